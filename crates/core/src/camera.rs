@@ -1,0 +1,144 @@
+//! The pinhole camera.
+
+use crate::aabb::Aabb;
+use crate::ray::Ray;
+use glam::Vec3;
+
+/// A pinhole camera: position, point looked at, up vector and vertical field of view.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// The eye.
+    pub position: Vec3,
+    /// The point at the image centre.
+    pub look_at: Vec3,
+    /// Up direction (need not be orthogonal to the view direction).
+    pub up: Vec3,
+    /// Vertical field of view in degrees, in `(0, 180)`.
+    pub vfov_degrees: f32,
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Self {
+            position: Vec3::new(0.0, 0.0, 5.0),
+            look_at: Vec3::ZERO,
+            up: Vec3::Y,
+            vfov_degrees: 45.0,
+        }
+    }
+}
+
+impl Camera {
+    /// A camera framing `bounds` from the front-right-above (the automatic camera of bare
+    /// mesh files): looking at the centre from a distance at which the bounding sphere fits
+    /// the field of view.
+    #[must_use]
+    pub fn framing(bounds: Aabb) -> Self {
+        if bounds.is_empty() || !bounds.extent().is_finite() {
+            return Self::default();
+        }
+        let center = bounds.center();
+        let radius = (bounds.extent().length() * 0.5).max(1e-3);
+        let vfov_degrees = 40.0f32;
+        let distance = radius / (vfov_degrees.to_radians() * 0.5).sin() * 1.05;
+        let dir = Vec3::new(0.45, 0.35, 1.0).normalize();
+        Self {
+            position: center + dir * distance,
+            look_at: center,
+            up: Vec3::Y,
+            vfov_degrees,
+        }
+    }
+
+    /// True when the camera can produce rays: finite vectors, distinct eye and target, an up
+    /// vector not parallel to the view direction, and a field of view in `(0, 180)`.
+    #[must_use]
+    pub fn is_valid(&self) -> bool {
+        let forward = self.look_at - self.position;
+        self.position.is_finite()
+            && self.look_at.is_finite()
+            && self.up.is_finite()
+            && forward.length_squared() > 0.0
+            && forward.cross(self.up).length_squared() > 0.0
+            && self.vfov_degrees > 0.0
+            && self.vfov_degrees < 180.0
+    }
+
+    /// The ray generator for a `width x height` image.
+    #[must_use]
+    pub fn rays(&self, width: u32, height: u32) -> CameraRays {
+        let forward = (self.look_at - self.position).normalize_or(-Vec3::Z);
+        let right = forward.cross(self.up).normalize_or(Vec3::X);
+        let up = right.cross(forward);
+        let half_h = (self.vfov_degrees.to_radians() * 0.5).tan();
+        let aspect = width as f32 / height.max(1) as f32;
+        CameraRays {
+            origin: self.position,
+            forward,
+            right: right * (half_h * aspect),
+            up: up * half_h,
+            inv_width: 1.0 / width.max(1) as f32,
+            inv_height: 1.0 / height.max(1) as f32,
+        }
+    }
+}
+
+/// Primary-ray generator of a [`Camera`] for one image size.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraRays {
+    origin: Vec3,
+    forward: Vec3,
+    right: Vec3,
+    up: Vec3,
+    inv_width: f32,
+    inv_height: f32,
+}
+
+impl CameraRays {
+    /// The ray through image position `(px, py)` in pixels, `(0, 0)` the top-left corner of
+    /// the image: the centre of pixel `(x, y)` is `(x + 0.5, y + 0.5)`. The direction is
+    /// normalised, so `t` is a distance.
+    #[inline]
+    #[must_use]
+    pub fn ray(&self, px: f32, py: f32) -> Ray {
+        let sx = 2.0 * px * self.inv_width - 1.0;
+        let sy = 1.0 - 2.0 * py * self.inv_height;
+        let dir = (self.forward + self.right * sx + self.up * sy).normalize();
+        Ray::new(self.origin, dir)
+    }
+
+    /// The primary ray through the centre of pixel `(x, y)`.
+    #[inline]
+    #[must_use]
+    pub fn center_ray(&self, x: u32, y: u32) -> Ray {
+        self.ray(x as f32 + 0.5, y as f32 + 0.5)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn centre_pixel_looks_at_target() {
+        let cam = Camera::default();
+        let rays = cam.rays(3, 3);
+        let r = rays.center_ray(1, 1);
+        assert!((r.dir - -Vec3::Z).length() < 1e-6);
+        // Top-left pixel points up and left.
+        let r = rays.center_ray(0, 0);
+        assert!(r.dir.x < 0.0 && r.dir.y > 0.0);
+    }
+
+    #[test]
+    fn validity() {
+        assert!(Camera::default().is_valid());
+        let mut c = Camera::default();
+        c.up = Vec3::Z;
+        assert!(!c.is_valid());
+        c = Camera::default();
+        c.vfov_degrees = 0.0;
+        assert!(!c.is_valid());
+        assert!(Camera::framing(Aabb::new(Vec3::ZERO, Vec3::ONE)).is_valid());
+    }
+}

@@ -1,0 +1,262 @@
+//! The flat list of primitives that acceleration structures index into.
+
+use crate::aabb::Aabb;
+use crate::hit::Hit;
+use crate::plane::Plane;
+use crate::ray::Ray;
+use crate::sphere::Sphere;
+use crate::triangle::Triangle;
+
+/// One primitive. A closed enum so that the per-ray path dispatches with a `match`, not a
+/// virtual call (pbrt-v4's tagged pointers).
+///
+/// Later object kinds with their own inner intersection (height fields, Bezier patches,
+/// implicit surfaces, CSG trees, volumes) join as further variants holding their data behind
+/// an `Arc`; they report a sub-primitive id in [`PrimHit::sub`].
+#[derive(Clone, Debug, PartialEq)]
+pub enum Shape {
+    /// A triangle (meshes are stored as their triangles).
+    Triangle(Triangle),
+    /// A sphere.
+    Sphere(Sphere),
+    /// An infinite plane (unbounded).
+    Plane(Plane),
+}
+
+/// The kinds of primitive, for statistics and for backends that support only some.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum PrimitiveKind {
+    /// [`Shape::Triangle`].
+    Triangle,
+    /// [`Shape::Sphere`].
+    Sphere,
+    /// [`Shape::Plane`].
+    Plane,
+}
+
+impl PrimitiveKind {
+    /// Every kind, in a fixed order.
+    pub const ALL: [Self; 3] = [Self::Triangle, Self::Sphere, Self::Plane];
+
+    /// Lower-case name used in scene files and reports.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Triangle => "triangle",
+            Self::Sphere => "sphere",
+            Self::Plane => "plane",
+        }
+    }
+}
+
+/// A primitive's own answer to a ray: where, and the surface parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrimHit {
+    /// Ray parameter.
+    pub t: f32,
+    /// Sub-primitive id (0 for simple primitives).
+    pub sub: u32,
+    /// First surface parameter (see [`Hit::u`]).
+    pub u: f32,
+    /// Second surface parameter (see [`Hit::v`]).
+    pub v: f32,
+}
+
+impl Shape {
+    /// The kind of this primitive.
+    #[inline]
+    #[must_use]
+    pub fn kind(&self) -> PrimitiveKind {
+        match self {
+            Self::Triangle(_) => PrimitiveKind::Triangle,
+            Self::Sphere(_) => PrimitiveKind::Sphere,
+            Self::Plane(_) => PrimitiveKind::Plane,
+        }
+    }
+
+    /// The bounding box, or `None` for unbounded primitives (planes).
+    #[inline]
+    #[must_use]
+    pub fn bounds(&self) -> Option<Aabb> {
+        match self {
+            Self::Triangle(t) => Some(t.bounds()),
+            Self::Sphere(s) => Some(s.bounds()),
+            Self::Plane(_) => None,
+        }
+    }
+
+    /// The ray's closest hit with this primitive inside `[ray.t_min, ray.t_max]`.
+    #[inline]
+    #[must_use]
+    pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
+        match self {
+            Self::Triangle(tri) => tri.intersect(ray).map(|h| PrimHit {
+                t: h.t,
+                sub: 0,
+                u: h.u,
+                v: h.v,
+            }),
+            Self::Sphere(s) => s.intersect(ray).map(|t| PrimHit {
+                t,
+                sub: 0,
+                u: 0.0,
+                v: 0.0,
+            }),
+            Self::Plane(p) => p.intersect(ray).map(|t| PrimHit {
+                t,
+                sub: 0,
+                u: 0.0,
+                v: 0.0,
+            }),
+        }
+    }
+
+    /// Fills in the surface data (normal, parameters) of a hit found by [`Shape::intersect`].
+    #[must_use]
+    pub fn complete_hit(&self, ray: &Ray, prim: u32, h: PrimHit) -> Hit {
+        let (normal, u, v) = match self {
+            Self::Triangle(tri) => (tri.normal(), h.u, h.v),
+            Self::Sphere(s) => {
+                let n = s.normal_at(ray.at(h.t));
+                let u = (n.z.atan2(n.x) / std::f32::consts::TAU).rem_euclid(1.0);
+                let v = n.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI;
+                (n, u, v)
+            }
+            Self::Plane(p) => (p.normal, h.u, h.v),
+        };
+        Hit {
+            t: h.t,
+            prim,
+            sub: h.sub,
+            u,
+            v,
+            normal,
+        }
+    }
+}
+
+/// Every primitive of a scene, indexed by global primitive id, with the split into bounded
+/// primitives (which acceleration structures organise) and unbounded ones (tested by every
+/// ray).
+#[derive(Clone, Debug, Default)]
+pub struct Geometry {
+    shapes: Vec<Shape>,
+    bounded: Vec<u32>,
+    unbounded: Vec<u32>,
+    bounds: Aabb,
+}
+
+impl Geometry {
+    /// Geometry from primitives in id order.
+    ///
+    /// # Panics
+    /// When there are `u32::MAX` primitives or more (scene loaders refuse such scenes first).
+    #[must_use]
+    pub fn new(shapes: Vec<Shape>) -> Self {
+        assert!(shapes.len() < u32::MAX as usize, "too many primitives");
+        let mut bounded = Vec::new();
+        let mut unbounded = Vec::new();
+        let mut bounds = Aabb::EMPTY;
+        for (i, s) in shapes.iter().enumerate() {
+            match s.bounds() {
+                Some(b) => {
+                    bounded.push(i as u32);
+                    bounds = bounds.union(b);
+                }
+                None => unbounded.push(i as u32),
+            }
+        }
+        Self {
+            shapes,
+            bounded,
+            unbounded,
+            bounds,
+        }
+    }
+
+    /// All primitives, indexed by id.
+    #[inline]
+    #[must_use]
+    pub fn shapes(&self) -> &[Shape] {
+        &self.shapes
+    }
+
+    /// Number of primitives.
+    #[inline]
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.shapes.len()
+    }
+
+    /// True when there are no primitives.
+    #[inline]
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.shapes.is_empty()
+    }
+
+    /// The primitive with id `id`.
+    #[inline]
+    #[must_use]
+    pub fn shape(&self, id: u32) -> &Shape {
+        &self.shapes[id as usize]
+    }
+
+    /// Ids of the bounded primitives, ascending.
+    #[inline]
+    #[must_use]
+    pub fn bounded(&self) -> &[u32] {
+        &self.bounded
+    }
+
+    /// Ids of the unbounded primitives (planes), ascending.
+    #[inline]
+    #[must_use]
+    pub fn unbounded(&self) -> &[u32] {
+        &self.unbounded
+    }
+
+    /// Bounds of all bounded primitives (empty when there are none).
+    #[inline]
+    #[must_use]
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    /// Primitive counts by kind, in [`PrimitiveKind::ALL`] order, zero counts included.
+    #[must_use]
+    pub fn count_by_kind(&self) -> Vec<(PrimitiveKind, usize)> {
+        PrimitiveKind::ALL
+            .iter()
+            .map(|&k| (k, self.shapes.iter().filter(|s| s.kind() == k).count()))
+            .collect()
+    }
+
+    /// Tests primitive `id` and, if it is hit closer than `best` under the tie rule
+    /// ([`Hit::closer`]), replaces `best`. Returns whether it replaced. The one place where
+    /// backends compare candidate hits.
+    #[inline]
+    pub fn test_closest(&self, id: u32, ray: &Ray, best: &mut Option<(u32, PrimHit)>) -> bool {
+        // The primitive sees the original ray, clipped only to the best t so far (a hit at
+        // exactly that t must still be seen for the tie rule).
+        let t_max = best.map_or(ray.t_max, |(_, h)| h.t);
+        let Some(h) = self.shape(id).intersect(&ray.clipped(t_max)) else {
+            return false;
+        };
+        let better = match best {
+            None => true,
+            Some((bid, bh)) => Hit::closer(h.t, id, bh.t, *bid),
+        };
+        if better {
+            *best = Some((id, h));
+        }
+        better
+    }
+
+    /// Turns the winner of [`Geometry::test_closest`] into a full [`Hit`].
+    #[inline]
+    #[must_use]
+    pub fn complete(&self, ray: &Ray, best: Option<(u32, PrimHit)>) -> Option<Hit> {
+        best.map(|(id, h)| self.shape(id).complete_hit(ray, id, h))
+    }
+}

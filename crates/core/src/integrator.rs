@@ -1,0 +1,227 @@
+//! Per-pixel integrators, run tile by tile. The render crate decides how tiles are spread
+//! over threads; a tile's output depends only on the tile, so frames are identical on any
+//! thread count.
+
+use crate::accel::{Accel, Counters};
+use crate::camera::CameraRays;
+use crate::frame::{Frame, FrameStats, NO_HIT};
+use crate::hit::Hit;
+use crate::material::{Light, MaterialKind};
+use crate::ray::Ray;
+use crate::renderer::{Mode, RenderSettings};
+use crate::sampling::Sampler;
+use crate::scene::Scene;
+use glam::Vec3;
+
+/// A rectangle of pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Tile {
+    /// Left column.
+    pub x0: u32,
+    /// Top row.
+    pub y0: u32,
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+}
+
+/// Splits a `width x height` image into `size x size` tiles (smaller at the right and
+/// bottom edges), row by row.
+#[must_use]
+pub fn tiles(width: u32, height: u32, size: u32) -> Vec<Tile> {
+    let size = size.max(1);
+    let mut out = Vec::new();
+    for y0 in (0..height).step_by(size as usize) {
+        for x0 in (0..width).step_by(size as usize) {
+            out.push(Tile {
+                x0,
+                y0,
+                width: size.min(width - x0),
+                height: size.min(height - y0),
+            });
+        }
+    }
+    out
+}
+
+/// The pixels of one tile, row by row.
+#[derive(Clone, Debug)]
+pub struct TileOutput<C> {
+    /// Which tile.
+    pub tile: Tile,
+    /// Linear colour.
+    pub color: Vec<Vec3>,
+    /// Centre-ray primitive ids.
+    pub ids: Vec<u32>,
+    /// Centre-ray distances.
+    pub t: Vec<f32>,
+    /// Rays traced.
+    pub rays: u64,
+    /// Work counters.
+    pub counters: C,
+}
+
+/// Renders one tile with the integrator of `settings.mode`, tracing the tile's rays through
+/// `accel`'s batch entry point.
+#[must_use]
+pub fn render_tile<A: Accel, C: Counters>(
+    scene: &Scene,
+    accel: &A,
+    camera: &CameraRays,
+    settings: &RenderSettings,
+    tile: Tile,
+) -> TileOutput<C> {
+    match settings.mode {
+        Mode::Cast => cast_tile(scene, accel, camera, settings, tile),
+    }
+}
+
+/// Direction light travels in ray-casting mode: the scene's first directional light, else a
+/// fixed light from above-front-right.
+fn cast_light(scene: &Scene) -> Vec3 {
+    scene
+        .lights
+        .iter()
+        .find_map(|l| match *l {
+            Light::Directional { direction, .. } => Some(direction),
+            Light::Point { .. } => None,
+        })
+        .unwrap_or_else(|| Vec3::new(-0.4, -1.0, -0.6).normalize())
+}
+
+/// Ray-casting shading: base colour times a mix of `|cos|` to the viewer and a directional
+/// light (no shadows), plus emission. Deliberately simple: this mode measures visibility.
+#[inline]
+#[must_use]
+pub fn shade_cast(scene: &Scene, light_dir: Vec3, ray: &Ray, hit: Option<&Hit>) -> Vec3 {
+    let Some(hit) = hit else {
+        return scene.background;
+    };
+    let m = scene.material_of(hit.prim);
+    let view = -ray.dir.normalize_or_zero();
+    let cos_view = hit.normal.dot(view);
+    // Face the normal towards the viewer.
+    let n = if cos_view < 0.0 {
+        -hit.normal
+    } else {
+        hit.normal
+    };
+    let diffuse = n.dot(-light_dir).max(0.0);
+    let albedo = match m.kind {
+        MaterialKind::Diffuse => m.base_color,
+        MaterialKind::Mirror => m.specular.max(Vec3::splat(0.2)),
+        MaterialKind::Glass => Vec3::new(0.75, 0.85, 0.9),
+    };
+    albedo * (0.35 * cos_view.abs() + 0.65 * diffuse) + m.emission
+}
+
+fn cast_tile<A: Accel, C: Counters>(
+    scene: &Scene,
+    accel: &A,
+    camera: &CameraRays,
+    settings: &RenderSettings,
+    tile: Tile,
+) -> TileOutput<C> {
+    let n = (tile.width * tile.height) as usize;
+    let mut counters = C::default();
+    let light_dir = cast_light(scene);
+
+    let mut rays = Vec::with_capacity(n);
+    for y in tile.y0..tile.y0 + tile.height {
+        for x in tile.x0..tile.x0 + tile.width {
+            rays.push(camera.center_ray(x, y));
+        }
+    }
+    let mut hits = vec![None; n];
+    accel.intersect_batch(&rays, &mut hits, &mut counters);
+    let mut traced = n as u64;
+
+    let ids = hits.iter().map(|h| h.map_or(NO_HIT, |h| h.prim)).collect();
+    let t = hits
+        .iter()
+        .map(|h| h.map_or(f32::INFINITY, |h| h.t))
+        .collect();
+
+    let color = if settings.spp <= 1 {
+        rays.iter()
+            .zip(&hits)
+            .map(|(r, h)| shade_cast(scene, light_dir, r, h.as_ref()))
+            .collect()
+    } else {
+        // Jittered samples for colour; ids and t stay those of the centre ray.
+        let mut sum = vec![Vec3::ZERO; n];
+        for s in 0..settings.spp {
+            let mut i = 0;
+            for y in tile.y0..tile.y0 + tile.height {
+                for x in tile.x0..tile.x0 + tile.width {
+                    let pixel = y * settings.width + x;
+                    let (jx, jy) = Sampler::new(pixel, s, settings.seed).next_2d();
+                    rays[i] = camera.ray(x as f32 + jx, y as f32 + jy);
+                    i += 1;
+                }
+            }
+            accel.intersect_batch(&rays, &mut hits, &mut counters);
+            traced += n as u64;
+            for ((acc, r), h) in sum.iter_mut().zip(&rays).zip(&hits) {
+                *acc += shade_cast(scene, light_dir, r, h.as_ref());
+            }
+        }
+        let inv = 1.0 / settings.spp as f32;
+        sum.into_iter().map(|c| c * inv).collect()
+    };
+
+    TileOutput {
+        tile,
+        color,
+        ids,
+        t,
+        rays: traced,
+        counters,
+    }
+}
+
+/// Assembles tile outputs (in any order) into a frame, summing rays and counters.
+#[must_use]
+pub fn assemble<C: Counters>(width: u32, height: u32, outputs: Vec<TileOutput<C>>) -> Frame {
+    let n = width as usize * height as usize;
+    let mut frame = Frame {
+        width,
+        height,
+        color: vec![Vec3::ZERO; n],
+        ids: vec![NO_HIT; n],
+        t: vec![f32::INFINITY; n],
+        stats: FrameStats::default(),
+        timings: Default::default(),
+    };
+    let mut counters = C::default();
+    for out in outputs {
+        let tile = out.tile;
+        for row in 0..tile.height {
+            let src = (row * tile.width) as usize..((row + 1) * tile.width) as usize;
+            let dst_start = ((tile.y0 + row) * width + tile.x0) as usize;
+            let dst = dst_start..dst_start + tile.width as usize;
+            frame.color[dst.clone()].copy_from_slice(&out.color[src.clone()]);
+            frame.ids[dst.clone()].copy_from_slice(&out.ids[src.clone()]);
+            frame.t[dst].copy_from_slice(&out.t[src]);
+        }
+        frame.stats.rays += out.rays;
+        counters.merge(&out.counters);
+    }
+    frame.stats.counters = counters.counts();
+    frame
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tiles_cover_the_image_once() {
+        let ts = tiles(37, 20, 16);
+        let area: u32 = ts.iter().map(|t| t.width * t.height).sum();
+        assert_eq!(area, 37 * 20);
+        assert_eq!(ts.len(), 3 * 2);
+        assert!(tiles(0, 5, 16).is_empty());
+    }
+}

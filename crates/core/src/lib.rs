@@ -1,0 +1,51 @@
+//! # raybench-core
+//!
+//! The vocabulary every raybench crate shares: rays, boxes and hits, the primitives and their
+//! ray intersection routines, the scene data model, the pinhole camera, the per-pixel
+//! integrators, and the two-level renderer contract ([`Accel`] for CPU strategies,
+//! [`Renderer`] at frame level).
+//!
+//! The scalar intersection routines in this crate are the workspace's *definition* of a hit:
+//! every backend calls them (or, for SIMD and GPU backends, ports them operation by operation),
+//! so that all raybench CPU backends return bit-identical results. See [`Accel`] for the
+//! equivalence contract.
+//!
+//! **Architecture invariant:** this crate knows nothing of threads, I/O, SIMD intrinsics or
+//! GPUs. It depends on `glam` and nothing else.
+
+mod aabb;
+mod accel;
+mod camera;
+mod error;
+mod frame;
+mod geometry;
+mod hit;
+pub mod integrator;
+pub mod limits;
+mod material;
+mod mesh;
+mod plane;
+mod ray;
+mod renderer;
+pub mod sampling;
+mod scene;
+mod sphere;
+mod triangle;
+
+pub use aabb::Aabb;
+pub use accel::{Accel, AccelStats, Counters, NoCounters, RayCounters};
+pub use camera::{Camera, CameraRays};
+pub use error::SceneError;
+pub use frame::{Frame, FrameStats, NO_HIT, Timings};
+pub use geometry::{Geometry, PrimHit, PrimitiveKind, Shape};
+pub use hit::Hit;
+pub use material::{Light, Material, MaterialKind};
+pub use mesh::{PolygonMesh, TriangleMesh};
+pub use plane::Plane;
+pub use ray::Ray;
+pub use renderer::{Mode, RenderError, RenderSettings, Renderer};
+pub use scene::{ObjectInfo, Scene, SceneBuilder};
+pub use sphere::Sphere;
+pub use triangle::Triangle;
+
+pub use glam::{Vec3, Vec3A};

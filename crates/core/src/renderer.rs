@@ -1,0 +1,191 @@
+//! The frame-level renderer interface that the harness talks to.
+
+use crate::accel::AccelStats;
+use crate::frame::{Frame, Timings};
+use crate::limits;
+use crate::scene::Scene;
+use std::fmt;
+use std::sync::Arc;
+
+/// What to compute per pixel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Mode {
+    /// Ray casting: one closest-hit ray per sample, simple shading, no secondary rays.
+    #[default]
+    Cast,
+}
+
+impl Mode {
+    /// Every mode.
+    pub const ALL: [Self; 1] = [Self::Cast];
+
+    /// The name used on the command line.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Cast => "cast",
+        }
+    }
+
+    /// The mode called `name`, if any.
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+}
+
+/// Settings of one frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RenderSettings {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Integrator.
+    pub mode: Mode,
+    /// Seed of the counter-based random numbers.
+    pub seed: u32,
+    /// Maximum number of bounces (modes with secondary rays).
+    pub max_depth: u32,
+    /// Whether to count ray/primitive tests and node visits.
+    pub count: bool,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self {
+            width: 512,
+            height: 512,
+            spp: 1,
+            mode: Mode::Cast,
+            seed: 0,
+            max_depth: 5,
+            count: false,
+        }
+    }
+}
+
+impl RenderSettings {
+    /// Checks the settings against [`crate::limits`].
+    ///
+    /// # Errors
+    /// [`RenderError::InvalidSettings`] naming the offending value.
+    pub fn validate(&self) -> Result<(), RenderError> {
+        let bad = |msg: String| Err(RenderError::InvalidSettings(msg));
+        if self.width == 0 || self.height == 0 {
+            return bad(format!(
+                "image size {}x{} is empty: width and height must be at least 1",
+                self.width, self.height
+            ));
+        }
+        if self.width > limits::MAX_DIMENSION || self.height > limits::MAX_DIMENSION {
+            return bad(format!(
+                "image size {}x{} exceeds the limit of {} pixels per side",
+                self.width,
+                self.height,
+                limits::MAX_DIMENSION
+            ));
+        }
+        if self.spp == 0 || self.spp > limits::MAX_SPP {
+            return bad(format!(
+                "samples per pixel {} must be in 1..={}",
+                self.spp,
+                limits::MAX_SPP
+            ));
+        }
+        let samples = u64::from(self.width) * u64::from(self.height) * u64::from(self.spp);
+        if samples > limits::MAX_SAMPLES {
+            return bad(format!(
+                "width x height x spp = {samples} exceeds the limit of {}",
+                limits::MAX_SAMPLES
+            ));
+        }
+        if self.max_depth > limits::MAX_DEPTH {
+            return bad(format!(
+                "max depth {} exceeds the limit of {}",
+                self.max_depth,
+                limits::MAX_DEPTH
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Why a renderer could not produce a frame.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum RenderError {
+    /// The backend cannot run here (no adapter, no library), with the reason.
+    Unavailable(String),
+    /// The scene holds something the backend does not support, with the reason.
+    Unsupported(String),
+    /// `render` was called before `prepare`.
+    NotPrepared,
+    /// The settings are out of range.
+    InvalidSettings(String),
+    /// Anything else the backend reports.
+    Backend(String),
+}
+
+impl fmt::Display for RenderError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Unavailable(r) => write!(f, "backend unavailable: {r}"),
+            Self::Unsupported(r) => write!(f, "scene not supported: {r}"),
+            Self::NotPrepared => write!(f, "render called before prepare"),
+            Self::InvalidSettings(r) => write!(f, "{r}"),
+            Self::Backend(r) => write!(f, "{r}"),
+        }
+    }
+}
+
+impl std::error::Error for RenderError {}
+
+/// A frame-level renderer: one backend, prepared once for a scene, then rendering any number
+/// of frames. The harness picks renderers by name (`Box<dyn Renderer>`); the CPU backends
+/// share one generic implementation over [`crate::Accel`].
+pub trait Renderer: Send + Sync {
+    /// Short name (`naive`, `bvh`, ...).
+    fn name(&self) -> &str;
+
+    /// One-line description.
+    fn description(&self) -> &str;
+
+    /// Whether the backend can run on this machine, or why not.
+    ///
+    /// # Errors
+    /// The reason it cannot run.
+    fn availability(&self) -> Result<(), String> {
+        Ok(())
+    }
+
+    /// Whether the backend supports every primitive kind and feature of `scene`.
+    ///
+    /// # Errors
+    /// The reason it does not.
+    fn supports(&self, _scene: &Scene) -> Result<(), String> {
+        Ok(())
+    }
+
+    /// Whether the backend counts ray/primitive tests.
+    fn counts_tests(&self) -> bool {
+        true
+    }
+
+    /// Prepares for `scene` (builds acceleration structures, uploads data) and returns the
+    /// timing of each preparation phase.
+    ///
+    /// # Errors
+    /// When the backend is unavailable or does not support the scene.
+    fn prepare(&mut self, scene: &Arc<Scene>) -> Result<Timings, RenderError>;
+
+    /// Renders one frame of the prepared scene.
+    ///
+    /// # Errors
+    /// When not prepared, or the settings are out of range.
+    fn render(&self, settings: &RenderSettings) -> Result<Frame, RenderError>;
+
+    /// Statistics of the prepared structure, if any.
+    fn structure(&self) -> Option<AccelStats>;
+}

@@ -1,0 +1,366 @@
+//! The scene: camera, materials, lights and geometry.
+
+use crate::camera::Camera;
+use crate::error::SceneError;
+use crate::geometry::{Geometry, Shape};
+use crate::limits;
+use crate::material::{Light, Material};
+use crate::mesh::TriangleMesh;
+use crate::plane::Plane;
+use crate::sphere::Sphere;
+use crate::triangle::Triangle;
+use glam::Vec3;
+use std::sync::Arc;
+
+/// One object of the scene file and the primitive ids it became.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ObjectInfo {
+    /// A name for messages (`sphere`, a mesh file name, a generator spec).
+    pub name: String,
+    /// First primitive id.
+    pub first: u32,
+    /// Number of primitives.
+    pub count: u32,
+}
+
+/// A complete scene. Geometry is shared (`Arc`) so that backends can hold it while the
+/// scene stays usable.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// A name for reports.
+    pub name: String,
+    /// The camera.
+    pub camera: Camera,
+    /// Radiance of rays that hit nothing (linear RGB).
+    pub background: Vec3,
+    /// Materials; `prim_material` indexes into this.
+    pub materials: Vec<Material>,
+    /// Light sources.
+    pub lights: Vec<Light>,
+    /// All primitives.
+    pub geometry: Arc<Geometry>,
+    /// Material index of each primitive.
+    pub prim_material: Vec<u32>,
+    /// The objects, in scene order.
+    pub objects: Vec<ObjectInfo>,
+}
+
+impl Scene {
+    /// The material of primitive `prim`.
+    #[inline]
+    #[must_use]
+    pub fn material_of(&self, prim: u32) -> &Material {
+        &self.materials[self.prim_material[prim as usize] as usize]
+    }
+}
+
+/// Builds a [`Scene`], object by object, assigning global primitive ids in call order and
+/// checking every coordinate.
+#[derive(Clone, Debug)]
+pub struct SceneBuilder {
+    name: String,
+    camera: Option<Camera>,
+    background: Vec3,
+    materials: Vec<Material>,
+    lights: Vec<Light>,
+    shapes: Vec<Shape>,
+    prim_material: Vec<u32>,
+    objects: Vec<ObjectInfo>,
+}
+
+fn finite(v: Vec3, what: &str) -> Result<(), SceneError> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(SceneError::NonFinite(what.to_string()))
+    }
+}
+
+impl SceneBuilder {
+    /// An empty scene named `name`, with the default material at index 0.
+    #[must_use]
+    pub fn new(name: impl Into<String>) -> Self {
+        Self {
+            name: name.into(),
+            camera: None,
+            background: Vec3::new(0.05, 0.05, 0.08),
+            materials: vec![Material::default()],
+            lights: Vec::new(),
+            shapes: Vec::new(),
+            prim_material: Vec::new(),
+            objects: Vec::new(),
+        }
+    }
+
+    /// Sets the camera; without one, [`SceneBuilder::build`] frames the geometry.
+    ///
+    /// # Errors
+    /// When the camera cannot produce rays ([`Camera::is_valid`]).
+    pub fn camera(&mut self, camera: Camera) -> Result<&mut Self, SceneError> {
+        if !camera.is_valid() {
+            return Err(SceneError::Invalid(
+                "camera: position, look_at and up must be finite, position and look_at \
+                 distinct, up not parallel to the view direction, fov in (0, 180)"
+                    .into(),
+            ));
+        }
+        self.camera = Some(camera);
+        Ok(self)
+    }
+
+    /// Sets the background radiance.
+    ///
+    /// # Errors
+    /// When it is not finite.
+    pub fn background(&mut self, color: Vec3) -> Result<&mut Self, SceneError> {
+        finite(color, "background")?;
+        self.background = color;
+        Ok(self)
+    }
+
+    /// Adds a material and returns its index.
+    ///
+    /// # Errors
+    /// When a colour or parameter is not finite.
+    pub fn add_material(&mut self, m: Material) -> Result<u32, SceneError> {
+        let what = format!("material '{}'", m.name);
+        finite(m.base_color, &what)?;
+        finite(m.specular, &what)?;
+        finite(m.emission, &what)?;
+        if !m.ior.is_finite() || !m.shininess.is_finite() || m.ior <= 0.0 {
+            return Err(SceneError::Invalid(format!(
+                "{what}: ior must be positive and finite"
+            )));
+        }
+        self.materials.push(m);
+        Ok((self.materials.len() - 1) as u32)
+    }
+
+    /// Adds a light.
+    ///
+    /// # Errors
+    /// When a vector is not finite or a direction is zero.
+    pub fn add_light(&mut self, light: Light) -> Result<&mut Self, SceneError> {
+        let light = match light {
+            Light::Point {
+                position,
+                intensity,
+            } => {
+                finite(position, "light position")?;
+                finite(intensity, "light intensity")?;
+                light
+            }
+            Light::Directional {
+                direction,
+                radiance,
+            } => {
+                finite(direction, "light direction")?;
+                finite(radiance, "light radiance")?;
+                let Some(direction) = direction.try_normalize() else {
+                    return Err(SceneError::Invalid("light direction is zero".into()));
+                };
+                Light::Directional {
+                    direction,
+                    radiance,
+                }
+            }
+        };
+        self.lights.push(light);
+        Ok(self)
+    }
+
+    fn check_room(&self, more: usize) -> Result<(), SceneError> {
+        if self.shapes.len() + more > limits::MAX_PRIMITIVES {
+            return Err(SceneError::TooLarge(format!(
+                "the scene would have {} primitives (limit {})",
+                self.shapes.len() + more,
+                limits::MAX_PRIMITIVES
+            )));
+        }
+        Ok(())
+    }
+
+    fn check_material(&self, material: u32) -> Result<(), SceneError> {
+        if material as usize >= self.materials.len() {
+            return Err(SceneError::Invalid(format!(
+                "material index {material} does not exist"
+            )));
+        }
+        Ok(())
+    }
+
+    fn push_object(
+        &mut self,
+        name: String,
+        shapes: impl IntoIterator<Item = Shape>,
+        material: u32,
+    ) {
+        let first = self.shapes.len() as u32;
+        self.shapes.extend(shapes);
+        let count = self.shapes.len() as u32 - first;
+        self.prim_material.resize(self.shapes.len(), material);
+        self.objects.push(ObjectInfo { name, first, count });
+    }
+
+    /// Adds a sphere with material index `material`.
+    ///
+    /// # Errors
+    /// When the centre or radius is not finite or the radius is not positive.
+    pub fn add_sphere(&mut self, sphere: Sphere, material: u32) -> Result<&mut Self, SceneError> {
+        finite(sphere.center, "sphere centre")?;
+        if !(sphere.radius.is_finite() && sphere.radius > 0.0) {
+            return Err(SceneError::Invalid(format!(
+                "sphere radius {} must be positive and finite",
+                sphere.radius
+            )));
+        }
+        self.check_material(material)?;
+        self.check_room(1)?;
+        self.push_object("sphere".into(), [Shape::Sphere(sphere)], material);
+        Ok(self)
+    }
+
+    /// Adds an infinite plane.
+    ///
+    /// # Errors
+    /// When a vector is not finite or the normal is zero.
+    pub fn add_plane(
+        &mut self,
+        point: Vec3,
+        normal: Vec3,
+        material: u32,
+    ) -> Result<&mut Self, SceneError> {
+        finite(point, "plane point")?;
+        finite(normal, "plane normal")?;
+        if normal.length_squared() == 0.0 {
+            return Err(SceneError::Invalid("plane normal is zero".into()));
+        }
+        self.check_material(material)?;
+        self.check_room(1)?;
+        self.push_object(
+            "plane".into(),
+            [Shape::Plane(Plane::new(point, normal))],
+            material,
+        );
+        Ok(self)
+    }
+
+    /// Adds a triangle mesh (one object, its triangles in index order). Degenerate triangles
+    /// are kept so that ids stay those of the file; they are never hit.
+    ///
+    /// # Errors
+    /// From [`TriangleMesh::validate`], or when the scene grows past the limit.
+    pub fn add_mesh(
+        &mut self,
+        name: impl Into<String>,
+        mesh: &TriangleMesh,
+        material: u32,
+    ) -> Result<&mut Self, SceneError> {
+        mesh.validate()?;
+        self.check_material(material)?;
+        self.check_room(mesh.indices.len())?;
+        self.push_object(name.into(), mesh.triangles().map(Shape::Triangle), material);
+        Ok(self)
+    }
+
+    /// Adds triangles with one material each (`materials[i]` for `triangles[i]`), as one
+    /// object: how OBJ files with several `usemtl` groups arrive.
+    ///
+    /// # Errors
+    /// When a vertex is not finite, a material does not exist, or the lengths differ.
+    pub fn add_triangles(
+        &mut self,
+        name: impl Into<String>,
+        triangles: &[Triangle],
+        materials: &[u32],
+    ) -> Result<&mut Self, SceneError> {
+        if triangles.len() != materials.len() {
+            return Err(SceneError::Invalid(
+                "one material per triangle needed".into(),
+            ));
+        }
+        for (i, t) in triangles.iter().enumerate() {
+            for v in t.v {
+                finite(v, &format!("vertex of triangle {}", i + 1))?;
+            }
+        }
+        for &m in materials {
+            self.check_material(m)?;
+        }
+        self.check_room(triangles.len())?;
+        let first = self.shapes.len() as u32;
+        self.shapes
+            .extend(triangles.iter().copied().map(Shape::Triangle));
+        self.prim_material.extend_from_slice(materials);
+        self.objects.push(ObjectInfo {
+            name: name.into(),
+            first,
+            count: triangles.len() as u32,
+        });
+        Ok(self)
+    }
+
+    /// Number of primitives added so far.
+    #[must_use]
+    pub fn primitive_count(&self) -> usize {
+        self.shapes.len()
+    }
+
+    /// Number of materials so far.
+    #[must_use]
+    pub fn material_count(&self) -> usize {
+        self.materials.len()
+    }
+
+    /// Finishes the scene; without a camera, one framing the geometry is chosen.
+    #[must_use]
+    pub fn build(self) -> Scene {
+        let geometry = Geometry::new(self.shapes);
+        let camera = self
+            .camera
+            .unwrap_or_else(|| Camera::framing(geometry.bounds()));
+        Scene {
+            name: self.name,
+            camera,
+            background: self.background,
+            materials: self.materials,
+            lights: self.lights,
+            geometry: Arc::new(geometry),
+            prim_material: self.prim_material,
+            objects: self.objects,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ids_follow_insertion_order() {
+        let mut b = SceneBuilder::new("t");
+        b.add_sphere(Sphere::new(Vec3::ZERO, 1.0), 0).unwrap();
+        let mesh = TriangleMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            indices: vec![[0, 1, 2], [0, 2, 1]],
+        };
+        b.add_mesh("m", &mesh, 0).unwrap();
+        b.add_plane(Vec3::ZERO, Vec3::Y, 0).unwrap();
+        let s = b.build();
+        assert_eq!(s.geometry.len(), 4);
+        assert_eq!(s.geometry.unbounded(), &[3]);
+        assert_eq!(s.objects[1].first, 1);
+        assert_eq!(s.objects[1].count, 2);
+    }
+
+    #[test]
+    fn bad_values_are_refused() {
+        let mut b = SceneBuilder::new("t");
+        assert!(b.add_sphere(Sphere::new(Vec3::NAN, 1.0), 0).is_err());
+        assert!(b.add_sphere(Sphere::new(Vec3::ZERO, -1.0), 0).is_err());
+        assert!(b.add_sphere(Sphere::new(Vec3::ZERO, 1.0), 7).is_err());
+        assert!(b.add_plane(Vec3::ZERO, Vec3::ZERO, 0).is_err());
+        assert!(b.background(Vec3::INFINITY).is_err());
+        assert_eq!(b.primitive_count(), 0);
+    }
+}

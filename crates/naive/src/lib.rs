@@ -1,0 +1,98 @@
+//! # raybench-naive
+//!
+//! The lecture's reference strategy: for each ray, test every primitive and keep the closest.
+//! An `N x N` ray-cast frame of `M` primitives with `K` rays per pixel costs
+//! `O(N^2 * M * K)` tests: exactly `rays * M` closest-hit tests, which the counters show.
+//!
+//! Because it tests primitives in id order and keeps a candidate only when it is strictly
+//! closer (or equally close with a smaller id, which in id order never happens), it is the
+//! definition of the right answer: every other raybench CPU backend is tested against it.
+
+use raybench_core::{Accel, AccelStats, Counters, Geometry, Hit, Ray};
+use std::sync::Arc;
+
+/// No acceleration structure: a loop over all primitives.
+#[derive(Clone, Debug)]
+pub struct NaiveAccel {
+    geometry: Arc<Geometry>,
+}
+
+impl Accel for NaiveAccel {
+    fn build(geometry: Arc<Geometry>) -> Self {
+        Self { geometry }
+    }
+
+    fn geometry(&self) -> &Geometry {
+        &self.geometry
+    }
+
+    #[inline]
+    fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
+        let geometry = &*self.geometry;
+        let mut best = None;
+        for id in 0..geometry.len() as u32 {
+            geometry.test_closest(id, ray, &mut best);
+        }
+        counters.add_tests(geometry.len() as u64);
+        geometry.complete(ray, best)
+    }
+
+    #[inline]
+    fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
+        for (i, shape) in self.geometry.shapes().iter().enumerate() {
+            if shape.intersect(ray).is_some() {
+                counters.add_tests(i as u64 + 1);
+                return true;
+            }
+        }
+        counters.add_tests(self.geometry.len() as u64);
+        false
+    }
+
+    fn stats(&self) -> AccelStats {
+        AccelStats {
+            memory_bytes: 0,
+            counts: Vec::new(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use raybench_core::{RayCounters, Shape, Sphere, Triangle, Vec3};
+
+    #[test]
+    fn closest_hit_and_tie_rule() {
+        // Two identical triangles: the smaller id wins at equal t.
+        let tri = Triangle::new(
+            Vec3::new(-1.0, -1.0, 1.0),
+            Vec3::new(1.0, -1.0, 1.0),
+            Vec3::new(0.0, 1.0, 1.0),
+        );
+        let g = Arc::new(Geometry::new(vec![
+            Shape::Sphere(Sphere::new(Vec3::new(0.0, 0.0, 5.0), 1.0)),
+            Shape::Triangle(tri),
+            Shape::Triangle(tri),
+        ]));
+        let accel = NaiveAccel::build(g);
+        let mut c = RayCounters::default();
+        let hit = accel
+            .intersect(&Ray::new(Vec3::ZERO, Vec3::Z), &mut c)
+            .unwrap();
+        assert_eq!((hit.prim, hit.t), (1, 1.0));
+        assert_eq!(c.prim_tests, 3);
+        assert!(accel.occluded(&Ray::new(Vec3::ZERO, Vec3::Z), &mut c));
+        assert!(!accel.occluded(&Ray::new(Vec3::ZERO, -Vec3::Z), &mut c));
+    }
+
+    #[test]
+    fn empty_geometry_misses() {
+        let accel = NaiveAccel::build(Arc::new(Geometry::default()));
+        assert!(
+            accel
+                .intersect(&Ray::new(Vec3::ZERO, Vec3::Z), &mut RayCounters::default())
+                .is_none()
+        );
+    }
+}

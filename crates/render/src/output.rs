@@ -1,0 +1,132 @@
+//! Writing frames as PNG images.
+
+use raybench_core::{Frame, NO_HIT, Vec3};
+use std::path::{Path, PathBuf};
+
+/// Why an image could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// Encoding or writing failed.
+    #[error("cannot write {path}: {source}")]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: image::ImageError,
+    },
+    /// Moving the finished file into place failed.
+    #[error("cannot move {from} to {path}: {source}")]
+    Rename {
+        /// The temporary file.
+        from: PathBuf,
+        /// The final file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+}
+
+/// Linear to sRGB-encoded 8-bit, clamping to `[0, 1]` (NaN becomes 0).
+#[must_use]
+pub fn srgb8(c: Vec3) -> [u8; 3] {
+    let enc = |x: f32| {
+        let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
+        let s = if x <= 0.003_130_8 {
+            12.92 * x
+        } else {
+            1.055 * x.powf(1.0 / 2.4) - 0.055
+        };
+        (s * 255.0 + 0.5) as u8
+    };
+    [enc(c.x), enc(c.y), enc(c.z)]
+}
+
+/// A stable false colour for primitive id `id` (black for [`NO_HIT`]).
+#[must_use]
+pub fn id_color(id: u32) -> [u8; 3] {
+    if id == NO_HIT {
+        return [0, 0, 0];
+    }
+    let [h, _, _] = raybench_core::sampling::pcg3d([id, 0x1234_5678, 0x9abc_def0]);
+    let b = h.to_le_bytes();
+    // Keep colours away from black so that misses stand out.
+    [b[0] | 0x40, b[1] | 0x40, b[2] | 0x40]
+}
+
+/// Writes RGB bytes to `path` through a temporary file renamed into place, so that an
+/// interrupted run never leaves a partial image under the final name.
+fn write_rgb(path: &Path, width: u32, height: u32, rgb: Vec<u8>) -> Result<(), OutputError> {
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(".partial");
+    let tmp = PathBuf::from(tmp);
+    image::save_buffer_with_format(
+        &tmp,
+        &rgb,
+        width,
+        height,
+        image::ExtendedColorType::Rgb8,
+        image::ImageFormat::Png,
+    )
+    .map_err(|source| OutputError::Write {
+        path: path.to_owned(),
+        source,
+    })?;
+    std::fs::rename(&tmp, path).map_err(|source| OutputError::Rename {
+        from: tmp,
+        path: path.to_owned(),
+        source,
+    })
+}
+
+/// Writes the frame's colour (linear, clamped, sRGB-encoded) as a PNG.
+///
+/// # Errors
+/// When the file cannot be written.
+pub fn write_color_png(frame: &Frame, path: &Path) -> Result<(), OutputError> {
+    let rgb = frame.color.iter().flat_map(|&c| srgb8(c)).collect();
+    write_rgb(path, frame.width, frame.height, rgb)
+}
+
+/// Writes the frame's primitive ids as a false-colour PNG.
+///
+/// # Errors
+/// When the file cannot be written.
+pub fn write_ids_png(frame: &Frame, path: &Path) -> Result<(), OutputError> {
+    let rgb = frame.ids.iter().flat_map(|&id| id_color(id)).collect();
+    write_rgb(path, frame.width, frame.height, rgb)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_endpoints() {
+        assert_eq!(srgb8(Vec3::ZERO), [0, 0, 0]);
+        assert_eq!(srgb8(Vec3::ONE), [255, 255, 255]);
+        assert_eq!(srgb8(Vec3::splat(f32::NAN)), [0, 0, 0]);
+        assert_eq!(srgb8(Vec3::splat(0.5))[0], 188);
+    }
+
+    #[test]
+    fn writes_png_and_reports_bad_paths() {
+        let frame = Frame {
+            width: 2,
+            height: 1,
+            color: vec![Vec3::ONE, Vec3::ZERO],
+            ids: vec![0, NO_HIT],
+            t: vec![1.0, f32::INFINITY],
+            ..Default::default()
+        };
+        let dir = std::env::temp_dir().join(format!("raybench-out-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("a.png");
+        write_color_png(&frame, &p).unwrap();
+        write_ids_png(&frame, &dir.join("b.png")).unwrap();
+        let img = image::open(&p).unwrap().to_rgb8();
+        assert_eq!(img.get_pixel(0, 0).0, [255, 255, 255]);
+        assert!(!dir.join("a.png.partial").exists());
+        assert!(write_color_png(&frame, &dir.join("no/such/dir.png")).is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
