@@ -1,0 +1,553 @@
+//! The TOML scene format (documented in `docs/scene-format.md`).
+
+use crate::error::LoadError;
+use crate::generators::{self, Generated};
+use crate::gltf_loader::load_gltf_file;
+use crate::obj::{MeshData, load_obj_file};
+use crate::transform::Transform;
+use raybench_core::{
+    Camera, Light, Material, MaterialKind, PolygonMesh, Scene, SceneBuilder, SceneError, Sphere, Triangle,
+    Vec3,
+};
+use serde::Deserialize;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// Scene files larger than this are refused before reading (meshes belong in mesh files).
+const MAX_SCENE_FILE_BYTES: u64 = 64 << 20;
+
+type V3 = [f32; 3];
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    name: Option<String>,
+    background: Option<V3>,
+    camera: Option<CameraDesc>,
+    #[serde(default, rename = "material")]
+    materials: Vec<MaterialDesc>,
+    #[serde(default, rename = "light")]
+    lights: Vec<LightDesc>,
+    #[serde(default, rename = "object")]
+    objects: Vec<ObjectDesc>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraDesc {
+    position: V3,
+    look_at: V3,
+    up: Option<V3>,
+    fov: Option<f32>,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "snake_case")]
+enum KindDesc {
+    Diffuse,
+    Mirror,
+    Glass,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MaterialDesc {
+    name: String,
+    kind: Option<KindDesc>,
+    color: Option<V3>,
+    specular: Option<V3>,
+    shininess: Option<f32>,
+    emission: Option<V3>,
+    ior: Option<f32>,
+}
+
+#[derive(Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+enum LightDesc {
+    Point(PointLightDesc),
+    Directional(DirectionalLightDesc),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PointLightDesc {
+    position: V3,
+    intensity: V3,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DirectionalLightDesc {
+    direction: V3,
+    radiance: V3,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum ScaleDesc {
+    Uniform(f32),
+    PerAxis(V3),
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct TransformDesc {
+    scale: Option<ScaleDesc>,
+    rotate: Option<V3>,
+    translate: Option<V3>,
+}
+
+impl TransformDesc {
+    fn to_transform(&self) -> Transform {
+        Transform {
+            scale: match self.scale {
+                None => Vec3::ONE,
+                Some(ScaleDesc::Uniform(s)) => Vec3::splat(s),
+                Some(ScaleDesc::PerAxis(s)) => Vec3::from(s),
+            },
+            rotate_degrees: self.rotate.map_or(Vec3::ZERO, Vec3::from),
+            translate: self.translate.map_or(Vec3::ZERO, Vec3::from),
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+enum ObjectDesc {
+    Sphere(SphereDesc),
+    Plane(PlaneDesc),
+    Triangle(TriangleDesc),
+    Polygons(PolygonsDesc),
+    Mesh(MeshDesc),
+    Generator(GeneratorDesc),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SphereDesc {
+    center: V3,
+    radius: f32,
+    material: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PlaneDesc {
+    point: V3,
+    normal: V3,
+    material: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TriangleDesc {
+    vertices: [V3; 3],
+    material: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PolygonsDesc {
+    positions: Vec<V3>,
+    faces: Vec<Vec<u32>>,
+    material: Option<String>,
+    #[serde(default)]
+    transform: TransformDesc,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MeshDesc {
+    path: String,
+    material: Option<String>,
+    #[serde(default)]
+    transform: TransformDesc,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GeneratorDesc {
+    spec: String,
+    seed: Option<u32>,
+    material: Option<String>,
+    #[serde(default)]
+    transform: TransformDesc,
+}
+
+/// Where relative paths of a scene are looked up.
+struct Context<'a> {
+    scene: &'a str,
+    file: PathBuf,
+    dir: Option<&'a Path>,
+    assets: &'a Path,
+}
+
+impl Context<'_> {
+    fn resolve(&self, rel: &str) -> Result<PathBuf, LoadError> {
+        let p = Path::new(rel);
+        if p.is_absolute() {
+            return if p.is_file() {
+                Ok(p.to_owned())
+            } else {
+                Err(self.missing(p.to_owned()))
+            };
+        }
+        if let Some(dir) = self.dir {
+            let candidate = dir.join(p);
+            if candidate.is_file() {
+                return Ok(candidate);
+            }
+        }
+        let candidate = self.assets.join(p);
+        if candidate.is_file() {
+            Ok(candidate)
+        } else {
+            Err(self.missing(candidate))
+        }
+    }
+
+    fn missing(&self, path: PathBuf) -> LoadError {
+        LoadError::MissingAsset {
+            scene: self.scene.to_owned(),
+            path,
+        }
+    }
+
+    fn scene_err(&self, what: &str) -> impl Fn(SceneError) -> LoadError + '_ {
+        let context = format!("{}: {what}", self.file.display());
+        move |source| LoadError::Scene {
+            context: context.clone(),
+            source,
+        }
+    }
+}
+
+/// Loads a `.toml` scene file; relative mesh paths resolve against its folder, then `assets`.
+///
+/// # Errors
+/// When the file is missing, too large, malformed or invalid, or a mesh it names is.
+pub fn load_toml_file(path: &Path, assets: &Path) -> Result<Scene, LoadError> {
+    let io = |source| LoadError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let len = std::fs::metadata(path).map_err(io)?.len();
+    if len > MAX_SCENE_FILE_BYTES {
+        return Err(LoadError::Parse {
+            path: path.to_owned(),
+            message: format!("scene file of {len} bytes exceeds the limit of {MAX_SCENE_FILE_BYTES}"),
+        });
+    }
+    let bytes = std::fs::read(path).map_err(io)?;
+    let text = String::from_utf8(bytes).map_err(|_| LoadError::Parse {
+        path: path.to_owned(),
+        message: "not UTF-8 text".into(),
+    })?;
+    let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("scene").to_owned();
+    let ctx = Context {
+        scene: &name,
+        file: path.to_owned(),
+        dir: path.parent(),
+        assets,
+    };
+    parse_and_build(&text, &ctx)
+}
+
+/// Loads a scene from TOML text (the built-in scenes); relative mesh paths resolve against
+/// `dir` (if any), then `assets`.
+///
+/// # Errors
+/// When the text is malformed or invalid, or a mesh it names is.
+pub fn load_scene_str(text: &str, name: &str, dir: Option<&Path>, assets: &Path) -> Result<Scene, LoadError> {
+    let ctx = Context {
+        scene: name,
+        file: PathBuf::from(format!("{name}.toml")),
+        dir,
+        assets,
+    };
+    parse_and_build(text, &ctx)
+}
+
+fn load_mesh_file(path: &Path) -> Result<MeshData, LoadError> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    match ext.as_str() {
+        "obj" => load_obj_file(path),
+        "gltf" | "glb" => load_gltf_file(path),
+        _ => Err(LoadError::Parse {
+            path: path.to_owned(),
+            message: "unknown mesh file type (expected .obj, .gltf or .glb)".into(),
+        }),
+    }
+}
+
+/// A scene of one mesh file with a light, a grey-blue background and a camera framing it.
+pub(crate) fn bare_mesh_scene(path: &Path) -> Result<Scene, LoadError> {
+    let data = load_mesh_file(path)?;
+    let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("mesh").to_owned();
+    let scene_err = |source| LoadError::Scene {
+        context: path.display().to_string(),
+        source,
+    };
+    let mut b = SceneBuilder::new(&name);
+    b.background(Vec3::new(0.55, 0.65, 0.8)).map_err(scene_err)?;
+    add_mesh_data(&mut b, &name, data, None).map_err(scene_err)?;
+    Ok(b.build())
+}
+
+/// Adds a loaded mesh: its own materials (unless `override_material`), its triangles as one
+/// object.
+fn add_mesh_data(
+    b: &mut SceneBuilder,
+    name: &str,
+    data: MeshData,
+    override_material: Option<u32>,
+) -> Result<(), SceneError> {
+    let materials: Vec<u32> = match override_material {
+        Some(m) => vec![m; data.mesh.indices.len()],
+        None => {
+            let mut ids = Vec::with_capacity(data.materials.len());
+            for m in data.materials {
+                ids.push(b.add_material(m)?);
+            }
+            data.triangle_material
+                .iter()
+                .map(|m| m.map_or(0, |i| ids[i as usize]))
+                .collect()
+        }
+    };
+    data.mesh.validate()?;
+    let triangles: Vec<Triangle> = data.mesh.triangles().collect();
+    b.add_triangles(name, &triangles, &materials)?;
+    Ok(())
+}
+
+fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
+    let file: SceneFile = toml::from_str(text).map_err(|e| LoadError::Parse {
+        path: ctx.file.clone(),
+        message: e.to_string().trim_end().replace('\n', " "),
+    })?;
+    let mut b = SceneBuilder::new(file.name.as_deref().unwrap_or(ctx.scene));
+    if let Some(bg) = file.background {
+        b.background(Vec3::from(bg)).map_err(ctx.scene_err("background"))?;
+    }
+    if let Some(c) = &file.camera {
+        b.camera(Camera {
+            position: Vec3::from(c.position),
+            look_at: Vec3::from(c.look_at),
+            up: c.up.map_or(Vec3::Y, Vec3::from),
+            vfov_degrees: c.fov.unwrap_or(45.0),
+        })
+        .map_err(ctx.scene_err("camera"))?;
+    }
+    let mut names: HashMap<String, u32> = HashMap::new();
+    for m in &file.materials {
+        let d = Material::default();
+        let kind = match m.kind.unwrap_or(KindDesc::Diffuse) {
+            KindDesc::Diffuse => MaterialKind::Diffuse,
+            KindDesc::Mirror => MaterialKind::Mirror,
+            KindDesc::Glass => MaterialKind::Glass,
+        };
+        let id = b
+            .add_material(Material {
+                name: m.name.clone(),
+                kind,
+                base_color: m.color.map_or(d.base_color, Vec3::from),
+                specular: m.specular.map_or(
+                    if kind == MaterialKind::Diffuse { d.specular } else { Vec3::ONE },
+                    Vec3::from,
+                ),
+                shininess: m.shininess.unwrap_or(d.shininess),
+                emission: m.emission.map_or(d.emission, Vec3::from),
+                ior: m.ior.unwrap_or(d.ior),
+            })
+            .map_err(ctx.scene_err("material"))?;
+        if names.insert(m.name.clone(), id).is_some() {
+            return Err(LoadError::Parse {
+                path: ctx.file.clone(),
+                message: format!("material '{}' is defined twice", m.name),
+            });
+        }
+    }
+    for l in &file.lights {
+        let light = match l {
+            LightDesc::Point(p) => Light::Point {
+                position: Vec3::from(p.position),
+                intensity: Vec3::from(p.intensity),
+            },
+            LightDesc::Directional(d) => Light::Directional {
+                direction: Vec3::from(d.direction),
+                radiance: Vec3::from(d.radiance),
+            },
+        };
+        b.add_light(light).map_err(ctx.scene_err("light"))?;
+    }
+    let material = |name: &Option<String>| -> Result<Option<u32>, LoadError> {
+        match name {
+            None => Ok(None),
+            Some(n) => names.get(n).copied().map(Some).ok_or_else(|| LoadError::Parse {
+                path: ctx.file.clone(),
+                message: format!("material '{n}' is not defined"),
+            }),
+        }
+    };
+    for (index, o) in file.objects.iter().enumerate() {
+        let what = format!("object {}", index + 1);
+        let err = ctx.scene_err(&what);
+        match o {
+            ObjectDesc::Sphere(s) => {
+                let m = material(&s.material)?.unwrap_or(0);
+                b.add_sphere(Sphere::new(Vec3::from(s.center), s.radius), m).map_err(err)?;
+            }
+            ObjectDesc::Plane(p) => {
+                let m = material(&p.material)?.unwrap_or(0);
+                b.add_plane(Vec3::from(p.point), Vec3::from(p.normal), m).map_err(err)?;
+            }
+            ObjectDesc::Triangle(t) => {
+                let m = material(&t.material)?.unwrap_or(0);
+                let tri = Triangle::new(t.vertices[0].into(), t.vertices[1].into(), t.vertices[2].into());
+                b.add_triangles("triangle", &[tri], &[m]).map_err(err)?;
+            }
+            ObjectDesc::Polygons(p) => {
+                let m = material(&p.material)?.unwrap_or(0);
+                let poly = PolygonMesh {
+                    positions: p.positions.iter().map(|&v| Vec3::from(v)).collect(),
+                    faces: p.faces.clone(),
+                };
+                let mut mesh = poly.triangulate().map_err(&err)?;
+                let xf = p.transform.to_transform();
+                if !xf.is_identity() {
+                    let a = xf.affine();
+                    mesh.transform(|v| a.transform_point3(v));
+                }
+                b.add_mesh("polygons", &mesh, m).map_err(err)?;
+            }
+            ObjectDesc::Mesh(md) => {
+                let path = ctx.resolve(&md.path)?;
+                let mut data = load_mesh_file(&path)?;
+                let xf = md.transform.to_transform();
+                if !xf.is_identity() {
+                    let a = xf.affine();
+                    data.mesh.transform(|v| a.transform_point3(v));
+                }
+                let m = material(&md.material)?;
+                add_mesh_data(&mut b, &md.path, data, m).map_err(err)?;
+            }
+            ObjectDesc::Generator(g) => {
+                let generated = generators::generate(&g.spec, g.seed.unwrap_or(generators::DEFAULT_SEED))?;
+                let m = material(&g.material)?.unwrap_or(0);
+                let xf = g.transform.to_transform();
+                let a = xf.affine();
+                match generated {
+                    Generated::Mesh(mut mesh) => {
+                        if !xf.is_identity() {
+                            mesh.transform(|v| a.transform_point3(v));
+                        }
+                        b.add_mesh(g.spec.as_str(), &mesh, m).map_err(err)?;
+                    }
+                    Generated::Spheres(spheres) => {
+                        let s_max = xf.scale.abs().max_element();
+                        for s in spheres {
+                            let s = Sphere::new(a.transform_point3(s.center), s.radius * s_max);
+                            b.add_sphere(s, m).map_err(&err)?;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    Ok(b.build())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn load(text: &str) -> Result<Scene, LoadError> {
+        load_scene_str(text, "t", None, Path::new("/nonexistent"))
+    }
+
+    #[test]
+    fn full_example() {
+        let s = load(
+            r#"
+            name = "demo"
+            background = [0, 0, 0]
+            [camera]
+            position = [0, 1, 5]
+            look_at = [0, 0, 0]
+            fov = 40
+            [[material]]
+            name = "red"
+            color = [0.8, 0.1, 0.1]
+            [[material]]
+            name = "glass"
+            kind = "glass"
+            ior = 1.5
+            [[light]]
+            kind = "point"
+            position = [0, 5, 0]
+            intensity = [10, 10, 10]
+            [[object]]
+            kind = "sphere"
+            center = [0, 0, 0]
+            radius = 1
+            material = "red"
+            [[object]]
+            kind = "plane"
+            point = [0, -1, 0]
+            normal = [0, 1, 0]
+            [[object]]
+            kind = "polygons"
+            positions = [[0,0,0],[1,0,0],[1,1,0],[0,1,0]]
+            faces = [[0,1,2,3]]
+            transform = { scale = 2, translate = [0, 0, 1] }
+            [[object]]
+            kind = "generator"
+            spec = "spheres:3"
+            "#,
+        )
+        .unwrap();
+        assert_eq!(s.name, "demo");
+        assert_eq!(s.geometry.len(), 1 + 1 + 2 + 3);
+        assert_eq!(s.material_of(0).name, "red");
+        assert_eq!(s.materials[2].kind, MaterialKind::Glass);
+        assert_eq!(s.lights.len(), 1);
+    }
+
+    #[test]
+    fn errors_name_the_problem() {
+        let cases = [
+            ("[[object]]\nkind = \"cube\"", "cube"),
+            ("[[object]]\nkind = \"sphere\"\ncenter = [0,0,0]", "radius"),
+            ("[[object]]\nkind = \"sphere\"\ncenter = [0,0,0]\nradius = 1\ncolour = 3", "colour"),
+            ("[[object]]\nkind = \"sphere\"\ncenter = [0,0,0]\nradius = 1\nmaterial = \"x\"", "'x'"),
+            ("[[object]]\nkind = \"sphere\"\ncenter = [nan,0,0]\nradius = 1", "not finite"),
+            ("[[object]]\nkind = \"sphere\"\ncenter = [inf,0,0]\nradius = 1", "not finite"),
+            ("[[object]]\nkind = \"sphere\"\ncenter = [0,0,0]\nradius = 0", "radius"),
+            ("[camera]\nposition = [0,0,0]\nlook_at = [0,0,0]", "camera"),
+            ("[[object]]\nkind = \"mesh\"\npath = \"nope.obj\"", "nope.obj"),
+            ("[[object]]\nkind = \"generator\"\nspec = \"soup:0\"", "soup:0"),
+            ("[[object]]\nkind = \"polygons\"\npositions = [[0,0,0]]\nfaces = [[0,1,2]]", "out of range"),
+            ("[[object]\nkind = ", "TOML"),
+            ("[[material]]\nname = \"a\"\n[[material]]\nname = \"a\"", "twice"),
+        ];
+        for (text, needle) in cases {
+            let e = load(text).err().unwrap_or_else(|| panic!("accepted: {text}")).to_string();
+            assert!(
+                e.to_lowercase().contains(&needle.to_lowercase()) || needle == "TOML",
+                "{text:?} -> {e}"
+            );
+        }
+    }
+
+    #[test]
+    fn empty_scene_is_legal() {
+        let s = load("").unwrap();
+        assert!(s.geometry.is_empty());
+        assert!(s.camera.is_valid());
+    }
+}
