@@ -1,1 +1,124 @@
-//! placeholder
+//! # raybench (library part of the command)
+//!
+//! The backend registry (names to [`Renderer`]s) and the frame comparison used by
+//! `raybench compare` and by the cross-backend equivalence tests. The command line itself is
+//! in `main.rs`.
+
+use raybench_core::{Frame, NO_HIT, Renderer};
+use raybench_naive::NaiveAccel;
+use raybench_render::CpuRenderer;
+
+/// A registered backend.
+#[derive(Clone, Copy, Debug)]
+pub struct Backend {
+    /// The name used on the command line.
+    pub name: &'static str,
+    /// One line of description.
+    pub description: &'static str,
+    /// Whether it is a raybench CPU backend bound by the equivalence contract (bit-identical
+    /// ids and `t` to naive); `compare` exits with status 3 when such a backend disagrees.
+    pub exact: bool,
+    /// Whether it tests every primitive for every ray (used to skip it by default on large
+    /// workloads).
+    pub brute_force: bool,
+    /// Makes a fresh, unprepared renderer.
+    pub make: fn() -> Box<dyn Renderer>,
+}
+
+/// Every backend, the reference (naive) first.
+pub const BACKENDS: &[Backend] = &[Backend {
+    name: "naive",
+    description: "every ray tests every primitive (the oracle)",
+    exact: true,
+    brute_force: true,
+    make: || {
+        Box::new(CpuRenderer::<NaiveAccel>::with_default_build(
+            "naive",
+            "every ray tests every primitive (the oracle)",
+        ))
+    },
+}];
+
+/// Backends in order of preference for `render` without `--backend` (fastest first).
+pub const PREFERENCE: &[&str] = &["naive"];
+
+/// The backend called `name`.
+///
+/// # Errors
+/// A message listing the known backends.
+pub fn backend(name: &str) -> Result<&'static Backend, String> {
+    BACKENDS.iter().find(|b| b.name == name).ok_or_else(|| {
+        let names: Vec<_> = BACKENDS.iter().map(|b| b.name).collect();
+        format!("unknown backend '{name}' (known: {})", names.join(", "))
+    })
+}
+
+/// The fastest available backend.
+#[must_use]
+pub fn default_backend() -> &'static Backend {
+    PREFERENCE
+        .iter()
+        .filter_map(|n| backend(n).ok())
+        .find(|b| (b.make)().availability().is_ok())
+        .unwrap_or(&BACKENDS[0])
+}
+
+/// How a frame differs from a reference frame of the same size.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Comparison {
+    /// Fraction of pixels (0..1) whose primitive id equals the reference's.
+    pub id_match: f64,
+    /// Pixels hit in one frame and missed in the other.
+    pub hit_mismatch: u64,
+    /// Largest `|t - t_ref|` over pixels where both hit the same primitive (0 when none).
+    pub max_abs_dt: f64,
+    /// Pixels whose id is equal but whose `t` differs in any bit.
+    pub t_mismatch: u64,
+}
+
+impl Comparison {
+    /// True when ids and `t` are bit-identical.
+    #[must_use]
+    pub fn is_exact(&self) -> bool {
+        self.id_match == 1.0 && self.t_mismatch == 0
+    }
+}
+
+/// Compares the id and `t` buffers of `frame` with those of `reference`.
+///
+/// # Panics
+/// When the frames differ in size.
+#[must_use]
+pub fn compare_frames(reference: &Frame, frame: &Frame) -> Comparison {
+    assert_eq!(
+        reference.ids.len(),
+        frame.ids.len(),
+        "frames differ in size"
+    );
+    let n = reference.ids.len();
+    let mut same = 0u64;
+    let mut hit_mismatch = 0u64;
+    let mut max_abs_dt = 0.0f64;
+    let mut t_mismatch = 0u64;
+    for i in 0..n {
+        let (a, b) = (reference.ids[i], frame.ids[i]);
+        if a == b {
+            same += 1;
+            if a != NO_HIT {
+                let (ta, tb) = (reference.t[i], frame.t[i]);
+                if ta.to_bits() != tb.to_bits() {
+                    t_mismatch += 1;
+                }
+                max_abs_dt = max_abs_dt.max((f64::from(ta) - f64::from(tb)).abs());
+            }
+        } else if (a == NO_HIT) != (b == NO_HIT) {
+            hit_mismatch += 1;
+        }
+    }
+    Comparison {
+        id_match: if n == 0 { 1.0 } else { same as f64 / n as f64 },
+        hit_mismatch,
+        max_abs_dt,
+        t_mismatch,
+    }
+}

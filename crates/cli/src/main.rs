@@ -1,1 +1,556 @@
-fn main() {}
+//! The `raybench` command. Stdout carries data (tables, JSON); progress, timings and
+//! warnings go to stderr.
+
+use anyhow::{Context, Result, bail};
+use clap::{Args, Parser, Subcommand};
+use raybench::{BACKENDS, Backend, backend, compare_frames, default_backend};
+use raybench_core::{Frame, Mode, RenderSettings, Renderer, Scene};
+use raybench_scene::{BUILTIN_SCENES, assets_dir, generators::GENERATORS};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::Arc;
+
+/// Renders scenes with interchangeable acceleration strategies and compares them.
+#[derive(Parser)]
+#[command(name = "raybench", version, about, long_about = None)]
+struct Cli {
+    /// Folder holding the shared meshes (default: $RAYBENCH_ASSETS, else assets/ at the
+    /// workspace root).
+    #[arg(long, global = true, value_name = "DIR")]
+    assets: Option<PathBuf>,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to a PNG image.
+    Render(RenderCmd),
+    /// Render a scene with several backends, time them and check that they agree.
+    Compare(CompareCmd),
+    /// List the built-in scenes and generators.
+    Scenes,
+    /// List the backends and whether they are available here.
+    Backends {
+        /// One JSON array on stdout.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Show a scene's primitives and each backend's structure.
+    Info(InfoCmd),
+}
+
+#[derive(Args, Clone)]
+struct FrameArgs {
+    /// Integrator.
+    #[arg(long, default_value = "cast", value_parser = parse_mode)]
+    mode: Mode,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 512)]
+    width: u32,
+    /// Image height in pixels.
+    #[arg(long, default_value_t = 512)]
+    height: u32,
+    /// Samples per pixel.
+    #[arg(long, default_value_t = 1)]
+    spp: u32,
+    /// Seed of the random numbers.
+    #[arg(long, default_value_t = 0)]
+    seed: u32,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
+impl FrameArgs {
+    fn settings(&self, count: bool) -> RenderSettings {
+        RenderSettings {
+            width: self.width,
+            height: self.height,
+            spp: self.spp,
+            mode: self.mode,
+            seed: self.seed,
+            count,
+            ..RenderSettings::default()
+        }
+    }
+}
+
+fn parse_mode(s: &str) -> Result<Mode, String> {
+    Mode::from_name(s).ok_or_else(|| {
+        let names: Vec<_> = Mode::ALL.iter().map(|m| m.name()).collect();
+        format!("unknown mode '{s}' (known: {})", names.join(", "))
+    })
+}
+
+#[derive(Args)]
+struct RenderCmd {
+    /// Scene: a file (.toml, .obj, .gltf, .glb), a built-in name or a generator (soup:1000).
+    scene: String,
+    /// Backend (default: the fastest available).
+    #[arg(long)]
+    backend: Option<String>,
+    #[command(flatten)]
+    frame: FrameArgs,
+    /// Output image (default: SCENE.png).
+    #[arg(long, value_name = "FILE.png")]
+    out: Option<PathBuf>,
+    /// Also write a false-colour image of primitive ids.
+    #[arg(long, value_name = "FILE.png")]
+    ids: Option<PathBuf>,
+}
+
+#[derive(Args)]
+struct CompareCmd {
+    /// Scene (as for render).
+    scene: String,
+    /// Comma-separated backends, the first being the reference (default: every available
+    /// backend, naive first when it finishes in reasonable time).
+    #[arg(long, value_delimiter = ',')]
+    backends: Option<Vec<String>>,
+    #[command(flatten)]
+    frame: FrameArgs,
+    /// Timed repetitions after one warm-up; the median is reported.
+    #[arg(long, default_value_t = 3)]
+    repeat: u32,
+    /// Print exactly one JSON array on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Args)]
+struct InfoCmd {
+    /// Scene (as for render).
+    scene: String,
+    /// Comma-separated backends (default: all available).
+    #[arg(long, value_delimiter = ',')]
+    backends: Option<Vec<String>>,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<ExitCode> {
+    let assets = assets_dir(cli.assets.as_deref());
+    match cli.command {
+        Command::Render(cmd) => with_threads(cmd.frame.threads, || render(&cmd, &assets)),
+        Command::Compare(cmd) => with_threads(cmd.frame.threads, || compare(&cmd, &assets)),
+        Command::Scenes => scenes(&assets),
+        Command::Backends { json } => backends(json),
+        Command::Info(cmd) => info(&cmd, &assets),
+    }
+}
+
+fn with_threads<T: Send>(
+    threads: Option<usize>,
+    f: impl FnOnce() -> Result<T> + Send,
+) -> Result<T> {
+    match threads {
+        None => f(),
+        Some(0) => bail!("--threads must be at least 1"),
+        Some(n) => rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .context("cannot start the thread pool")?
+            .install(f),
+    }
+}
+
+fn load_scene(spec: &str, assets: &Path) -> Result<Arc<Scene>> {
+    let start = std::time::Instant::now();
+    let scene = raybench_scene::load(spec, assets)?;
+    eprintln!(
+        "loaded {} ({} primitives) in {:.3} s",
+        scene.name,
+        scene.geometry.len(),
+        start.elapsed().as_secs_f64()
+    );
+    Ok(Arc::new(scene))
+}
+
+/// Makes and prepares a renderer, or says why it cannot run this scene.
+fn prepare(b: &Backend, scene: &Arc<Scene>) -> Result<(Box<dyn Renderer>, f64), String> {
+    let mut r = (b.make)();
+    r.availability()?;
+    r.supports(scene)?;
+    let timings = r.prepare(scene).map_err(|e| e.to_string())?;
+    let build = timings.0.iter().map(|(_, s)| s).sum();
+    Ok((r, build))
+}
+
+fn render(cmd: &RenderCmd, assets: &Path) -> Result<ExitCode> {
+    let settings = cmd.frame.settings(false);
+    settings.validate()?;
+    let b = match &cmd.backend {
+        Some(name) => backend(name).map_err(anyhow::Error::msg)?,
+        None => default_backend(),
+    };
+    let scene = load_scene(&cmd.scene, assets)?;
+    let (r, build) =
+        prepare(b, &scene).map_err(|e| anyhow::anyhow!("backend '{}': {e}", b.name))?;
+    let frame = r.render(&settings)?;
+    let secs = frame.timings.get("render").unwrap_or(0.0);
+    eprintln!(
+        "{}: build {:.3} s, render {:.3} s, {} rays, {:.2} Mrays/s",
+        b.name,
+        build,
+        secs,
+        frame.stats.rays,
+        frame.stats.rays as f64 / secs.max(1e-12) / 1e6
+    );
+    let out = cmd.out.clone().unwrap_or_else(|| {
+        let stem = Path::new(&cmd.scene)
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or("scene")
+            .replace(':', "-");
+        PathBuf::from(format!("{stem}.png"))
+    });
+    raybench_render::write_color_png(&frame, &out)?;
+    eprintln!("wrote {}", out.display());
+    if let Some(ids) = &cmd.ids {
+        raybench_render::write_ids_png(&frame, ids)?;
+        eprintln!("wrote {}", ids.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// One row of `raybench compare --json`; the key set is documented in the README.
+#[derive(Serialize)]
+struct CompareRow {
+    backend: String,
+    reference: bool,
+    available: bool,
+    reason: Option<String>,
+    scene: String,
+    mode: &'static str,
+    width: u32,
+    height: u32,
+    spp: u32,
+    build_seconds: Option<f64>,
+    render_seconds: Option<f64>,
+    rays: Option<u64>,
+    mrays_per_s: Option<f64>,
+    tests_per_ray: Option<f64>,
+    id_match: Option<f64>,
+    hit_mismatch: Option<u64>,
+    max_abs_dt: Option<f64>,
+}
+
+/// Naive-backend work above which `compare` leaves naive out of its default list.
+const NAIVE_DEFAULT_BUDGET_TESTS: f64 = 2.0e10;
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
+    let settings = cmd.frame.settings(false);
+    settings.validate()?;
+    if cmd.repeat == 0 {
+        bail!("--repeat must be at least 1");
+    }
+    let scene = load_scene(&cmd.scene, assets)?;
+    let chosen: Vec<&Backend> = match &cmd.backends {
+        Some(names) => names
+            .iter()
+            .map(|n| backend(n.trim()))
+            .collect::<Result<_, _>>()
+            .map_err(anyhow::Error::msg)?,
+        None => {
+            let samples =
+                f64::from(settings.width) * f64::from(settings.height) * f64::from(settings.spp);
+            let work = samples * scene.geometry.len() as f64 * f64::from(cmd.repeat + 1);
+            BACKENDS
+                .iter()
+                .filter(|b| {
+                    let keep = !b.brute_force || work <= NAIVE_DEFAULT_BUDGET_TESTS || BACKENDS.len() == 1;
+                    if !keep {
+                        eprintln!(
+                            "leaving {} out: about {work:.1e} ray/primitive tests (pass --backends {} to force)",
+                            b.name, b.name
+                        );
+                    }
+                    keep
+                })
+                .collect()
+        }
+    };
+    if chosen.is_empty() {
+        bail!("no backend to compare");
+    }
+
+    let mut rows = Vec::new();
+    let mut reference: Option<Frame> = None;
+    let mut disagree = false;
+    for (i, b) in chosen.iter().enumerate() {
+        let mut row = CompareRow {
+            backend: b.name.into(),
+            reference: i == 0,
+            available: true,
+            reason: None,
+            scene: scene.name.clone(),
+            mode: settings.mode.name(),
+            width: settings.width,
+            height: settings.height,
+            spp: settings.spp,
+            build_seconds: None,
+            render_seconds: None,
+            rays: None,
+            mrays_per_s: None,
+            tests_per_ray: None,
+            id_match: None,
+            hit_mismatch: None,
+            max_abs_dt: None,
+        };
+        let (r, build) = match prepare(b, &scene) {
+            Ok(x) => x,
+            Err(reason) => {
+                eprintln!("skipping {}: {reason}", b.name);
+                row.available = false;
+                row.reason = Some(reason);
+                rows.push(row);
+                continue;
+            }
+        };
+        eprintln!(
+            "{}: built in {build:.3} s, rendering {} times",
+            b.name,
+            cmd.repeat + 1
+        );
+        // The warm-up frame is counted and is the one compared; timed frames count nothing.
+        let warm = r.render(&RenderSettings {
+            count: true,
+            ..settings
+        })?;
+        let mut times = Vec::new();
+        for _ in 0..cmd.repeat {
+            let f = r.render(&settings)?;
+            times.push(f.timings.get("render").unwrap_or(0.0));
+        }
+        let secs = median(times);
+        row.build_seconds = Some(build);
+        row.render_seconds = Some(secs);
+        row.rays = Some(warm.stats.rays);
+        row.mrays_per_s = Some(warm.stats.rays as f64 / secs.max(1e-12) / 1e6);
+        row.tests_per_ray = warm
+            .stats
+            .counters
+            .filter(|_| r.counts_tests())
+            .map(|c| c.prim_tests as f64 / warm.stats.rays.max(1) as f64);
+        match &reference {
+            None => {
+                row.reference = true;
+                row.id_match = Some(1.0);
+                row.hit_mismatch = Some(0);
+                row.max_abs_dt = Some(0.0);
+                reference = Some(warm);
+            }
+            Some(reference) => {
+                let c = compare_frames(reference, &warm);
+                row.id_match = Some(c.id_match);
+                row.hit_mismatch = Some(c.hit_mismatch);
+                row.max_abs_dt = Some(c.max_abs_dt);
+                if b.exact && c.id_match < 1.0 {
+                    disagree = true;
+                }
+            }
+        }
+        rows.push(row);
+    }
+
+    if cmd.json {
+        println!("{}", serde_json::to_string_pretty(&rows)?);
+    } else {
+        print_table(&rows);
+    }
+    if disagree {
+        eprintln!("error: a raybench CPU backend disagrees with the reference");
+        return Ok(ExitCode::from(3));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn fmt_opt<T>(v: Option<T>, f: impl Fn(T) -> String) -> String {
+    v.map_or_else(|| "-".into(), f)
+}
+
+fn print_table(rows: &[CompareRow]) {
+    println!(
+        "{:<12} {:>10} {:>10} {:>10} {:>12} {:>10} {:>9} {:>8} {:>10}",
+        "backend",
+        "build s",
+        "render s",
+        "Mrays/s",
+        "tests/ray",
+        "id match",
+        "hit diff",
+        "max|dt|",
+        "speed-up"
+    );
+    let base = rows.iter().find_map(|r| r.render_seconds);
+    for r in rows {
+        if !r.available {
+            println!(
+                "{:<12} unavailable: {}",
+                r.backend,
+                r.reason.as_deref().unwrap_or("")
+            );
+            continue;
+        }
+        println!(
+            "{:<12} {:>10} {:>10} {:>10} {:>12} {:>10} {:>9} {:>8} {:>10}",
+            r.backend,
+            fmt_opt(r.build_seconds, |v| format!("{v:.4}")),
+            fmt_opt(r.render_seconds, |v| format!("{v:.4}")),
+            fmt_opt(r.mrays_per_s, |v| format!("{v:.3}")),
+            fmt_opt(r.tests_per_ray, |v| format!("{v:.1}")),
+            fmt_opt(r.id_match, |v| format!("{:.4}%", v * 100.0)),
+            fmt_opt(r.hit_mismatch, |v| v.to_string()),
+            fmt_opt(r.max_abs_dt, |v| format!("{v:.1e}")),
+            fmt_opt(r.render_seconds.zip(base), |(s, b)| format!(
+                "{:.1}x",
+                b / s.max(1e-12)
+            )),
+        );
+    }
+}
+
+fn scenes(assets: &Path) -> Result<ExitCode> {
+    println!("# built-in scenes (assets: {})", assets.display());
+    for b in BUILTIN_SCENES {
+        let missing: Vec<_> = b
+            .assets
+            .iter()
+            .filter(|a| !assets.join(a).is_file())
+            .collect();
+        let state = if missing.is_empty() {
+            "ok"
+        } else {
+            "missing-assets"
+        };
+        println!("{:<14} {:<15} {}", b.name, state, b.description);
+    }
+    println!("# generators (NAME:ARG)");
+    for g in GENERATORS {
+        println!(
+            "{:<14} {:<15} {} (ARG = {}, at most {})",
+            format!("{}:ARG", g.name),
+            "ok",
+            g.description,
+            g.argument,
+            g.max
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+#[derive(Serialize)]
+struct BackendRow {
+    name: &'static str,
+    available: bool,
+    reason: Option<String>,
+    exact: bool,
+    description: &'static str,
+}
+
+fn backends(json: bool) -> Result<ExitCode> {
+    let rows: Vec<BackendRow> = BACKENDS
+        .iter()
+        .map(|b| {
+            let avail = (b.make)().availability();
+            BackendRow {
+                name: b.name,
+                available: avail.is_ok(),
+                reason: avail.err(),
+                exact: b.exact,
+                description: b.description,
+            }
+        })
+        .collect();
+    if json {
+        println!("{}", serde_json::to_string_pretty(&rows)?);
+    } else {
+        for r in rows {
+            let state = if r.available {
+                "available".to_string()
+            } else {
+                format!("unavailable ({})", r.reason.unwrap_or_default())
+            };
+            println!("{:<12} {:<12} {}", r.name, state, r.description);
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
+    let scene = load_scene(&cmd.scene, assets)?;
+    let g = &scene.geometry;
+    println!("scene       {}", scene.name);
+    println!("primitives  {}", g.len());
+    for (kind, n) in g.count_by_kind() {
+        println!("  {:<10}{n}", kind.name());
+    }
+    println!("objects     {}", scene.objects.len());
+    println!("materials   {}", scene.materials.len());
+    println!("lights      {}", scene.lights.len());
+    let bb = g.bounds();
+    if bb.is_empty() {
+        println!("bounds      (none: no bounded primitives)");
+    } else {
+        println!(
+            "bounds      [{}, {}, {}] .. [{}, {}, {}]",
+            bb.min.x, bb.min.y, bb.min.z, bb.max.x, bb.max.y, bb.max.z
+        );
+    }
+    println!("rays/pixel  1 (mode cast, 1 sample: one primary ray)");
+    let chosen: Vec<&Backend> = match &cmd.backends {
+        Some(names) => names
+            .iter()
+            .map(|n| backend(n.trim()))
+            .collect::<Result<_, _>>()
+            .map_err(anyhow::Error::msg)?,
+        None => BACKENDS.iter().collect(),
+    };
+    println!(
+        "{:<12} {:>10} {:>14}  structure",
+        "backend", "build s", "memory bytes"
+    );
+    for b in chosen {
+        match prepare(b, &scene) {
+            Err(reason) => println!("{:<12} unavailable: {reason}", b.name),
+            Ok((r, build)) => {
+                let s = r.structure().unwrap_or_default();
+                let counts: Vec<String> =
+                    s.counts.iter().map(|(k, v)| format!("{k}={v}")).collect();
+                println!(
+                    "{:<12} {:>10.4} {:>14}  {}",
+                    b.name,
+                    build,
+                    s.memory_bytes,
+                    if counts.is_empty() {
+                        "(none)".into()
+                    } else {
+                        counts.join(" ")
+                    }
+                );
+            }
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}

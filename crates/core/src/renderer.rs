@@ -1,8 +1,10 @@
 //! The frame-level renderer interface that the harness talks to.
 
-use crate::accel::AccelStats;
+use crate::accel::{AccelStats, RayCounters};
 use crate::frame::{Frame, Timings};
+use crate::hit::Hit;
 use crate::limits;
+use crate::ray::Ray;
 use crate::scene::Scene;
 use std::fmt;
 use std::sync::Arc;
@@ -188,4 +190,20 @@ pub trait Renderer: Send + Sync {
 
     /// Statistics of the prepared structure, if any.
     fn structure(&self) -> Option<AccelStats>;
+
+    /// Closest hits of arbitrary rays (edge-aimed rays, incoherent ray sets) against the
+    /// prepared scene, with the work counters when `count` is set and the backend counts.
+    ///
+    /// # Errors
+    /// When not prepared, or the backend traces only whole frames.
+    fn trace_rays(
+        &self,
+        _rays: &[Ray],
+        _count: bool,
+    ) -> Result<(Vec<Option<Hit>>, Option<RayCounters>), RenderError> {
+        Err(RenderError::Unsupported(format!(
+            "backend '{}' traces only whole frames",
+            self.name()
+        )))
+    }
 }

@@ -15,7 +15,7 @@ pub use output::{OutputError, id_color, srgb8, write_color_png, write_ids_png};
 
 use raybench_core::integrator::{assemble, render_tile, tiles};
 use raybench_core::{
-    Accel, AccelStats, Counters, Frame, Geometry, NoCounters, RayCounters, RenderError,
+    Accel, AccelStats, Counters, Frame, Geometry, Hit, NoCounters, Ray, RayCounters, RenderError,
     RenderSettings, Renderer, Scene, Timings,
 };
 use rayon::prelude::*;
@@ -123,6 +123,43 @@ impl<A: Accel> Renderer for CpuRenderer<A> {
     fn structure(&self) -> Option<AccelStats> {
         self.accel().map(Accel::stats)
     }
+
+    fn trace_rays(
+        &self,
+        rays: &[Ray],
+        count: bool,
+    ) -> Result<(Vec<Option<Hit>>, Option<RayCounters>), RenderError> {
+        let (_, accel) = self.prepared.as_ref().ok_or(RenderError::NotPrepared)?;
+        Ok(if count {
+            let (hits, c) = trace_counted::<A, RayCounters>(accel, rays);
+            (hits, Some(c))
+        } else {
+            (trace_counted::<A, NoCounters>(accel, rays).0, None)
+        })
+    }
+}
+
+/// Rays per batch in [`trace_counted`].
+const RAY_CHUNK: usize = 256;
+
+/// Traces `rays` in parallel chunks through the batch entry point; counters are summed in
+/// chunk order.
+fn trace_counted<A: Accel, C: Counters>(accel: &A, rays: &[Ray]) -> (Vec<Option<Hit>>, C) {
+    let mut hits = vec![None; rays.len()];
+    let counters: Vec<C> = hits
+        .par_chunks_mut(RAY_CHUNK)
+        .zip(rays.par_chunks(RAY_CHUNK))
+        .map(|(out, rays)| {
+            let mut c = C::default();
+            accel.intersect_batch(rays, out, &mut c);
+            c
+        })
+        .collect();
+    let mut total = C::default();
+    for c in &counters {
+        total.merge(c);
+    }
+    (hits, total)
 }
 
 #[cfg(test)]

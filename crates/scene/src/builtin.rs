@@ -26,11 +26,39 @@ macro_rules! builtin {
 
 /// Every built-in scene, in the order `raybench scenes` lists them.
 pub const BUILTIN_SCENES: &[BuiltinScene] = &[
-    builtin!("spheres", "the lecture's example: five coloured spheres over a plane", []),
-    builtin!("cornell-box", "the Cornell box (36 triangles, area light)", ["cornell-box/CornellBox-Original.obj"]),
-    builtin!("bunny-lowres", "Stanford bunny, 3,674 triangles", ["bunny-lowres/bunny-lowres.obj"]),
-    builtin!("bunny", "Stanford bunny, 69,451 triangles", ["bunny/stanford-bunny.obj"]),
-    builtin!("sponza", "Dabrovic's Sponza atrium, 66,454 triangles, seen from inside", ["sponza-dabrovic/sponza.obj"]),
-    builtin!("suzanne", "Blender's Suzanne, 968 triangles", ["suzanne/suzanne.obj"]),
-    builtin!("teapot", "the Utah teapot, 6,320 triangles", ["teapot/teapot.obj"]),
+    builtin!(
+        "spheres",
+        "the lecture's example: five coloured spheres over a plane",
+        []
+    ),
+    builtin!(
+        "cornell-box",
+        "the Cornell box (36 triangles, area light)",
+        ["cornell-box/CornellBox-Original.obj"]
+    ),
+    builtin!(
+        "bunny-lowres",
+        "Stanford bunny, 3,674 triangles",
+        ["bunny-lowres/bunny-lowres.obj"]
+    ),
+    builtin!(
+        "bunny",
+        "Stanford bunny, 69,451 triangles",
+        ["bunny/stanford-bunny.obj"]
+    ),
+    builtin!(
+        "sponza",
+        "Dabrovic's Sponza atrium, 66,454 triangles, seen from inside",
+        ["sponza-dabrovic/sponza.obj"]
+    ),
+    builtin!(
+        "suzanne",
+        "Blender's Suzanne, 968 triangles",
+        ["suzanne/suzanne.obj"]
+    ),
+    builtin!(
+        "teapot",
+        "the Utah teapot, 6,320 triangles",
+        ["teapot/teapot.obj"]
+    ),
 ];

@@ -6,8 +6,8 @@ use crate::gltf_loader::load_gltf_file;
 use crate::obj::{MeshData, load_obj_file};
 use crate::transform::Transform;
 use raybench_core::{
-    Camera, Light, Material, MaterialKind, PolygonMesh, Scene, SceneBuilder, SceneError, Sphere, Triangle,
-    Vec3,
+    Camera, Light, Material, MaterialKind, PolygonMesh, Scene, SceneBuilder, SceneError, Sphere,
+    Triangle, Vec3,
 };
 use serde::Deserialize;
 use std::collections::HashMap;
@@ -235,7 +235,9 @@ pub fn load_toml_file(path: &Path, assets: &Path) -> Result<Scene, LoadError> {
     if len > MAX_SCENE_FILE_BYTES {
         return Err(LoadError::Parse {
             path: path.to_owned(),
-            message: format!("scene file of {len} bytes exceeds the limit of {MAX_SCENE_FILE_BYTES}"),
+            message: format!(
+                "scene file of {len} bytes exceeds the limit of {MAX_SCENE_FILE_BYTES}"
+            ),
         });
     }
     let bytes = std::fs::read(path).map_err(io)?;
@@ -243,7 +245,11 @@ pub fn load_toml_file(path: &Path, assets: &Path) -> Result<Scene, LoadError> {
         path: path.to_owned(),
         message: "not UTF-8 text".into(),
     })?;
-    let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("scene").to_owned();
+    let name = path
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("scene")
+        .to_owned();
     let ctx = Context {
         scene: &name,
         file: path.to_owned(),
@@ -258,7 +264,12 @@ pub fn load_toml_file(path: &Path, assets: &Path) -> Result<Scene, LoadError> {
 ///
 /// # Errors
 /// When the text is malformed or invalid, or a mesh it names is.
-pub fn load_scene_str(text: &str, name: &str, dir: Option<&Path>, assets: &Path) -> Result<Scene, LoadError> {
+pub fn load_scene_str(
+    text: &str,
+    name: &str,
+    dir: Option<&Path>,
+    assets: &Path,
+) -> Result<Scene, LoadError> {
     let ctx = Context {
         scene: name,
         file: PathBuf::from(format!("{name}.toml")),
@@ -287,13 +298,18 @@ fn load_mesh_file(path: &Path) -> Result<MeshData, LoadError> {
 /// A scene of one mesh file with a light, a grey-blue background and a camera framing it.
 pub(crate) fn bare_mesh_scene(path: &Path) -> Result<Scene, LoadError> {
     let data = load_mesh_file(path)?;
-    let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("mesh").to_owned();
+    let name = path
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("mesh")
+        .to_owned();
     let scene_err = |source| LoadError::Scene {
         context: path.display().to_string(),
         source,
     };
     let mut b = SceneBuilder::new(&name);
-    b.background(Vec3::new(0.55, 0.65, 0.8)).map_err(scene_err)?;
+    b.background(Vec3::new(0.55, 0.65, 0.8))
+        .map_err(scene_err)?;
     add_mesh_data(&mut b, &name, data, None).map_err(scene_err)?;
     Ok(b.build())
 }
@@ -332,7 +348,8 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
     })?;
     let mut b = SceneBuilder::new(file.name.as_deref().unwrap_or(ctx.scene));
     if let Some(bg) = file.background {
-        b.background(Vec3::from(bg)).map_err(ctx.scene_err("background"))?;
+        b.background(Vec3::from(bg))
+            .map_err(ctx.scene_err("background"))?;
     }
     if let Some(c) = &file.camera {
         b.camera(Camera {
@@ -357,7 +374,11 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
                 kind,
                 base_color: m.color.map_or(d.base_color, Vec3::from),
                 specular: m.specular.map_or(
-                    if kind == MaterialKind::Diffuse { d.specular } else { Vec3::ONE },
+                    if kind == MaterialKind::Diffuse {
+                        d.specular
+                    } else {
+                        Vec3::ONE
+                    },
                     Vec3::from,
                 ),
                 shininess: m.shininess.unwrap_or(d.shininess),
@@ -388,10 +409,14 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
     let material = |name: &Option<String>| -> Result<Option<u32>, LoadError> {
         match name {
             None => Ok(None),
-            Some(n) => names.get(n).copied().map(Some).ok_or_else(|| LoadError::Parse {
-                path: ctx.file.clone(),
-                message: format!("material '{n}' is not defined"),
-            }),
+            Some(n) => names
+                .get(n)
+                .copied()
+                .map(Some)
+                .ok_or_else(|| LoadError::Parse {
+                    path: ctx.file.clone(),
+                    message: format!("material '{n}' is not defined"),
+                }),
         }
     };
     for (index, o) in file.objects.iter().enumerate() {
@@ -400,15 +425,21 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
         match o {
             ObjectDesc::Sphere(s) => {
                 let m = material(&s.material)?.unwrap_or(0);
-                b.add_sphere(Sphere::new(Vec3::from(s.center), s.radius), m).map_err(err)?;
+                b.add_sphere(Sphere::new(Vec3::from(s.center), s.radius), m)
+                    .map_err(err)?;
             }
             ObjectDesc::Plane(p) => {
                 let m = material(&p.material)?.unwrap_or(0);
-                b.add_plane(Vec3::from(p.point), Vec3::from(p.normal), m).map_err(err)?;
+                b.add_plane(Vec3::from(p.point), Vec3::from(p.normal), m)
+                    .map_err(err)?;
             }
             ObjectDesc::Triangle(t) => {
                 let m = material(&t.material)?.unwrap_or(0);
-                let tri = Triangle::new(t.vertices[0].into(), t.vertices[1].into(), t.vertices[2].into());
+                let tri = Triangle::new(
+                    t.vertices[0].into(),
+                    t.vertices[1].into(),
+                    t.vertices[2].into(),
+                );
                 b.add_triangles("triangle", &[tri], &[m]).map_err(err)?;
             }
             ObjectDesc::Polygons(p) => {
@@ -437,7 +468,8 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
                 add_mesh_data(&mut b, &md.path, data, m).map_err(err)?;
             }
             ObjectDesc::Generator(g) => {
-                let generated = generators::generate(&g.spec, g.seed.unwrap_or(generators::DEFAULT_SEED))?;
+                let generated =
+                    generators::generate(&g.spec, g.seed.unwrap_or(generators::DEFAULT_SEED))?;
                 let m = material(&g.material)?.unwrap_or(0);
                 let xf = g.transform.to_transform();
                 let a = xf.affine();
@@ -523,20 +555,50 @@ mod tests {
         let cases = [
             ("[[object]]\nkind = \"cube\"", "cube"),
             ("[[object]]\nkind = \"sphere\"\ncenter = [0,0,0]", "radius"),
-            ("[[object]]\nkind = \"sphere\"\ncenter = [0,0,0]\nradius = 1\ncolour = 3", "colour"),
-            ("[[object]]\nkind = \"sphere\"\ncenter = [0,0,0]\nradius = 1\nmaterial = \"x\"", "'x'"),
-            ("[[object]]\nkind = \"sphere\"\ncenter = [nan,0,0]\nradius = 1", "not finite"),
-            ("[[object]]\nkind = \"sphere\"\ncenter = [inf,0,0]\nradius = 1", "not finite"),
-            ("[[object]]\nkind = \"sphere\"\ncenter = [0,0,0]\nradius = 0", "radius"),
+            (
+                "[[object]]\nkind = \"sphere\"\ncenter = [0,0,0]\nradius = 1\ncolour = 3",
+                "colour",
+            ),
+            (
+                "[[object]]\nkind = \"sphere\"\ncenter = [0,0,0]\nradius = 1\nmaterial = \"x\"",
+                "'x'",
+            ),
+            (
+                "[[object]]\nkind = \"sphere\"\ncenter = [nan,0,0]\nradius = 1",
+                "not finite",
+            ),
+            (
+                "[[object]]\nkind = \"sphere\"\ncenter = [inf,0,0]\nradius = 1",
+                "not finite",
+            ),
+            (
+                "[[object]]\nkind = \"sphere\"\ncenter = [0,0,0]\nradius = 0",
+                "radius",
+            ),
             ("[camera]\nposition = [0,0,0]\nlook_at = [0,0,0]", "camera"),
-            ("[[object]]\nkind = \"mesh\"\npath = \"nope.obj\"", "nope.obj"),
-            ("[[object]]\nkind = \"generator\"\nspec = \"soup:0\"", "soup:0"),
-            ("[[object]]\nkind = \"polygons\"\npositions = [[0,0,0]]\nfaces = [[0,1,2]]", "out of range"),
+            (
+                "[[object]]\nkind = \"mesh\"\npath = \"nope.obj\"",
+                "nope.obj",
+            ),
+            (
+                "[[object]]\nkind = \"generator\"\nspec = \"soup:0\"",
+                "soup:0",
+            ),
+            (
+                "[[object]]\nkind = \"polygons\"\npositions = [[0,0,0]]\nfaces = [[0,1,2]]",
+                "out of range",
+            ),
             ("[[object]\nkind = ", "TOML"),
-            ("[[material]]\nname = \"a\"\n[[material]]\nname = \"a\"", "twice"),
+            (
+                "[[material]]\nname = \"a\"\n[[material]]\nname = \"a\"",
+                "twice",
+            ),
         ];
         for (text, needle) in cases {
-            let e = load(text).err().unwrap_or_else(|| panic!("accepted: {text}")).to_string();
+            let e = load(text)
+                .err()
+                .unwrap_or_else(|| panic!("accepted: {text}"))
+                .to_string();
             assert!(
                 e.to_lowercase().contains(&needle.to_lowercase()) || needle == "TOML",
                 "{text:?} -> {e}"

@@ -90,9 +90,12 @@ pub fn parse_spec(spec: &str) -> Result<(GeneratorInfo, u64), LoadError> {
         .find(|g| g.name == name)
         .copied()
         .ok_or_else(|| err(format!("unknown generator '{name}'")))?;
-    let n: u64 = arg
-        .parse()
-        .map_err(|_| err(format!("'{arg}' is not a non-negative whole number ({})", info.argument)))?;
+    let n: u64 = arg.parse().map_err(|_| {
+        err(format!(
+            "'{arg}' is not a non-negative whole number ({})",
+            info.argument
+        ))
+    })?;
     let min = u64::from(info.name != "icosphere");
     if n < min || n > info.max {
         return Err(err(format!(
@@ -124,7 +127,12 @@ pub fn soup(m: u32, seed: u32) -> TriangleMesh {
     let size = 1.0 / (m.max(1) as f32).cbrt();
     let mut positions = Vec::with_capacity(m as usize * 3);
     for i in 0..m {
-        let c = Vec3::new(uniform(i, seed, 0), uniform(i, seed, 1), uniform(i, seed, 2)) * 2.0 - 1.0;
+        let c = Vec3::new(
+            uniform(i, seed, 0),
+            uniform(i, seed, 1),
+            uniform(i, seed, 2),
+        ) * 2.0
+            - 1.0;
         for k in 0..3 {
             let d = Vec3::new(
                 uniform(i, seed, 3 + 3 * k),
@@ -146,7 +154,12 @@ pub fn random_spheres(m: u32, seed: u32) -> Vec<Sphere> {
     let scale = 0.6 / (m.max(1) as f32).cbrt();
     (0..m)
         .map(|i| {
-            let c = Vec3::new(uniform(i, seed, 10), uniform(i, seed, 11), uniform(i, seed, 12)) * 2.0 - 1.0;
+            let c = Vec3::new(
+                uniform(i, seed, 10),
+                uniform(i, seed, 11),
+                uniform(i, seed, 12),
+            ) * 2.0
+                - 1.0;
             Sphere::new(c, scale * (0.2 + 0.8 * uniform(i, seed, 13)))
         })
         .collect()
@@ -284,7 +297,8 @@ pub fn generate_scene(spec: &str) -> Result<Scene, LoadError> {
     };
     let generated = generate(spec, DEFAULT_SEED)?;
     let mut b = SceneBuilder::new(spec);
-    b.background(Vec3::new(0.55, 0.65, 0.8)).map_err(scene_err)?;
+    b.background(Vec3::new(0.55, 0.65, 0.8))
+        .map_err(scene_err)?;
     b.add_light(Light::Directional {
         direction: Vec3::new(-0.4, -1.0, -0.6),
         radiance: Vec3::ONE,
@@ -330,7 +344,10 @@ mod tests {
         assert_eq!(icosphere(3).indices.len(), 20 * 64);
         // Closed: V - E + F = 2 with E = 3F/2.
         let m = icosphere(3);
-        assert_eq!(m.positions.len() as i64 - 3 * m.indices.len() as i64 / 2 + m.indices.len() as i64, 2);
+        assert_eq!(
+            m.positions.len() as i64 - 3 * m.indices.len() as i64 / 2 + m.indices.len() as i64,
+            2
+        );
         assert_eq!(terrain(708).indices.len(), 1_002_528);
     }
 
@@ -342,7 +359,16 @@ mod tests {
 
     #[test]
     fn bad_specs() {
-        for spec in ["soup:", "soup:-1", "soup:0", "soup:abc", "terrain:5000", "icosphere:11", "cube:3", "soup:1e3"] {
+        for spec in [
+            "soup:",
+            "soup:-1",
+            "soup:0",
+            "soup:abc",
+            "terrain:5000",
+            "icosphere:11",
+            "cube:3",
+            "soup:1e3",
+        ] {
             assert!(parse_spec(spec).is_err(), "{spec}");
         }
         assert!(parse_spec("icosphere:0").is_ok());

@@ -17,7 +17,11 @@ fn parse_err(path: &Path, message: impl Into<String>) -> LoadError {
     }
 }
 
-fn load_buffers(path: &Path, doc: &gltf::Document, blob: Option<Vec<u8>>) -> Result<Vec<Vec<u8>>, LoadError> {
+fn load_buffers(
+    path: &Path,
+    doc: &gltf::Document,
+    blob: Option<Vec<u8>>,
+) -> Result<Vec<Vec<u8>>, LoadError> {
     let base = path.parent().unwrap_or(Path::new("."));
     let mut blob = blob;
     let mut out = Vec::new();
@@ -77,7 +81,8 @@ pub fn load_gltf_file(path: &Path) -> Result<MeshData, LoadError> {
         path: path.to_owned(),
         source,
     })?;
-    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| parse_err(path, format!("malformed glTF: {e}")))?;
+    let gltf = gltf::Gltf::from_slice(&bytes)
+        .map_err(|e| parse_err(path, format!("malformed glTF: {e}")))?;
     let buffers = load_buffers(path, &gltf.document, gltf.blob.clone())?;
     let doc = &gltf.document;
 
@@ -115,7 +120,10 @@ fn add_node(
     let local = Mat4::from_cols_array_2d(&node.transform().matrix());
     let world = parent * local;
     if !world.is_finite() {
-        return Err(parse_err(path, format!("node {} has a non-finite transform", node.index())));
+        return Err(parse_err(
+            path,
+            format!("node {} has a non-finite transform", node.index()),
+        ));
     }
     if let Some(mesh) = node.mesh() {
         add_mesh(path, &mesh, world, buffers, data)?;
@@ -126,7 +134,13 @@ fn add_node(
     Ok(())
 }
 
-fn add_mesh(path: &Path, mesh: &gltf::Mesh, world: Mat4, buffers: &[Vec<u8>], data: &mut MeshData) -> Result<(), LoadError> {
+fn add_mesh(
+    path: &Path,
+    mesh: &gltf::Mesh,
+    world: Mat4,
+    buffers: &[Vec<u8>],
+    data: &mut MeshData,
+) -> Result<(), LoadError> {
     for prim in mesh.primitives() {
         if prim.mode() != gltf::mesh::Mode::Triangles {
             // Points, lines and strips carry no triangles of the list kind: skipped.
@@ -135,7 +149,12 @@ fn add_mesh(path: &Path, mesh: &gltf::Mesh, world: Mat4, buffers: &[Vec<u8>], da
         let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
         let positions: Vec<Vec3> = reader
             .read_positions()
-            .ok_or_else(|| parse_err(path, format!("mesh {} has a primitive without positions", mesh.index())))?
+            .ok_or_else(|| {
+                parse_err(
+                    path,
+                    format!("mesh {} has a primitive without positions", mesh.index()),
+                )
+            })?
             .map(|p| world.transform_point3(Vec3::from(p)))
             .collect();
         let count = positions.len();
@@ -144,13 +163,21 @@ fn add_mesh(path: &Path, mesh: &gltf::Mesh, world: Mat4, buffers: &[Vec<u8>], da
             None => (0..count as u32).collect(),
         };
         if indices.len() % 3 != 0 {
-            return Err(parse_err(path, format!("mesh {}: index count is not a multiple of 3", mesh.index())));
+            return Err(parse_err(
+                path,
+                format!("mesh {}: index count is not a multiple of 3", mesh.index()),
+            ));
         }
         let local = TriangleMesh {
             positions,
-            indices: indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+            indices: indices
+                .chunks_exact(3)
+                .map(|c| [c[0], c[1], c[2]])
+                .collect(),
         };
-        local.validate().map_err(|e| parse_err(path, format!("mesh {}: {e}", mesh.index())))?;
+        local
+            .validate()
+            .map_err(|e| parse_err(path, format!("mesh {}: {e}", mesh.index())))?;
         let base = data.mesh.positions.len() as u32;
         let material = prim.material().index().map(|i| i as u32);
         data.mesh.positions.extend_from_slice(&local.positions);

@@ -25,7 +25,10 @@ pub fn material_from_mtl(m: &tobj::Material) -> Material {
         .or_else(|| {
             // Older tobj versions keep Ke among the unknown parameters.
             m.unknown_param.get("Ke").and_then(|s| {
-                let p: Vec<f32> = s.split_whitespace().filter_map(|x| x.parse().ok()).collect();
+                let p: Vec<f32> = s
+                    .split_whitespace()
+                    .filter_map(|x| x.parse().ok())
+                    .collect();
                 (p.len() == 3).then(|| Vec3::new(p[0], p[1], p[2]))
             })
         })

@@ -28,7 +28,12 @@ impl Transform {
     #[must_use]
     pub fn affine(&self) -> Affine3A {
         let r = self.rotate_degrees;
-        let q = Quat::from_euler(EulerRot::ZYX, r.z.to_radians(), r.y.to_radians(), r.x.to_radians());
+        let q = Quat::from_euler(
+            EulerRot::ZYX,
+            r.z.to_radians(),
+            r.y.to_radians(),
+            r.x.to_radians(),
+        );
         Affine3A::from_scale_rotation_translation(self.scale, q, self.translate)
     }
 
