@@ -133,11 +133,15 @@ mod tests {
     #[test]
     fn validity() {
         assert!(Camera::default().is_valid());
-        let mut c = Camera::default();
-        c.up = Vec3::Z;
+        let c = Camera {
+            up: Vec3::Z,
+            ..Camera::default()
+        };
         assert!(!c.is_valid());
-        c = Camera::default();
-        c.vfov_degrees = 0.0;
+        let c = Camera {
+            vfov_degrees: 0.0,
+            ..Camera::default()
+        };
         assert!(!c.is_valid());
         assert!(Camera::framing(Aabb::new(Vec3::ZERO, Vec3::ONE)).is_valid());
     }

@@ -46,8 +46,8 @@ impl Sphere {
         let l = f + d * (b / a);
         let r2 = self.radius * self.radius;
         let disc = r2 - l.dot(l);
-        // `!(disc >= 0)` also rejects NaN.
-        if !(disc >= 0.0) {
+        // Also rejects NaN (`is_nan` is false for negative numbers).
+        if disc < 0.0 || disc.is_nan() {
             return None;
         }
         let c = f.dot(f) - r2;

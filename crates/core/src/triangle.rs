@@ -121,8 +121,8 @@ impl Triangle {
         let cz = sz * c[kz];
         let t_scaled = u * az + v * bz + w * cz;
         let t = t_scaled / det;
-        // Also rejects NaN (rays with NaN or zero directions).
-        if !(t >= ray.t_min && t <= ray.t_max) {
+        // Range checks reject NaN too (rays with NaN or zero directions).
+        if t < ray.t_min || t > ray.t_max || t.is_nan() {
             return None;
         }
         Some(TriangleHit {

@@ -14,6 +14,12 @@ pub enum LoadError {
         /// The cause.
         source: std::io::Error,
     },
+    /// The file does not exist.
+    #[error("{}: file not found", path.display())]
+    NotFound {
+        /// The file.
+        path: PathBuf,
+    },
     /// The file is malformed.
     #[error("{}: {message}", path.display())]
     Parse {

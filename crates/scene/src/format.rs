@@ -280,6 +280,17 @@ pub fn load_scene_str(
 }
 
 fn load_mesh_file(path: &Path) -> Result<MeshData, LoadError> {
+    let data = load_mesh_file_any(path)?;
+    if data.mesh.indices.is_empty() {
+        return Err(LoadError::Parse {
+            path: path.to_owned(),
+            message: "no triangles found (is this a mesh file?)".into(),
+        });
+    }
+    Ok(data)
+}
+
+fn load_mesh_file_any(path: &Path) -> Result<MeshData, LoadError> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -342,9 +353,17 @@ fn add_mesh_data(
 }
 
 fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
-    let file: SceneFile = toml::from_str(text).map_err(|e| LoadError::Parse {
-        path: ctx.file.clone(),
-        message: e.to_string().trim_end().replace('\n', " "),
+    let file: SceneFile = toml::from_str(text).map_err(|e| {
+        let position = e.span().map_or(String::new(), |span| {
+            let before = text.get(..span.start).unwrap_or(text);
+            let line = before.matches('\n').count() + 1;
+            let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+            format!("line {line}, column {column}: ")
+        });
+        LoadError::Parse {
+            path: ctx.file.clone(),
+            message: format!("{position}{}", e.message()),
+        }
     })?;
     let mut b = SceneBuilder::new(file.name.as_deref().unwrap_or(ctx.scene));
     if let Some(bg) = file.background {

@@ -188,3 +188,129 @@ fn add_mesh(
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One triangle (positions f32, indices u16) as a buffer, and the JSON describing it.
+    fn triangle_gltf(uri: Option<&str>) -> (Vec<u8>, String) {
+        let mut bin = Vec::new();
+        for v in [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
+            bin.extend_from_slice(&v.to_le_bytes());
+        }
+        for i in [0u16, 1, 2, 0] {
+            bin.extend_from_slice(&i.to_le_bytes());
+        }
+        let uri = uri.map_or(String::new(), |u| format!(r#""uri": "{u}", "#));
+        let json = format!(
+            r#"{{"asset": {{"version": "2.0"}}, "scene": 0,
+            "scenes": [{{"nodes": [0]}}],
+            "nodes": [{{"mesh": 0, "translation": [0, 0, 5]}}],
+            "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1, "material": 0}}]}}],
+            "materials": [{{"name": "m", "pbrMetallicRoughness": {{"baseColorFactor": [1, 0, 0, 1]}}}}],
+            "buffers": [{{{uri}"byteLength": {len}}}],
+            "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": 36}},
+                            {{"buffer": 0, "byteOffset": 36, "byteLength": 6}}],
+            "accessors": [
+              {{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                "min": [0, 0, 0], "max": [1, 1, 0]}},
+              {{"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}}]}}"#,
+            len = bin.len()
+        );
+        (bin, json)
+    }
+
+    fn tmp(name: &str) -> std::path::PathBuf {
+        let d = std::env::temp_dir().join(format!("raybench-gltf-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        d.join(name)
+    }
+
+    fn check(data: &MeshData) {
+        assert_eq!(data.mesh.indices.len(), 1);
+        assert_eq!(
+            data.mesh.positions[1],
+            Vec3::new(1.0, 0.0, 5.0),
+            "node translation applied"
+        );
+        assert_eq!(data.triangle_material, vec![Some(0)]);
+        assert_eq!(data.materials[0].base_color, Vec3::new(1.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn embedded_external_and_binary_gltf() {
+        let (bin, _) = triangle_gltf(None);
+        let data_uri = format!(
+            "data:application/octet-stream;base64,{}",
+            base64::engine::general_purpose::STANDARD.encode(&bin)
+        );
+        let (_, json) = triangle_gltf(Some(&data_uri));
+        let p = tmp("embedded.gltf");
+        std::fs::write(&p, &json).unwrap();
+        check(&load_gltf_file(&p).unwrap());
+
+        let (_, json) = triangle_gltf(Some("tri.bin"));
+        std::fs::write(tmp("tri.bin"), &bin).unwrap();
+        let p = tmp("external.gltf");
+        std::fs::write(&p, &json).unwrap();
+        check(&load_gltf_file(&p).unwrap());
+
+        // GLB: header, JSON chunk (padded with spaces), BIN chunk (padded with zeros).
+        let (_, json) = triangle_gltf(None);
+        let mut j = json.into_bytes();
+        while j.len() % 4 != 0 {
+            j.push(b' ');
+        }
+        let mut b = bin.clone();
+        while b.len() % 4 != 0 {
+            b.push(0);
+        }
+        let total = 12 + 8 + j.len() + 8 + b.len();
+        let mut glb = Vec::new();
+        glb.extend_from_slice(b"glTF");
+        glb.extend_from_slice(&2u32.to_le_bytes());
+        glb.extend_from_slice(&(total as u32).to_le_bytes());
+        glb.extend_from_slice(&(j.len() as u32).to_le_bytes());
+        glb.extend_from_slice(b"JSON");
+        glb.extend_from_slice(&j);
+        glb.extend_from_slice(&(b.len() as u32).to_le_bytes());
+        glb.extend_from_slice(b"BIN\0");
+        glb.extend_from_slice(&b);
+        let p = tmp("tri.glb");
+        std::fs::write(&p, &glb).unwrap();
+        check(&load_gltf_file(&p).unwrap());
+
+        // Truncated GLB and a buffer shorter than declared are errors, not panics.
+        std::fs::write(&p, &glb[..glb.len() - 10]).unwrap();
+        assert!(load_gltf_file(&p).is_err());
+        let (_, json) = triangle_gltf(Some("short.bin"));
+        std::fs::write(tmp("short.bin"), &bin[..10]).unwrap();
+        let p = tmp("short.gltf");
+        std::fs::write(&p, &json).unwrap();
+        let e = load_gltf_file(&p).unwrap_err().to_string();
+        assert!(e.contains("declares"), "{e}");
+        // A missing external buffer names it.
+        let (_, json) = triangle_gltf(Some("absent.bin"));
+        let p = tmp("absent.gltf");
+        std::fs::write(&p, &json).unwrap();
+        let e = load_gltf_file(&p).unwrap_err().to_string();
+        assert!(e.contains("absent.bin"), "{e}");
+    }
+
+    #[test]
+    fn out_of_range_indices_are_errors() {
+        let (mut bin, _) = triangle_gltf(None);
+        // Index 2 becomes 9.
+        bin[40..42].copy_from_slice(&9u16.to_le_bytes());
+        let data_uri = format!(
+            "data:application/octet-stream;base64,{}",
+            base64::engine::general_purpose::STANDARD.encode(&bin)
+        );
+        let (_, json) = triangle_gltf(Some(&data_uri));
+        let p = tmp("oob.gltf");
+        std::fs::write(&p, &json).unwrap();
+        let e = load_gltf_file(&p).unwrap_err().to_string();
+        assert!(e.contains("out of range"), "{e}");
+    }
+}

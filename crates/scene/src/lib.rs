@@ -64,9 +64,8 @@ pub fn load(spec: &str, assets: &Path) -> Result<Scene, LoadError> {
         return generators::generate_scene(spec);
     }
     if path.extension().is_some() || spec.contains('/') {
-        return Err(LoadError::Io {
+        return Err(LoadError::NotFound {
             path: path.to_owned(),
-            source: std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"),
         });
     }
     Err(LoadError::UnknownScene(spec.to_owned()))

@@ -64,9 +64,8 @@ pub fn load_obj_file(path: &Path) -> Result<MeshData, LoadError> {
         ignore_lines: true,
     };
     if !path.is_file() {
-        return Err(LoadError::Io {
+        return Err(LoadError::NotFound {
             path: path.to_owned(),
-            source: std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"),
         });
     }
     let (models, materials) = tobj::load_obj(path, &opts).map_err(|e| LoadError::Parse {

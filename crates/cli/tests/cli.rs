@@ -1,0 +1,315 @@
+//! The `raybench` command end to end: happy paths, and every kind of bad input giving a
+//! one-line error and a non-zero exit, never a panic (exit code 101) or a hang.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn raybench(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_raybench"))
+        .args(args)
+        .output()
+        .expect("raybench runs")
+}
+
+fn tmp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("raybench-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn write(dir: &Path, name: &str, content: &[u8]) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, content).unwrap();
+    p.to_str().unwrap().to_owned()
+}
+
+/// Asserts a clean failure: non-zero exit that is not a panic, and one `error:` line that
+/// contains `needle`.
+fn assert_clean_error(out: &Output, needle: &str) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "succeeded; stderr: {stderr}");
+    assert_ne!(out.status.code(), Some(101), "panicked: {stderr}");
+    let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
+    assert_eq!(errors.len(), 1, "expected one error line, got: {stderr}");
+    assert!(
+        errors[0].contains(needle),
+        "error line {:?} lacks {needle:?}",
+        errors[0]
+    );
+}
+
+#[test]
+fn render_writes_colour_and_id_images() {
+    let dir = tmp_dir("render");
+    let out = dir.join("s.png");
+    let ids = dir.join("ids.png");
+    let o = raybench(&[
+        "render",
+        "spheres",
+        "--width",
+        "40",
+        "--height",
+        "30",
+        "--out",
+        out.to_str().unwrap(),
+        "--ids",
+        ids.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(o.stdout.is_empty(), "render prints data only to files");
+    for p in [&out, &ids] {
+        let bytes = std::fs::read(p).unwrap();
+        assert_eq!(&bytes[1..4], b"PNG");
+    }
+    assert!(!dir.join("s.png.partial").exists());
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn compare_json_has_the_documented_keys() {
+    let o = raybench(&[
+        "compare", "spheres", "--width", "32", "--height", "32", "--repeat", "1", "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value =
+        serde_json::from_slice(&o.stdout).expect("exactly one JSON document");
+    let rows = v.as_array().unwrap();
+    assert!(!rows.is_empty());
+    let keys = [
+        "backend",
+        "reference",
+        "available",
+        "reason",
+        "scene",
+        "mode",
+        "width",
+        "height",
+        "spp",
+        "build_seconds",
+        "render_seconds",
+        "rays",
+        "mrays_per_s",
+        "tests_per_ray",
+        "id_match",
+        "hit_mismatch",
+        "max_abs_dt",
+    ];
+    for row in rows {
+        for k in keys {
+            assert!(row.get(k).is_some(), "missing key {k} in {row}");
+        }
+    }
+    assert_eq!(rows[0]["reference"], true);
+    assert_eq!(rows[0]["rays"], 32 * 32);
+    assert_eq!(rows[0]["id_match"], 1.0);
+    // Naive tests all 6 primitives of `spheres` for every ray.
+    assert_eq!(rows[0]["tests_per_ray"], 6.0);
+}
+
+#[test]
+fn listing_commands() {
+    let o = raybench(&["scenes"]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("cornell-box"));
+    let o = raybench(&["backends"]);
+    assert!(String::from_utf8_lossy(&o.stdout).starts_with("naive"));
+    let o = raybench(&["backends", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v[0]["name"], "naive");
+    let o = raybench(&["--version"]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains(env!("CARGO_PKG_VERSION")));
+    let o = raybench(&["info", "spheres"]);
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        s.contains("sphere") && s.contains("plane") && s.contains("naive"),
+        "{s}"
+    );
+}
+
+#[test]
+fn bad_files_give_one_line_errors() {
+    let dir = tmp_dir("bad");
+    let cases: Vec<(String, &str)> = vec![
+        (
+            write(&dir, "oob.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n"),
+            "out of bounds",
+        ),
+        (
+            write(&dir, "neg.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf -5 2 3\n"),
+            "out of bounds",
+        ),
+        (
+            write(&dir, "short.obj", b"v 0 0 0\nv 1 0\nv 0 1 0\nf 1 2 3\n"),
+            "short.obj",
+        ),
+        (
+            write(
+                &dir,
+                "trunc.obj",
+                b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nv 0 0 ",
+            ),
+            "trunc.obj",
+        ),
+        (
+            write(&dir, "nan.obj", b"v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+            "non-finite",
+        ),
+        (
+            write(&dir, "inf.obj", b"v 1e39 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+            "non-finite",
+        ),
+        (
+            write(&dir, "garbage.obj", b"hello\x00\x01world\n"),
+            "no triangles",
+        ),
+        (
+            write(
+                &dir,
+                "trunc.gltf",
+                br#"{"asset": {"version": "2.0"}, "meshes": ["#,
+            ),
+            "trunc.gltf",
+        ),
+        (
+            write(&dir, "trunc.glb", b"glTF\x02\x00\x00\x00\xff\x00\x00\x00"),
+            "trunc.glb",
+        ),
+        (
+            write(&dir, "bad.toml", b"[camera\nposition="),
+            "line 1, column 8",
+        ),
+        (
+            write(
+                &dir,
+                "nan.toml",
+                b"[[object]]\nkind = \"sphere\"\ncenter = [nan, 0, 0]\nradius = 1\n",
+            ),
+            "not finite",
+        ),
+        (
+            write(
+                &dir,
+                "typo.toml",
+                b"[[object]]\nkind = \"sphere\"\ncentre = [0, 0, 0]\nradius = 1\n",
+            ),
+            "centre",
+        ),
+        (
+            write(
+                &dir,
+                "idx.toml",
+                b"[[object]]\nkind = \"polygons\"\npositions = [[0,0,0]]\nfaces = [[0, 1, 2]]\n",
+            ),
+            "out of range",
+        ),
+        (
+            write(
+                &dir,
+                "mesh.toml",
+                b"[[object]]\nkind = \"mesh\"\npath = \"absent.obj\"\n",
+            ),
+            "absent.obj",
+        ),
+        (
+            write(
+                &dir,
+                "cam.toml",
+                b"[camera]\nposition = [0,0,0]\nlook_at = [0,0,0]\n",
+            ),
+            "camera",
+        ),
+        (
+            write(&dir, "scene.txt", b"hello"),
+            "unknown scene file type",
+        ),
+        (
+            dir.join("missing.obj").to_str().unwrap().to_owned(),
+            "file not found",
+        ),
+        ("no-such-scene".to_owned(), "unknown scene"),
+        ("soup:0".to_owned(), "soup:0"),
+        ("terrain:99999".to_owned(), "terrain:99999"),
+    ];
+    for (scene, needle) in &cases {
+        let o = raybench(&[
+            "render",
+            scene,
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--out",
+            dir.join("o.png").to_str().unwrap(),
+        ]);
+        assert_clean_error(&o, needle);
+    }
+    assert!(!dir.join("o.png").exists());
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn bad_options_give_one_line_errors() {
+    let cases: &[(&[&str], &str)] = &[
+        (&["render", "spheres", "--width", "0"], "empty"),
+        (&["render", "spheres", "--height", "0"], "empty"),
+        (&["render", "spheres", "--width", "100000"], "limit"),
+        (&["render", "spheres", "--spp", "0"], "samples per pixel"),
+        (
+            &["render", "spheres", "--backend", "bogus"],
+            "unknown backend",
+        ),
+        (&["render", "spheres", "--mode", "bogus"], "unknown mode"),
+        (
+            &[
+                "render",
+                "spheres",
+                "--threads",
+                "0",
+                "--width",
+                "4",
+                "--height",
+                "4",
+            ],
+            "threads",
+        ),
+        (
+            &["compare", "spheres", "--backends", "naive,bogus"],
+            "unknown backend",
+        ),
+        (&["compare", "spheres", "--repeat", "0"], "repeat"),
+        (&["render", "spheres", "--width=-3"], "width"),
+        (
+            &[
+                "render",
+                "bunny",
+                "--assets",
+                "/nonexistent-raybench-assets",
+            ],
+            "stanford-bunny.obj",
+        ),
+    ];
+    for (args, needle) in cases {
+        let o = raybench(args);
+        assert_clean_error(&o, needle);
+    }
+}
+
+#[test]
+fn empty_scene_file_renders_background() {
+    let dir = tmp_dir("empty");
+    let scene = write(&dir, "empty.toml", b"background = [1.0, 0.0, 0.0]\n");
+    let out = dir.join("e.png");
+    let o = raybench(&[
+        "render",
+        &scene,
+        "--width",
+        "4",
+        "--height",
+        "4",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let bytes = std::fs::read(&out).unwrap();
+    assert_eq!(&bytes[1..4], b"PNG");
+    std::fs::remove_dir_all(dir).unwrap();
+}
