@@ -4,6 +4,7 @@
 //! `raybench compare` and by the cross-backend equivalence tests. The command line itself is
 //! in `main.rs`.
 
+use raybench_bvh::{Bvh, ObvhsAccel};
 use raybench_core::{Frame, NO_HIT, Renderer};
 use raybench_naive::NaiveAccel;
 use raybench_render::CpuRenderer;
@@ -25,22 +26,46 @@ pub struct Backend {
     pub make: fn() -> Box<dyn Renderer>,
 }
 
+const NAIVE: &str = "every ray tests every primitive (the oracle)";
+const BVH: &str =
+    "own binned-SAH BVH2, 32-byte depth-first nodes, near-child-first stack traversal";
+const OBVHS: &str = "obvhs crate: PLOC + reinsertion, compressed wide CWBVH8, obvhs traversal";
+
 /// Every backend, the reference (naive) first.
-pub const BACKENDS: &[Backend] = &[Backend {
-    name: "naive",
-    description: "every ray tests every primitive (the oracle)",
-    exact: true,
-    brute_force: true,
-    make: || {
-        Box::new(CpuRenderer::<NaiveAccel>::with_default_build(
-            "naive",
-            "every ray tests every primitive (the oracle)",
-        ))
+pub const BACKENDS: &[Backend] = &[
+    Backend {
+        name: "naive",
+        description: NAIVE,
+        exact: true,
+        brute_force: true,
+        make: || {
+            Box::new(CpuRenderer::<NaiveAccel>::with_default_build(
+                "naive", NAIVE,
+            ))
+        },
     },
-}];
+    Backend {
+        name: "bvh",
+        description: BVH,
+        exact: true,
+        brute_force: false,
+        make: || Box::new(CpuRenderer::<Bvh>::with_default_build("bvh", BVH)),
+    },
+    Backend {
+        name: "obvhs",
+        description: OBVHS,
+        exact: true,
+        brute_force: false,
+        make: || {
+            Box::new(CpuRenderer::<ObvhsAccel>::with_default_build(
+                "obvhs", OBVHS,
+            ))
+        },
+    },
+];
 
 /// Backends in order of preference for `render` without `--backend` (fastest first).
-pub const PREFERENCE: &[&str] = &["naive"];
+pub const PREFERENCE: &[&str] = &["bvh", "obvhs", "naive"];
 
 /// The backend called `name`.
 ///

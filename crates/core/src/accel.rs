@@ -68,6 +68,27 @@ impl Counters for NoCounters {
     }
 }
 
+/// Relative slack of early-exit comparisons: a node or cell is skipped only when its entry
+/// distance exceeds [`cull_bound`]`(best_t)`, slightly more than the best `t`.
+///
+/// Rule 3 of the contract compares a box's entry distance with a primitive's `t`, two
+/// numbers computed by different routines, each with its own rounding. A primitive hit at
+/// `t` lies inside its box, so the box's true entry is at most the true `t`; but the
+/// computed entry can exceed the computed `t` by a few ulps (the slab test rounds twice, the
+/// triangle test a handful of times). Without slack, two coincident triangles in different
+/// leaves (equal `t`, the tie going to the smaller id) could see the smaller id's leaf
+/// skipped. `2^-16` relative dwarfs those few ulps (`~2^-21`) and costs no measurable
+/// extra visits.
+pub const CULL_SLACK: f32 = 1.0 / 65_536.0;
+
+/// The largest entry distance at which a node or cell must still be visited when the best
+/// hit so far is at `best_t` (see [`CULL_SLACK`]).
+#[inline]
+#[must_use]
+pub fn cull_bound(best_t: f32) -> f32 {
+    best_t + best_t.abs() * CULL_SLACK
+}
+
 /// Size and shape of a built acceleration structure, for `raybench info` and reports.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct AccelStats {
@@ -90,8 +111,9 @@ pub struct AccelStats {
 /// 2. **Conservative culling.** A box or cell test may accept a ray that misses, never reject
 ///    one that hits (robust slab test, [`crate::Aabb::intersect`]; pad where needed).
 /// 3. **Strict early exits.** Skip a node only when its entry `t` is *greater* than the best
-///    `t` so far (equal must still be visited, for the tie rule); a grid stops only when the
-///    best `t` is *less* than the current cell's exit.
+///    `t` so far (equal must still be visited, for the tie rule), with the small relative
+///    slack of [`cull_bound`] that absorbs the rounding of two different routines; a grid
+///    stops only when the best `t` is *less* than the current cell's exit.
 /// 4. **Original rays.** Primitive tests always receive the original ray (its `t_max` may be
 ///    lowered to the best `t` so far, which changes no computed `t`), never one clipped to
 ///    a node or cell or with a moved origin.

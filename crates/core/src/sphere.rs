@@ -21,11 +21,15 @@ impl Sphere {
         Self { center, radius }
     }
 
-    /// The bounding box.
+    /// The bounding box, padded by `radius * 2^-11`.
+    ///
+    /// The padding covers the rounding of grazing hits: near a tangent the discriminant
+    /// loses half its bits, so a computed hit point can lie up to about `sqrt(eps) * r`
+    /// (`~2.4e-4 r`) outside the true sphere, and an unpadded box could cull it.
     #[inline]
     #[must_use]
     pub fn bounds(&self) -> Aabb {
-        let r = Vec3::splat(self.radius.abs());
+        let r = Vec3::splat(self.radius.abs() * (1.0 + 1.0 / 2048.0));
         Aabb::new(self.center - r, self.center + r)
     }
 

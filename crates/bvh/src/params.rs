@@ -1,0 +1,66 @@
+//! Build parameters with named presets.
+
+/// Parameters of the binned SAH builder.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BvhParams {
+    /// Centroid bins per axis.
+    pub bins: usize,
+    /// Largest leaf; bigger nodes are always split (SAH decides below it).
+    pub max_leaf_size: usize,
+    /// Cost of one traversal step relative to one primitive test (the SAH's `C_t / C_i`).
+    pub traversal_cost: f32,
+    /// Nodes with at least this many primitives build their two subtrees in parallel.
+    pub parallel_threshold: usize,
+}
+
+impl BvhParams {
+    /// Fastest build: 8 bins, leaves of up to 8.
+    #[must_use]
+    pub fn fast() -> Self {
+        Self {
+            bins: 8,
+            max_leaf_size: 8,
+            traversal_cost: 1.0,
+            parallel_threshold: 4096,
+        }
+    }
+
+    /// The default: 16 bins, leaves of up to 4.
+    #[must_use]
+    pub fn medium() -> Self {
+        Self {
+            bins: 16,
+            max_leaf_size: 4,
+            traversal_cost: 1.0,
+            parallel_threshold: 4096,
+        }
+    }
+
+    /// Best trees: 32 bins, leaves of up to 2.
+    #[must_use]
+    pub fn quality() -> Self {
+        Self {
+            bins: 32,
+            max_leaf_size: 2,
+            traversal_cost: 1.0,
+            parallel_threshold: 4096,
+        }
+    }
+
+    /// The preset called `name` (`fast`, `medium`, `quality`).
+    #[must_use]
+    pub fn preset(name: &str) -> Option<Self> {
+        match name {
+            "fast" => Some(Self::fast()),
+            "medium" => Some(Self::medium()),
+            "quality" => Some(Self::quality()),
+            _ => None,
+        }
+    }
+}
+
+impl Default for BvhParams {
+    fn default() -> Self {
+        Self::medium()
+    }
+}

@@ -1,0 +1,147 @@
+//! Closest-hit and any-hit traversal of the flattened BVH2.
+
+use crate::Bvh;
+use crate::build::MAX_DEPTH;
+use raybench_core::{Accel, AccelStats, Counters, Geometry, Hit, PrimHit, Ray, cull_bound};
+use std::sync::Arc;
+
+/// Traversal stack: one entry per level plus the far children pushed on the way down.
+const STACK_SIZE: usize = 2 * MAX_DEPTH + 4;
+
+impl Accel for Bvh {
+    fn build(geometry: Arc<Geometry>) -> Self {
+        Self::build_with(geometry, crate::BvhParams::default())
+    }
+
+    fn geometry(&self) -> &Geometry {
+        &self.geometry
+    }
+
+    fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
+        let g = &*self.geometry;
+        let mut best: Option<(u32, PrimHit)> = None;
+        for &id in g.unbounded() {
+            g.test_closest(id, ray, &mut best);
+        }
+        counters.add_tests(g.unbounded().len() as u64);
+        if self.nodes.is_empty() {
+            return g.complete(ray, best);
+        }
+        let bound =
+            |best: &Option<(u32, PrimHit)>| cull_bound(best.map_or(ray.t_max, |(_, h)| h.t));
+
+        let mut stack = [(0u32, 0.0f32); STACK_SIZE];
+        let mut sp = 0;
+        if let Some(t) = self.nodes[0].aabb().intersect(ray, bound(&best)) {
+            stack[0] = (0, t);
+            sp = 1;
+        }
+        while sp > 0 {
+            sp -= 1;
+            let (index, entry) = stack[sp];
+            // Strict early exit: skip only nodes entered beyond the best hit.
+            if entry > bound(&best) {
+                continue;
+            }
+            counters.add_visits(1);
+            let node = &self.nodes[index as usize];
+            if node.is_leaf() {
+                let first = node.first_or_right as usize;
+                for &id in &self.prim_ids[first..first + node.count as usize] {
+                    g.test_closest(id, ray, &mut best);
+                }
+                counters.add_tests(u64::from(node.count));
+                continue;
+            }
+            let (l, r) = (index + 1, node.first_or_right);
+            let limit = bound(&best);
+            let tl = self.nodes[l as usize].aabb().intersect(ray, limit);
+            let tr = self.nodes[r as usize].aabb().intersect(ray, limit);
+            // Near-child-first: push the far child first so the near one is popped next.
+            match (tl, tr) {
+                (Some(a), Some(b)) => {
+                    let (near, far) = if a <= b {
+                        ((l, a), (r, b))
+                    } else {
+                        ((r, b), (l, a))
+                    };
+                    stack[sp] = far;
+                    stack[sp + 1] = near;
+                    sp += 2;
+                }
+                (Some(a), None) => {
+                    stack[sp] = (l, a);
+                    sp += 1;
+                }
+                (None, Some(b)) => {
+                    stack[sp] = (r, b);
+                    sp += 1;
+                }
+                (None, None) => {}
+            }
+        }
+        g.complete(ray, best)
+    }
+
+    fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
+        let g = &*self.geometry;
+        for (i, &id) in g.unbounded().iter().enumerate() {
+            if g.shape(id).intersect(ray).is_some() {
+                counters.add_tests(i as u64 + 1);
+                return true;
+            }
+        }
+        counters.add_tests(g.unbounded().len() as u64);
+        if self.nodes.is_empty() {
+            return false;
+        }
+        let mut stack = [0u32; STACK_SIZE];
+        let mut sp = 0;
+        if self.nodes[0].aabb().intersect(ray, ray.t_max).is_some() {
+            sp = 1;
+        }
+        while sp > 0 {
+            sp -= 1;
+            counters.add_visits(1);
+            let node = &self.nodes[stack[sp] as usize];
+            if node.is_leaf() {
+                let first = node.first_or_right as usize;
+                for (k, &id) in self.prim_ids[first..first + node.count as usize]
+                    .iter()
+                    .enumerate()
+                {
+                    if g.shape(id).intersect(ray).is_some() {
+                        counters.add_tests(k as u64 + 1);
+                        return true;
+                    }
+                }
+                counters.add_tests(u64::from(node.count));
+                continue;
+            }
+            for child in [node.first_or_right, stack[sp] + 1] {
+                if self.nodes[child as usize]
+                    .aabb()
+                    .intersect(ray, ray.t_max)
+                    .is_some()
+                {
+                    stack[sp] = child;
+                    sp += 1;
+                }
+            }
+        }
+        false
+    }
+
+    fn stats(&self) -> AccelStats {
+        let leaves = self.nodes.iter().filter(|n| n.is_leaf()).count() as u64;
+        AccelStats {
+            memory_bytes: self.nodes.len() * std::mem::size_of::<crate::Node>()
+                + self.prim_ids.len() * std::mem::size_of::<u32>(),
+            counts: vec![
+                ("nodes", self.nodes.len() as u64),
+                ("leaves", leaves),
+                ("depth", self.depth() as u64),
+            ],
+        }
+    }
+}
