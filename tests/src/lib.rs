@@ -97,7 +97,9 @@ pub fn assert_same_ray_hits(what: &str, reference: &[Option<Hit>], hits: &[Optio
 }
 
 /// The one equivalence check: renders `scene` with naive on one thread (the reference) and
-/// with each of `backends` on several threads, and asserts bit-identical ids and `t`.
+/// with each of `backends` on several threads, and asserts bit-identical ids and `t`; then
+/// the same for `size * size` seeded incoherent rays (origins inside the scene's box, so
+/// many start inside nodes and next to surfaces).
 /// Also asserts naive's exact counter (`rays * M` closest-hit tests). Skips (or fails under
 /// CI) when the scene's meshes are absent.
 ///

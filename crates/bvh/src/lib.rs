@@ -157,3 +157,105 @@ impl Bvh {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use raybench_core::{Accel, Shape, Sphere, Triangle, Vec3};
+    use raybench_scene::generators;
+
+    fn geometries() -> Vec<(&'static str, Arc<Geometry>)> {
+        let mesh = |m: raybench_core::TriangleMesh| {
+            Arc::new(Geometry::new(m.triangles().map(Shape::Triangle).collect()))
+        };
+        let spheres = generators::random_spheres(700, 3)
+            .into_iter()
+            .map(Shape::Sphere)
+            .collect();
+        let point = Triangle::new(Vec3::ONE, Vec3::ONE, Vec3::ONE);
+        vec![
+            ("soup", mesh(generators::soup(5000, 1))),
+            ("icosphere", mesh(generators::icosphere(4))),
+            ("terrain", mesh(generators::terrain(40))),
+            ("spheres", Arc::new(Geometry::new(spheres))),
+            (
+                "one",
+                Arc::new(Geometry::new(vec![Shape::Sphere(Sphere::new(
+                    Vec3::ZERO,
+                    1.0,
+                ))])),
+            ),
+            (
+                "same point",
+                Arc::new(Geometry::new(vec![Shape::Triangle(point); 100])),
+            ),
+            ("empty", Arc::new(Geometry::default())),
+        ]
+    }
+
+    #[test]
+    fn every_preset_builds_valid_trees() {
+        for (name, g) in geometries() {
+            for params in [BvhParams::fast(), BvhParams::medium(), BvhParams::quality()] {
+                let bvh = Bvh::build_with(Arc::clone(&g), params);
+                bvh.validate()
+                    .unwrap_or_else(|e| panic!("{name} {params:?}: {e}"));
+                assert!(bvh.depth() <= build::MAX_DEPTH + 1);
+                let leaves = bvh.nodes().iter().filter(|n| n.is_leaf()).count();
+                if !g.is_empty() {
+                    // A binary tree with every interior node full.
+                    assert_eq!(bvh.nodes().len(), 2 * leaves - 1, "{name}");
+                }
+                let stats = bvh.stats();
+                assert_eq!(
+                    stats.memory_bytes,
+                    32 * bvh.nodes().len() + 4 * bvh.prim_ids().len()
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn validate_catches_broken_trees() {
+        let g = Arc::new(Geometry::new(
+            generators::soup(200, 2)
+                .triangles()
+                .map(Shape::Triangle)
+                .collect(),
+        ));
+        let good = Bvh::build_with(g, BvhParams::default());
+        good.validate().unwrap();
+
+        let mut shrunk = good.clone();
+        shrunk.nodes[0].max = shrunk.nodes[0].min;
+        assert!(shrunk.validate().is_err(), "a child outside its parent");
+
+        let mut lost = good.clone();
+        let leaf = lost.nodes.iter().position(Node::is_leaf).unwrap();
+        lost.nodes[leaf].count = 0;
+        assert!(lost.validate().is_err(), "an empty leaf");
+
+        let mut duplicated = good.clone();
+        duplicated.prim_ids[1] = duplicated.prim_ids[0];
+        assert!(duplicated.validate().is_err(), "a primitive in two leaves");
+    }
+
+    #[test]
+    fn sah_beats_a_leaf_on_real_work() {
+        // Incoherent rays test a handful of the 20,480 triangles: the tree really culls.
+        let g = Arc::new(Geometry::new(
+            generators::icosphere(5)
+                .triangles()
+                .map(Shape::Triangle)
+                .collect(),
+        ));
+        let bvh = Bvh::build_with(g, BvhParams::default());
+        let rays = raybench_core::rays::incoherent(bvh.geometry.bounds(), 2000, 5);
+        let mut c = raybench_core::RayCounters::default();
+        for r in &rays {
+            let _ = bvh.intersect(r, &mut c);
+        }
+        let per_ray = c.prim_tests as f64 / rays.len() as f64;
+        assert!(per_ray < 10.0, "{per_ray} tests per ray");
+    }
+}

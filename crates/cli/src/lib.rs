@@ -115,22 +115,28 @@ impl Comparison {
 /// When the frames differ in size.
 #[must_use]
 pub fn compare_frames(reference: &Frame, frame: &Frame) -> Comparison {
-    assert_eq!(
-        reference.ids.len(),
-        frame.ids.len(),
-        "frames differ in size"
-    );
-    let n = reference.ids.len();
+    compare_hits(&reference.ids, &reference.t, &frame.ids, &frame.t)
+}
+
+/// Compares per-ray primitive ids and `t` (as in a frame's buffers: [`NO_HIT`] and
+/// infinity for misses) with reference ones.
+///
+/// # Panics
+/// When the lengths differ.
+#[must_use]
+pub fn compare_hits(ref_ids: &[u32], ref_t: &[f32], ids: &[u32], t: &[f32]) -> Comparison {
+    assert_eq!(ref_ids.len(), ids.len(), "hit buffers differ in size");
+    let n = ref_ids.len();
     let mut same = 0u64;
     let mut hit_mismatch = 0u64;
     let mut max_abs_dt = 0.0f64;
     let mut t_mismatch = 0u64;
     for i in 0..n {
-        let (a, b) = (reference.ids[i], frame.ids[i]);
+        let (a, b) = (ref_ids[i], ids[i]);
         if a == b {
             same += 1;
             if a != NO_HIT {
-                let (ta, tb) = (reference.t[i], frame.t[i]);
+                let (ta, tb) = (ref_t[i], t[i]);
                 if ta.to_bits() != tb.to_bits() {
                     t_mismatch += 1;
                 }

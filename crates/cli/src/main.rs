@@ -3,8 +3,8 @@
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
-use raybench::{BACKENDS, Backend, backend, compare_frames, default_backend};
-use raybench_core::{Frame, Mode, RenderSettings, Renderer, Scene};
+use raybench::{BACKENDS, Backend, backend, compare_hits, default_backend};
+use raybench_core::{Mode, NO_HIT, Ray, RayCounters, RaySet, RenderSettings, Renderer, Scene};
 use raybench_scene::{BUILTIN_SCENES, assets_dir, generators::GENERATORS};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -58,6 +58,9 @@ struct FrameArgs {
     /// Seed of the random numbers.
     #[arg(long, default_value_t = 0)]
     seed: u32,
+    /// Maximum number of bounces (whitted, path).
+    #[arg(long, default_value_t = 5)]
+    max_depth: u32,
     /// Worker threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
@@ -71,8 +74,8 @@ impl FrameArgs {
             spp: self.spp,
             mode: self.mode,
             seed: self.seed,
+            max_depth: self.max_depth,
             count,
-            ..RenderSettings::default()
         }
     }
 }
@@ -111,12 +114,70 @@ struct CompareCmd {
     backends: Option<Vec<String>>,
     #[command(flatten)]
     frame: FrameArgs,
+    /// Ray set: `primary` renders frames; `incoherent` traces width x height seeded random
+    /// rays (origins in the scene's box, uniform directions) instead.
+    #[arg(long, default_value = "primary", value_parser = parse_ray_set)]
+    rays: RaySet,
     /// Timed repetitions after one warm-up; the median is reported.
     #[arg(long, default_value_t = 3)]
     repeat: u32,
     /// Print exactly one JSON array on stdout.
     #[arg(long)]
     json: bool,
+}
+
+fn parse_ray_set(s: &str) -> Result<RaySet, String> {
+    RaySet::from_name(s)
+        .ok_or_else(|| format!("unknown ray set '{s}' (known: primary, incoherent)"))
+}
+
+/// Seed of the incoherent ray set (the same rays in every run and in the benches).
+const INCOHERENT_SEED: u32 = 1;
+
+/// One measured workload: per-ray ids and `t`, rays traced, counters, seconds.
+struct Measured {
+    ids: Vec<u32>,
+    t: Vec<f32>,
+    rays: u64,
+    counters: Option<RayCounters>,
+    seconds: f64,
+}
+
+/// Renders a frame (primary rays) or traces the given rays (incoherent) once.
+fn measure(
+    r: &dyn Renderer,
+    settings: &RenderSettings,
+    rays: Option<&[Ray]>,
+    count: bool,
+) -> Result<Measured> {
+    let settings = RenderSettings { count, ..*settings };
+    match rays {
+        None => {
+            let f = r.render(&settings)?;
+            Ok(Measured {
+                seconds: f.timings.get("render").unwrap_or(0.0),
+                rays: f.stats.rays,
+                counters: f.stats.counters,
+                ids: f.ids,
+                t: f.t,
+            })
+        }
+        Some(rays) => {
+            let start = std::time::Instant::now();
+            let (hits, counters) = r.trace_rays(rays, count)?;
+            let seconds = start.elapsed().as_secs_f64();
+            Ok(Measured {
+                ids: hits.iter().map(|h| h.map_or(NO_HIT, |h| h.prim)).collect(),
+                t: hits
+                    .iter()
+                    .map(|h| h.map_or(f32::INFINITY, |h| h.t))
+                    .collect(),
+                rays: rays.len() as u64,
+                counters,
+                seconds,
+            })
+        }
+    }
 }
 
 #[derive(Args)]
@@ -126,6 +187,15 @@ struct InfoCmd {
     /// Comma-separated backends (default: all available).
     #[arg(long, value_delimiter = ',')]
     backends: Option<Vec<String>>,
+    /// Ray set whose work per ray is shown (primary or incoherent).
+    #[arg(long, default_value = "primary", value_parser = parse_ray_set)]
+    rays: RaySet,
+    /// Width of the probe image (or width x height incoherent rays).
+    #[arg(long, default_value_t = 128)]
+    width: u32,
+    /// Height of the probe image.
+    #[arg(long, default_value_t = 128)]
+    height: u32,
 }
 
 fn main() -> ExitCode {
@@ -233,6 +303,7 @@ struct CompareRow {
     reason: Option<String>,
     scene: String,
     mode: &'static str,
+    ray_set: &'static str,
     width: u32,
     height: u32,
     spp: u32,
@@ -252,7 +323,7 @@ const NAIVE_DEFAULT_BUDGET_TESTS: f64 = 2.0e10;
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     let n = v.len();
-    if n % 2 == 1 {
+    if !n.is_multiple_of(2) {
         v[n / 2]
     } else {
         0.5 * (v[n / 2 - 1] + v[n / 2])
@@ -295,8 +366,16 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
         bail!("no backend to compare");
     }
 
+    let rays: Option<Vec<Ray>> = match cmd.rays {
+        RaySet::Primary => None,
+        RaySet::Incoherent => Some(raybench_core::rays::incoherent(
+            scene.geometry.bounds(),
+            settings.width as usize * settings.height as usize,
+            INCOHERENT_SEED,
+        )),
+    };
     let mut rows = Vec::new();
-    let mut reference: Option<Frame> = None;
+    let mut reference: Option<Measured> = None;
     let mut disagree = false;
     for (i, b) in chosen.iter().enumerate() {
         let mut row = CompareRow {
@@ -306,6 +385,7 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
             reason: None,
             scene: scene.name.clone(),
             mode: settings.mode.name(),
+            ray_set: cmd.rays.name(),
             width: settings.width,
             height: settings.height,
             spp: settings.spp,
@@ -329,30 +409,25 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
             }
         };
         eprintln!(
-            "{}: built in {build:.3} s, rendering {} times",
+            "{}: built in {build:.3} s, tracing {} times",
             b.name,
             cmd.repeat + 1
         );
-        // The warm-up frame is counted and is the one compared; timed frames count nothing.
-        let warm = r.render(&RenderSettings {
-            count: true,
-            ..settings
-        })?;
+        // The warm-up is counted and is what gets compared; timed runs count nothing.
+        let warm = measure(r.as_ref(), &settings, rays.as_deref(), true)?;
         let mut times = Vec::new();
         for _ in 0..cmd.repeat {
-            let f = r.render(&settings)?;
-            times.push(f.timings.get("render").unwrap_or(0.0));
+            times.push(measure(r.as_ref(), &settings, rays.as_deref(), false)?.seconds);
         }
         let secs = median(times);
         row.build_seconds = Some(build);
         row.render_seconds = Some(secs);
-        row.rays = Some(warm.stats.rays);
-        row.mrays_per_s = Some(warm.stats.rays as f64 / secs.max(1e-12) / 1e6);
+        row.rays = Some(warm.rays);
+        row.mrays_per_s = Some(warm.rays as f64 / secs.max(1e-12) / 1e6);
         row.tests_per_ray = warm
-            .stats
             .counters
             .filter(|_| r.counts_tests())
-            .map(|c| c.prim_tests as f64 / warm.stats.rays.max(1) as f64);
+            .map(|c| c.prim_tests as f64 / warm.rays.max(1) as f64);
         match &reference {
             None => {
                 row.reference = true;
@@ -362,7 +437,7 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
                 reference = Some(warm);
             }
             Some(reference) => {
-                let c = compare_frames(reference, &warm);
+                let c = compare_hits(&reference.ids, &reference.t, &warm.ids, &warm.t);
                 row.id_match = Some(c.id_match);
                 row.hit_mismatch = Some(c.hit_mismatch);
                 row.max_abs_dt = Some(c.max_abs_dt);
@@ -519,6 +594,26 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
         );
     }
     println!("rays/pixel  1 (mode cast, 1 sample: one primary ray)");
+    let settings = RenderSettings {
+        width: cmd.width,
+        height: cmd.height,
+        ..RenderSettings::default()
+    };
+    settings.validate()?;
+    let probe: Option<Vec<Ray>> = match cmd.rays {
+        RaySet::Primary => None,
+        RaySet::Incoherent => Some(raybench_core::rays::incoherent(
+            g.bounds(),
+            cmd.width as usize * cmd.height as usize,
+            INCOHERENT_SEED,
+        )),
+    };
+    println!(
+        "probe       {} rays, {}x{}",
+        cmd.rays.name(),
+        cmd.width,
+        cmd.height
+    );
     let chosen: Vec<&Backend> = match &cmd.backends {
         Some(names) => names
             .iter()
@@ -528,8 +623,8 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
         None => BACKENDS.iter().collect(),
     };
     println!(
-        "{:<12} {:>10} {:>14}  structure",
-        "backend", "build s", "memory bytes"
+        "{:<12} {:>10} {:>14} {:>10} {:>10}  structure",
+        "backend", "build s", "memory bytes", "tests/ray", "visits/ray"
     );
     for b in chosen {
         match prepare(b, &scene) {
@@ -538,11 +633,15 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
                 let s = r.structure().unwrap_or_default();
                 let counts: Vec<String> =
                     s.counts.iter().map(|(k, v)| format!("{k}={v}")).collect();
+                let m = measure(r.as_ref(), &settings, probe.as_deref(), true)?;
+                let per_ray = |v: u64| format!("{:.2}", v as f64 / m.rays.max(1) as f64);
                 println!(
-                    "{:<12} {:>10.4} {:>14}  {}",
+                    "{:<12} {:>10.4} {:>14} {:>10} {:>10}  {}",
                     b.name,
                     build,
                     s.memory_bytes,
+                    m.counters.map_or("-".into(), |c| per_ray(c.prim_tests)),
+                    m.counters.map_or("-".into(), |c| per_ray(c.node_visits)),
                     if counts.is_empty() {
                         "(none)".into()
                     } else {

@@ -107,6 +107,32 @@ fn compare_json_has_the_documented_keys() {
 }
 
 #[test]
+fn compare_incoherent_rays_with_every_backend() {
+    let o = raybench(&[
+        "compare",
+        "spheres:200",
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--repeat",
+        "1",
+        "--rays",
+        "incoherent",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let rows = v.as_array().unwrap();
+    assert_eq!(rows.len(), raybench::BACKENDS.len());
+    for row in rows {
+        assert_eq!(row["ray_set"], "incoherent");
+        assert_eq!(row["rays"], 32 * 32);
+        assert_eq!(row["id_match"], 1.0, "{row}");
+    }
+}
+
+#[test]
 fn listing_commands() {
     let o = raybench(&["scenes"]);
     assert!(String::from_utf8_lossy(&o.stdout).contains("cornell-box"));
@@ -276,6 +302,10 @@ fn bad_options_give_one_line_errors() {
             "unknown backend",
         ),
         (&["compare", "spheres", "--repeat", "0"], "repeat"),
+        (
+            &["compare", "spheres", "--rays", "sideways"],
+            "unknown ray set",
+        ),
         (&["render", "spheres", "--width=-3"], "width"),
         (
             &[

@@ -55,7 +55,9 @@ impl Sphere {
             return None;
         }
         let c = f.dot(f) - r2;
-        let q = b + (a * disc).sqrt().copysign(b);
+        // sqrt(a) * sqrt(disc), not sqrt(a * disc): the product overflows f32 once
+        // |d| * r passes 1.8e19 (scenes at 1e15 with unnormalised directions).
+        let q = b + (a.sqrt() * disc.sqrt()).copysign(b);
         let t0 = c / q;
         let t1 = q / a;
         let (near, far) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
@@ -111,6 +113,14 @@ mod tests {
         let s = Sphere::new(Vec3::new(0.0, 0.0, 1.0e5), 0.01);
         let t = s.intersect(&Ray::new(Vec3::ZERO, Vec3::Z)).unwrap();
         assert!((t - (1.0e5 - 0.01)).abs() <= 1.0e5 * 1e-6, "t = {t}");
+    }
+
+    #[test]
+    fn huge_coordinates_do_not_overflow() {
+        let s = Sphere::new(Vec3::new(0.0, 0.0, 4.0e15), 1.0e14);
+        let r = Ray::new(Vec3::ZERO, Vec3::new(0.0, 0.0, 4.0e15));
+        let t = s.intersect(&r).unwrap();
+        assert!((t - 0.975).abs() < 1e-5, "t = {t}");
     }
 
     #[test]

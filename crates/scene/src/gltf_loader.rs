@@ -162,7 +162,7 @@ fn add_mesh(
             Some(ix) => ix.into_u32().collect(),
             None => (0..count as u32).collect(),
         };
-        if indices.len() % 3 != 0 {
+        if !indices.len().is_multiple_of(3) {
             return Err(parse_err(
                 path,
                 format!("mesh {}: index count is not a multiple of 3", mesh.index()),
@@ -259,11 +259,11 @@ mod tests {
         // GLB: header, JSON chunk (padded with spaces), BIN chunk (padded with zeros).
         let (_, json) = triangle_gltf(None);
         let mut j = json.into_bytes();
-        while j.len() % 4 != 0 {
+        while !j.len().is_multiple_of(4) {
             j.push(b' ');
         }
         let mut b = bin.clone();
-        while b.len() % 4 != 0 {
+        while !b.len().is_multiple_of(4) {
             b.push(0);
         }
         let total = 12 + 8 + j.len() + 8 + b.len();

@@ -47,6 +47,7 @@ pub fn material_from_mtl(m: &tobj::Material) -> Material {
         shininess: m.shininess.unwrap_or(d.shininess),
         emission,
         ior: m.optical_density.filter(|&n| n > 0.0).unwrap_or(d.ior),
+        checker: None,
     }
 }
 
@@ -82,7 +83,7 @@ pub fn load_obj_file(path: &Path) -> Result<MeshData, LoadError> {
     };
     for model in &models {
         let m = &model.mesh;
-        if m.positions.len() % 3 != 0 || m.indices.len() % 3 != 0 {
+        if !m.positions.len().is_multiple_of(3) || !m.indices.len().is_multiple_of(3) {
             return Err(LoadError::Parse {
                 path: path.to_owned(),
                 message: format!("object '{}' has incomplete vertex or face data", model.name),
