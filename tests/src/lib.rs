@@ -138,3 +138,47 @@ pub fn check(backends: &[&str], scene: &str, size: u32) {
         }
     }
 }
+
+/// The equivalence check for the integrators with secondary rays: Whitted (4 bounces) and
+/// path tracing (2 samples, 4 bounces) at `size x size` must give bit-identical colours, ids
+/// and `t` with every backend and thread count. Meant for scenes small enough for naive.
+///
+/// # Panics
+/// When any backend differs from the reference.
+pub fn check_modes(backends: &[&str], scene: &str, size: u32) {
+    let Some(scene_data) = load_or_skip(scene) else {
+        return;
+    };
+    for (mode, spp) in [
+        (raybench_core::Mode::Whitted, 1),
+        (raybench_core::Mode::Path, 2),
+    ] {
+        let settings = RenderSettings {
+            width: size,
+            height: size,
+            spp,
+            mode,
+            max_depth: 4,
+            seed: 7,
+            count: false,
+        };
+        let reference = render_with("naive", &scene_data, &settings, 1);
+        for &name in backends {
+            for threads in [2, 3] {
+                let frame = render_with(name, &scene_data, &settings, threads);
+                let what = format!("{name} on {scene}, {} ({threads} threads)", mode.name());
+                assert_same_hits(&what, &reference, &frame);
+                assert_eq!(
+                    frame.stats.rays, reference.stats.rays,
+                    "{what}: ray counts differ"
+                );
+                for (i, (a, b)) in reference.color.iter().zip(&frame.color).enumerate() {
+                    assert!(
+                        a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits),
+                        "{what}: pixel {i} colour {a} vs {b}"
+                    );
+                }
+            }
+        }
+    }
+}

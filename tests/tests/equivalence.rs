@@ -35,6 +35,30 @@ scene_tests! {
     random_spheres => "spheres:2000",
     icosphere => "icosphere:4",
     terrain => "terrain:64",
+    whitted => "whitted",
+}
+
+macro_rules! mode_tests {
+    ($($test:ident => $scene:literal,)*) => {
+        $(
+            #[test]
+            fn $test() {
+                raybench_tests::check_modes(BACKENDS, $scene, 24);
+            }
+        )*
+    };
+}
+
+// Whitted and path tracing on the scenes small enough for naive's secondary rays.
+mode_tests! {
+    modes_spheres => "spheres",
+    modes_whitted => "whitted",
+    modes_cornell_box => "cornell-box",
+    modes_suzanne => "suzanne",
+    modes_bunny_lowres => "bunny-lowres",
+    modes_teapot => "teapot",
+    modes_random_spheres => "spheres:2000",
+    modes_terrain => "terrain:32",
 }
 
 #[test]

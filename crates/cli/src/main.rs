@@ -196,6 +196,15 @@ struct InfoCmd {
     /// Height of the probe image.
     #[arg(long, default_value_t = 128)]
     height: u32,
+    /// Integrator of the probe (primary rays only).
+    #[arg(long, default_value = "cast", value_parser = parse_mode)]
+    mode: Mode,
+    /// Samples per pixel of the probe.
+    #[arg(long, default_value_t = 1)]
+    spp: u32,
+    /// Maximum bounces of the probe.
+    #[arg(long, default_value_t = 5)]
+    max_depth: u32,
 }
 
 fn main() -> ExitCode {
@@ -593,10 +602,12 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
             bb.min.x, bb.min.y, bb.min.z, bb.max.x, bb.max.y, bb.max.z
         );
     }
-    println!("rays/pixel  1 (mode cast, 1 sample: one primary ray)");
     let settings = RenderSettings {
         width: cmd.width,
         height: cmd.height,
+        spp: cmd.spp,
+        mode: cmd.mode,
+        max_depth: cmd.max_depth,
         ..RenderSettings::default()
     };
     settings.validate()?;
@@ -623,8 +634,8 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
         None => BACKENDS.iter().collect(),
     };
     println!(
-        "{:<12} {:>10} {:>14} {:>10} {:>10}  structure",
-        "backend", "build s", "memory bytes", "tests/ray", "visits/ray"
+        "{:<12} {:>10} {:>14} {:>9} {:>10} {:>10}  structure",
+        "backend", "build s", "memory bytes", "rays/px", "tests/ray", "visits/ray"
     );
     for b in chosen {
         match prepare(b, &scene) {
@@ -635,11 +646,13 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
                     s.counts.iter().map(|(k, v)| format!("{k}={v}")).collect();
                 let m = measure(r.as_ref(), &settings, probe.as_deref(), true)?;
                 let per_ray = |v: u64| format!("{:.2}", v as f64 / m.rays.max(1) as f64);
+                let pixels = f64::from(cmd.width) * f64::from(cmd.height);
                 println!(
-                    "{:<12} {:>10.4} {:>14} {:>10} {:>10}  {}",
+                    "{:<12} {:>10.4} {:>14} {:>9.2} {:>10} {:>10}  {}",
                     b.name,
                     build,
                     s.memory_bytes,
+                    m.rays as f64 / pixels,
                     m.counters.map_or("-".into(), |c| per_ray(c.prim_tests)),
                     m.counters.map_or("-".into(), |c| per_ray(c.node_visits)),
                     if counts.is_empty() {

@@ -133,6 +133,48 @@ fn compare_incoherent_rays_with_every_backend() {
 }
 
 #[test]
+fn every_mode_renders_and_compares() {
+    for mode in ["cast", "whitted", "path"] {
+        let o = raybench(&[
+            "compare",
+            "whitted",
+            "--mode",
+            mode,
+            "--spp",
+            "2",
+            "--max-depth",
+            "3",
+            "--seed",
+            "5",
+            "--width",
+            "24",
+            "--height",
+            "24",
+            "--repeat",
+            "1",
+            "--json",
+        ]);
+        assert!(
+            o.status.success(),
+            "{mode}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        for row in v.as_array().unwrap() {
+            assert_eq!(row["mode"], mode);
+            assert_eq!(row["id_match"], 1.0, "{row}");
+            let rays = row["rays"].as_u64().unwrap();
+            // Cast: centre + 2 jittered rays per pixel; the others add secondary rays.
+            if mode == "cast" {
+                assert_eq!(rays, 24 * 24 * 3);
+            } else {
+                assert!(rays > 24 * 24 * 3, "{mode}: {rays} rays");
+            }
+        }
+    }
+}
+
+#[test]
 fn listing_commands() {
     let o = raybench(&["scenes"]);
     assert!(String::from_utf8_lossy(&o.stdout).contains("cornell-box"));
@@ -284,6 +326,7 @@ fn bad_options_give_one_line_errors() {
             "unknown backend",
         ),
         (&["render", "spheres", "--mode", "bogus"], "unknown mode"),
+        (&["render", "spheres", "--max-depth", "1000"], "max depth"),
         (
             &[
                 "render",

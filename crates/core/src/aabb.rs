@@ -1,7 +1,7 @@
 //! Axis-aligned bounding boxes and the conservative ray/box (slab) test.
 
 use crate::ray::Ray;
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 /// An axis-aligned box. The empty box has `min = +inf`, `max = -inf`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -106,37 +106,56 @@ impl Aabb {
     ///
     /// Conservative means it may accept a ray that misses, never reject one that hits: the
     /// far distance is scaled by `1 + 2 gamma(3)` (Ize, "Robust BVH Ray Traversal", JCGT
-    /// 2013), and the `0 * inf = NaN` of a ray parallel to a slab and starting exactly on
-    /// its plane leaves that axis unconstrained instead of poisoning the result. A ray
-    /// parallel to a slab and outside it gets `+-inf` distances and is rejected.
+    /// 2013). Each axis's near and far planes are picked by the sign of the inverse
+    /// direction, and a `0 * inf = NaN` (a ray parallel to a slab, starting exactly in one of
+    /// its planes) leaves that axis unconstrained instead of poisoning the result; a ray
+    /// parallel to a slab and outside it gets `+-inf` on both planes and is rejected. The
+    /// arithmetic is four-wide SIMD (`Vec3A`) without branches.
     #[inline]
     #[must_use]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<f32> {
-        let mut t0 = ray.t_min;
-        let mut t1 = t_max;
-        for axis in 0..3 {
-            let inv = ray.inv_dir[axis];
-            // Pick the slab planes by the direction's sign (not by swapping distances), so
-            // that the empty box stays empty.
-            let (lo, hi) = if inv >= 0.0 {
-                (self.min[axis], self.max[axis])
-            } else {
-                (self.max[axis], self.min[axis])
-            };
-            let near = (lo - ray.origin[axis]) * inv;
-            let far = (hi - ray.origin[axis]) * inv * FAR_SCALE;
-            // Written so that a NaN bound compares false and keeps the interval.
-            if near > t0 {
-                t0 = near;
-            }
-            if far < t1 {
-                t1 = far;
-            }
-            if t0 > t1 {
-                return None;
-            }
+        SlabRay::new(ray).entry(Vec3A::from(self.min), Vec3A::from(self.max), t_max)
+    }
+}
+
+/// A ray prepared for many slab tests (what [`Aabb::intersect`] does, with the per-ray work
+/// hoisted out of a traversal loop): origin, inverse direction and its signs in SIMD
+/// registers.
+#[derive(Clone, Copy, Debug)]
+pub struct SlabRay {
+    origin: Vec3A,
+    inv: Vec3A,
+    positive: glam::BVec3A,
+    t_min: f32,
+}
+
+impl SlabRay {
+    /// Prepares `ray`.
+    #[inline]
+    #[must_use]
+    pub fn new(ray: &Ray) -> Self {
+        let inv = Vec3A::from(ray.inv_dir);
+        Self {
+            origin: Vec3A::from(ray.origin),
+            inv,
+            positive: inv.cmpge(Vec3A::ZERO),
+            t_min: ray.t_min,
         }
-        Some(t0)
+    }
+
+    /// The entry distance into the box `[min, max]` clamped to `[t_min, t_max]`, or `None`:
+    /// exactly [`Aabb::intersect`].
+    #[inline]
+    #[must_use]
+    pub fn entry(&self, min: Vec3A, max: Vec3A, t_max: f32) -> Option<f32> {
+        let near = (Vec3A::select(self.positive, min, max) - self.origin) * self.inv;
+        let far = (Vec3A::select(self.positive, max, min) - self.origin) * self.inv;
+        // 0 * inf = NaN: the ray lies in that slab's plane and the axis must not constrain
+        // it. `x.max(splat)` is `_mm_max_ps(x, splat)` (second operand on NaN) or
+        // `f32::max` (the non-NaN operand): either way a NaN lane becomes the bound.
+        let t0 = near.max(Vec3A::splat(self.t_min)).max_element();
+        let t1 = (far * FAR_SCALE).min(Vec3A::splat(t_max)).min_element();
+        (t0 <= t1).then_some(t0)
     }
 }
 
@@ -193,5 +212,26 @@ mod tests {
         assert!(Aabb::EMPTY.is_empty());
         assert_eq!(Aabb::EMPTY.intersect(&r, f32::INFINITY), None);
         assert_eq!(Aabb::EMPTY.surface_area(), 0.0);
+        assert!(!Aabb::new(Vec3::ZERO, Vec3::ZERO).is_empty());
+    }
+
+    #[test]
+    fn nan_free_for_rays_in_slab_planes() {
+        // Every combination of origins on the box's faces and edges with axis directions.
+        for &o in &[
+            Vec3::ZERO,
+            Vec3::ONE,
+            Vec3::new(0.0, 1.0, 0.5),
+            Vec3::new(1.0, 0.0, 1.0),
+        ] {
+            for axis in 0..3 {
+                let mut d = Vec3::ZERO;
+                d[axis] = 1.0;
+                let back = o - d * 2.0;
+                let r = Ray::new(back, d);
+                let t = unit().intersect(&r, f32::INFINITY);
+                assert!(t.is_some_and(|t| t.is_finite()), "{back} {d}: {t:?}");
+            }
+        }
     }
 }

@@ -15,17 +15,25 @@ pub enum Mode {
     /// Ray casting: one closest-hit ray per sample, simple shading, no secondary rays.
     #[default]
     Cast,
+    /// Whitted ray tracing: shadow rays to point and directional lights, Lambert plus
+    /// Blinn-Phong, mirror reflection, refraction with Fresnel weighting.
+    Whitted,
+    /// Monte Carlo path tracing: cosine-weighted diffuse bounces, next-event estimation,
+    /// Russian roulette, many samples per pixel.
+    Path,
 }
 
 impl Mode {
     /// Every mode.
-    pub const ALL: [Self; 1] = [Self::Cast];
+    pub const ALL: [Self; 3] = [Self::Cast, Self::Whitted, Self::Path];
 
     /// The name used on the command line.
     #[must_use]
     pub fn name(self) -> &'static str {
         match self {
             Self::Cast => "cast",
+            Self::Whitted => "whitted",
+            Self::Path => "path",
         }
     }
 

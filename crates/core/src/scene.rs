@@ -1,6 +1,7 @@
 //! The scene: camera, materials, lights and geometry.
 
 use crate::camera::Camera;
+use crate::emitters::Emitters;
 use crate::error::SceneError;
 use crate::geometry::{Geometry, Shape};
 use crate::limits;
@@ -43,6 +44,8 @@ pub struct Scene {
     pub prim_material: Vec<u32>,
     /// The objects, in scene order.
     pub objects: Vec<ObjectInfo>,
+    /// Emissive triangles, for next-event estimation.
+    pub emitters: Emitters,
 }
 
 impl Scene {
@@ -131,6 +134,14 @@ impl SceneBuilder {
             return Err(SceneError::Invalid(format!(
                 "{what}: ior must be positive and finite"
             )));
+        }
+        if let Some(c) = m.checker {
+            finite(c.color, &what)?;
+            if !(c.size.is_finite() && c.size > 0.0) {
+                return Err(SceneError::Invalid(format!(
+                    "{what}: checker size must be positive and finite"
+                )));
+            }
         }
         self.materials.push(m);
         Ok((self.materials.len() - 1) as u32)
@@ -319,6 +330,7 @@ impl SceneBuilder {
         let camera = self
             .camera
             .unwrap_or_else(|| Camera::framing(geometry.bounds()));
+        let emitters = Emitters::new(&geometry, &self.prim_material, &self.materials);
         Scene {
             name: self.name,
             camera,
@@ -328,6 +340,7 @@ impl SceneBuilder {
             geometry: Arc::new(geometry),
             prim_material: self.prim_material,
             objects: self.objects,
+            emitters,
         }
     }
 }

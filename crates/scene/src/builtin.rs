@@ -32,6 +32,11 @@ pub const BUILTIN_SCENES: &[BuiltinScene] = &[
         []
     ),
     builtin!(
+        "whitted",
+        "a glass and a mirror sphere over a checkered floor, point lights",
+        []
+    ),
+    builtin!(
         "cornell-box",
         "the Cornell box (36 triangles, area light)",
         ["cornell-box/CornellBox-Original.obj"]

@@ -59,6 +59,14 @@ struct MaterialDesc {
     shininess: Option<f32>,
     emission: Option<V3>,
     ior: Option<f32>,
+    checker: Option<CheckerDesc>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CheckerDesc {
+    color: V3,
+    size: f32,
 }
 
 #[derive(Deserialize)]
@@ -403,6 +411,10 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
                 shininess: m.shininess.unwrap_or(d.shininess),
                 emission: m.emission.map_or(d.emission, Vec3::from),
                 ior: m.ior.unwrap_or(d.ior),
+                checker: m.checker.as_ref().map(|c| raybench_core::Checker {
+                    color: Vec3::from(c.color),
+                    size: c.size,
+                }),
             })
             .map_err(ctx.scene_err("material"))?;
         if names.insert(m.name.clone(), id).is_some() {

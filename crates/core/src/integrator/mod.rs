@@ -13,6 +13,9 @@ use crate::sampling::Sampler;
 use crate::scene::Scene;
 use glam::Vec3;
 
+mod path;
+mod whitted;
+
 /// A rectangle of pixels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Tile {
@@ -74,7 +77,43 @@ pub fn render_tile<A: Accel, C: Counters>(
 ) -> TileOutput<C> {
     match settings.mode {
         Mode::Cast => cast_tile(scene, accel, camera, settings, tile),
+        Mode::Whitted => whitted::whitted_tile(scene, accel, camera, settings, tile),
+        Mode::Path => path::path_tile(scene, accel, camera, settings, tile),
     }
+}
+
+/// The centre rays of a tile, row by row, with their closest hits (the id and `t` buffers).
+fn centre_pass<A: Accel, C: Counters>(
+    accel: &A,
+    camera: &CameraRays,
+    tile: Tile,
+    counters: &mut C,
+) -> (Vec<Ray>, Vec<Option<Hit>>) {
+    let mut rays = Vec::with_capacity((tile.width * tile.height) as usize);
+    for y in tile.y0..tile.y0 + tile.height {
+        for x in tile.x0..tile.x0 + tile.width {
+            rays.push(camera.center_ray(x, y));
+        }
+    }
+    let mut hits = vec![None; rays.len()];
+    accel.intersect_batch(&rays, &mut hits, counters);
+    (rays, hits)
+}
+
+/// Global pixel indices (`y * width + x`) of a tile's pixels, row by row.
+fn tile_pixels(tile: Tile, width: u32) -> impl Iterator<Item = (u32, u32, u32)> {
+    (tile.y0..tile.y0 + tile.height)
+        .flat_map(move |y| (tile.x0..tile.x0 + tile.width).map(move |x| (x, y, y * width + x)))
+}
+
+/// The id and `t` buffers from the centre rays' hits.
+fn id_t_buffers(hits: &[Option<Hit>]) -> (Vec<u32>, Vec<f32>) {
+    (
+        hits.iter().map(|h| h.map_or(NO_HIT, |h| h.prim)).collect(),
+        hits.iter()
+            .map(|h| h.map_or(f32::INFINITY, |h| h.t))
+            .collect(),
+    )
 }
 
 /// Direction light travels in ray-casting mode: the scene's first directional light, else a
@@ -127,21 +166,9 @@ fn cast_tile<A: Accel, C: Counters>(
     let mut counters = C::default();
     let light_dir = cast_light(scene);
 
-    let mut rays = Vec::with_capacity(n);
-    for y in tile.y0..tile.y0 + tile.height {
-        for x in tile.x0..tile.x0 + tile.width {
-            rays.push(camera.center_ray(x, y));
-        }
-    }
-    let mut hits = vec![None; n];
-    accel.intersect_batch(&rays, &mut hits, &mut counters);
+    let (mut rays, mut hits) = centre_pass(accel, camera, tile, &mut counters);
     let mut traced = n as u64;
-
-    let ids = hits.iter().map(|h| h.map_or(NO_HIT, |h| h.prim)).collect();
-    let t = hits
-        .iter()
-        .map(|h| h.map_or(f32::INFINITY, |h| h.t))
-        .collect();
+    let (ids, t) = id_t_buffers(&hits);
 
     let color = if settings.spp <= 1 {
         rays.iter()
@@ -152,14 +179,9 @@ fn cast_tile<A: Accel, C: Counters>(
         // Jittered samples for colour; ids and t stay those of the centre ray.
         let mut sum = vec![Vec3::ZERO; n];
         for s in 0..settings.spp {
-            let mut i = 0;
-            for y in tile.y0..tile.y0 + tile.height {
-                for x in tile.x0..tile.x0 + tile.width {
-                    let pixel = y * settings.width + x;
-                    let (jx, jy) = Sampler::new(pixel, s, settings.seed).next_2d();
-                    rays[i] = camera.ray(x as f32 + jx, y as f32 + jy);
-                    i += 1;
-                }
+            for (ray, (x, y, pixel)) in rays.iter_mut().zip(tile_pixels(tile, settings.width)) {
+                let (jx, jy) = Sampler::new(pixel, s, settings.seed).next_2d();
+                *ray = camera.ray(x as f32 + jx, y as f32 + jy);
             }
             accel.intersect_batch(&rays, &mut hits, &mut counters);
             traced += n as u64;
