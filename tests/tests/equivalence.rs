@@ -7,7 +7,7 @@ use raybench_core::{Ray, Vec3};
 use raybench_tests::{assert_same_ray_hits, check, load_or_skip, prepared};
 
 /// Backends under test (naive itself checks thread-count independence).
-const BACKENDS: &[&str] = &["naive", "bvh", "obvhs"];
+const BACKENDS: &[&str] = &["naive", "bvh", "obvhs", "grid"];
 
 /// 64 x 64 ray casting: about 4k rays, so naive on the 69k-triangle meshes stays near 1 s.
 const SIZE: u32 = 64;
@@ -36,6 +36,7 @@ scene_tests! {
     icosphere => "icosphere:4",
     terrain => "terrain:64",
     whitted => "whitted",
+    teapot_stadium => "teapot-stadium",
 }
 
 macro_rules! mode_tests {
@@ -135,5 +136,40 @@ fn empty_scene_renders_background() {
         let f = raybench_tests::render_with(name, &scene, &settings, 2);
         assert!(f.ids.iter().all(|&id| id == raybench_core::NO_HIT));
         assert!(f.color.iter().all(|&c| c == Vec3::new(0.25, 0.5, 0.75)));
+    }
+}
+
+/// `Bvh::validate` on the structure built over every built-in scene and generator above,
+/// with every preset.
+#[test]
+fn bvh_invariants_hold_on_every_scene() {
+    let scenes = [
+        "spheres",
+        "whitted",
+        "cornell-box",
+        "bunny-lowres",
+        "bunny",
+        "sponza",
+        "suzanne",
+        "teapot",
+        "teapot-stadium",
+        "soup:10000",
+        "spheres:2000",
+        "icosphere:4",
+        "terrain:64",
+    ];
+    for spec in scenes {
+        let Some(scene) = raybench_tests::load_or_skip(spec) else {
+            continue;
+        };
+        for params in [
+            raybench_bvh::BvhParams::fast(),
+            raybench_bvh::BvhParams::medium(),
+            raybench_bvh::BvhParams::quality(),
+        ] {
+            let bvh = raybench_bvh::Bvh::build_with(std::sync::Arc::clone(&scene.geometry), params);
+            bvh.validate()
+                .unwrap_or_else(|e| panic!("{spec} {params:?}: {e}"));
+        }
     }
 }

@@ -6,6 +6,7 @@
 
 use raybench_bvh::{Bvh, ObvhsAccel};
 use raybench_core::{Frame, NO_HIT, Renderer};
+use raybench_grid::Grid;
 use raybench_naive::NaiveAccel;
 use raybench_render::CpuRenderer;
 
@@ -30,6 +31,7 @@ const NAIVE: &str = "every ray tests every primitive (the oracle)";
 const BVH: &str =
     "own binned-SAH BVH2, 32-byte depth-first nodes, near-child-first stack traversal";
 const OBVHS: &str = "obvhs crate: PLOC + reinsertion, compressed wide CWBVH8, obvhs traversal";
+const GRID: &str = "uniform grid walked by 3D-DDA (ray marching), mailboxing";
 
 /// Every backend, the reference (naive) first.
 pub const BACKENDS: &[Backend] = &[
@@ -62,10 +64,17 @@ pub const BACKENDS: &[Backend] = &[
             ))
         },
     },
+    Backend {
+        name: "grid",
+        description: GRID,
+        exact: true,
+        brute_force: false,
+        make: || Box::new(CpuRenderer::<Grid>::with_default_build("grid", GRID)),
+    },
 ];
 
 /// Backends in order of preference for `render` without `--backend` (fastest first).
-pub const PREFERENCE: &[&str] = &["bvh", "obvhs", "naive"];
+pub const PREFERENCE: &[&str] = &["bvh", "obvhs", "grid", "naive"];
 
 /// The backend called `name`.
 ///

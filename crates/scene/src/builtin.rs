@@ -66,4 +66,9 @@ pub const BUILTIN_SCENES: &[BuiltinScene] = &[
         "the Utah teapot, 6,320 triangles",
         ["teapot/teapot.obj"]
     ),
+    builtin!(
+        "teapot-stadium",
+        "the teapot inside a huge, nearly empty box (where uniform grids lose)",
+        ["teapot/teapot.obj"]
+    ),
 ];

@@ -1,14 +1,16 @@
-//! Criterion benchmarks of the BVH backends against two peers, on one thread per ray stream.
+//! Criterion benchmarks of raybench's accelerated backends against two peers, on one thread
+//! per ray stream.
 //!
-//! Backends: `bvh` ([`raybench_bvh::Bvh`]) and `obvhs` ([`raybench_bvh::ObvhsAccel`]), traced
-//! through [`Accel::intersect`]; peers: `bvh-crate` (svenstaro's `bvh` crate) and
+//! Backends: `bvh` ([`raybench_bvh::Bvh`]), `obvhs` ([`raybench_bvh::ObvhsAccel`]) and `grid`
+//! ([`raybench_grid::Grid`]), traced through [`Accel::intersect`]; peers: `bvh-crate` (svenstaro's `bvh` crate) and
 //! `obvhs-bvh2` (obvhs's own BVH2), built over the same triangles and testing them with
 //! raybench's [`Triangle::intersect`], so all four pay the same per-primitive cost and only
 //! the structure and its traversal differ.
 //!
 //! Scenes: the built-in `bunny` and `sponza` (their meshes come from the assets directory;
-//! when one is missing the scene is skipped with a message) and the generator
-//! `terrain:708` (about a million triangles, always available).
+//! when one is missing the scene is skipped with a message) and the generators
+//! `terrain:708` (about a million triangles) and `soup:100000` (where a uniform grid should
+//! be close to a BVH).
 //!
 //! Benchmarks, named hierarchically so they can be filtered by regular expression:
 //!
@@ -29,16 +31,16 @@
 //! Run from the workspace root (the assets path is relative to it):
 //!
 //! ```text
-//! RAYBENCH_ASSETS=../shared/scenes cargo bench -p raybench-bvh --bench bvh
-//! RAYBENCH_ASSETS=../shared/scenes cargo bench -p raybench-bvh --bench bvh -- 'trace/.*/bunny'
-//! cargo bench -p raybench-bvh --bench bvh -- terrain
+//! RAYBENCH_ASSETS=../shared/scenes cargo bench -p raybench-tests --bench backends
+//! RAYBENCH_ASSETS=../shared/scenes cargo bench -p raybench-tests --bench backends -- 'trace/.*/bunny'
+//! cargo bench -p raybench-tests --bench backends -- terrain
 //! ```
 //!
 //! Save a baseline, change the code, then compare against it:
 //!
 //! ```text
-//! RAYBENCH_ASSETS=../shared/scenes cargo bench -p raybench-bvh --bench bvh -- --save-baseline main
-//! RAYBENCH_ASSETS=../shared/scenes cargo bench -p raybench-bvh --bench bvh -- --baseline main
+//! RAYBENCH_ASSETS=../shared/scenes cargo bench -p raybench-tests --bench backends -- --save-baseline main
+//! RAYBENCH_ASSETS=../shared/scenes cargo bench -p raybench-tests --bench backends -- --baseline main
 //! ```
 //!
 //! Samples are few and short (10 samples, 2 s) so the whole suite takes a few minutes;
@@ -61,12 +63,13 @@ use raybench_bvh::{Bvh, BvhParams, ObvhsAccel};
 use raybench_core::{
     Accel, Geometry, NoCounters, PrimHit, Ray, Scene, Shape, Triangle, Vec3A, rays,
 };
+use raybench_grid::{Grid, GridParams};
 use std::hint::black_box;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// The scenes, in benchmark order.
-const SCENES: [&str; 3] = ["bunny", "sponza", "terrain:708"];
+const SCENES: [&str; 4] = ["bunny", "sponza", "terrain:708", "soup:100000"];
 /// Primary rays: a `PRIMARY_SIZE x PRIMARY_SIZE` image.
 const PRIMARY_SIZE: u32 = 256;
 /// Number of incoherent rays.
@@ -285,9 +288,10 @@ struct Prepared {
     tris: Option<Vec<Triangle>>,
     bvh: Bvh,
     obvhs: ObvhsAccel,
+    grid: Grid,
     peers: Option<(CratePeer, ObvhsPeer)>,
     /// One untimed build of each backend, to size the build benchmarks' measurement time.
-    build_times: [(&'static str, Duration); 4],
+    build_times: [(&'static str, Duration); 5],
 }
 
 fn timed<T>(f: impl FnOnce() -> T) -> (T, Duration) {
@@ -321,6 +325,7 @@ fn prepare(name: &'static str) -> Option<Prepared> {
     ];
     let (bvh, t_bvh) = timed(|| Bvh::build_with(g.clone(), BvhParams::default()));
     let (obvhs, t_obvhs) = timed(|| ObvhsAccel::build(g.clone()));
+    let (grid, t_grid) = timed(|| Grid::build_with(g.clone(), GridParams::default()));
     let tris = triangles(&g);
     if tris.is_none() {
         eprintln!("scene {name} has non-triangle primitives: skipping the peers");
@@ -335,7 +340,7 @@ fn prepare(name: &'static str) -> Option<Prepared> {
     });
     eprintln!(
         "scene {name}: {} primitives; untimed builds: bvh {t_bvh:.2?}, obvhs {t_obvhs:.2?}, \
-         bvh-crate {t_crate:.2?}, obvhs-bvh2 {t_bvh2:.2?}",
+         grid {t_grid:.2?}, bvh-crate {t_crate:.2?}, obvhs-bvh2 {t_bvh2:.2?}",
         g.len()
     );
     Some(Prepared {
@@ -345,10 +350,12 @@ fn prepare(name: &'static str) -> Option<Prepared> {
         tris,
         bvh,
         obvhs,
+        grid,
         peers: crate_peer.zip(obvhs_peer),
         build_times: [
             ("bvh", t_bvh),
             ("obvhs", t_obvhs),
+            ("grid", t_grid),
             ("bvh-crate", t_crate),
             ("obvhs-bvh2", t_bvh2),
         ],
@@ -368,14 +375,24 @@ fn check_agreement(p: &Prepared) {
             let same = ids.zip(&reference).filter(|(a, b)| a == *b).count();
             same as f64 / reference.len() as f64
         };
-        let mut results = vec![(
-            "obvhs",
-            agree(
-                &mut rays
-                    .iter()
-                    .map(|r| p.obvhs.intersect(r, &mut NoCounters).map(|h| h.prim)),
+        let mut results = vec![
+            (
+                "obvhs",
+                agree(
+                    &mut rays
+                        .iter()
+                        .map(|r| p.obvhs.intersect(r, &mut NoCounters).map(|h| h.prim)),
+                ),
             ),
-        )];
+            (
+                "grid",
+                agree(
+                    &mut rays
+                        .iter()
+                        .map(|r| p.grid.intersect(r, &mut NoCounters).map(|h| h.prim)),
+                ),
+            ),
+        ];
         if let Some((crate_peer, obvhs_peer)) = &p.peers {
             let mut stack = Vec::new();
             results.push((
@@ -427,8 +444,12 @@ fn check_agreement(p: &Prepared) {
                 );
             }
         }
+        assert_eq!(
+            results[1].1, 1.0,
+            "grid, an exact backend, differs from bvh"
+        );
         if *set == "primary" {
-            for (backend, a) in &results[1..] {
+            for (backend, a) in &results[2..] {
                 assert!(
                     *a >= MIN_AGREEMENT,
                     "{backend} agrees with bvh on only {:.3}% of the {} primary rays",
@@ -458,6 +479,10 @@ fn bench_build(c: &mut Criterion, p: &Prepared) {
     group.measurement_time(target("obvhs"));
     group.bench_function(BenchmarkId::new("obvhs", p.name), |b| {
         b.iter_with_large_drop(|| ObvhsAccel::build(black_box(g.clone())));
+    });
+    group.measurement_time(target("grid"));
+    group.bench_function(BenchmarkId::new("grid", p.name), |b| {
+        b.iter_with_large_drop(|| Grid::build_with(black_box(g.clone()), GridParams::default()));
     });
     if let Some(tris) = &p.tris {
         // The peers' inputs in their own formats, prepared outside the timing.
@@ -495,6 +520,13 @@ fn bench_trace(c: &mut Criterion, p: &Prepared) {
             b.iter(|| {
                 for ray in rays {
                     black_box(p.obvhs.intersect(black_box(ray), &mut NoCounters));
+                }
+            });
+        });
+        group.bench_function(id("grid"), |b| {
+            b.iter(|| {
+                for ray in rays {
+                    black_box(p.grid.intersect(black_box(ray), &mut NoCounters));
                 }
             });
         });

@@ -1,0 +1,658 @@
+//! # raybench-grid
+//!
+//! The lecture's "ray marching": a uniform grid over the scene's box, walked cell by cell
+//! with the 3D-DDA of Amanatides and Woo ("A Fast Voxel Traversal Algorithm for Ray
+//! Tracing", Eurographics 1987); only the primitives listed in the cells the ray crosses
+//! are tested.
+//!
+//! - **Resolution** ([`GridParams`]): about `lambda * M^(1/3)` cells per axis, scaled to the
+//!   box's aspect (`n_i = e_i * cbrt(lambda M / V)`), total capped at `max_cells`.
+//! - **Storage**: one flat array of primitive ids and one of per-cell offsets (compressed
+//!   rows), no `Vec` per cell.
+//! - **Insertion**: each primitive goes into every cell its box, padded by `PAD` (the
+//!   larger of 1/4096 of a cell and 2^-16 of the grid's size), overlaps. The padding makes
+//!   insertion conservative against the DDA's rounding: a ray that passes through a cell
+//!   corner visits three of the four cells around it, and any primitive near that corner
+//!   is also listed in the visited ones; and the DDA's positions, off by a few ulps of the
+//!   ray origin's distance to the grid, stay within the padding for rays starting less
+//!   than [`FAR_ORIGIN`] grid sizes away. Rays starting farther away (a camera 10 km from
+//!   a 1 mm scene) cannot be located in the grid to f32 precision: they test every bounded
+//!   primitive instead, which keeps the result exact.
+//! - **Traversal**: enter from outside (conservative slab test) or start inside; one
+//!   comparison per axis per step; zero direction components never step; crossing
+//!   distances recomputed from cell boundaries (no drift). The walk stops only when the
+//!   best hit lies before the current cell's exit (with the contract's slack), since a
+//!   primitive spanning several cells may be hit beyond the cell where it was first met.
+//! - **Mailboxing**: a per-ray ring of the last [`MAILBOX`] primitive ids tested, so a
+//!   primitive spanning consecutive cells is tested once; it lives on the stack of the
+//!   query, so it is safe under rayon. The test counter shows the saving.
+//! - Unbounded primitives (planes) are tested beside the grid; any-hit queries stop at the
+//!   first hit.
+
+use glam::Vec3A;
+use raybench_core::{
+    Aabb, Accel, AccelStats, Counters, Geometry, Hit, PrimHit, Ray, SlabRay, Vec3, cull_bound,
+};
+use std::sync::Arc;
+
+/// Size of the per-ray mailbox (recently tested primitive ids).
+pub const MAILBOX: usize = 8;
+
+/// Rays whose origin lies farther than this many grid sizes from the grid's centre skip
+/// the DDA and test every bounded primitive (see the crate documentation).
+pub const FAR_ORIGIN: f32 = 8.0;
+
+/// Grid construction parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridParams {
+    /// Cell density: about `lambda` primitives' worth of cells per primitive (the `lambda` of
+    /// `lambda * M^(1/3)` cells per axis is its cube root).
+    pub lambda: f32,
+    /// Largest number of cells.
+    pub max_cells: usize,
+}
+
+impl GridParams {
+    /// The default: `lambda = 2`, at most 2^24 cells (64 MiB of offsets).
+    #[must_use]
+    pub fn medium() -> Self {
+        Self {
+            lambda: 2.0,
+            max_cells: 1 << 24,
+        }
+    }
+
+    /// Coarser and cheaper: `lambda = 0.5`.
+    #[must_use]
+    pub fn coarse() -> Self {
+        Self {
+            lambda: 0.5,
+            ..Self::medium()
+        }
+    }
+
+    /// Finer: `lambda = 8`.
+    #[must_use]
+    pub fn fine() -> Self {
+        Self {
+            lambda: 8.0,
+            ..Self::medium()
+        }
+    }
+}
+
+impl Default for GridParams {
+    fn default() -> Self {
+        Self::medium()
+    }
+}
+
+/// The uniform grid.
+#[derive(Clone, Debug)]
+pub struct Grid {
+    geometry: Arc<Geometry>,
+    /// The grid's box (the bounded primitives' box, padded).
+    bounds: Aabb,
+    /// Cells per axis (each at least 1; all 0 when empty).
+    res: [u32; 3],
+    /// Cell size per axis.
+    cell: Vec3,
+    /// `1 / cell`.
+    inv_cell: Vec3,
+    /// Insertion padding (per axis).
+    pad: Vec3,
+    /// `offsets[c]..offsets[c + 1]` indexes `ids` for cell `c = (z * ny + y) * nx + x`.
+    offsets: Vec<u32>,
+    /// Primitive ids, cell after cell.
+    ids: Vec<u32>,
+    params: GridParams,
+}
+
+impl Grid {
+    /// Builds the grid over the bounded primitives of `geometry`.
+    ///
+    /// # Panics
+    /// When the primitive references exceed `u32::MAX` (about 4 billion).
+    #[must_use]
+    pub fn build_with(geometry: Arc<Geometry>, params: GridParams) -> Self {
+        let gb = geometry.bounds();
+        let empty = Self {
+            geometry: Arc::clone(&geometry),
+            bounds: Aabb::EMPTY,
+            res: [0; 3],
+            cell: Vec3::ONE,
+            inv_cell: Vec3::ONE,
+            pad: Vec3::ZERO,
+            offsets: vec![0],
+            ids: Vec::new(),
+            params,
+        };
+        if gb.is_empty() || !gb.extent().is_finite() {
+            return empty;
+        }
+        let m = geometry.bounded().len() as f32;
+        // Pad the box so flat scenes have volume and border primitives sit inside.
+        let scale = gb
+            .extent()
+            .max_element()
+            .max(gb.min.abs().max_element())
+            .max(gb.max.abs().max_element());
+        let pad = Vec3::splat(
+            (gb.extent().max_element() * (1.0 / 1024.0))
+                .max(scale * 1e-6)
+                .max(1e-30),
+        );
+        let bounds = Aabb::new(gb.min - pad, gb.max + pad);
+        let e = bounds.extent();
+        let volume = f64::from(e.x) * f64::from(e.y) * f64::from(e.z);
+        let k = (f64::from(params.lambda.max(1e-3)) * f64::from(m) / volume).cbrt();
+        let mut n = [0u32; 3];
+        for a in 0..3 {
+            n[a] = ((f64::from(e[a]) * k).round() as u32).clamp(1, 1 << 16);
+        }
+        // Cap the total, shrinking every axis by the same factor.
+        let total = |n: &[u32; 3]| u64::from(n[0]) * u64::from(n[1]) * u64::from(n[2]);
+        let max_cells = params.max_cells.max(1) as u64;
+        if total(&n) > max_cells {
+            let f = (max_cells as f64 / total(&n) as f64).cbrt();
+            for v in &mut n {
+                *v = ((f64::from(*v) * f).floor() as u32).max(1);
+            }
+        }
+        let cell = e / Vec3::new(n[0] as f32, n[1] as f32, n[2] as f32);
+        let inv_cell = cell.recip();
+        let pad = (cell * (1.0 / 4096.0)).max(Vec3::splat(e.max_element() * (1.0 / 65_536.0)));
+        let mut grid = Self {
+            bounds,
+            res: n,
+            cell,
+            inv_cell,
+            pad,
+            ..empty
+        };
+        grid.insert();
+        grid
+    }
+
+    /// The cell range `[lo, hi]` (inclusive) a padded box overlaps.
+    fn cell_range(&self, b: Aabb) -> ([u32; 3], [u32; 3]) {
+        let pad = self.pad + b.min.abs().max(b.max.abs()) * (1.0 / 1_048_576.0);
+        let lo = ((b.min - pad - self.bounds.min) * self.inv_cell).floor();
+        let hi = ((b.max + pad - self.bounds.min) * self.inv_cell).floor();
+        let clamp = |v: f32, a: usize| {
+            if v.is_nan() {
+                0
+            } else {
+                v.clamp(0.0, (self.res[a] - 1) as f32) as u32
+            }
+        };
+        (
+            [clamp(lo.x, 0), clamp(lo.y, 1), clamp(lo.z, 2)],
+            [clamp(hi.x, 0), clamp(hi.y, 1), clamp(hi.z, 2)],
+        )
+    }
+
+    fn cell_index(&self, c: [u32; 3]) -> usize {
+        (c[2] as usize * self.res[1] as usize + c[1] as usize) * self.res[0] as usize
+            + c[0] as usize
+    }
+
+    /// Two passes over the primitives: count per cell, prefix sums, fill.
+    fn insert(&mut self) {
+        let cells = self.res.iter().map(|&r| r as usize).product::<usize>();
+        let mut counts = vec![0u32; cells + 1];
+        let ranges: Vec<(u32, [u32; 3], [u32; 3])> = self
+            .geometry
+            .bounded()
+            .iter()
+            .map(|&id| {
+                let b = self.geometry.shape(id).bounds().unwrap_or(Aabb::EMPTY);
+                let (lo, hi) = self.cell_range(b);
+                (id, lo, hi)
+            })
+            .collect();
+        for (_, lo, hi) in &ranges {
+            for z in lo[2]..=hi[2] {
+                for y in lo[1]..=hi[1] {
+                    for x in lo[0]..=hi[0] {
+                        counts[self.cell_index([x, y, z])] += 1;
+                    }
+                }
+            }
+        }
+        let mut offsets = vec![0u32; cells + 1];
+        let mut sum = 0u64;
+        for c in 0..cells {
+            offsets[c] = u32::try_from(sum).expect("too many primitive references");
+            sum += u64::from(counts[c]);
+        }
+        offsets[cells] = u32::try_from(sum).expect("too many primitive references");
+        let mut fill = offsets.clone();
+        let mut ids = vec![0u32; sum as usize];
+        for (id, lo, hi) in &ranges {
+            for z in lo[2]..=hi[2] {
+                for y in lo[1]..=hi[1] {
+                    for x in lo[0]..=hi[0] {
+                        let c = self.cell_index([x, y, z]);
+                        ids[fill[c] as usize] = *id;
+                        fill[c] += 1;
+                    }
+                }
+            }
+        }
+        self.offsets = offsets;
+        self.ids = ids;
+    }
+
+    /// Cells per axis.
+    #[must_use]
+    pub fn resolution(&self) -> [u32; 3] {
+        self.res
+    }
+
+    /// The primitive ids listed in cell `(x, y, z)`.
+    #[must_use]
+    pub fn cell_ids(&self, c: [u32; 3]) -> &[u32] {
+        let i = self.cell_index(c);
+        &self.ids[self.offsets[i] as usize..self.offsets[i + 1] as usize]
+    }
+
+    /// The parameters it was built with.
+    #[must_use]
+    pub fn params(&self) -> &GridParams {
+        &self.params
+    }
+
+    /// The grid's box (the bounded primitives' box, padded by 1/1024 of its size).
+    #[must_use]
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    /// The size of one cell.
+    #[must_use]
+    pub fn cell_size(&self) -> Vec3 {
+        self.cell
+    }
+
+    /// Whether the DDA can locate `ray` in the grid precisely enough (its origin within
+    /// [`FAR_ORIGIN`] grid sizes of the centre, and finite).
+    #[inline]
+    fn dda_is_exact_for(&self, ray: &Ray) -> bool {
+        if self.ids.is_empty() {
+            return true;
+        }
+        let reach = (ray.origin - self.bounds.center()).abs().max_element();
+        reach <= FAR_ORIGIN * self.bounds.extent().max_element()
+    }
+
+    /// The cells `ray` visits, in order (for tests and teaching).
+    #[must_use]
+    pub fn cells_visited(&self, ray: &Ray) -> Vec<[u32; 3]> {
+        let mut out = Vec::new();
+        self.dda(ray, |c, _| {
+            out.push(c);
+            true
+        });
+        out
+    }
+
+    /// Walks the cells `ray` crosses in order, calling `visit(cell_ids, exit_t)` for each;
+    /// `visit` returns `false` to stop. Cells are visited from the ray's entry into the
+    /// grid until it leaves the grid or passes `ray.t_max`. Returns the cells visited.
+    #[inline]
+    fn walk(&self, ray: &Ray, mut visit: impl FnMut(&[u32], f32) -> bool) -> u64 {
+        self.dda(ray, |c, exit| {
+            let i = self.cell_index(c);
+            visit(
+                &self.ids[self.offsets[i] as usize..self.offsets[i + 1] as usize],
+                exit,
+            )
+        })
+    }
+
+    /// The 3D-DDA itself: calls `visit(cell, exit_t)` for each cell crossed.
+    #[inline]
+    fn dda(&self, ray: &Ray, mut visit: impl FnMut([u32; 3], f32) -> bool) -> u64 {
+        if self.ids.is_empty() {
+            return 0;
+        }
+        let slab = SlabRay::new(ray);
+        let Some(t_enter) = slab.entry(self.bounds.min.into(), self.bounds.max.into(), ray.t_max)
+        else {
+            return 0;
+        };
+        let o = Vec3A::from(ray.origin);
+        let d = Vec3A::from(ray.dir);
+        let gmin = Vec3A::from(self.bounds.min);
+        let cell = Vec3A::from(self.cell);
+        let p = o + d * t_enter;
+        let start = ((p - gmin) * Vec3A::from(self.inv_cell)).floor();
+        let mut c = [0i64; 3];
+        let mut step = [0i64; 3];
+        let mut t_next = [f32::INFINITY; 3];
+        let inv = ray.inv_dir;
+        for a in 0..3 {
+            let max = i64::from(self.res[a]) - 1;
+            c[a] = if start[a].is_nan() {
+                0
+            } else {
+                (start[a] as i64).clamp(0, max)
+            };
+            if d[a] > 0.0 {
+                step[a] = 1;
+            } else if d[a] < 0.0 {
+                step[a] = -1;
+            }
+        }
+        // Distance at which the ray leaves cell `c` across axis `a`'s boundary.
+        let boundary_t = |c: &[i64; 3], a: usize| -> f32 {
+            match step[a] {
+                1 => (gmin[a] + (c[a] + 1) as f32 * cell[a] - o[a]) * inv[a],
+                -1 => (gmin[a] + c[a] as f32 * cell[a] - o[a]) * inv[a],
+                _ => f32::INFINITY,
+            }
+        };
+        for (a, t) in t_next.iter_mut().enumerate() {
+            *t = boundary_t(&c, a);
+        }
+        let mut visits = 0u64;
+        loop {
+            visits += 1;
+            let exit = t_next[0].min(t_next[1]).min(t_next[2]);
+            // `exit` is never NaN: only axes with a non-zero direction step.
+            if !visit([c[0] as u32, c[1] as u32, c[2] as u32], exit) || exit > ray.t_max {
+                return visits;
+            }
+            // One comparison per axis: step along the axis whose boundary comes first.
+            let a = if t_next[0] <= t_next[1] && t_next[0] <= t_next[2] {
+                0
+            } else if t_next[1] <= t_next[2] {
+                1
+            } else {
+                2
+            };
+            c[a] += step[a];
+            if c[a] < 0 || c[a] >= i64::from(self.res[a]) {
+                return visits;
+            }
+            t_next[a] = boundary_t(&c, a);
+        }
+    }
+}
+
+/// A ring of recently tested primitive ids (mailboxing without shared state).
+struct Mailbox {
+    ids: [u32; MAILBOX],
+    next: usize,
+}
+
+impl Mailbox {
+    fn new() -> Self {
+        Self {
+            ids: [u32::MAX; MAILBOX],
+            next: 0,
+        }
+    }
+
+    /// True when `id` was tested recently; otherwise remembers it and returns false.
+    #[inline]
+    fn seen(&mut self, id: u32) -> bool {
+        if self.ids.contains(&id) {
+            return true;
+        }
+        self.ids[self.next] = id;
+        self.next = (self.next + 1) % MAILBOX;
+        false
+    }
+}
+
+impl Accel for Grid {
+    fn build(geometry: Arc<Geometry>) -> Self {
+        Self::build_with(geometry, GridParams::default())
+    }
+
+    fn geometry(&self) -> &Geometry {
+        &self.geometry
+    }
+
+    fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
+        let g = &*self.geometry;
+        let mut best: Option<(u32, PrimHit)> = None;
+        if !self.dda_is_exact_for(ray) {
+            for id in 0..g.len() as u32 {
+                g.test_closest(id, ray, &mut best);
+            }
+            counters.add_tests(g.len() as u64);
+            return g.complete(ray, best);
+        }
+        for &id in g.unbounded() {
+            g.test_closest(id, ray, &mut best);
+        }
+        let mut tests = g.unbounded().len() as u64;
+        let mut mailbox = Mailbox::new();
+        let visits = self.walk(ray, |ids, exit| {
+            for &id in ids {
+                if !mailbox.seen(id) {
+                    tests += 1;
+                    g.test_closest(id, ray, &mut best);
+                }
+            }
+            // Stop only when the best hit lies before this cell's exit (with slack).
+            best.is_none_or(|(_, h)| cull_bound(h.t) >= exit)
+        });
+        counters.add_tests(tests);
+        counters.add_visits(visits);
+        g.complete(ray, best)
+    }
+
+    fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
+        let g = &*self.geometry;
+        let mut tests = 0u64;
+        if !self.dda_is_exact_for(ray) {
+            let hit = g.shapes().iter().any(|s| {
+                tests += 1;
+                s.intersect(ray).is_some()
+            });
+            counters.add_tests(tests);
+            return hit;
+        }
+        for &id in g.unbounded() {
+            tests += 1;
+            if g.shape(id).intersect(ray).is_some() {
+                counters.add_tests(tests);
+                return true;
+            }
+        }
+        let mut hit = false;
+        let mut mailbox = Mailbox::new();
+        let visits = self.walk(ray, |ids, _| {
+            for &id in ids {
+                if !mailbox.seen(id) {
+                    tests += 1;
+                    if g.shape(id).intersect(ray).is_some() {
+                        hit = true;
+                        return false;
+                    }
+                }
+            }
+            true
+        });
+        counters.add_tests(tests);
+        counters.add_visits(visits);
+        hit
+    }
+
+    fn stats(&self) -> AccelStats {
+        let cells = self.offsets.len().saturating_sub(1);
+        let non_empty = self.offsets.windows(2).filter(|w| w[1] > w[0]).count();
+        AccelStats {
+            memory_bytes: std::mem::size_of_val(self.offsets.as_slice())
+                + std::mem::size_of_val(self.ids.as_slice()),
+            counts: vec![
+                ("cells", cells as u64),
+                ("non-empty cells", non_empty as u64),
+                ("references", self.ids.len() as u64),
+                ("nx", u64::from(self.res[0])),
+                ("ny", u64::from(self.res[1])),
+                ("nz", u64::from(self.res[2])),
+            ],
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use raybench_core::{Shape, Sphere, Triangle};
+    use raybench_scene::generators;
+
+    fn soup_grid(n: u32) -> Grid {
+        let g = Arc::new(Geometry::new(
+            generators::soup(n, 4)
+                .triangles()
+                .map(Shape::Triangle)
+                .collect(),
+        ));
+        Grid::build_with(g, GridParams::default())
+    }
+
+    /// f64 slab interval of `ray` with box `[lo, hi]`.
+    fn interval(ray: &Ray, lo: [f64; 3], hi: [f64; 3]) -> (f64, f64) {
+        let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
+        for a in 0..3 {
+            let o = f64::from(ray.origin[a]);
+            let d = f64::from(ray.dir[a]);
+            if d == 0.0 {
+                if o < lo[a] || o > hi[a] {
+                    return (1.0, 0.0);
+                }
+                continue;
+            }
+            let (mut n, mut f) = ((lo[a] - o) / d, (hi[a] - o) / d);
+            if n > f {
+                std::mem::swap(&mut n, &mut f);
+            }
+            t0 = t0.max(n);
+            t1 = t1.min(f);
+        }
+        (t0, t1)
+    }
+
+    #[test]
+    fn dda_visits_every_cell_the_ray_really_crosses() {
+        let grid = soup_grid(3000);
+        let res = grid.resolution();
+        let rays = raybench_core::rays::incoherent(grid.bounds(), 300, 9);
+        let (min, cell) = (grid.bounds().min, grid.cell_size());
+        for ray in &rays {
+            let visited: std::collections::HashSet<[u32; 3]> =
+                grid.cells_visited(ray).into_iter().collect();
+            for z in 0..res[2] {
+                for y in 0..res[1] {
+                    for x in 0..res[0] {
+                        let lo = [0, 1, 2].map(|a| {
+                            f64::from(min[a]) + f64::from([x, y, z][a]) * f64::from(cell[a])
+                        });
+                        let hi = [0, 1, 2].map(|a| lo[a] + f64::from(cell[a]));
+                        let (t0, t1) = interval(ray, lo, hi);
+                        // Crossed by more than a sliver: must be visited.
+                        if t1 - t0 > 1e-4 * f64::from(cell.min_element()) {
+                            assert!(
+                                visited.contains(&[x, y, z]),
+                                "ray {ray:?} skipped cell {x} {y} {z}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn resolution_follows_the_primitive_count_and_cap() {
+        let small = soup_grid(100);
+        let large = soup_grid(20_000);
+        let cells = |g: &Grid| {
+            g.resolution()
+                .iter()
+                .map(|&r| u64::from(r))
+                .product::<u64>()
+        };
+        assert!(cells(&large) > 50 * cells(&small));
+        // lambda * M cells, roughly.
+        let ratio = cells(&large) as f64 / (2.0 * 20_000.0);
+        assert!((0.5..2.0).contains(&ratio), "{ratio}");
+        let g = Arc::new(Geometry::new(
+            generators::soup(20_000, 4)
+                .triangles()
+                .map(Shape::Triangle)
+                .collect(),
+        ));
+        let capped = Grid::build_with(
+            g,
+            GridParams {
+                lambda: 8.0,
+                max_cells: 1000,
+            },
+        );
+        assert!(cells(&capped) <= 1000);
+    }
+
+    #[test]
+    fn mailboxing_tests_each_primitive_once_along_a_ray() {
+        // One long thin triangle spanning every cell along x.
+        let mut shapes = vec![Shape::Triangle(Triangle::new(
+            Vec3::new(-10.0, 0.0, 0.0),
+            Vec3::new(10.0, 0.0, 0.0),
+            Vec3::new(10.0, 0.1, 0.0),
+        ))];
+        shapes.extend((0..500).map(|i| {
+            Shape::Sphere(Sphere::new(
+                Vec3::new(-9.0 + i as f32 * 0.036, 5.0, 5.0),
+                0.01,
+            ))
+        }));
+        let grid = Grid::build_with(Arc::new(Geometry::new(shapes)), GridParams::default());
+        // Along the triangle's plane, just above it: crosses every cell it lists.
+        let ray = Ray::new(Vec3::new(-11.0, 0.05, 0.0), Vec3::X);
+        let mut c = raybench_core::RayCounters::default();
+        let _ = grid.intersect(&ray, &mut c);
+        assert!(c.node_visits > 5, "{} cells", c.node_visits);
+        assert_eq!(
+            c.prim_tests, 1,
+            "tested once despite spanning {} cells",
+            c.node_visits
+        );
+    }
+
+    #[test]
+    fn empty_and_flat_grids() {
+        let g = Grid::build_with(Arc::new(Geometry::default()), GridParams::default());
+        assert!(
+            g.intersect(
+                &Ray::new(Vec3::ZERO, Vec3::X),
+                &mut raybench_core::NoCounters
+            )
+            .is_none()
+        );
+        let flat = Arc::new(Geometry::new(
+            generators::terrain(1)
+                .triangles()
+                .map(|t| {
+                    Shape::Triangle(Triangle::new(
+                        Vec3::new(t.v[0].x, 0.0, t.v[0].z),
+                        Vec3::new(t.v[1].x, 0.0, t.v[1].z),
+                        Vec3::new(t.v[2].x, 0.0, t.v[2].z),
+                    ))
+                })
+                .collect(),
+        ));
+        let g = Grid::build_with(flat, GridParams::default());
+        let hit = g.intersect(
+            &Ray::new(Vec3::new(0.1, 1.0, 0.2), -Vec3::Y),
+            &mut raybench_core::NoCounters,
+        );
+        assert_eq!(hit.map(|h| h.t), Some(1.0));
+    }
+}

@@ -1,0 +1,132 @@
+//! Rays that stress a uniform grid, every backend against naive: along cell boundaries and
+//! grid faces, starting exactly on the grid's box, axis-aligned; a single huge triangle; a
+//! million tiny spheres in one corner with one large plane.
+
+use raybench_core::{Ray, Scene, SceneBuilder, Sphere, TriangleMesh, Vec3};
+use raybench_grid::{Grid, GridParams};
+use raybench_tests::{assert_same_ray_hits, prepared};
+use std::sync::Arc;
+
+const BACKENDS: &[&str] = &["bvh", "obvhs", "grid"];
+
+fn check(what: &str, scene: &Arc<Scene>, rays: &[Ray]) {
+    let (reference, _) = prepared("naive", scene).trace_rays(rays, false).unwrap();
+    for &name in BACKENDS {
+        let (hits, _) = prepared(name, scene).trace_rays(rays, false).unwrap();
+        assert_same_ray_hits(&format!("{name}: {what}"), &reference, &hits);
+    }
+}
+
+/// Rays lying in the grid's cell-boundary planes and faces, and starting on its box.
+fn boundary_rays(grid: &Grid) -> Vec<Ray> {
+    let b = grid.bounds();
+    let cell = grid.cell_size();
+    let res = grid.resolution();
+    let mut rays = Vec::new();
+    for a in 0..3 {
+        let (u, v) = ((a + 1) % 3, (a + 2) % 3);
+        for i in 0..=res[u] {
+            for j in (0..=res[v]).step_by(((res[v] / 6).max(1)) as usize) {
+                let mut o = b.min;
+                o[u] = b.min[u] + i as f32 * cell[u];
+                o[v] = b.min[v] + j as f32 * cell[v];
+                // Along axis a, exactly on the boundary lines of u and v, from outside, from the
+                // box face, and from the middle.
+                let mut d = Vec3::ZERO;
+                d[a] = 1.0;
+                let mut outside = o;
+                outside[a] = b.min[a] - 1.0;
+                rays.push(Ray::new(outside, d));
+                rays.push(Ray::new(o, d));
+                let mut far = o;
+                far[a] = b.max[a];
+                rays.push(Ray::new(far, -d));
+                // Diagonal inside the boundary plane of u.
+                let mut dd = Vec3::ZERO;
+                dd[a] = 1.0;
+                dd[v] = 0.37;
+                rays.push(Ray::new(outside, dd));
+            }
+        }
+    }
+    // From the box's corners towards the centre and along its edges.
+    let c = b.center();
+    for k in 0..8 {
+        let corner = Vec3::new(
+            if k & 1 == 0 { b.min.x } else { b.max.x },
+            if k & 2 == 0 { b.min.y } else { b.max.y },
+            if k & 4 == 0 { b.min.z } else { b.max.z },
+        );
+        rays.push(Ray::new(corner, c - corner));
+        rays.push(Ray::new(corner, Vec3::new(c.x - corner.x, 0.0, 0.0)));
+    }
+    rays
+}
+
+#[test]
+fn rays_along_cell_boundaries_and_grid_faces() {
+    for spec in ["soup:3000", "spheres:1500", "terrain:24"] {
+        let scene = Arc::new(raybench_scene::load(spec, std::path::Path::new(".")).unwrap());
+        let grid = Grid::build_with(Arc::clone(&scene.geometry), GridParams::default());
+        let rays = boundary_rays(&grid);
+        check(spec, &scene, &rays);
+    }
+}
+
+#[test]
+fn single_huge_triangle() {
+    let mut b = SceneBuilder::new("huge");
+    let mesh = TriangleMesh {
+        positions: vec![
+            Vec3::new(-1e4, -1e4, 0.0),
+            Vec3::new(1e4, -1e4, 1.0),
+            Vec3::new(0.0, 1e4, -1.0),
+        ],
+        indices: vec![[0, 1, 2]],
+    };
+    b.add_mesh("t", &mesh, 0).unwrap();
+    let scene = Arc::new(b.build());
+    let mut rays = raybench_core::rays::incoherent(scene.geometry.bounds(), 3000, 2);
+    rays.extend((0..200).map(|i| {
+        Ray::new(
+            Vec3::new(i as f32 * 97.0 - 9000.0, 37.0 * i as f32 - 3000.0, 50.0),
+            -Vec3::Z,
+        )
+    }));
+    check("single huge triangle", &scene, &rays);
+}
+
+/// A million tiny spheres packed in one corner and one large plane: most cells are empty,
+/// the corner's are crowded (the "teapot in a stadium" of spheres).
+#[test]
+fn a_million_tiny_spheres_in_a_corner_and_a_plane() {
+    let mut b = SceneBuilder::new("corner");
+    b.add_plane(Vec3::new(0.0, -1.0, 0.0), Vec3::Y, 0).unwrap();
+    for s in raybench_scene::generators::random_spheres(1_000_000, 6) {
+        b.add_sphere(
+            Sphere::new(s.center * 0.01 + Vec3::splat(9.0), s.radius * 0.01),
+            0,
+        )
+        .unwrap();
+    }
+    // A big sphere at the other end so the grid spans the whole room.
+    b.add_sphere(Sphere::new(Vec3::splat(-9.0), 0.5), 0)
+        .unwrap();
+    let scene = Arc::new(b.build());
+    let target = Vec3::splat(9.0);
+    let mut rays: Vec<Ray> = (0..160)
+        .map(|i| {
+            let a = i as f32 * 0.39;
+            let eye = Vec3::new(a.cos() * 5.0, 3.0 + (a * 0.7).sin(), a.sin() * 5.0);
+            let jitter = Vec3::new((a * 3.1).sin(), (a * 2.3).cos(), (a * 1.7).sin()) * 0.006;
+            Ray::new(eye, target + jitter - eye)
+        })
+        .collect();
+    rays.extend((0..40).map(|i| {
+        Ray::new(
+            Vec3::new(i as f32 * 0.4 - 8.0, 5.0, 0.0),
+            Vec3::new(0.1, -1.0, 0.05),
+        )
+    }));
+    check("million spheres in a corner", &scene, &rays);
+}
