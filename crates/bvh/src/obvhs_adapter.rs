@@ -158,16 +158,6 @@ impl ObvhsAccel {
         };
         (ray, factor)
     }
-
-    fn brute_force<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
-        let g = &*self.geometry;
-        let mut best = None;
-        for id in 0..g.len() as u32 {
-            g.test_closest(id, ray, &mut best);
-        }
-        counters.add_tests(g.len() as u64);
-        g.complete(ray, best)
-    }
 }
 
 impl Accel for ObvhsAccel {
@@ -181,7 +171,7 @@ impl Accel for ObvhsAccel {
 
     fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
         if !ray.is_valid() {
-            return self.brute_force(ray, counters);
+            return self.geometry.closest_brute_force(ray, counters);
         }
         let g = &*self.geometry;
         let mut best: Option<(u32, PrimHit)> = None;
@@ -209,7 +199,7 @@ impl Accel for ObvhsAccel {
 
     fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
         if !ray.is_valid() {
-            return self.brute_force(ray, counters).is_some();
+            return self.geometry.occluded_brute_force(ray, counters);
         }
         let g = &*self.geometry;
         let mut tests = 0u64;

@@ -134,6 +134,19 @@ fn parse_ray_set(s: &str) -> Result<RaySet, String> {
 /// Seed of the incoherent ray set (the same rays in every run and in the benches).
 const INCOHERENT_SEED: u32 = 1;
 
+/// The rays a ray set traces explicitly: `None` for primary rays (frames are rendered),
+/// `width x height` seeded incoherent rays otherwise.
+fn explicit_rays(set: RaySet, scene: &Scene, settings: &RenderSettings) -> Option<Vec<Ray>> {
+    match set {
+        RaySet::Primary => None,
+        RaySet::Incoherent => Some(raybench_core::rays::incoherent(
+            scene.geometry.bounds(),
+            settings.width as usize * settings.height as usize,
+            INCOHERENT_SEED,
+        )),
+    }
+}
+
 /// One measured workload: per-ray ids and `t`, rays traced, counters, seconds.
 struct Measured {
     ids: Vec<u32>,
@@ -375,14 +388,7 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
         bail!("no backend to compare");
     }
 
-    let rays: Option<Vec<Ray>> = match cmd.rays {
-        RaySet::Primary => None,
-        RaySet::Incoherent => Some(raybench_core::rays::incoherent(
-            scene.geometry.bounds(),
-            settings.width as usize * settings.height as usize,
-            INCOHERENT_SEED,
-        )),
-    };
+    let rays = explicit_rays(cmd.rays, &scene, &settings);
     let mut rows = Vec::new();
     let mut reference: Option<Measured> = None;
     let mut disagree = false;
@@ -611,14 +617,7 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
         ..RenderSettings::default()
     };
     settings.validate()?;
-    let probe: Option<Vec<Ray>> = match cmd.rays {
-        RaySet::Primary => None,
-        RaySet::Incoherent => Some(raybench_core::rays::incoherent(
-            g.bounds(),
-            cmd.width as usize * cmd.height as usize,
-            INCOHERENT_SEED,
-        )),
-    };
+    let probe = explicit_rays(cmd.rays, &scene, &settings);
     println!(
         "probe       {} rays, {}x{}",
         cmd.rays.name(),

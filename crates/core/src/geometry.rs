@@ -253,6 +253,35 @@ impl Geometry {
         better
     }
 
+    /// The closest hit found by testing every primitive in id order: the naive strategy,
+    /// and the exact fallback of accelerators for rays they cannot place.
+    #[must_use]
+    pub fn closest_brute_force<C: crate::Counters>(
+        &self,
+        ray: &Ray,
+        counters: &mut C,
+    ) -> Option<Hit> {
+        let mut best = None;
+        for id in 0..self.len() as u32 {
+            self.test_closest(id, ray, &mut best);
+        }
+        counters.add_tests(self.len() as u64);
+        self.complete(ray, best)
+    }
+
+    /// Whether any primitive is hit, testing in id order and stopping at the first hit.
+    #[must_use]
+    pub fn occluded_brute_force<C: crate::Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
+        for (i, shape) in self.shapes.iter().enumerate() {
+            if shape.intersect(ray).is_some() {
+                counters.add_tests(i as u64 + 1);
+                return true;
+            }
+        }
+        counters.add_tests(self.len() as u64);
+        false
+    }
+
     /// Turns the winner of [`Geometry::test_closest`] into a full [`Hit`].
     #[inline]
     #[must_use]

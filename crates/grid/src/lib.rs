@@ -420,11 +420,7 @@ impl Accel for Grid {
         let g = &*self.geometry;
         let mut best: Option<(u32, PrimHit)> = None;
         if !self.dda_is_exact_for(ray) {
-            for id in 0..g.len() as u32 {
-                g.test_closest(id, ray, &mut best);
-            }
-            counters.add_tests(g.len() as u64);
-            return g.complete(ray, best);
+            return g.closest_brute_force(ray, counters);
         }
         for &id in g.unbounded() {
             g.test_closest(id, ray, &mut best);
@@ -450,12 +446,7 @@ impl Accel for Grid {
         let g = &*self.geometry;
         let mut tests = 0u64;
         if !self.dda_is_exact_for(ray) {
-            let hit = g.shapes().iter().any(|s| {
-                tests += 1;
-                s.intersect(ray).is_some()
-            });
-            counters.add_tests(tests);
-            return hit;
+            return g.occluded_brute_force(ray, counters);
         }
         for &id in g.unbounded() {
             tests += 1;

@@ -28,25 +28,12 @@ impl Accel for NaiveAccel {
 
     #[inline]
     fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
-        let geometry = &*self.geometry;
-        let mut best = None;
-        for id in 0..geometry.len() as u32 {
-            geometry.test_closest(id, ray, &mut best);
-        }
-        counters.add_tests(geometry.len() as u64);
-        geometry.complete(ray, best)
+        self.geometry.closest_brute_force(ray, counters)
     }
 
     #[inline]
     fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
-        for (i, shape) in self.geometry.shapes().iter().enumerate() {
-            if shape.intersect(ray).is_some() {
-                counters.add_tests(i as u64 + 1);
-                return true;
-            }
-        }
-        counters.add_tests(self.geometry.len() as u64);
-        false
+        self.geometry.occluded_brute_force(ray, counters)
     }
 
     fn stats(&self) -> AccelStats {

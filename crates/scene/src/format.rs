@@ -299,12 +299,7 @@ fn load_mesh_file(path: &Path) -> Result<MeshData, LoadError> {
 }
 
 fn load_mesh_file_any(path: &Path) -> Result<MeshData, LoadError> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase)
-        .unwrap_or_default();
-    match ext.as_str() {
+    match crate::extension(path).as_str() {
         "obj" => load_obj_file(path),
         "gltf" | "glb" => load_gltf_file(path),
         _ => Err(LoadError::Parse {

@@ -71,18 +71,21 @@ pub fn load(spec: &str, assets: &Path) -> Result<Scene, LoadError> {
     Err(LoadError::UnknownScene(spec.to_owned()))
 }
 
+/// A path's extension in lower case (empty when it has none).
+pub(crate) fn extension(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default()
+}
+
 /// Loads a scene file, choosing the format by extension: `.toml` scene files; `.obj`,
 /// `.gltf` and `.glb` meshes get an automatic camera framing their bounding box.
 ///
 /// # Errors
 /// What the format's loader reports, or an unsupported extension.
 pub fn load_file(path: &Path, assets: &Path) -> Result<Scene, LoadError> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase)
-        .unwrap_or_default();
-    match ext.as_str() {
+    match extension(path).as_str() {
         "toml" => load_toml_file(path, assets),
         "obj" | "gltf" | "glb" => format::bare_mesh_scene(path),
         _ => Err(LoadError::Parse {

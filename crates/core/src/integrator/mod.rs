@@ -100,6 +100,28 @@ fn centre_pass<A: Accel, C: Counters>(
     (rays, hits)
 }
 
+/// Traces a batch of shadow rays and adds `value` to pixel `px` for each `(px, value)` whose
+/// ray is unblocked. Returns the number of rays traced.
+fn add_unshadowed<A: Accel, C: Counters>(
+    accel: &A,
+    rays: &[Ray],
+    light: &[(usize, Vec3)],
+    color: &mut [Vec3],
+    counters: &mut C,
+) -> u64 {
+    if rays.is_empty() {
+        return 0;
+    }
+    let mut occluded = vec![false; rays.len()];
+    accel.occluded_batch(rays, &mut occluded, counters);
+    for (&(px, value), &blocked) in light.iter().zip(&occluded) {
+        if !blocked {
+            color[px] += value;
+        }
+    }
+    rays.len() as u64
+}
+
 /// Global pixel indices (`y * width + x`) of a tile's pixels, row by row.
 fn tile_pixels(tile: Tile, width: u32) -> impl Iterator<Item = (u32, u32, u32)> {
     (tile.y0..tile.y0 + tile.height)

@@ -12,7 +12,7 @@
 //! points to (counter-clockwise winding); the Cornell box's light faces down.
 
 use super::whitted::{Segment, light_ray, shading_frame};
-use super::{Tile, TileOutput, centre_pass, id_t_buffers, tile_pixels};
+use super::{Tile, TileOutput, add_unshadowed, centre_pass, id_t_buffers, tile_pixels};
 use crate::accel::{Accel, Counters};
 use crate::camera::CameraRays;
 use crate::geometry::Shape;
@@ -199,16 +199,13 @@ pub(super) fn path_tile<A: Accel, C: Counters>(
                     ..*path
                 });
             }
-            if !shadow_rays.is_empty() {
-                let mut occluded = vec![false; shadow_rays.len()];
-                accel.occluded_batch(&shadow_rays, &mut occluded, &mut counters);
-                traced += shadow_rays.len() as u64;
-                for (&(px, value), &blocked) in shadow_light.iter().zip(&occluded) {
-                    if !blocked {
-                        color[px] += value;
-                    }
-                }
-            }
+            traced += add_unshadowed(
+                accel,
+                &shadow_rays,
+                &shadow_light,
+                &mut color,
+                &mut counters,
+            );
             paths = next;
         }
     }

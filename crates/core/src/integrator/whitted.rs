@@ -1,7 +1,7 @@
 //! Whitted ray tracing, bounce by bounce over a whole tile (wavefront): every bounce's rays,
 //! and then its shadow rays, go through the accelerator's batch entry points.
 
-use super::{Tile, TileOutput, centre_pass, id_t_buffers, tile_pixels};
+use super::{Tile, TileOutput, add_unshadowed, centre_pass, id_t_buffers, tile_pixels};
 use crate::accel::{Accel, Counters};
 use crate::camera::CameraRays;
 use crate::hit::Hit;
@@ -181,16 +181,13 @@ pub(super) fn whitted_tile<A: Accel, C: Counters>(
                     MaterialKind::Mirror | MaterialKind::Glass => {}
                 }
             }
-            if !shadow_rays.is_empty() {
-                let mut occluded = vec![false; shadow_rays.len()];
-                accel.occluded_batch(&shadow_rays, &mut occluded, &mut counters);
-                traced += shadow_rays.len() as u64;
-                for (&(px, value), &blocked) in shadow_light.iter().zip(&occluded) {
-                    if !blocked {
-                        color[px] += value;
-                    }
-                }
-            }
+            traced += add_unshadowed(
+                accel,
+                &shadow_rays,
+                &shadow_light,
+                &mut color,
+                &mut counters,
+            );
             // Drop contributions too small to matter (keeps glass-in-glass from doubling
             // the ray count every bounce for nothing).
             next.retain(|s| s.weight.max_element() > 1e-4);
