@@ -137,6 +137,21 @@ pub fn check(backends: &[&str], scene: &str, size: u32) {
             );
         }
     }
+    let rays =
+        raybench_core::rays::incoherent(scene_data.geometry.bounds(), (size * size) as usize, 1);
+    let (reference_rays, _) = prepared("naive", &scene_data)
+        .trace_rays(&rays, false)
+        .unwrap();
+    for &name in backends {
+        let (hits, _) = prepared(name, &scene_data)
+            .trace_rays(&rays, false)
+            .unwrap();
+        assert_same_ray_hits(
+            &format!("{name} on {scene}, incoherent rays"),
+            &reference_rays,
+            &hits,
+        );
+    }
 }
 
 /// The equivalence check for the integrators with secondary rays: Whitted (4 bounces) and

@@ -147,6 +147,42 @@ fn lambertian_plane_under_uniform_sky() {
     }
 }
 
+/// Whitted's secondary rays survive any sample count: a mirror sphere filling the pixel
+/// reflects the background at 1 and at 16,384 samples alike.
+#[test]
+fn whitted_mirrors_do_not_fade_with_many_samples() {
+    let mut b = SceneBuilder::new("mirror");
+    b.background(Vec3::splat(0.5)).unwrap();
+    let mirror = b
+        .add_material(Material {
+            name: "mirror".into(),
+            kind: raybench_core::MaterialKind::Mirror,
+            specular: Vec3::splat(0.8),
+            ..Material::default()
+        })
+        .unwrap();
+    b.add_sphere(Sphere::new(Vec3::ZERO, 1.0), mirror).unwrap();
+    b.camera(Camera {
+        position: Vec3::new(0.0, 0.0, 5.0),
+        look_at: Vec3::ZERO,
+        up: Vec3::Y,
+        vfov_degrees: 0.5,
+    })
+    .unwrap();
+    let scene = Arc::new(b.build());
+    for spp in [1, 16_384] {
+        let settings = RenderSettings {
+            width: 1,
+            height: 1,
+            spp,
+            mode: Mode::Whitted,
+            ..Default::default()
+        };
+        let c = render_with("naive", &scene, &settings, 1).color[0];
+        assert!((c.x - 0.4).abs() < 1e-3, "spp {spp}: {c}");
+    }
+}
+
 /// Whitted: a diffuse plane lit by one point light straight above, no ambient occlusion:
 /// radiance `albedo * I / d^2 + ambient`.
 #[test]

@@ -4,7 +4,9 @@
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
 use raybench::{BACKENDS, Backend, backend, compare_hits, default_backend};
-use raybench_core::{Mode, NO_HIT, Ray, RayCounters, RaySet, RenderSettings, Renderer, Scene};
+use raybench_core::{
+    Mode, NO_HIT, Ray, RayCounters, RaySet, RenderSettings, Renderer, Scene, limits,
+};
 use raybench_scene::{BUILTIN_SCENES, assets_dir, generators::GENERATORS};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -136,14 +138,23 @@ const INCOHERENT_SEED: u32 = 1;
 
 /// The rays a ray set traces explicitly: `None` for primary rays (frames are rendered),
 /// `width x height` seeded incoherent rays otherwise.
-fn explicit_rays(set: RaySet, scene: &Scene, settings: &RenderSettings) -> Option<Vec<Ray>> {
+fn explicit_rays(
+    set: RaySet,
+    scene: &Scene,
+    settings: &RenderSettings,
+) -> Result<Option<Vec<Ray>>> {
+    let count = u64::from(settings.width) * u64::from(settings.height);
     match set {
-        RaySet::Primary => None,
-        RaySet::Incoherent => Some(raybench_core::rays::incoherent(
+        RaySet::Primary => Ok(None),
+        RaySet::Incoherent if count > limits::MAX_EXPLICIT_RAYS => bail!(
+            "{count} incoherent rays exceed the limit of {} (use a smaller --width x --height)",
+            limits::MAX_EXPLICIT_RAYS
+        ),
+        RaySet::Incoherent => Ok(Some(raybench_core::rays::incoherent(
             scene.geometry.bounds(),
-            settings.width as usize * settings.height as usize,
+            count as usize,
             INCOHERENT_SEED,
-        )),
+        ))),
     }
 }
 
@@ -355,8 +366,8 @@ fn median(mut v: Vec<f64>) -> f64 {
 fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
     let settings = cmd.frame.settings(false);
     settings.validate()?;
-    if cmd.repeat == 0 {
-        bail!("--repeat must be at least 1");
+    if cmd.repeat == 0 || cmd.repeat > 10_000 {
+        bail!("--repeat must be in 1..=10000");
     }
     let scene = load_scene(&cmd.scene, assets)?;
     let chosen: Vec<&Backend> = match &cmd.backends {
@@ -368,7 +379,7 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
         None => {
             let samples =
                 f64::from(settings.width) * f64::from(settings.height) * f64::from(settings.spp);
-            let work = samples * scene.geometry.len() as f64 * f64::from(cmd.repeat + 1);
+            let work = samples * scene.geometry.len() as f64 * (f64::from(cmd.repeat) + 1.0);
             BACKENDS
                 .iter()
                 .filter(|b| {
@@ -388,7 +399,7 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
         bail!("no backend to compare");
     }
 
-    let rays = explicit_rays(cmd.rays, &scene, &settings);
+    let rays = explicit_rays(cmd.rays, &scene, &settings)?;
     let mut rows = Vec::new();
     let mut reference: Option<Measured> = None;
     let mut disagree = false;
@@ -426,7 +437,7 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
         eprintln!(
             "{}: built in {build:.3} s, tracing {} times",
             b.name,
-            cmd.repeat + 1
+            u64::from(cmd.repeat) + 1
         );
         // The warm-up is counted and is what gets compared; timed runs count nothing.
         let warm = measure(r.as_ref(), &settings, rays.as_deref(), true)?;
@@ -617,7 +628,7 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
         ..RenderSettings::default()
     };
     settings.validate()?;
-    let probe = explicit_rays(cmd.rays, &scene, &settings);
+    let probe = explicit_rays(cmd.rays, &scene, &settings)?;
     println!(
         "probe       {} rays, {}x{}",
         cmd.rays.name(),
@@ -630,7 +641,24 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
             .map(|n| backend(n.trim()))
             .collect::<Result<_, _>>()
             .map_err(anyhow::Error::msg)?,
-        None => BACKENDS.iter().collect(),
+        None => {
+            // As in compare: leave brute-force backends out when they would take minutes.
+            let work =
+                f64::from(cmd.width) * f64::from(cmd.height) * f64::from(cmd.spp) * g.len() as f64;
+            BACKENDS
+                .iter()
+                .filter(|b| {
+                    let keep = !b.brute_force || work <= NAIVE_DEFAULT_BUDGET_TESTS;
+                    if !keep {
+                        eprintln!(
+                            "leaving {} out: about {work:.1e} ray/primitive tests",
+                            b.name
+                        );
+                    }
+                    keep
+                })
+                .collect()
+        }
     };
     println!(
         "{:<12} {:>10} {:>14} {:>9} {:>10} {:>10}  structure",

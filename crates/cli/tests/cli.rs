@@ -345,6 +345,20 @@ fn bad_options_give_one_line_errors() {
             "unknown backend",
         ),
         (&["compare", "spheres", "--repeat", "0"], "repeat"),
+        (&["compare", "spheres", "--repeat", "4294967295"], "repeat"),
+        (
+            &[
+                "compare",
+                "spheres",
+                "--rays",
+                "incoherent",
+                "--width",
+                "16384",
+                "--height",
+                "16384",
+            ],
+            "limit",
+        ),
         (
             &["compare", "spheres", "--rays", "sideways"],
             "unknown ray set",

@@ -8,8 +8,9 @@ use crate::material::Material;
 pub struct Emitters {
     /// Primitive ids of emissive triangles, ascending.
     pub ids: Vec<u32>,
-    /// `cdf[i]` = total area of `ids[..=i]`.
-    pub cdf: Vec<f32>,
+    /// `cdf[i]` = total area of `ids[..=i]`, summed in f64 so that the picking probability
+    /// of a small triangle among millions stays its area over the total.
+    pub cdf: Vec<f64>,
 }
 
 impl Emitters {
@@ -18,7 +19,7 @@ impl Emitters {
     pub fn new(geometry: &Geometry, prim_material: &[u32], materials: &[Material]) -> Self {
         let mut ids = Vec::new();
         let mut cdf = Vec::new();
-        let mut total = 0.0f32;
+        let mut total = 0.0f64;
         for (id, shape) in geometry.shapes().iter().enumerate() {
             let Shape::Triangle(t) = shape else { continue };
             let m = &materials[prim_material[id] as usize];
@@ -27,7 +28,7 @@ impl Emitters {
             }
             let area = 0.5 * (t.v[1] - t.v[0]).cross(t.v[2] - t.v[0]).length();
             if area > 0.0 && area.is_finite() {
-                total += area;
+                total += f64::from(area);
                 ids.push(id as u32);
                 cdf.push(total);
             }
@@ -38,7 +39,7 @@ impl Emitters {
     /// Total emitting area.
     #[must_use]
     pub fn total_area(&self) -> f32 {
-        self.cdf.last().copied().unwrap_or(0.0)
+        self.cdf.last().copied().unwrap_or(0.0) as f32
     }
 
     /// True when there is no area light.
@@ -57,7 +58,7 @@ impl Emitters {
     /// The emitter chosen by `u` in `[0, 1)` with probability proportional to its area.
     #[must_use]
     pub fn pick(&self, u: f32) -> Option<u32> {
-        let target = u * self.total_area();
+        let target = f64::from(u) * self.cdf.last().copied().unwrap_or(0.0);
         let i = self.cdf.partition_point(|&c| c <= target);
         self.ids
             .get(i.min(self.ids.len().saturating_sub(1)))

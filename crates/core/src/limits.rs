@@ -10,8 +10,15 @@ pub const MAX_SAMPLES: u64 = 1 << 34;
 /// Largest accepted samples per pixel.
 pub const MAX_SPP: u32 = 1 << 16;
 
-/// Largest accepted number of primitives in one scene.
-pub const MAX_PRIMITIVES: usize = 1 << 28;
+/// Largest accepted number of primitives in one scene (about 2.7 GB of primitives).
+pub const MAX_PRIMITIVES: usize = 1 << 26;
+
+/// Largest accepted magnitude of a coordinate or radius: scene extents, squared radii and
+/// products in the intersection routines then stay finite in f32.
+pub const MAX_COORDINATE: f32 = 1.0e18;
+
+/// Largest accepted number of explicitly generated rays (incoherent ray sets).
+pub const MAX_EXPLICIT_RAYS: u64 = 1 << 24;
 
 /// Largest accepted ray depth (bounces).
 pub const MAX_DEPTH: u32 = 64;

@@ -22,6 +22,17 @@ impl TriangleMesh {
         if let Some(p) = self.positions.iter().position(|p| !p.is_finite()) {
             return Err(SceneError::NonFinite(format!("vertex {}", p + 1)));
         }
+        if let Some(p) = self
+            .positions
+            .iter()
+            .position(|p| p.abs().max_element() > crate::limits::MAX_COORDINATE)
+        {
+            return Err(SceneError::TooLarge(format!(
+                "vertex {} exceeds the coordinate limit of {:e}",
+                p + 1,
+                crate::limits::MAX_COORDINATE
+            )));
+        }
         let len = self.positions.len();
         for tri in &self.indices {
             for &i in tri {

@@ -79,6 +79,18 @@ fn finite(v: Vec3, what: &str) -> Result<(), SceneError> {
     }
 }
 
+/// A position: finite and within [`limits::MAX_COORDINATE`].
+fn coordinate(v: Vec3, what: &str) -> Result<(), SceneError> {
+    finite(v, what)?;
+    if v.abs().max_element() > limits::MAX_COORDINATE {
+        return Err(SceneError::TooLarge(format!(
+            "{what} {v} exceeds the coordinate limit of {:e}",
+            limits::MAX_COORDINATE
+        )));
+    }
+    Ok(())
+}
+
 impl SceneBuilder {
     /// An empty scene named `name`, with the default material at index 0.
     #[must_use]
@@ -157,7 +169,7 @@ impl SceneBuilder {
                 position,
                 intensity,
             } => {
-                finite(position, "light position")?;
+                coordinate(position, "light position")?;
                 finite(intensity, "light intensity")?;
                 light
             }
@@ -218,10 +230,13 @@ impl SceneBuilder {
     /// # Errors
     /// When the centre or radius is not finite or the radius is not positive.
     pub fn add_sphere(&mut self, sphere: Sphere, material: u32) -> Result<&mut Self, SceneError> {
-        finite(sphere.center, "sphere centre")?;
-        if !(sphere.radius.is_finite() && sphere.radius > 0.0) {
+        coordinate(sphere.center, "sphere centre")?;
+        if !(sphere.radius.is_finite()
+            && sphere.radius > 0.0
+            && sphere.radius <= limits::MAX_COORDINATE)
+        {
             return Err(SceneError::Invalid(format!(
-                "sphere radius {} must be positive and finite",
+                "sphere radius {} must be positive, finite and at most 1e18",
                 sphere.radius
             )));
         }
@@ -241,7 +256,7 @@ impl SceneBuilder {
         normal: Vec3,
         material: u32,
     ) -> Result<&mut Self, SceneError> {
-        finite(point, "plane point")?;
+        coordinate(point, "plane point")?;
         finite(normal, "plane normal")?;
         if normal.length_squared() == 0.0 {
             return Err(SceneError::Invalid("plane normal is zero".into()));
@@ -292,7 +307,7 @@ impl SceneBuilder {
         }
         for (i, t) in triangles.iter().enumerate() {
             for v in t.v {
-                finite(v, &format!("vertex of triangle {}", i + 1))?;
+                coordinate(v, &format!("vertex of triangle {}", i + 1))?;
             }
         }
         for &m in materials {

@@ -6,7 +6,10 @@
 //! are tested.
 //!
 //! - **Resolution** ([`GridParams`]): about `lambda * M^(1/3)` cells per axis, scaled to the
-//!   box's aspect (`n_i = e_i * cbrt(lambda M / V)`), total capped at `max_cells`.
+//!   box's aspect (`n_i = lambda * e_i * cbrt(M / V)`, so about `lambda^3 M` cells), total
+//!   capped at `max_cells`, and coarsened while the cell lists would exceed
+//!   [`MAX_REFERENCES_PER_PRIMITIVE`] entries per primitive (primitives that span many cells,
+//!   such as long thin triangles, would otherwise make the lists quadratic).
 //! - **Storage**: one flat array of primitive ids and one of per-cell offsets (compressed
 //!   rows), no `Vec` per cell.
 //! - **Insertion**: each primitive goes into every cell its box, padded by `PAD` (the
@@ -42,40 +45,45 @@ pub const MAILBOX: usize = 8;
 /// the DDA and test every bounded primitive (see the crate documentation).
 pub const FAR_ORIGIN: f32 = 8.0;
 
+/// The cell lists are kept below this many entries per primitive (plus one per cell) by
+/// coarsening the grid.
+pub const MAX_REFERENCES_PER_PRIMITIVE: u64 = 16;
+
 /// Grid construction parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GridParams {
-    /// Cell density: about `lambda` primitives' worth of cells per primitive (the `lambda` of
-    /// `lambda * M^(1/3)` cells per axis is its cube root).
+    /// Cells per axis are about `lambda * M^(1/3)` for `M` primitives in a cubic box (about
+    /// `lambda^3` cells per primitive).
     pub lambda: f32,
     /// Largest number of cells.
     pub max_cells: usize,
 }
 
 impl GridParams {
-    /// The default: `lambda = 2`, at most 2^24 cells (64 MiB of offsets).
+    /// The default: `lambda = 1.25` (about two cells per primitive), at most 2^24 cells
+    /// (64 MiB of offsets).
     #[must_use]
     pub fn medium() -> Self {
         Self {
-            lambda: 2.0,
+            lambda: 1.25,
             max_cells: 1 << 24,
         }
     }
 
-    /// Coarser and cheaper: `lambda = 0.5`.
+    /// Coarser and cheaper: `lambda = 0.8` (about half a cell per primitive).
     #[must_use]
     pub fn coarse() -> Self {
         Self {
-            lambda: 0.5,
+            lambda: 0.8,
             ..Self::medium()
         }
     }
 
-    /// Finer: `lambda = 8`.
+    /// Finer: `lambda = 2` (eight cells per primitive).
     #[must_use]
     pub fn fine() -> Self {
         Self {
-            lambda: 8.0,
+            lambda: 2.0,
             ..Self::medium()
         }
     }
@@ -145,7 +153,7 @@ impl Grid {
         let bounds = Aabb::new(gb.min - pad, gb.max + pad);
         let e = bounds.extent();
         let volume = f64::from(e.x) * f64::from(e.y) * f64::from(e.z);
-        let k = (f64::from(params.lambda.max(1e-3)) * f64::from(m) / volume).cbrt();
+        let k = f64::from(params.lambda.max(1e-3)) * (f64::from(m) / volume).cbrt();
         let mut n = [0u32; 3];
         for a in 0..3 {
             n[a] = ((f64::from(e[a]) * k).round() as u32).clamp(1, 1 << 16);
@@ -159,19 +167,47 @@ impl Grid {
                 *v = ((f64::from(*v) * f).floor() as u32).max(1);
             }
         }
-        let cell = e / Vec3::new(n[0] as f32, n[1] as f32, n[2] as f32);
-        let inv_cell = cell.recip();
-        let pad = (cell * (1.0 / 4096.0)).max(Vec3::splat(e.max_element() * (1.0 / 65_536.0)));
-        let mut grid = Self {
-            bounds,
-            res: n,
-            cell,
-            inv_cell,
-            pad,
-            ..empty
-        };
+        let mut grid = Self { bounds, ..empty };
+        grid.set_resolution(n);
+        // Coarsen while the cell lists would be too long.
+        let budget = MAX_REFERENCES_PER_PRIMITIVE * geometry.bounded().len() as u64;
+        while grid.res.iter().any(|&r| r > 1)
+            && grid.count_references() > budget + grid.cell_count() as u64
+        {
+            let res = grid.res.map(|r| (r / 2).max(1));
+            grid.set_resolution(res);
+        }
         grid.insert();
         grid
+    }
+
+    fn cell_count(&self) -> usize {
+        self.res.iter().map(|&r| r as usize).product()
+    }
+
+    /// Sets the resolution, with the cell size and padding that go with it.
+    fn set_resolution(&mut self, res: [u32; 3]) {
+        let e = self.bounds.extent();
+        self.res = res;
+        self.cell = e / Vec3::new(res[0] as f32, res[1] as f32, res[2] as f32);
+        self.inv_cell = self.cell.recip();
+        self.pad =
+            (self.cell * (1.0 / 4096.0)).max(Vec3::splat(e.max_element() * (1.0 / 65_536.0)));
+    }
+
+    /// The number of cell-list entries the current resolution needs.
+    fn count_references(&self) -> u64 {
+        self.geometry
+            .bounded()
+            .iter()
+            .map(|&id| {
+                let b = self.geometry.shape(id).bounds().unwrap_or(Aabb::EMPTY);
+                let (lo, hi) = self.cell_range(b);
+                (0..3)
+                    .map(|a| u64::from(hi[a] - lo[a] + 1))
+                    .product::<u64>()
+            })
+            .sum()
     }
 
     /// The cell range `[lo, hi]` (inclusive) a padded box overlaps.
@@ -280,7 +316,12 @@ impl Grid {
     #[inline]
     fn dda_is_exact_for(&self, ray: &Ray) -> bool {
         if self.ids.is_empty() {
-            return true;
+            // Nothing to walk; unless bounded primitives exist that the grid could not hold.
+            return self.geometry.bounded().is_empty();
+        }
+        if !ray.is_valid() {
+            // NaN or zero directions would never step: test everything, as naive does.
+            return false;
         }
         let reach = (ray.origin - self.bounds.center()).abs().max_element();
         reach <= FAR_ORIGIN * self.bounds.extent().max_element()
@@ -615,6 +656,44 @@ mod tests {
             "tested once despite spanning {} cells",
             c.node_visits
         );
+    }
+
+    #[test]
+    fn primitives_spanning_everything_do_not_make_lists_quadratic() {
+        // 3,000 triangles each crossing the whole box: at two cells per primitive the lists
+        // would hold 3,000 x 6,000 entries; coarsening keeps them near 16 per primitive.
+        let shapes: Vec<Shape> = (0..3000)
+            .map(|i| {
+                let a = i as f32 * 0.001;
+                Shape::Triangle(Triangle::new(
+                    Vec3::new(-1.0, -1.0, -1.0 + a),
+                    Vec3::new(1.0, 1.0, 1.0 - a),
+                    Vec3::new(1.0, -1.0, a),
+                ))
+            })
+            .collect();
+        let grid = Grid::build_with(Arc::new(Geometry::new(shapes)), GridParams::default());
+        let refs = grid.ids.len() as u64;
+        let cells = grid.offsets.len() as u64 - 1;
+        assert!(
+            refs <= MAX_REFERENCES_PER_PRIMITIVE * 3000 + cells,
+            "{refs} references"
+        );
+        let hit = grid.intersect(
+            &Ray::new(Vec3::new(0.2, 0.1, -5.0), Vec3::Z),
+            &mut raybench_core::NoCounters,
+        );
+        assert!(hit.is_some());
+    }
+
+    #[test]
+    fn zero_and_nan_directions_terminate_and_miss() {
+        let grid = soup_grid(500);
+        for dir in [Vec3::ZERO, Vec3::splat(f32::NAN)] {
+            let r = Ray::new(Vec3::ZERO, dir);
+            assert!(grid.intersect(&r, &mut raybench_core::NoCounters).is_none());
+            assert!(!grid.occluded(&r, &mut raybench_core::NoCounters));
+        }
     }
 
     #[test]

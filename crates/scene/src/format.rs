@@ -324,6 +324,11 @@ pub(crate) fn bare_mesh_scene(path: &Path) -> Result<Scene, LoadError> {
     let mut b = SceneBuilder::new(&name);
     b.background(Vec3::new(0.55, 0.65, 0.8))
         .map_err(scene_err)?;
+    b.add_light(Light::Directional {
+        direction: Vec3::new(-0.4, -1.0, -0.6),
+        radiance: Vec3::ONE,
+    })
+    .map_err(scene_err)?;
     add_mesh_data(&mut b, &name, data, None).map_err(scene_err)?;
     Ok(b.build())
 }
@@ -494,6 +499,23 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
                 add_mesh_data(&mut b, &md.path, data, m).map_err(err)?;
             }
             ObjectDesc::Generator(g) => {
+                // Refuse before generating: a one-line spec can ask for 2e7 primitives.
+                let (info, count) = generators::parse_spec(&g.spec)?;
+                let count = match info.name {
+                    "icosphere" => 20u64 << (2 * count),
+                    "terrain" => 2 * count * count,
+                    _ => count,
+                };
+                let limit = raybench_core::limits::MAX_PRIMITIVES as u64;
+                if b.primitive_count() as u64 + count > limit {
+                    return Err(LoadError::Scene {
+                        context: format!("{}: {what}", ctx.file.display()),
+                        source: SceneError::TooLarge(format!(
+                            "generator '{}' would take the scene past {limit} primitives",
+                            g.spec
+                        )),
+                    });
+                }
                 let generated =
                     generators::generate(&g.spec, g.seed.unwrap_or(generators::DEFAULT_SEED))?;
                 let m = material(&g.material)?.unwrap_or(0);

@@ -7,14 +7,31 @@ use glam::{Mat4, Vec3};
 use raybench_core::{Material, TriangleMesh};
 use std::path::Path;
 
-/// Node hierarchies deeper than this are refused (it also stops cycles).
-const MAX_NODE_DEPTH: usize = 256;
-
 fn parse_err(path: &Path, message: impl Into<String>) -> LoadError {
     LoadError::Parse {
         path: path.to_owned(),
         message: message.into(),
     }
+}
+
+/// Reads an external buffer: a regular file, at most the declared length (so a URI naming
+/// `/dev/zero` or a huge file cannot exhaust memory).
+fn read_external(file: &Path, declared: usize) -> Result<Vec<u8>, LoadError> {
+    use std::io::Read as _;
+    let io = |source| LoadError::Io {
+        path: file.to_owned(),
+        source,
+    };
+    if !std::fs::metadata(file).map_err(io)?.is_file() {
+        return Err(parse_err(file, "buffer is not a regular file"));
+    }
+    let mut data = Vec::new();
+    std::fs::File::open(file)
+        .map_err(io)?
+        .take(declared as u64)
+        .read_to_end(&mut data)
+        .map_err(io)?;
+    Ok(data)
 }
 
 fn load_buffers(
@@ -39,8 +56,7 @@ fn load_buffers(
                         .decode(payload)
                         .map_err(|e| parse_err(path, format!("bad base64 buffer: {e}")))?
                 } else {
-                    let file = base.join(uri);
-                    std::fs::read(&file).map_err(|source| LoadError::Io { path: file, source })?
+                    read_external(&base.join(uri), buffer.length())?
                 }
             }
         };
@@ -93,8 +109,16 @@ pub fn load_gltf_file(path: &Path) -> Result<MeshData, LoadError> {
     let scene = doc.default_scene().or_else(|| doc.scenes().next());
     match scene {
         Some(scene) => {
+            let mut visited = vec![false; doc.nodes().len()];
             for node in scene.nodes() {
-                add_node(path, &node, Mat4::IDENTITY, &buffers, &mut data, 0)?;
+                add_node(
+                    path,
+                    &node,
+                    Mat4::IDENTITY,
+                    &buffers,
+                    &mut data,
+                    &mut visited,
+                )?;
             }
         }
         None => {
@@ -112,10 +136,21 @@ fn add_node(
     parent: Mat4,
     buffers: &[Vec<u8>],
     data: &mut MeshData,
-    depth: usize,
+    visited: &mut [bool],
 ) -> Result<(), LoadError> {
-    if depth > MAX_NODE_DEPTH {
-        return Err(parse_err(path, "node hierarchy too deep (or cyclic)"));
+    // glTF node hierarchies are strict trees: a node reached twice is a cycle or a shared
+    // child, which could multiply the geometry exponentially.
+    let seen = visited
+        .get_mut(node.index())
+        .ok_or_else(|| parse_err(path, "node index out of range"))?;
+    if std::mem::replace(seen, true) {
+        return Err(parse_err(
+            path,
+            format!(
+                "node {} is reached twice (node hierarchies must be trees)",
+                node.index()
+            ),
+        ));
     }
     let local = Mat4::from_cols_array_2d(&node.transform().matrix());
     let world = parent * local;
@@ -129,7 +164,67 @@ fn add_node(
         add_mesh(path, &mesh, world, buffers, data)?;
     }
     for child in node.children() {
-        add_node(path, &child, world, buffers, data, depth + 1)?;
+        add_node(path, &child, world, buffers, data, visited)?;
+    }
+    Ok(())
+}
+
+/// Refuses accessors the `gltf` crate's readers would panic on: positions must be `f32`
+/// VEC3 and indices unsigned scalars, with strides no shorter than an element, at least one
+/// element, and data inside their buffer view.
+fn check_accessors(path: &Path, prim: &gltf::Primitive) -> Result<(), LoadError> {
+    use gltf::accessor::{DataType, Dimensions};
+    let check = |a: &gltf::Accessor, what: &str, elem: usize| -> Result<(), LoadError> {
+        let bad = |why: &str| parse_err(path, format!("accessor {} ({what}): {why}", a.index()));
+        if a.count() == 0 {
+            return Err(bad("no elements"));
+        }
+        let view = a
+            .view()
+            .ok_or_else(|| bad("no buffer view (sparse accessors are not supported)"))?;
+        let stride = view.stride().unwrap_or(elem);
+        if stride < elem {
+            return Err(bad("byte stride shorter than an element"));
+        }
+        let end = a
+            .offset()
+            .checked_add(
+                (a.count() - 1)
+                    .checked_mul(stride)
+                    .ok_or_else(|| bad("too large"))?,
+            )
+            .and_then(|e| e.checked_add(elem))
+            .ok_or_else(|| bad("too large"))?;
+        if end > view.length() {
+            return Err(bad("runs past its buffer view"));
+        }
+        let view_end = view
+            .offset()
+            .checked_add(view.length())
+            .ok_or_else(|| bad("too large"))?;
+        if view_end > view.buffer().length() {
+            return Err(bad("buffer view runs past its buffer"));
+        }
+        Ok(())
+    };
+    let position = prim
+        .get(&gltf::Semantic::Positions)
+        .ok_or_else(|| parse_err(path, "a primitive has no POSITION attribute"))?;
+    if position.data_type() != DataType::F32 || position.dimensions() != Dimensions::Vec3 {
+        return Err(parse_err(path, "POSITION must be f32 VEC3"));
+    }
+    check(&position, "POSITION", 12)?;
+    if let Some(indices) = prim.indices() {
+        let size = match indices.data_type() {
+            DataType::U8 => 1,
+            DataType::U16 => 2,
+            DataType::U32 => 4,
+            _ => return Err(parse_err(path, "indices must be unsigned integers")),
+        };
+        if indices.dimensions() != Dimensions::Scalar {
+            return Err(parse_err(path, "indices must be scalars"));
+        }
+        check(&indices, "indices", size)?;
     }
     Ok(())
 }
@@ -146,6 +241,7 @@ fn add_mesh(
             // Points, lines and strips carry no triangles of the list kind: skipped.
             continue;
         }
+        check_accessors(path, &prim)?;
         let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
         let positions: Vec<Vec3> = reader
             .read_positions()
@@ -184,6 +280,9 @@ fn add_mesh(
         for [a, b, c] in local.indices {
             data.mesh.indices.push([a + base, b + base, c + base]);
             data.triangle_material.push(material);
+        }
+        if data.mesh.indices.len() > raybench_core::limits::MAX_PRIMITIVES {
+            return Err(parse_err(path, "more triangles than the primitive limit"));
         }
     }
     Ok(())
@@ -296,6 +395,48 @@ mod tests {
         std::fs::write(&p, &json).unwrap();
         let e = load_gltf_file(&p).unwrap_err().to_string();
         assert!(e.contains("absent.bin"), "{e}");
+    }
+
+    #[test]
+    fn crafted_accessors_and_shared_nodes_are_errors() {
+        let (bin, _) = triangle_gltf(None);
+        let data_uri = format!(
+            "data:application/octet-stream;base64,{}",
+            base64::engine::general_purpose::STANDARD.encode(&bin)
+        );
+        let (_, json) = triangle_gltf(Some(&data_uri));
+        let cases = [
+            // A 4-byte stride on 12-byte positions (the gltf crate asserts on it).
+            (
+                json.replacen(
+                    r#""byteLength": 36}"#,
+                    r#""byteLength": 36, "byteStride": 4}"#,
+                    1,
+                ),
+                "stride",
+            ),
+            // No elements.
+            (
+                json.replacen(
+                    r#""count": 3, "type": "VEC3""#,
+                    r#""count": 0, "type": "VEC3""#,
+                    1,
+                ),
+                "no elements",
+            ),
+            // Node 0 listed twice in the scene.
+            (
+                json.replacen(r#""nodes": [0]}"#, r#""nodes": [0, 0]}"#, 1),
+                "twice",
+            ),
+        ];
+        for (i, (text, needle)) in cases.iter().enumerate() {
+            assert_ne!(text, &json, "case {i} did not change the file");
+            let p = tmp(&format!("crafted{i}.gltf"));
+            std::fs::write(&p, text).unwrap();
+            let e = load_gltf_file(&p).map(|_| ()).unwrap_err().to_string();
+            assert!(e.contains(needle), "case {i}: {e}");
+        }
     }
 
     #[test]

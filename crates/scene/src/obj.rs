@@ -43,7 +43,12 @@ pub fn material_from_mtl(m: &tobj::Material) -> Material {
         name: m.name.clone(),
         kind,
         base_color: v(m.diffuse).unwrap_or(d.base_color),
-        specular: v(m.specular).unwrap_or(d.specular),
+        // Mirrors and glass without Ks reflect fully (as in the TOML format).
+        specular: v(m.specular).unwrap_or(if kind == MaterialKind::Diffuse {
+            d.specular
+        } else {
+            Vec3::ONE
+        }),
         shininess: m.shininess.unwrap_or(d.shininess),
         emission,
         ior: m.optical_density.filter(|&n| n > 0.0).unwrap_or(d.ior),

@@ -189,8 +189,10 @@ pub(super) fn whitted_tile<A: Accel, C: Counters>(
                 &mut counters,
             );
             // Drop contributions too small to matter (keeps glass-in-glass from doubling
-            // the ray count every bounce for nothing).
-            next.retain(|s| s.weight.max_element() > 1e-4);
+            // the ray count every bounce for nothing); relative to one sample's weight, so
+            // the cut does not depend on the sample count.
+            let cut = 1e-4 * sample_weight.x;
+            next.retain(|s| s.weight.max_element() > cut);
             segments = next;
         }
     }
