@@ -1,7 +1,8 @@
 //! Criterion benchmarks of raybench's accelerated backends against two peers, on one thread
 //! per ray stream.
 //!
-//! Backends: `bvh` ([`raybench_bvh::Bvh`]), `obvhs` ([`raybench_bvh::ObvhsAccel`]) and `grid`
+//! Backends: `bvh` ([`raybench_bvh::Bvh`]), `obvhs` ([`raybench_bvh::ObvhsAccel`]), `grid2`
+//! ([`raybench_grid::TwoLevelGrid`]) and `grid`
 //! ([`raybench_grid::Grid`]), traced through [`Accel::intersect`]; peers: `bvh-crate` (svenstaro's `bvh` crate) and
 //! `obvhs-bvh2` (obvhs's own BVH2), built over the same triangles and testing them with
 //! raybench's [`Triangle::intersect`], so all four pay the same per-primitive cost and only
@@ -63,7 +64,7 @@ use raybench_bvh::{Bvh, BvhParams, ObvhsAccel};
 use raybench_core::{
     Accel, Geometry, NoCounters, PrimHit, Ray, Scene, Shape, Triangle, Vec3A, rays,
 };
-use raybench_grid::{Grid, GridParams};
+use raybench_grid::{Grid, GridParams, TwoLevelGrid, TwoLevelParams};
 use std::hint::black_box;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -289,9 +290,10 @@ struct Prepared {
     bvh: Bvh,
     obvhs: ObvhsAccel,
     grid: Grid,
+    grid2: TwoLevelGrid,
     peers: Option<(CratePeer, ObvhsPeer)>,
     /// One untimed build of each backend, to size the build benchmarks' measurement time.
-    build_times: [(&'static str, Duration); 5],
+    build_times: [(&'static str, Duration); 6],
 }
 
 fn timed<T>(f: impl FnOnce() -> T) -> (T, Duration) {
@@ -326,6 +328,7 @@ fn prepare(name: &'static str) -> Option<Prepared> {
     let (bvh, t_bvh) = timed(|| Bvh::build_with(g.clone(), BvhParams::default()));
     let (obvhs, t_obvhs) = timed(|| ObvhsAccel::build(g.clone()));
     let (grid, t_grid) = timed(|| Grid::build_with(g.clone(), GridParams::default()));
+    let (grid2, t_grid2) = timed(|| TwoLevelGrid::build_with(g.clone(), TwoLevelParams::default()));
     let tris = triangles(&g);
     if tris.is_none() {
         eprintln!("scene {name} has non-triangle primitives: skipping the peers");
@@ -351,11 +354,13 @@ fn prepare(name: &'static str) -> Option<Prepared> {
         bvh,
         obvhs,
         grid,
+        grid2,
         peers: crate_peer.zip(obvhs_peer),
         build_times: [
             ("bvh", t_bvh),
             ("obvhs", t_obvhs),
             ("grid", t_grid),
+            ("grid2", t_grid2),
             ("bvh-crate", t_crate),
             ("obvhs-bvh2", t_bvh2),
         ],
@@ -480,6 +485,12 @@ fn bench_build(c: &mut Criterion, p: &Prepared) {
     group.bench_function(BenchmarkId::new("obvhs", p.name), |b| {
         b.iter_with_large_drop(|| ObvhsAccel::build(black_box(g.clone())));
     });
+    group.measurement_time(target("grid2"));
+    group.bench_function(BenchmarkId::new("grid2", p.name), |b| {
+        b.iter_with_large_drop(|| {
+            TwoLevelGrid::build_with(black_box(g.clone()), TwoLevelParams::default())
+        });
+    });
     group.measurement_time(target("grid"));
     group.bench_function(BenchmarkId::new("grid", p.name), |b| {
         b.iter_with_large_drop(|| Grid::build_with(black_box(g.clone()), GridParams::default()));
@@ -520,6 +531,13 @@ fn bench_trace(c: &mut Criterion, p: &Prepared) {
             b.iter(|| {
                 for ray in rays {
                     black_box(p.obvhs.intersect(black_box(ray), &mut NoCounters));
+                }
+            });
+        });
+        group.bench_function(id("grid2"), |b| {
+            b.iter(|| {
+                for ray in rays {
+                    black_box(p.grid2.intersect(black_box(ray), &mut NoCounters));
                 }
             });
         });

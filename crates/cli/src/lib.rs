@@ -6,7 +6,7 @@
 
 use raybench_bvh::{Bvh, ObvhsAccel};
 use raybench_core::{Frame, NO_HIT, Renderer};
-use raybench_grid::Grid;
+use raybench_grid::{Grid, TwoLevelGrid};
 use raybench_naive::NaiveAccel;
 use raybench_render::CpuRenderer;
 
@@ -32,6 +32,7 @@ const BVH: &str =
     "own binned-SAH BVH2, 32-byte depth-first nodes, near-child-first stack traversal";
 const OBVHS: &str = "obvhs crate: PLOC + reinsertion, compressed wide CWBVH8, obvhs traversal";
 const GRID: &str = "uniform grid walked by 3D-DDA (ray marching), mailboxing";
+const GRID2: &str = "two-level grid: crowded cells hold their own grid";
 
 /// Every backend, the reference (naive) first.
 pub const BACKENDS: &[Backend] = &[
@@ -71,10 +72,21 @@ pub const BACKENDS: &[Backend] = &[
         brute_force: false,
         make: || Box::new(CpuRenderer::<Grid>::with_default_build("grid", GRID)),
     },
+    Backend {
+        name: "grid2",
+        description: GRID2,
+        exact: true,
+        brute_force: false,
+        make: || {
+            Box::new(CpuRenderer::<TwoLevelGrid>::with_default_build(
+                "grid2", GRID2,
+            ))
+        },
+    },
 ];
 
 /// Backends in order of preference for `render` without `--backend` (fastest first).
-pub const PREFERENCE: &[&str] = &["bvh", "obvhs", "grid", "naive"];
+pub const PREFERENCE: &[&str] = &["bvh", "obvhs", "grid2", "grid", "naive"];
 
 /// The backend called `name`.
 ///

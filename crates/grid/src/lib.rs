@@ -38,6 +38,9 @@ use raybench_core::{
 };
 use std::sync::Arc;
 
+mod two_level;
+pub use two_level::{TwoLevelGrid, TwoLevelParams};
+
 /// Size of the per-ray mailbox (recently tested primitive ids).
 pub const MAILBOX: usize = 8;
 
@@ -113,6 +116,8 @@ pub struct Grid {
     offsets: Vec<u32>,
     /// Primitive ids, cell after cell.
     ids: Vec<u32>,
+    /// The primitives this grid holds (all bounded ones, or a dense cell's for a sub-grid).
+    prims: Vec<u32>,
     params: GridParams,
 }
 
@@ -123,7 +128,19 @@ impl Grid {
     /// When the primitive references exceed `u32::MAX` (about 4 billion).
     #[must_use]
     pub fn build_with(geometry: Arc<Geometry>, params: GridParams) -> Self {
+        let prims = geometry.bounded().to_vec();
         let gb = geometry.bounds();
+        Self::build_over(geometry, prims, gb, params)
+    }
+
+    /// Builds a grid over `prims` (bounded primitive ids of `geometry`) inside `region`;
+    /// primitives reaching outside it are listed in its border cells.
+    pub(crate) fn build_over(
+        geometry: Arc<Geometry>,
+        prims: Vec<u32>,
+        gb: Aabb,
+        params: GridParams,
+    ) -> Self {
         let empty = Self {
             geometry: Arc::clone(&geometry),
             bounds: Aabb::EMPTY,
@@ -133,12 +150,13 @@ impl Grid {
             pad: Vec3::ZERO,
             offsets: vec![0],
             ids: Vec::new(),
+            prims,
             params,
         };
-        if gb.is_empty() || !gb.extent().is_finite() {
+        if gb.is_empty() || !gb.extent().is_finite() || empty.prims.is_empty() {
             return empty;
         }
-        let m = geometry.bounded().len() as f32;
+        let m = empty.prims.len() as f32;
         // Pad the box so flat scenes have volume and border primitives sit inside.
         let scale = gb
             .extent()
@@ -170,7 +188,7 @@ impl Grid {
         let mut grid = Self { bounds, ..empty };
         grid.set_resolution(n);
         // Coarsen while the cell lists would be too long.
-        let budget = MAX_REFERENCES_PER_PRIMITIVE * geometry.bounded().len() as u64;
+        let budget = MAX_REFERENCES_PER_PRIMITIVE * grid.prims.len() as u64;
         while grid.res.iter().any(|&r| r > 1)
             && grid.count_references() > budget + grid.cell_count() as u64
         {
@@ -197,8 +215,7 @@ impl Grid {
 
     /// The number of cell-list entries the current resolution needs.
     fn count_references(&self) -> u64 {
-        self.geometry
-            .bounded()
+        self.prims
             .iter()
             .map(|&id| {
                 let b = self.geometry.shape(id).bounds().unwrap_or(Aabb::EMPTY);
@@ -228,7 +245,7 @@ impl Grid {
         )
     }
 
-    fn cell_index(&self, c: [u32; 3]) -> usize {
+    pub(crate) fn cell_index(&self, c: [u32; 3]) -> usize {
         (c[2] as usize * self.res[1] as usize + c[1] as usize) * self.res[0] as usize
             + c[0] as usize
     }
@@ -238,8 +255,7 @@ impl Grid {
         let cells = self.res.iter().map(|&r| r as usize).product::<usize>();
         let mut counts = vec![0u32; cells + 1];
         let ranges: Vec<(u32, [u32; 3], [u32; 3])> = self
-            .geometry
-            .bounded()
+            .prims
             .iter()
             .map(|&id| {
                 let b = self.geometry.shape(id).bounds().unwrap_or(Aabb::EMPTY);
@@ -314,10 +330,10 @@ impl Grid {
     /// Whether the DDA can locate `ray` in the grid precisely enough (its origin within
     /// [`FAR_ORIGIN`] grid sizes of the centre, and finite).
     #[inline]
-    fn dda_is_exact_for(&self, ray: &Ray) -> bool {
+    pub(crate) fn dda_is_exact_for(&self, ray: &Ray) -> bool {
         if self.ids.is_empty() {
-            // Nothing to walk; unless bounded primitives exist that the grid could not hold.
-            return self.geometry.bounded().is_empty();
+            // Nothing to walk; unless primitives exist that the grid could not hold.
+            return self.prims.is_empty();
         }
         if !ray.is_valid() {
             // NaN or zero directions would never step: test everything, as naive does.
@@ -342,7 +358,7 @@ impl Grid {
     /// `visit` returns `false` to stop. Cells are visited from the ray's entry into the
     /// grid until it leaves the grid or passes `ray.t_max`. Returns the cells visited.
     #[inline]
-    fn walk(&self, ray: &Ray, mut visit: impl FnMut(&[u32], f32) -> bool) -> u64 {
+    pub(crate) fn walk(&self, ray: &Ray, mut visit: impl FnMut(&[u32], f32) -> bool) -> u64 {
         self.dda(ray, |c, exit| {
             let i = self.cell_index(c);
             visit(
@@ -354,7 +370,7 @@ impl Grid {
 
     /// The 3D-DDA itself: calls `visit(cell, exit_t)` for each cell crossed.
     #[inline]
-    fn dda(&self, ray: &Ray, mut visit: impl FnMut([u32; 3], f32) -> bool) -> u64 {
+    pub(crate) fn dda(&self, ray: &Ray, mut visit: impl FnMut([u32; 3], f32) -> bool) -> u64 {
         if self.ids.is_empty() {
             return 0;
         }
@@ -423,13 +439,13 @@ impl Grid {
 }
 
 /// A ring of recently tested primitive ids (mailboxing without shared state).
-struct Mailbox {
+pub(crate) struct Mailbox {
     ids: [u32; MAILBOX],
     next: usize,
 }
 
 impl Mailbox {
-    fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Self {
             ids: [u32::MAX; MAILBOX],
             next: 0,
@@ -438,7 +454,7 @@ impl Mailbox {
 
     /// True when `id` was tested recently; otherwise remembers it and returns false.
     #[inline]
-    fn seen(&mut self, id: u32) -> bool {
+    pub(crate) fn seen(&mut self, id: u32) -> bool {
         if self.ids.contains(&id) {
             return true;
         }
