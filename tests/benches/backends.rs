@@ -1,11 +1,11 @@
 //! Criterion benchmarks of raybench's accelerated backends against two peers, on one thread
 //! per ray stream.
 //!
-//! Backends: `bvh` ([`raybench_bvh::Bvh`]), `obvhs` ([`raybench_bvh::ObvhsAccel`]), `grid2`
-//! ([`raybench_grid::TwoLevelGrid`]) and `grid`
-//! ([`raybench_grid::Grid`]), traced through [`Accel::intersect`]; peers: `bvh-crate` (svenstaro's `bvh` crate) and
-//! `obvhs-bvh2` (obvhs's own BVH2), built over the same triangles and testing them with
-//! raybench's [`Triangle::intersect`], so all four pay the same per-primitive cost and only
+//! Backends: `bvh` ([`raybench_bvh::Bvh`]), `obvhs` ([`raybench_bvh::ObvhsAccel`]), `grid`
+//! ([`raybench_grid::Grid`]) and `grid2` ([`raybench_grid::TwoLevelGrid`]), traced through
+//! [`Accel::intersect`]; peers: `bvh-crate` (svenstaro's `bvh` crate) and `obvhs-bvh2`
+//! (obvhs's own BVH2), built over the same triangles and testing them with raybench's own
+//! primitive routine, so all of them pay the same per-primitive cost and only
 //! the structure and its traversal differ.
 //!
 //! Scenes: the built-in `bunny` and `sponza` (their meshes come from the assets directory;
