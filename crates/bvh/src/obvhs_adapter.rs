@@ -175,10 +175,7 @@ impl Accel for ObvhsAccel {
         }
         let g = &*self.geometry;
         let mut best: Option<(u32, PrimHit)> = None;
-        for &id in g.unbounded() {
-            g.test_closest(id, ray, &mut best);
-        }
-        let mut tests = g.unbounded().len() as u64;
+        let mut tests = g.closest_unbounded(ray, &mut best);
         if !self.bvh.nodes.is_empty() {
             let mut hit = RayHit::none();
             let (oray, factor) = self.obvhs_ray(&ray.clipped(best.map_or(ray.t_max, |(_, h)| h.t)));
@@ -203,12 +200,11 @@ impl Accel for ObvhsAccel {
         }
         let g = &*self.geometry;
         let mut tests = 0u64;
-        for &id in g.unbounded() {
-            tests += 1;
-            if g.shape(id).intersect(ray).is_some() {
-                counters.add_tests(tests);
-                return true;
-            }
+        let (plane_hit, plane_tests) = g.occluded_unbounded(ray);
+        tests += plane_tests;
+        if plane_hit {
+            counters.add_tests(tests);
+            return true;
         }
         let mut hit = false;
         if !self.bvh.nodes.is_empty() {

@@ -23,10 +23,7 @@ impl Accel for Bvh {
     fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
         let g = &*self.geometry;
         let mut best: Option<(u32, PrimHit)> = None;
-        for &id in g.unbounded() {
-            g.test_closest(id, ray, &mut best);
-        }
-        counters.add_tests(g.unbounded().len() as u64);
+        counters.add_tests(g.closest_unbounded(ray, &mut best));
         if self.nodes.is_empty() {
             return g.complete(ray, best);
         }
@@ -93,15 +90,10 @@ impl Accel for Bvh {
 
     fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
         let g = &*self.geometry;
-        for (i, &id) in g.unbounded().iter().enumerate() {
-            if g.shape(id).intersect(ray).is_some() {
-                counters.add_tests(i as u64 + 1);
-                return true;
-            }
-        }
-        counters.add_tests(g.unbounded().len() as u64);
-        if self.nodes.is_empty() {
-            return false;
+        let (plane_hit, plane_tests) = g.occluded_unbounded(ray);
+        counters.add_tests(plane_tests);
+        if plane_hit || self.nodes.is_empty() {
+            return plane_hit;
         }
         let slab = SlabRay::new(ray);
         let hits_box = |node: &Node| {

@@ -253,6 +253,28 @@ impl Geometry {
         better
     }
 
+    /// Tests every unbounded primitive (the planes every structure keeps beside itself) as
+    /// [`Geometry::test_closest`] does; returns how many were tested.
+    #[inline]
+    pub fn closest_unbounded(&self, ray: &Ray, best: &mut Option<(u32, PrimHit)>) -> u64 {
+        for &id in &self.unbounded {
+            self.test_closest(id, ray, best);
+        }
+        self.unbounded.len() as u64
+    }
+
+    /// Whether an unbounded primitive is hit, and how many were tested to find out.
+    #[inline]
+    #[must_use]
+    pub fn occluded_unbounded(&self, ray: &Ray) -> (bool, u64) {
+        for (i, &id) in self.unbounded.iter().enumerate() {
+            if self.shape(id).intersect(ray).is_some() {
+                return (true, i as u64 + 1);
+            }
+        }
+        (false, self.unbounded.len() as u64)
+    }
+
     /// The closest hit found by testing every primitive in id order: the naive strategy,
     /// and the exact fallback of accelerators for rays they cannot place.
     #[must_use]

@@ -122,10 +122,7 @@ impl Accel for TwoLevelGrid {
             return g.closest_brute_force(ray, counters);
         }
         let mut best: Option<(u32, PrimHit)> = None;
-        for &id in g.unbounded() {
-            g.test_closest(id, ray, &mut best);
-        }
-        let mut tests = g.unbounded().len() as u64;
+        let mut tests = g.closest_unbounded(ray, &mut best);
         let mut mailbox = Mailbox::new();
         let visits = self.walk(ray, |ids| {
             for &id in ids {
@@ -147,12 +144,11 @@ impl Accel for TwoLevelGrid {
             return g.occluded_brute_force(ray, counters);
         }
         let mut tests = 0u64;
-        for &id in g.unbounded() {
-            tests += 1;
-            if g.shape(id).intersect(ray).is_some() {
-                counters.add_tests(tests);
-                return true;
-            }
+        let (plane_hit, plane_tests) = g.occluded_unbounded(ray);
+        tests += plane_tests;
+        if plane_hit {
+            counters.add_tests(tests);
+            return true;
         }
         let mut hit = false;
         let mut mailbox = Mailbox::new();

@@ -82,6 +82,46 @@ pub fn render_tile<A: Accel, C: Counters>(
     }
 }
 
+/// What every integrator does around its own work: the tile's centre rays (whose hits are
+/// the id and `t` buffers), the colour accumulator, and the counts of rays and work.
+struct TileState<C> {
+    tile: Tile,
+    centre_rays: Vec<Ray>,
+    centre_hits: Vec<Option<Hit>>,
+    color: Vec<Vec3>,
+    traced: u64,
+    counters: C,
+}
+
+impl<C: Counters> TileState<C> {
+    /// Traces the centre rays; colour starts at zero.
+    fn new<A: Accel>(accel: &A, camera: &CameraRays, tile: Tile) -> Self {
+        let mut counters = C::default();
+        let (centre_rays, centre_hits) = centre_pass(accel, camera, tile, &mut counters);
+        let n = centre_rays.len();
+        Self {
+            tile,
+            centre_rays,
+            centre_hits,
+            color: vec![Vec3::ZERO; n],
+            traced: n as u64,
+            counters,
+        }
+    }
+
+    fn finish(self) -> TileOutput<C> {
+        let (ids, t) = id_t_buffers(&self.centre_hits);
+        TileOutput {
+            tile: self.tile,
+            color: self.color,
+            ids,
+            t,
+            rays: self.traced,
+            counters: self.counters,
+        }
+    }
+}
+
 /// The centre rays of a tile, row by row, with their closest hits (the id and `t` buffers).
 fn centre_pass<A: Accel, C: Counters>(
     accel: &A,
@@ -184,45 +224,39 @@ fn cast_tile<A: Accel, C: Counters>(
     settings: &RenderSettings,
     tile: Tile,
 ) -> TileOutput<C> {
-    let n = (tile.width * tile.height) as usize;
-    let mut counters = C::default();
+    let mut st = TileState::<C>::new(accel, camera, tile);
     let light_dir = cast_light(scene);
-
-    let (mut rays, mut hits) = centre_pass(accel, camera, tile, &mut counters);
-    let mut traced = n as u64;
-    let (ids, t) = id_t_buffers(&hits);
-
-    let color = if settings.spp <= 1 {
-        rays.iter()
-            .zip(&hits)
-            .map(|(r, h)| shade_cast(scene, light_dir, r, h.as_ref()))
-            .collect()
+    if settings.spp <= 1 {
+        for ((c, r), h) in st
+            .color
+            .iter_mut()
+            .zip(&st.centre_rays)
+            .zip(&st.centre_hits)
+        {
+            *c = shade_cast(scene, light_dir, r, h.as_ref());
+        }
     } else {
         // Jittered samples for colour; ids and t stay those of the centre ray.
-        let mut sum = vec![Vec3::ZERO; n];
+        let n = st.centre_rays.len();
+        let mut rays = st.centre_rays.clone();
+        let mut hits = vec![None; n];
         for s in 0..settings.spp {
             for (ray, (x, y, pixel)) in rays.iter_mut().zip(tile_pixels(tile, settings.width)) {
                 let (jx, jy) = Sampler::new(pixel, s, settings.seed).next_2d();
                 *ray = camera.ray(x as f32 + jx, y as f32 + jy);
             }
-            accel.intersect_batch(&rays, &mut hits, &mut counters);
-            traced += n as u64;
-            for ((acc, r), h) in sum.iter_mut().zip(&rays).zip(&hits) {
+            accel.intersect_batch(&rays, &mut hits, &mut st.counters);
+            st.traced += n as u64;
+            for ((acc, r), h) in st.color.iter_mut().zip(&rays).zip(&hits) {
                 *acc += shade_cast(scene, light_dir, r, h.as_ref());
             }
         }
         let inv = 1.0 / settings.spp as f32;
-        sum.into_iter().map(|c| c * inv).collect()
-    };
-
-    TileOutput {
-        tile,
-        color,
-        ids,
-        t,
-        rays: traced,
-        counters,
+        for c in &mut st.color {
+            *c *= inv;
+        }
     }
+    st.finish()
 }
 
 /// Assembles tile outputs (in any order) into a frame, summing rays and counters.

@@ -12,7 +12,7 @@
 //! points to (counter-clockwise winding); the Cornell box's light faces down.
 
 use super::whitted::{Segment, light_ray, shading_frame};
-use super::{Tile, TileOutput, add_unshadowed, centre_pass, id_t_buffers, tile_pixels};
+use super::{Tile, TileOutput, TileState, add_unshadowed, tile_pixels};
 use crate::accel::{Accel, Counters};
 use crate::camera::CameraRays;
 use crate::geometry::Shape;
@@ -56,12 +56,7 @@ pub(super) fn path_tile<A: Accel, C: Counters>(
     settings: &RenderSettings,
     tile: Tile,
 ) -> TileOutput<C> {
-    let n = (tile.width * tile.height) as usize;
-    let mut counters = C::default();
-    let (_, centre_hits) = centre_pass(accel, camera, tile, &mut counters);
-    let mut traced = n as u64;
-    let (ids, t) = id_t_buffers(&centre_hits);
-    let mut color = vec![Vec3::ZERO; n];
+    let mut st = TileState::<C>::new(accel, camera, tile);
     let sample_weight = Vec3::splat(1.0 / settings.spp as f32);
     let emitters = &scene.emitters;
     let emitter_area = emitters.total_area();
@@ -89,8 +84,8 @@ pub(super) fn path_tile<A: Accel, C: Counters>(
             }
             let rays: Vec<Ray> = paths.iter().map(|p| p.segment.ray).collect();
             let mut hits = vec![None; rays.len()];
-            accel.intersect_batch(&rays, &mut hits, &mut counters);
-            traced += rays.len() as u64;
+            accel.intersect_batch(&rays, &mut hits, &mut st.counters);
+            st.traced += rays.len() as u64;
 
             let mut next = Vec::with_capacity(paths.len());
             let mut shadow_rays = Vec::new();
@@ -99,14 +94,14 @@ pub(super) fn path_tile<A: Accel, C: Counters>(
                 let seg = path.segment;
                 let px = seg.pixel as usize;
                 let Some(hit) = hit else {
-                    color[px] += seg.weight * scene.background;
+                    st.color[px] += seg.weight * scene.background;
                     continue;
                 };
                 let m = scene.material_of(hit.prim);
                 let (p, nf, front) = shading_frame(&seg.ray, hit);
                 let d = seg.ray.dir.normalize();
                 if front && (path.specular || !emitters.contains(hit.prim)) {
-                    color[px] += seg.weight * m.emission;
+                    st.color[px] += seg.weight * m.emission;
                 }
                 if depth == settings.max_depth {
                     continue;
@@ -199,22 +194,15 @@ pub(super) fn path_tile<A: Accel, C: Counters>(
                     ..*path
                 });
             }
-            traced += add_unshadowed(
+            st.traced += add_unshadowed(
                 accel,
                 &shadow_rays,
                 &shadow_light,
-                &mut color,
-                &mut counters,
+                &mut st.color,
+                &mut st.counters,
             );
             paths = next;
         }
     }
-    TileOutput {
-        tile,
-        color,
-        ids,
-        t,
-        rays: traced,
-        counters,
-    }
+    st.finish()
 }

@@ -1,7 +1,7 @@
 //! Whitted ray tracing, bounce by bounce over a whole tile (wavefront): every bounce's rays,
 //! and then its shadow rays, go through the accelerator's batch entry points.
 
-use super::{Tile, TileOutput, add_unshadowed, centre_pass, id_t_buffers, tile_pixels};
+use super::{Tile, TileOutput, TileState, add_unshadowed, tile_pixels};
 use crate::accel::{Accel, Counters};
 use crate::camera::CameraRays;
 use crate::hit::Hit;
@@ -78,18 +78,13 @@ pub(super) fn whitted_tile<A: Accel, C: Counters>(
     settings: &RenderSettings,
     tile: Tile,
 ) -> TileOutput<C> {
-    let n = (tile.width * tile.height) as usize;
-    let mut counters = C::default();
-    let (centre_rays, centre_hits) = centre_pass(accel, camera, tile, &mut counters);
-    let mut traced = n as u64;
-    let (ids, t) = id_t_buffers(&centre_hits);
-    let mut color = vec![Vec3::ZERO; n];
+    let mut st = TileState::<C>::new(accel, camera, tile);
     let sample_weight = Vec3::splat(1.0 / settings.spp as f32);
 
     for s in 0..settings.spp {
         // One sample: the centre rays (already traced); several: jittered rays.
         let mut segments: Vec<Segment> = if settings.spp == 1 {
-            centre_rays
+            st.centre_rays
                 .iter()
                 .enumerate()
                 .map(|(i, &ray)| Segment {
@@ -116,12 +111,12 @@ pub(super) fn whitted_tile<A: Accel, C: Counters>(
                 break;
             }
             let hits = if depth == 0 && settings.spp == 1 {
-                centre_hits.clone()
+                st.centre_hits.clone()
             } else {
                 let rays: Vec<Ray> = segments.iter().map(|s| s.ray).collect();
                 let mut hits = vec![None; rays.len()];
-                accel.intersect_batch(&rays, &mut hits, &mut counters);
-                traced += rays.len() as u64;
+                accel.intersect_batch(&rays, &mut hits, &mut st.counters);
+                st.traced += rays.len() as u64;
                 hits
             };
             let mut next = Vec::new();
@@ -130,19 +125,19 @@ pub(super) fn whitted_tile<A: Accel, C: Counters>(
             for (seg, hit) in segments.iter().zip(&hits) {
                 let px = seg.pixel as usize;
                 let Some(hit) = hit else {
-                    color[px] += seg.weight * scene.background;
+                    st.color[px] += seg.weight * scene.background;
                     continue;
                 };
                 let m = scene.material_of(hit.prim);
                 let (p, nf, front) = shading_frame(&seg.ray, hit);
                 let d = seg.ray.dir.normalize();
                 if front {
-                    color[px] += seg.weight * m.emission;
+                    st.color[px] += seg.weight * m.emission;
                 }
                 match m.kind {
                     MaterialKind::Diffuse => {
                         let albedo = m.albedo_at(p);
-                        color[px] += seg.weight * albedo * AMBIENT;
+                        st.color[px] += seg.weight * albedo * AMBIENT;
                         for light in &scene.lights {
                             let Some((ray, irradiance, wi)) = light_ray(light, p, nf) else {
                                 continue;
@@ -181,12 +176,12 @@ pub(super) fn whitted_tile<A: Accel, C: Counters>(
                     MaterialKind::Mirror | MaterialKind::Glass => {}
                 }
             }
-            traced += add_unshadowed(
+            st.traced += add_unshadowed(
                 accel,
                 &shadow_rays,
                 &shadow_light,
-                &mut color,
-                &mut counters,
+                &mut st.color,
+                &mut st.counters,
             );
             // Drop contributions too small to matter (keeps glass-in-glass from doubling
             // the ray count every bounce for nothing); relative to one sample's weight, so
@@ -196,12 +191,5 @@ pub(super) fn whitted_tile<A: Accel, C: Counters>(
             segments = next;
         }
     }
-    TileOutput {
-        tile,
-        color,
-        ids,
-        t,
-        rays: traced,
-        counters,
-    }
+    st.finish()
 }
