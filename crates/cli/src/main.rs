@@ -350,6 +350,31 @@ struct CompareRow {
     max_abs_dt: Option<f64>,
 }
 
+/// The backends named on the command line, or by default every backend, leaving
+/// brute-force ones out (with a message) when `work` ray/primitive tests would take minutes.
+fn chosen_backends(names: Option<&[String]>, work: f64) -> Result<Vec<&'static Backend>> {
+    if let Some(names) = names {
+        return names
+            .iter()
+            .map(|n| backend(n.trim()))
+            .collect::<Result<_, _>>()
+            .map_err(anyhow::Error::msg);
+    }
+    Ok(BACKENDS
+        .iter()
+        .filter(|b| {
+            let keep = !b.brute_force || work <= NAIVE_DEFAULT_BUDGET_TESTS || BACKENDS.len() == 1;
+            if !keep {
+                eprintln!(
+                    "leaving {} out: about {work:.1e} ray/primitive tests (pass --backends {} to force)",
+                    b.name, b.name
+                );
+            }
+            keep
+        })
+        .collect())
+}
+
 /// Naive-backend work above which `compare` leaves naive out of its default list.
 const NAIVE_DEFAULT_BUDGET_TESTS: f64 = 2.0e10;
 
@@ -370,31 +395,9 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
         bail!("--repeat must be in 1..=10000");
     }
     let scene = load_scene(&cmd.scene, assets)?;
-    let chosen: Vec<&Backend> = match &cmd.backends {
-        Some(names) => names
-            .iter()
-            .map(|n| backend(n.trim()))
-            .collect::<Result<_, _>>()
-            .map_err(anyhow::Error::msg)?,
-        None => {
-            let samples =
-                f64::from(settings.width) * f64::from(settings.height) * f64::from(settings.spp);
-            let work = samples * scene.geometry.len() as f64 * (f64::from(cmd.repeat) + 1.0);
-            BACKENDS
-                .iter()
-                .filter(|b| {
-                    let keep = !b.brute_force || work <= NAIVE_DEFAULT_BUDGET_TESTS || BACKENDS.len() == 1;
-                    if !keep {
-                        eprintln!(
-                            "leaving {} out: about {work:.1e} ray/primitive tests (pass --backends {} to force)",
-                            b.name, b.name
-                        );
-                    }
-                    keep
-                })
-                .collect()
-        }
-    };
+    let samples = f64::from(settings.width) * f64::from(settings.height) * f64::from(settings.spp);
+    let work = samples * scene.geometry.len() as f64 * (f64::from(cmd.repeat) + 1.0);
+    let chosen = chosen_backends(cmd.backends.as_deref(), work)?;
     if chosen.is_empty() {
         bail!("no backend to compare");
     }
@@ -630,36 +633,16 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
     settings.validate()?;
     let probe = explicit_rays(cmd.rays, &scene, &settings)?;
     println!(
-        "probe       {} rays, {}x{}",
+        "probe       {} rays, {}x{}, mode {}, {} spp, max depth {}",
         cmd.rays.name(),
         cmd.width,
-        cmd.height
+        cmd.height,
+        cmd.mode.name(),
+        cmd.spp,
+        cmd.max_depth
     );
-    let chosen: Vec<&Backend> = match &cmd.backends {
-        Some(names) => names
-            .iter()
-            .map(|n| backend(n.trim()))
-            .collect::<Result<_, _>>()
-            .map_err(anyhow::Error::msg)?,
-        None => {
-            // As in compare: leave brute-force backends out when they would take minutes.
-            let work =
-                f64::from(cmd.width) * f64::from(cmd.height) * f64::from(cmd.spp) * g.len() as f64;
-            BACKENDS
-                .iter()
-                .filter(|b| {
-                    let keep = !b.brute_force || work <= NAIVE_DEFAULT_BUDGET_TESTS;
-                    if !keep {
-                        eprintln!(
-                            "leaving {} out: about {work:.1e} ray/primitive tests",
-                            b.name
-                        );
-                    }
-                    keep
-                })
-                .collect()
-        }
-    };
+    let work = f64::from(cmd.width) * f64::from(cmd.height) * f64::from(cmd.spp) * g.len() as f64;
+    let chosen = chosen_backends(cmd.backends.as_deref(), work)?;
     println!(
         "{:<12} {:>10} {:>14} {:>9} {:>10} {:>10}  structure",
         "backend", "build s", "memory bytes", "rays/px", "tests/ray", "visits/ray"
