@@ -199,9 +199,7 @@ impl Accel for ObvhsAccel {
             return self.geometry.occluded_brute_force(ray, counters);
         }
         let g = &*self.geometry;
-        let mut tests = 0u64;
-        let (plane_hit, plane_tests) = g.occluded_unbounded(ray);
-        tests += plane_tests;
+        let (plane_hit, mut tests) = g.occluded_unbounded(ray);
         if plane_hit {
             counters.add_tests(tests);
             return true;

@@ -562,12 +562,10 @@ impl Accel for Grid {
 
     fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
         let g = &*self.geometry;
-        let mut tests = 0u64;
         if !self.dda_is_exact_for(ray) {
             return g.occluded_brute_force(ray, counters);
         }
-        let (plane_hit, plane_tests) = g.occluded_unbounded(ray);
-        tests += plane_tests;
+        let (plane_hit, mut tests) = g.occluded_unbounded(ray);
         if plane_hit {
             counters.add_tests(tests);
             return true;

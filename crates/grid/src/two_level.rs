@@ -143,9 +143,7 @@ impl Accel for TwoLevelGrid {
         if !self.top.dda_is_exact_for(ray) {
             return g.occluded_brute_force(ray, counters);
         }
-        let mut tests = 0u64;
-        let (plane_hit, plane_tests) = g.occluded_unbounded(ray);
-        tests += plane_tests;
+        let (plane_hit, mut tests) = g.occluded_unbounded(ray);
         if plane_hit {
             counters.add_tests(tests);
             return true;
