@@ -2,8 +2,10 @@
 //! per ray stream.
 //!
 //! Backends: `bvh` ([`raybench_bvh::Bvh`]), `obvhs` ([`raybench_bvh::ObvhsAccel`]), `grid`
-//! ([`raybench_grid::Grid`]) and `grid2` ([`raybench_grid::TwoLevelGrid`]), traced through
-//! [`Accel::intersect`]; peers: `bvh-crate` (svenstaro's `bvh` crate) and `obvhs-bvh2`
+//! ([`raybench_grid::Grid`]), `grid2` ([`raybench_grid::TwoLevelGrid`]) and `packet`
+//! ([`raybench_packet::PacketAccel`], with the instruction set [`raybench_packet::Isa::detect`]
+//! picks; `RAYBENCH_ISA` overrides it), traced through [`Accel::intersect_batch`] in batches
+//! of 256 rays, as the renderer does; peers: `bvh-crate` (svenstaro's `bvh` crate) and `obvhs-bvh2`
 //! (obvhs's own BVH2), built over the same triangles and testing them with raybench's own
 //! primitive routine, so all of them pay the same per-primitive cost and only
 //! the structure and its traversal differ.
@@ -17,12 +19,14 @@
 //!
 //! - `build/<backend>/<scene>`: building the structure from the scene's geometry (builders
 //!   use rayon's global pool, i.e. every core);
-//! - `trace/<backend>/<scene>/primary`: the 256 x 256 centre rays of the scene's camera;
+//! - `trace/<backend>/<scene>/primary`: the 256 x 256 centre rays of the scene's camera, in
+//!   the order the renderer traces them (16 x 16 tiles of 4 x 4 pixel blocks,
+//!   [`raybench_core::rays::primary_tiled`]);
 //! - `trace/<backend>/<scene>/incoherent`: 65,536 seeded random rays inside the scene's
 //!   bounding box ([`raybench_core::rays::incoherent`], seed 1).
 //!
-//! Trace benchmarks send single rays one after the other on the calling thread and report
-//! throughput in rays (criterion's `elem/s`). Before the benchmarks of a scene run, every
+//! Trace benchmarks run on the calling thread and report throughput in rays (criterion's
+//! `elem/s`); the peers trace single rays one after the other. Before the benchmarks of a scene run, every
 //! backend and peer traces both ray sets once, untimed, and the agreement of each with `bvh`
 //! (same primitive hit, or both miss) is printed: the peers must agree on at least 99.9% of
 //! the primary rays (they use the same triangle test, so only ties may go another way), so
@@ -65,6 +69,7 @@ use raybench_core::{
     Accel, Geometry, NoCounters, PrimHit, Ray, Scene, Shape, Triangle, Vec3A, rays,
 };
 use raybench_grid::{Grid, GridParams, TwoLevelGrid, TwoLevelParams};
+use raybench_packet::{PacketAccel, PacketParams};
 use std::hint::black_box;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -291,9 +296,10 @@ struct Prepared {
     obvhs: ObvhsAccel,
     grid: Grid,
     grid2: TwoLevelGrid,
+    packet: PacketAccel,
     peers: Option<(CratePeer, ObvhsPeer)>,
     /// One untimed build of each backend, to size the build benchmarks' measurement time.
-    build_times: [(&'static str, Duration); 6],
+    build_times: [(&'static str, Duration); 7],
 }
 
 fn timed<T>(f: impl FnOnce() -> T) -> (T, Duration) {
@@ -318,7 +324,12 @@ fn prepare(name: &'static str) -> Option<Prepared> {
     let ray_sets = [
         (
             "primary",
-            rays::primary(&scene.camera, PRIMARY_SIZE, PRIMARY_SIZE),
+            rays::primary_tiled(
+                &scene.camera,
+                PRIMARY_SIZE,
+                PRIMARY_SIZE,
+                raybench_render::TILE_SIZE,
+            ),
         ),
         (
             "incoherent",
@@ -329,6 +340,7 @@ fn prepare(name: &'static str) -> Option<Prepared> {
     let (obvhs, t_obvhs) = timed(|| ObvhsAccel::build(g.clone()));
     let (grid, t_grid) = timed(|| Grid::build_with(g.clone(), GridParams::default()));
     let (grid2, t_grid2) = timed(|| TwoLevelGrid::build_with(g.clone(), TwoLevelParams::default()));
+    let (packet, t_packet) = timed(|| PacketAccel::build_with(g.clone(), PacketParams::default()));
     let tris = triangles(&g);
     if tris.is_none() {
         eprintln!("scene {name} has non-triangle primitives: skipping the peers");
@@ -343,8 +355,9 @@ fn prepare(name: &'static str) -> Option<Prepared> {
     });
     eprintln!(
         "scene {name}: {} primitives; untimed builds: bvh {t_bvh:.2?}, obvhs {t_obvhs:.2?}, \
-         grid {t_grid:.2?}, bvh-crate {t_crate:.2?}, obvhs-bvh2 {t_bvh2:.2?}",
-        g.len()
+         grid {t_grid:.2?}, grid2 {t_grid2:.2?}, packet {t_packet:.2?} ({}), bvh-crate {t_crate:.2?}, obvhs-bvh2 {t_bvh2:.2?}",
+        g.len(),
+        packet.params().isa
     );
     Some(Prepared {
         name,
@@ -355,12 +368,14 @@ fn prepare(name: &'static str) -> Option<Prepared> {
         obvhs,
         grid,
         grid2,
+        packet,
         peers: crate_peer.zip(obvhs_peer),
         build_times: [
             ("bvh", t_bvh),
             ("obvhs", t_obvhs),
             ("grid", t_grid),
             ("grid2", t_grid2),
+            ("packet", t_packet),
             ("bvh-crate", t_crate),
             ("obvhs-bvh2", t_bvh2),
         ],
@@ -395,6 +410,14 @@ fn check_agreement(p: &Prepared) {
                     &mut rays
                         .iter()
                         .map(|r| p.grid.intersect(r, &mut NoCounters).map(|h| h.prim)),
+                ),
+            ),
+            (
+                "packet",
+                agree(
+                    &mut batch(&p.packet, rays)
+                        .into_iter()
+                        .map(|h| h.map(|h| h.prim)),
                 ),
             ),
         ];
@@ -449,12 +472,11 @@ fn check_agreement(p: &Prepared) {
                 );
             }
         }
-        assert_eq!(
-            results[1].1, 1.0,
-            "grid, an exact backend, differs from bvh"
-        );
+        for (backend, a) in &results[1..3] {
+            assert_eq!(*a, 1.0, "{backend}, an exact backend, differs from bvh");
+        }
         if *set == "primary" {
-            for (backend, a) in &results[2..] {
+            for (backend, a) in &results[3..] {
                 assert!(
                     *a >= MIN_AGREEMENT,
                     "{backend} agrees with bvh on only {:.3}% of the {} primary rays",
@@ -464,6 +486,24 @@ fn check_agreement(p: &Prepared) {
             }
         }
     }
+}
+
+/// Rays per batch in the trace benchmarks: a 16 x 16 tile, what the renderer sends.
+const BATCH: usize = 256;
+
+/// Traces `rays` through the batch entry point into `hits`.
+fn trace<A: Accel>(accel: &A, rays: &[Ray], hits: &mut [Option<raybench_core::Hit>]) {
+    for (r, h) in rays.chunks(BATCH).zip(hits.chunks_mut(BATCH)) {
+        accel.intersect_batch(r, h, &mut NoCounters);
+    }
+    black_box(hits);
+}
+
+/// The hits of `rays` through the batch entry point.
+fn batch<A: Accel>(accel: &A, rays: &[Ray]) -> Vec<Option<raybench_core::Hit>> {
+    let mut hits = vec![None; rays.len()];
+    trace(accel, rays, &mut hits);
+    hits
 }
 
 fn bench_build(c: &mut Criterion, p: &Prepared) {
@@ -489,6 +529,12 @@ fn bench_build(c: &mut Criterion, p: &Prepared) {
     group.bench_function(BenchmarkId::new("grid2", p.name), |b| {
         b.iter_with_large_drop(|| {
             TwoLevelGrid::build_with(black_box(g.clone()), TwoLevelParams::default())
+        });
+    });
+    group.measurement_time(target("packet"));
+    group.bench_function(BenchmarkId::new("packet", p.name), |b| {
+        b.iter_with_large_drop(|| {
+            PacketAccel::build_with(black_box(g.clone()), PacketParams::default())
         });
     });
     group.measurement_time(target("grid"));
@@ -519,34 +565,22 @@ fn bench_trace(c: &mut Criterion, p: &Prepared) {
     for (set, rays) in &p.ray_sets {
         group.throughput(Throughput::Elements(rays.len() as u64));
         let id = |backend: &str| BenchmarkId::new(backend, format!("{}/{set}", p.name));
+        let mut hits = vec![None; rays.len()];
 
         group.bench_function(id("bvh"), |b| {
-            b.iter(|| {
-                for ray in rays {
-                    black_box(p.bvh.intersect(black_box(ray), &mut NoCounters));
-                }
-            });
+            b.iter(|| trace(&p.bvh, black_box(rays), &mut hits));
+        });
+        group.bench_function(id("packet"), |b| {
+            b.iter(|| trace(&p.packet, black_box(rays), &mut hits));
         });
         group.bench_function(id("obvhs"), |b| {
-            b.iter(|| {
-                for ray in rays {
-                    black_box(p.obvhs.intersect(black_box(ray), &mut NoCounters));
-                }
-            });
+            b.iter(|| trace(&p.obvhs, black_box(rays), &mut hits));
         });
         group.bench_function(id("grid2"), |b| {
-            b.iter(|| {
-                for ray in rays {
-                    black_box(p.grid2.intersect(black_box(ray), &mut NoCounters));
-                }
-            });
+            b.iter(|| trace(&p.grid2, black_box(rays), &mut hits));
         });
         group.bench_function(id("grid"), |b| {
-            b.iter(|| {
-                for ray in rays {
-                    black_box(p.grid.intersect(black_box(ray), &mut NoCounters));
-                }
-            });
+            b.iter(|| trace(&p.grid, black_box(rays), &mut hits));
         });
         if let Some((crate_peer, obvhs_peer)) = &p.peers {
             let g = &*p.scene.geometry;

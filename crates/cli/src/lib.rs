@@ -8,6 +8,7 @@ use raybench_bvh::{Bvh, ObvhsAccel};
 use raybench_core::{Frame, NO_HIT, Renderer};
 use raybench_grid::{Grid, TwoLevelGrid};
 use raybench_naive::NaiveAccel;
+use raybench_packet::PacketAccel;
 use raybench_render::CpuRenderer;
 
 /// A registered backend.
@@ -33,6 +34,7 @@ const BVH: &str =
 const OBVHS: &str = "obvhs crate: PLOC + reinsertion, compressed wide CWBVH8, obvhs traversal";
 const GRID: &str = "uniform grid walked by 3D-DDA (ray marching), mailboxing";
 const GRID2: &str = "two-level grid: crowded cells hold their own grid";
+const PACKET: &str = "SIMD: 16-ray packets over the BVH2, single rays over a BVH8 (AVX2, SSE4.1 or portable, picked at run time; RAYBENCH_ISA overrides)";
 
 /// Every backend, the reference (naive) first.
 pub const BACKENDS: &[Backend] = &[
@@ -83,10 +85,21 @@ pub const BACKENDS: &[Backend] = &[
             ))
         },
     },
+    Backend {
+        name: "packet",
+        description: PACKET,
+        exact: true,
+        brute_force: false,
+        make: || {
+            Box::new(CpuRenderer::<PacketAccel>::with_default_build(
+                "packet", PACKET,
+            ))
+        },
+    },
 ];
 
 /// Backends in order of preference for `render` without `--backend` (fastest first).
-pub const PREFERENCE: &[&str] = &["bvh", "obvhs", "grid2", "grid", "naive"];
+pub const PREFERENCE: &[&str] = &["packet", "bvh", "obvhs", "grid2", "grid", "naive"];
 
 /// The backend called `name`.
 ///

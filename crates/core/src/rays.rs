@@ -50,6 +50,19 @@ pub fn primary(camera: &Camera, width: u32, height: u32) -> Vec<Ray> {
     out
 }
 
+/// The same primary rays in the order the integrators trace them: `tile x tile` tiles row
+/// by row, each in [`crate::integrator::tile_pixels`] order (4 x 4 pixel blocks). What a
+/// benchmark of batch tracing should feed a packet backend.
+#[must_use]
+pub fn primary_tiled(camera: &Camera, width: u32, height: u32, tile: u32) -> Vec<Ray> {
+    let rays = camera.rays(width, height);
+    crate::integrator::tiles(width, height, tile)
+        .into_iter()
+        .flat_map(|t| crate::integrator::tile_pixels(t, width))
+        .map(|(x, y, _)| rays.center_ray(x, y))
+        .collect()
+}
+
 /// `count` incoherent rays for `bounds` under `seed`: ray `i` starts at a uniform point of
 /// the box and points in a uniform direction (unit length), both from the counter-based
 /// hash keyed by `(i, seed)`. An empty box puts every origin at zero.

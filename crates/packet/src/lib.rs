@@ -1,0 +1,401 @@
+//! # raybench-packet
+//!
+//! SIMD ray tracing behind raybench's [`Accel`] contract (backend `packet`), bit-identical
+//! to the scalar backends:
+//!
+//! - **Coherent packets** (Wald, Slusallek, Benthin and Wagner, "Interactive Rendering with
+//!   Coherent Ray Tracing", 2001): consecutive rays of a batch that share an octant travel
+//!   the BVH2 of `raybench-bvh` together, 16 at a time with AVX2 (two vectors of eight
+//!   lanes), 8 with SSE4.1, with one SIMD slab test per node and vector, nearest child first
+//!   by the packet's direction, each lane clipped to its own best `t`; leaves test one
+//!   triangle against all lanes.
+//! - **A wide BVH for incoherent rays**: the BVH2 collapsed into a BVH8 whose children's
+//!   boxes are stored as structure of arrays, so one SIMD test checks eight children
+//!   against one ray; children are visited nearest first and leaves test `W` triangles at
+//!   once. Single rays (`intersect`, `occluded`) and packets whose lanes diverge take it.
+//! - **Instruction sets chosen at run time** ([`Isa::detect`]): AVX2, else SSE4.1, else
+//!   portable code (four plain `f32` lanes, the fallback on any target). The same generic
+//!   kernels are instantiated once per instruction set inside a `#[target_feature]`
+//!   function; no build needs `-C target-cpu=native`.
+//!
+//! **Exactness.** The SIMD triangle kernels perform, lane by lane, the operations of
+//! [`raybench_core::Triangle::intersect`] in its order, without approximate reciprocals or
+//! fused multiply-adds; lanes where that routine would switch to f64 (an edge function
+//! exactly 0) and primitives other than triangles are handed to the scalar routine. Box
+//! tests are the core's conservative slab test with the same early-exit rule, so hits and
+//! `t` equal the naive backend's bit for bit.
+//!
+//! `unsafe` is confined to the intrinsics wrapper (`simd.rs`) and the calls of the
+//! `#[target_feature]` entry points after detection (this file).
+
+mod layout;
+mod packet;
+mod simd;
+mod single;
+mod tri;
+
+use layout::Layout;
+use raybench_bvh::{Bvh, BvhParams};
+use raybench_core::{Accel, AccelStats, Counters, Geometry, Hit, PrimHit, Ray};
+use simd::{Lanes, Portable};
+use std::sync::{Arc, OnceLock};
+
+/// An instruction set the kernels can run on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Isa {
+    /// AVX2: eight lanes (x86-64).
+    Avx2,
+    /// SSE4.1: four lanes (x86-64).
+    Sse41,
+    /// Portable code: four lanes of plain `f32` (any target).
+    Portable,
+}
+
+impl Isa {
+    /// Every instruction set, fastest first.
+    pub const ALL: [Isa; 3] = [Isa::Avx2, Isa::Sse41, Isa::Portable];
+
+    /// The name used by `RAYBENCH_ISA` and in reports: `avx2`, `sse4.1`, `portable`.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Avx2 => "avx2",
+            Self::Sse41 => "sse4.1",
+            Self::Portable => "portable",
+        }
+    }
+
+    /// SIMD lanes per vector.
+    #[must_use]
+    pub fn lanes(self) -> usize {
+        match self {
+            Self::Avx2 => 8,
+            Self::Sse41 | Self::Portable => 4,
+        }
+    }
+
+    /// Whether this CPU can run it.
+    #[must_use]
+    pub fn is_available(self) -> bool {
+        match self {
+            #[cfg(target_arch = "x86_64")]
+            Self::Avx2 => std::arch::is_x86_feature_detected!("avx2"),
+            #[cfg(target_arch = "x86_64")]
+            Self::Sse41 => std::arch::is_x86_feature_detected!("sse4.1"),
+            #[cfg(not(target_arch = "x86_64"))]
+            Self::Avx2 | Self::Sse41 => false,
+            Self::Portable => true,
+        }
+    }
+
+    /// The instruction set to use, decided once per process: the fastest available, or the
+    /// one named by the environment variable `RAYBENCH_ISA` (`avx2`, `sse4.1`, `portable`)
+    /// when it is set and available (otherwise a warning on stderr and the fastest).
+    #[must_use]
+    pub fn detect() -> Isa {
+        static CHOSEN: OnceLock<Isa> = OnceLock::new();
+        *CHOSEN.get_or_init(|| {
+            let best = Self::ALL
+                .into_iter()
+                .find(|i| i.is_available())
+                .unwrap_or(Self::Portable);
+            let Ok(wanted) = std::env::var("RAYBENCH_ISA") else {
+                return best;
+            };
+            match Self::ALL.into_iter().find(|i| i.name() == wanted.trim()) {
+                Some(isa) if isa.is_available() => isa,
+                _ => {
+                    eprintln!(
+                        "warning: RAYBENCH_ISA={wanted:?} is not an available instruction set \
+                         (this CPU has: {}); using {}",
+                        Self::ALL
+                            .iter()
+                            .filter(|i| i.is_available())
+                            .map(|i| i.name())
+                            .collect::<Vec<_>>()
+                            .join(", "),
+                        best.name()
+                    );
+                    best
+                }
+            }
+        })
+    }
+}
+
+impl std::fmt::Display for Isa {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// How [`PacketAccel`] traces batches.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PacketParams {
+    /// The instruction set; [`Isa::detect`] by default. An unavailable one falls back to
+    /// [`Isa::Portable`].
+    pub isa: Isa,
+    /// Trace coherent runs of a batch as packets (else every ray goes through the BVH8).
+    pub packets: bool,
+    /// The BVH2 the packets walk and the BVH8 is collapsed from.
+    pub bvh: BvhParams,
+}
+
+impl Default for PacketParams {
+    fn default() -> Self {
+        Self {
+            isa: Isa::detect(),
+            packets: true,
+            bvh: BvhParams::default(),
+        }
+    }
+}
+
+/// The packet backend: a BVH2 for packets and the BVH8 collapsed from it for single rays.
+#[derive(Debug)]
+pub struct PacketAccel {
+    geometry: Arc<Geometry>,
+    layout: Layout,
+    params: PacketParams,
+}
+
+impl PacketAccel {
+    /// Builds with explicit parameters.
+    #[must_use]
+    pub fn build_with(geometry: Arc<Geometry>, params: PacketParams) -> Self {
+        let mut params = params;
+        if !params.isa.is_available() {
+            params.isa = Isa::Portable;
+        }
+        let bvh = Bvh::build_with(Arc::clone(&geometry), params.bvh);
+        let layout = Layout::new(bvh, &geometry);
+        Self {
+            geometry,
+            layout,
+            params,
+        }
+    }
+
+    /// The parameters in use (with the instruction set actually used).
+    #[must_use]
+    pub fn params(&self) -> &PacketParams {
+        &self.params
+    }
+
+    /// Rays per packet: two vectors.
+    #[must_use]
+    pub fn packet_size(&self) -> usize {
+        PACKET_VECTORS * self.params.isa.lanes()
+    }
+}
+
+/// Vectors per packet: 16 rays with AVX2, 8 with four lanes (measured against one vector:
+/// see the crate's README section in the workspace README).
+const PACKET_VECTORS: usize = 2;
+
+/// The closest hits of a batch: packets where the rays are coherent, single rays otherwise.
+#[inline(always)]
+fn batch_closest<L: Lanes, C: Counters>(
+    accel: &PacketAccel,
+    rays: &[Ray],
+    hits: &mut [Option<Hit>],
+    counters: &mut C,
+) {
+    let g = &*accel.geometry;
+    let size = PACKET_VECTORS * L::W;
+    let mut best = [None::<(u32, PrimHit)>; 32];
+    let mut stack = [(0, 0.0); single::STACK];
+    for (rays, hits) in rays.chunks(size).zip(hits.chunks_mut(size)) {
+        let best = &mut best[..rays.len()];
+        for (ray, b) in rays.iter().zip(best.iter_mut()) {
+            *b = None;
+            counters.add_tests(g.closest_unbounded(ray, b));
+        }
+        match packet::octant(rays).filter(|_| accel.params.packets) {
+            Some(oct) => {
+                packet::closest::<L, PACKET_VECTORS, C>(&accel.layout, g, rays, oct, best, counters)
+            }
+            None => {
+                for (ray, b) in rays.iter().zip(best.iter_mut()) {
+                    *b = single::closest::<L, C>(&accel.layout, g, ray, *b, &mut stack, counters);
+                }
+            }
+        }
+        for ((ray, b), hit) in rays.iter().zip(best.iter()).zip(hits) {
+            *hit = g.complete(ray, *b);
+        }
+    }
+}
+
+/// Any-hit results of a batch, as [`batch_closest`].
+#[inline(always)]
+fn batch_occluded<L: Lanes, C: Counters>(
+    accel: &PacketAccel,
+    rays: &[Ray],
+    occluded: &mut [bool],
+    counters: &mut C,
+) {
+    let g = &*accel.geometry;
+    let size = PACKET_VECTORS * L::W;
+    let mut stack = [(0, 0.0); single::STACK];
+    for (rays, out) in rays.chunks(size).zip(occluded.chunks_mut(size)) {
+        for (ray, o) in rays.iter().zip(out.iter_mut()) {
+            let (hit, tests) = g.occluded_unbounded(ray);
+            counters.add_tests(tests);
+            *o = hit;
+        }
+        match packet::octant(rays).filter(|_| accel.params.packets) {
+            Some(oct) => {
+                packet::occluded::<L, PACKET_VECTORS, C>(&accel.layout, g, rays, oct, out, counters)
+            }
+            None => {
+                for (ray, o) in rays.iter().zip(out.iter_mut()) {
+                    if !*o {
+                        *o = single::occluded::<L, C>(&accel.layout, g, ray, &mut stack, counters);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// One ray's closest hit through the BVH8.
+#[inline(always)]
+fn one_closest<L: Lanes, C: Counters>(
+    accel: &PacketAccel,
+    ray: &Ray,
+    counters: &mut C,
+) -> Option<Hit> {
+    let g = &*accel.geometry;
+    let mut best = None;
+    counters.add_tests(g.closest_unbounded(ray, &mut best));
+    let best = single::closest::<L, C>(
+        &accel.layout,
+        g,
+        ray,
+        best,
+        &mut [(0, 0.0); single::STACK],
+        counters,
+    );
+    g.complete(ray, best)
+}
+
+/// Whether one ray is blocked, through the BVH8.
+#[inline(always)]
+fn one_occluded<L: Lanes, C: Counters>(accel: &PacketAccel, ray: &Ray, counters: &mut C) -> bool {
+    let g = &*accel.geometry;
+    let (hit, tests) = g.occluded_unbounded(ray);
+    counters.add_tests(tests);
+    hit || single::occluded::<L, C>(
+        &accel.layout,
+        g,
+        ray,
+        &mut [(0, 0.0); single::STACK],
+        counters,
+    )
+}
+
+/// Instantiates the kernels for one instruction set inside `#[target_feature]` functions.
+macro_rules! entry_points {
+    ($module:ident, $lanes:ty, $feature:literal) => {
+        #[cfg(target_arch = "x86_64")]
+        mod $module {
+            use super::*;
+            #[target_feature(enable = $feature)]
+            pub(super) fn batch_closest<C: Counters>(
+                a: &PacketAccel,
+                r: &[Ray],
+                h: &mut [Option<Hit>],
+                c: &mut C,
+            ) {
+                super::batch_closest::<$lanes, C>(a, r, h, c);
+            }
+            #[target_feature(enable = $feature)]
+            pub(super) fn batch_occluded<C: Counters>(
+                a: &PacketAccel,
+                r: &[Ray],
+                o: &mut [bool],
+                c: &mut C,
+            ) {
+                super::batch_occluded::<$lanes, C>(a, r, o, c);
+            }
+            #[target_feature(enable = $feature)]
+            pub(super) fn one_closest<C: Counters>(
+                a: &PacketAccel,
+                r: &Ray,
+                c: &mut C,
+            ) -> Option<Hit> {
+                super::one_closest::<$lanes, C>(a, r, c)
+            }
+            #[target_feature(enable = $feature)]
+            pub(super) fn one_occluded<C: Counters>(a: &PacketAccel, r: &Ray, c: &mut C) -> bool {
+                super::one_occluded::<$lanes, C>(a, r, c)
+            }
+        }
+    };
+}
+
+entry_points!(avx2, simd::Avx2, "avx2");
+entry_points!(sse41, simd::Sse41, "sse4.1");
+
+/// Calls `$f` of the module for the accelerator's instruction set.
+macro_rules! dispatch {
+    ($self:ident, $f:ident($($arg:expr),*)) => {
+        match $self.params.isa {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `build_with` keeps `Avx2` only when `is_available` detected AVX2.
+            Isa::Avx2 => unsafe { avx2::$f($self, $($arg),*) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `build_with` keeps `Sse41` only when `is_available` detected SSE4.1.
+            Isa::Sse41 => unsafe { sse41::$f($self, $($arg),*) },
+            _ => $f::<Portable, _>($self, $($arg),*),
+        }
+    };
+}
+
+#[allow(unsafe_code)]
+impl Accel for PacketAccel {
+    fn build(geometry: Arc<Geometry>) -> Self {
+        Self::build_with(geometry, PacketParams::default())
+    }
+
+    fn geometry(&self) -> &Geometry {
+        &self.geometry
+    }
+
+    fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
+        dispatch!(self, one_closest(ray, counters))
+    }
+
+    fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
+        dispatch!(self, one_occluded(ray, counters))
+    }
+
+    fn intersect_batch<C: Counters>(
+        &self,
+        rays: &[Ray],
+        hits: &mut [Option<Hit>],
+        counters: &mut C,
+    ) {
+        assert_eq!(rays.len(), hits.len());
+        dispatch!(self, batch_closest(rays, hits, counters));
+    }
+
+    fn occluded_batch<C: Counters>(&self, rays: &[Ray], occluded: &mut [bool], counters: &mut C) {
+        assert_eq!(rays.len(), occluded.len());
+        dispatch!(self, batch_occluded(rays, occluded, counters));
+    }
+
+    fn stats(&self) -> AccelStats {
+        AccelStats {
+            memory_bytes: self.layout.memory_bytes(),
+            counts: vec![
+                ("bvh2 nodes", self.layout.bvh.nodes().len() as u64),
+                ("bvh8 nodes", self.layout.wide.len() as u64),
+                ("leaves", self.layout.leaves.len() as u64),
+                ("lanes", self.params.isa.lanes() as u64),
+                ("packet rays", self.packet_size() as u64),
+            ],
+        }
+    }
+}

@@ -1,0 +1,426 @@
+//! The lane vectors the kernels are written in, one implementation per instruction set.
+//!
+//! Kernels are generic over [`Lanes`] and marked `#[inline(always)]`; each instruction set
+//! has one entry function with `#[target_feature]` that instantiates them, so the same
+//! source compiles to AVX2 (8 lanes), SSE4.1 (4 lanes) and portable code (4 lanes of plain
+//! `f32`, which is also what runs on non-x86 targets). The operations are the IEEE ones,
+//! lane by lane: no approximate reciprocals, no fused multiply-add.
+//!
+//! `min` and `max` follow the x86 rule (`a < b ? a : b`): when either operand is NaN the
+//! *second* is returned. The box tests rely on that to leave an axis unconstrained when
+//! `0 * inf` makes its distance NaN (see `raybench_core::SlabRay`).
+
+/// A vector of `W` `f32` lanes and its lane masks.
+pub(crate) trait Lanes: Copy + Send + Sync + 'static {
+    /// Lanes per vector.
+    const W: usize;
+    /// `W` floats.
+    type V: Copy;
+    /// `W` lane flags.
+    type M: Copy;
+
+    fn splat(x: f32) -> Self::V;
+    /// The first `W` elements of `s` (which must have at least `W`).
+    fn load(s: &[f32]) -> Self::V;
+    /// Writes the lanes to the first `W` elements of `out`.
+    fn store(v: Self::V, out: &mut [f32]);
+    fn add(a: Self::V, b: Self::V) -> Self::V;
+    fn sub(a: Self::V, b: Self::V) -> Self::V;
+    fn mul(a: Self::V, b: Self::V) -> Self::V;
+    fn div(a: Self::V, b: Self::V) -> Self::V;
+    /// `a < b ? a : b` per lane.
+    fn min(a: Self::V, b: Self::V) -> Self::V;
+    /// `a > b ? a : b` per lane.
+    fn max(a: Self::V, b: Self::V) -> Self::V;
+    /// Ordered comparisons: false where either lane is NaN.
+    fn lt(a: Self::V, b: Self::V) -> Self::M;
+    fn le(a: Self::V, b: Self::V) -> Self::M;
+    fn gt(a: Self::V, b: Self::V) -> Self::M;
+    fn eq(a: Self::V, b: Self::V) -> Self::M;
+    fn and(a: Self::M, b: Self::M) -> Self::M;
+    fn or(a: Self::M, b: Self::M) -> Self::M;
+    /// `!a & b`.
+    fn andnot(a: Self::M, b: Self::M) -> Self::M;
+    /// `m ? a : b` per lane.
+    fn select(m: Self::M, a: Self::V, b: Self::V) -> Self::V;
+    /// Bit `i` set when lane `i` is set.
+    fn bits(m: Self::M) -> u32;
+    /// The mask whose lane `i` is bit `i` of `bits`.
+    fn mask(bits: u32) -> Self::M;
+}
+
+/// Portable lanes: four plain `f32`s, compiled for the baseline target.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Portable;
+
+impl Lanes for Portable {
+    const W: usize = 4;
+    type V = [f32; 4];
+    type M = [bool; 4];
+
+    #[inline(always)]
+    fn splat(x: f32) -> Self::V {
+        [x; 4]
+    }
+    #[inline(always)]
+    fn load(s: &[f32]) -> Self::V {
+        [s[0], s[1], s[2], s[3]]
+    }
+    #[inline(always)]
+    fn store(v: Self::V, out: &mut [f32]) {
+        out[..4].copy_from_slice(&v);
+    }
+    #[inline(always)]
+    fn add(a: Self::V, b: Self::V) -> Self::V {
+        std::array::from_fn(|i| a[i] + b[i])
+    }
+    #[inline(always)]
+    fn sub(a: Self::V, b: Self::V) -> Self::V {
+        std::array::from_fn(|i| a[i] - b[i])
+    }
+    #[inline(always)]
+    fn mul(a: Self::V, b: Self::V) -> Self::V {
+        std::array::from_fn(|i| a[i] * b[i])
+    }
+    #[inline(always)]
+    fn div(a: Self::V, b: Self::V) -> Self::V {
+        std::array::from_fn(|i| a[i] / b[i])
+    }
+    #[inline(always)]
+    fn min(a: Self::V, b: Self::V) -> Self::V {
+        std::array::from_fn(|i| if a[i] < b[i] { a[i] } else { b[i] })
+    }
+    #[inline(always)]
+    fn max(a: Self::V, b: Self::V) -> Self::V {
+        std::array::from_fn(|i| if a[i] > b[i] { a[i] } else { b[i] })
+    }
+    #[inline(always)]
+    fn lt(a: Self::V, b: Self::V) -> Self::M {
+        std::array::from_fn(|i| a[i] < b[i])
+    }
+    #[inline(always)]
+    fn le(a: Self::V, b: Self::V) -> Self::M {
+        std::array::from_fn(|i| a[i] <= b[i])
+    }
+    #[inline(always)]
+    fn gt(a: Self::V, b: Self::V) -> Self::M {
+        std::array::from_fn(|i| a[i] > b[i])
+    }
+    #[inline(always)]
+    fn eq(a: Self::V, b: Self::V) -> Self::M {
+        std::array::from_fn(|i| a[i] == b[i])
+    }
+    #[inline(always)]
+    fn and(a: Self::M, b: Self::M) -> Self::M {
+        std::array::from_fn(|i| a[i] & b[i])
+    }
+    #[inline(always)]
+    fn or(a: Self::M, b: Self::M) -> Self::M {
+        std::array::from_fn(|i| a[i] | b[i])
+    }
+    #[inline(always)]
+    fn andnot(a: Self::M, b: Self::M) -> Self::M {
+        std::array::from_fn(|i| !a[i] & b[i])
+    }
+    #[inline(always)]
+    fn select(m: Self::M, a: Self::V, b: Self::V) -> Self::V {
+        std::array::from_fn(|i| if m[i] { a[i] } else { b[i] })
+    }
+    #[inline(always)]
+    fn bits(m: Self::M) -> u32 {
+        m.iter()
+            .enumerate()
+            .fold(0, |acc, (i, &b)| acc | (u32::from(b) << i))
+    }
+    #[inline(always)]
+    fn mask(bits: u32) -> Self::M {
+        std::array::from_fn(|i| bits & (1 << i) != 0)
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+pub(crate) use x86::{Avx2, Sse41};
+
+#[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
+mod x86 {
+    use super::Lanes;
+    use std::arch::x86_64::*;
+
+    /// Wraps an intrinsic call.
+    ///
+    /// SAFETY (for every use in this module): the intrinsics are `unsafe` only because they
+    /// need their instruction set. [`Sse41`] and [`Avx2`] are used exclusively by the
+    /// kernels instantiated inside `#[target_feature(enable = "sse4.1")]` and
+    /// `#[target_feature(enable = "avx2")]` functions, which `crate::Isa::detect` lets run
+    /// only after `is_x86_feature_detected!` confirmed the feature. Loads and stores go
+    /// through slices of at least `W` elements (indexed first, so a short slice panics
+    /// before any pointer is used), and the unaligned variants need no alignment.
+    macro_rules! intrinsic {
+        ($e:expr) => {
+            unsafe { $e }
+        };
+    }
+
+    /// SSE4.1: four lanes in `__m128`.
+    #[derive(Clone, Copy, Debug)]
+    pub(crate) struct Sse41;
+
+    impl Lanes for Sse41 {
+        const W: usize = 4;
+        type V = __m128;
+        type M = __m128;
+
+        #[inline(always)]
+        fn splat(x: f32) -> Self::V {
+            intrinsic!(_mm_set1_ps(x))
+        }
+        #[inline(always)]
+        fn load(s: &[f32]) -> Self::V {
+            let s = &s[..4];
+            intrinsic!(_mm_loadu_ps(s.as_ptr()))
+        }
+        #[inline(always)]
+        fn store(v: Self::V, out: &mut [f32]) {
+            let out = &mut out[..4];
+            intrinsic!(_mm_storeu_ps(out.as_mut_ptr(), v));
+        }
+        #[inline(always)]
+        fn add(a: Self::V, b: Self::V) -> Self::V {
+            intrinsic!(_mm_add_ps(a, b))
+        }
+        #[inline(always)]
+        fn sub(a: Self::V, b: Self::V) -> Self::V {
+            intrinsic!(_mm_sub_ps(a, b))
+        }
+        #[inline(always)]
+        fn mul(a: Self::V, b: Self::V) -> Self::V {
+            intrinsic!(_mm_mul_ps(a, b))
+        }
+        #[inline(always)]
+        fn div(a: Self::V, b: Self::V) -> Self::V {
+            intrinsic!(_mm_div_ps(a, b))
+        }
+        #[inline(always)]
+        fn min(a: Self::V, b: Self::V) -> Self::V {
+            intrinsic!(_mm_min_ps(a, b))
+        }
+        #[inline(always)]
+        fn max(a: Self::V, b: Self::V) -> Self::V {
+            intrinsic!(_mm_max_ps(a, b))
+        }
+        #[inline(always)]
+        fn lt(a: Self::V, b: Self::V) -> Self::M {
+            intrinsic!(_mm_cmplt_ps(a, b))
+        }
+        #[inline(always)]
+        fn le(a: Self::V, b: Self::V) -> Self::M {
+            intrinsic!(_mm_cmple_ps(a, b))
+        }
+        #[inline(always)]
+        fn gt(a: Self::V, b: Self::V) -> Self::M {
+            intrinsic!(_mm_cmpgt_ps(a, b))
+        }
+        #[inline(always)]
+        fn eq(a: Self::V, b: Self::V) -> Self::M {
+            intrinsic!(_mm_cmpeq_ps(a, b))
+        }
+        #[inline(always)]
+        fn and(a: Self::M, b: Self::M) -> Self::M {
+            intrinsic!(_mm_and_ps(a, b))
+        }
+        #[inline(always)]
+        fn or(a: Self::M, b: Self::M) -> Self::M {
+            intrinsic!(_mm_or_ps(a, b))
+        }
+        #[inline(always)]
+        fn andnot(a: Self::M, b: Self::M) -> Self::M {
+            intrinsic!(_mm_andnot_ps(a, b))
+        }
+        #[inline(always)]
+        fn select(m: Self::M, a: Self::V, b: Self::V) -> Self::V {
+            intrinsic!(_mm_blendv_ps(b, a, m))
+        }
+        #[inline(always)]
+        fn bits(m: Self::M) -> u32 {
+            intrinsic!(_mm_movemask_ps(m)) as u32
+        }
+        #[inline(always)]
+        fn mask(bits: u32) -> Self::M {
+            let lanes = intrinsic!(_mm_set_epi32(8, 4, 2, 1));
+            let b = intrinsic!(_mm_set1_epi32(bits as i32));
+            let m = intrinsic!(_mm_cmpeq_epi32(_mm_and_si128(b, lanes), lanes));
+            intrinsic!(_mm_castsi128_ps(m))
+        }
+    }
+
+    /// AVX2: eight lanes in `__m256`.
+    #[derive(Clone, Copy, Debug)]
+    pub(crate) struct Avx2;
+
+    impl Lanes for Avx2 {
+        const W: usize = 8;
+        type V = __m256;
+        type M = __m256;
+
+        #[inline(always)]
+        fn splat(x: f32) -> Self::V {
+            intrinsic!(_mm256_set1_ps(x))
+        }
+        #[inline(always)]
+        fn load(s: &[f32]) -> Self::V {
+            let s = &s[..8];
+            intrinsic!(_mm256_loadu_ps(s.as_ptr()))
+        }
+        #[inline(always)]
+        fn store(v: Self::V, out: &mut [f32]) {
+            let out = &mut out[..8];
+            intrinsic!(_mm256_storeu_ps(out.as_mut_ptr(), v));
+        }
+        #[inline(always)]
+        fn add(a: Self::V, b: Self::V) -> Self::V {
+            intrinsic!(_mm256_add_ps(a, b))
+        }
+        #[inline(always)]
+        fn sub(a: Self::V, b: Self::V) -> Self::V {
+            intrinsic!(_mm256_sub_ps(a, b))
+        }
+        #[inline(always)]
+        fn mul(a: Self::V, b: Self::V) -> Self::V {
+            intrinsic!(_mm256_mul_ps(a, b))
+        }
+        #[inline(always)]
+        fn div(a: Self::V, b: Self::V) -> Self::V {
+            intrinsic!(_mm256_div_ps(a, b))
+        }
+        #[inline(always)]
+        fn min(a: Self::V, b: Self::V) -> Self::V {
+            intrinsic!(_mm256_min_ps(a, b))
+        }
+        #[inline(always)]
+        fn max(a: Self::V, b: Self::V) -> Self::V {
+            intrinsic!(_mm256_max_ps(a, b))
+        }
+        #[inline(always)]
+        fn lt(a: Self::V, b: Self::V) -> Self::M {
+            intrinsic!(_mm256_cmp_ps::<_CMP_LT_OQ>(a, b))
+        }
+        #[inline(always)]
+        fn le(a: Self::V, b: Self::V) -> Self::M {
+            intrinsic!(_mm256_cmp_ps::<_CMP_LE_OQ>(a, b))
+        }
+        #[inline(always)]
+        fn gt(a: Self::V, b: Self::V) -> Self::M {
+            intrinsic!(_mm256_cmp_ps::<_CMP_GT_OQ>(a, b))
+        }
+        #[inline(always)]
+        fn eq(a: Self::V, b: Self::V) -> Self::M {
+            intrinsic!(_mm256_cmp_ps::<_CMP_EQ_OQ>(a, b))
+        }
+        #[inline(always)]
+        fn and(a: Self::M, b: Self::M) -> Self::M {
+            intrinsic!(_mm256_and_ps(a, b))
+        }
+        #[inline(always)]
+        fn or(a: Self::M, b: Self::M) -> Self::M {
+            intrinsic!(_mm256_or_ps(a, b))
+        }
+        #[inline(always)]
+        fn andnot(a: Self::M, b: Self::M) -> Self::M {
+            intrinsic!(_mm256_andnot_ps(a, b))
+        }
+        #[inline(always)]
+        fn select(m: Self::M, a: Self::V, b: Self::V) -> Self::V {
+            intrinsic!(_mm256_blendv_ps(b, a, m))
+        }
+        #[inline(always)]
+        fn bits(m: Self::M) -> u32 {
+            intrinsic!(_mm256_movemask_ps(m)) as u32
+        }
+        #[inline(always)]
+        fn mask(bits: u32) -> Self::M {
+            let lanes = intrinsic!(_mm256_set_epi32(128, 64, 32, 16, 8, 4, 2, 1));
+            let b = intrinsic!(_mm256_set1_epi32(bits as i32));
+            let m = intrinsic!(_mm256_cmpeq_epi32(_mm256_and_si256(b, lanes), lanes));
+            intrinsic!(_mm256_castsi256_ps(m))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each instruction set agrees with the portable lanes, including on NaN operands.
+    fn agrees<L: Lanes>() {
+        let a: Vec<f32> = (0..16)
+            .map(|i| [1.0, -2.0, f32::NAN, 0.0][i % 4] * (i as f32 + 1.0))
+            .collect();
+        let b: Vec<f32> = (0..16)
+            .map(|i| [0.5, -3.0, 1.0, f32::NAN][(i / 2) % 4])
+            .collect();
+        let (x, y) = (L::load(&a), L::load(&b));
+        let mut out = vec![0.0f32; L::W];
+        let check = |v: L::V, f: &dyn Fn(f32, f32) -> f32, what: &str| {
+            let mut o = vec![0.0f32; L::W];
+            L::store(v, &mut o);
+            for i in 0..L::W {
+                let want = f(a[i], b[i]);
+                assert!(
+                    o[i].to_bits() == want.to_bits() || (o[i].is_nan() && want.is_nan()),
+                    "{} {what} lane {i}: {} vs {want}",
+                    std::any::type_name::<L>(),
+                    o[i]
+                );
+            }
+        };
+        check(L::add(x, y), &|p, q| p + q, "add");
+        check(L::sub(x, y), &|p, q| p - q, "sub");
+        check(L::mul(x, y), &|p, q| p * q, "mul");
+        check(L::div(x, y), &|p, q| p / q, "div");
+        check(L::min(x, y), &|p, q| if p < q { p } else { q }, "min");
+        check(L::max(x, y), &|p, q| if p > q { p } else { q }, "max");
+        let lt = L::bits(L::lt(x, y));
+        let le = L::bits(L::le(x, y));
+        let gt = L::bits(L::gt(x, y));
+        let eq = L::bits(L::eq(x, y));
+        for i in 0..L::W {
+            assert_eq!(lt >> i & 1 == 1, a[i] < b[i]);
+            assert_eq!(le >> i & 1 == 1, a[i] <= b[i]);
+            assert_eq!(gt >> i & 1 == 1, a[i] > b[i]);
+            assert_eq!(eq >> i & 1 == 1, a[i] == b[i]);
+        }
+        for bits in [0u32, 1, 0b1010, (1 << L::W) - 1] {
+            assert_eq!(L::bits(L::mask(bits)), bits);
+            L::store(L::select(L::mask(bits), x, y), &mut out);
+            for i in 0..L::W {
+                let want = if bits >> i & 1 == 1 { a[i] } else { b[i] };
+                assert!(out[i].to_bits() == want.to_bits());
+            }
+        }
+        assert_eq!(L::bits(L::andnot(L::mask(0b11), L::mask(0b110))), 0b100);
+        assert_eq!(L::bits(L::or(L::mask(0b1), L::mask(0b10))), 0b11);
+        assert_eq!(L::bits(L::and(L::mask(0b11), L::mask(0b10))), 0b10);
+    }
+
+    #[test]
+    fn portable_lanes() {
+        agrees::<Portable>();
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn sse41_lanes() {
+        if is_x86_feature_detected!("sse4.1") {
+            agrees::<Sse41>();
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx2_lanes() {
+        if is_x86_feature_detected!("avx2") {
+            agrees::<Avx2>();
+        }
+    }
+}

@@ -1,0 +1,323 @@
+//! Single rays through the BVH8: one SIMD slab test checks a node's eight children, the
+//! children hit are visited nearest first, and leaves test `W` triangles at a time.
+
+use crate::layout::{EMPTY_CHILD, LEAF_BIT, Layout, WIDE};
+use crate::simd::Lanes;
+use crate::tri::{SplatRay, ray_vs_triangles};
+use raybench_core::{Counters, Geometry, Hit, PrimHit, Ray, cull_bound};
+
+/// `1 + 2 gamma(3)`: the far-distance scale of the conservative slab test (the core's).
+pub(crate) const FAR_SCALE: f32 =
+    1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
+
+/// A ray prepared for wide slab tests: for each axis, which of a node's `min`/`max` arrays
+/// holds the near plane (by the sign of the inverse direction, as `raybench_core::SlabRay`).
+pub(crate) struct WideRay<L: Lanes> {
+    origin: [L::V; 3],
+    inv: [L::V; 3],
+    near_is_min: [bool; 3],
+    t_min: L::V,
+}
+
+impl<L: Lanes> WideRay<L> {
+    #[inline(always)]
+    pub fn new(ray: &Ray) -> Self {
+        let o = ray.origin;
+        let inv = ray.inv_dir;
+        Self {
+            origin: [L::splat(o.x), L::splat(o.y), L::splat(o.z)],
+            inv: [L::splat(inv.x), L::splat(inv.y), L::splat(inv.z)],
+            near_is_min: [inv.x >= 0.0, inv.y >= 0.0, inv.z >= 0.0],
+            t_min: L::splat(ray.t_min),
+        }
+    }
+
+    /// Entry distances of children `first..first + W` of `node`, and the mask of those
+    /// entered at or before `limit` (conservatively: see `raybench_core::Aabb::intersect`).
+    #[inline(always)]
+    pub fn entries(
+        &self,
+        min: &[[f32; WIDE]; 3],
+        max: &[[f32; WIDE]; 3],
+        first: usize,
+        limit: L::V,
+    ) -> (L::V, u32) {
+        let mut t0 = self.t_min;
+        let mut t1 = limit;
+        let scale = L::splat(FAR_SCALE);
+        for axis in 0..3 {
+            let (near, far) = if self.near_is_min[axis] {
+                (&min[axis], &max[axis])
+            } else {
+                (&max[axis], &min[axis])
+            };
+            let tn = L::mul(
+                L::sub(L::load(&near[first..]), self.origin[axis]),
+                self.inv[axis],
+            );
+            let tf = L::mul(
+                L::sub(L::load(&far[first..]), self.origin[axis]),
+                self.inv[axis],
+            );
+            // NaN (0 * inf) first: the x86 min/max then return the accumulated bound.
+            t0 = L::max(tn, t0);
+            t1 = L::min(L::mul(tf, scale), t1);
+        }
+        (t0, L::bits(L::le(t0, t1)))
+    }
+}
+
+/// Tests the leaf `leaf` against `ray`, keeping the closest hit in `best`.
+#[inline(always)]
+pub(crate) fn leaf_closest<L: Lanes, C: Counters>(
+    layout: &Layout,
+    g: &Geometry,
+    leaf: usize,
+    ray: &Ray,
+    splat: &SplatRay<L>,
+    best: &mut Option<(u32, PrimHit)>,
+    counters: &mut C,
+) {
+    let leaf = layout.leaves[leaf];
+    let (first, count) = (leaf.first as usize, leaf.count as usize);
+    counters.add_tests(count as u64);
+    if !leaf.all_triangles {
+        for &id in &layout.ids[first..first + count] {
+            g.test_closest(id, ray, best);
+        }
+        return;
+    }
+    let mut start = first;
+    while start < first + count {
+        let valid = lanes_below::<L>(first + count - start);
+        let t_max = best.map_or(ray.t_max, |(_, h)| h.t);
+        let r = ray_vs_triangles(layout, splat, start, t_max, valid);
+        take_hits(layout, &r, start, best);
+        for lane in BitIter(r.zero) {
+            g.test_closest(layout.ids[start + lane], ray, best);
+        }
+        start += L::W;
+    }
+}
+
+/// Merges the hit lanes of a triangle test at positions `start..` into `best` by the tie
+/// rule.
+#[inline(always)]
+pub(crate) fn take_hits<L: Lanes>(
+    layout: &Layout,
+    r: &crate::tri::TriLanes<L>,
+    start: usize,
+    best: &mut Option<(u32, PrimHit)>,
+) {
+    if r.hit == 0 {
+        return;
+    }
+    let mut t = [0.0f32; 16];
+    L::store(r.t, &mut t);
+    for lane in BitIter(r.hit) {
+        let id = layout.ids[start + lane];
+        let better = best.is_none_or(|(bid, bh)| Hit::closer(t[lane], id, bh.t, bid));
+        if better {
+            *best = Some((id, prim_hit::<L>(r, lane, t[lane])));
+        }
+    }
+}
+
+/// The scalar routine's `PrimHit` from lane `lane`: `u = V / det`, `v = W / det`.
+#[inline(always)]
+pub(crate) fn prim_hit<L: Lanes>(r: &crate::tri::TriLanes<L>, lane: usize, t: f32) -> PrimHit {
+    let (mut v, mut w, mut det) = ([0.0f32; 16], [0.0f32; 16], [0.0f32; 16]);
+    L::store(r.v, &mut v);
+    L::store(r.w, &mut w);
+    L::store(r.det, &mut det);
+    PrimHit {
+        t,
+        sub: 0,
+        u: v[lane] / det[lane],
+        v: w[lane] / det[lane],
+    }
+}
+
+/// Whether the leaf `leaf` blocks `ray`.
+#[inline(always)]
+fn leaf_occluded<L: Lanes>(
+    layout: &Layout,
+    g: &Geometry,
+    leaf: usize,
+    ray: &Ray,
+    splat: &SplatRay<L>,
+) -> bool {
+    let leaf = layout.leaves[leaf];
+    let (first, count) = (leaf.first as usize, leaf.count as usize);
+    if !leaf.all_triangles {
+        return layout.ids[first..first + count]
+            .iter()
+            .any(|&id| g.shape(id).intersect(ray).is_some());
+    }
+    let mut start = first;
+    while start < first + count {
+        let valid = lanes_below::<L>(first + count - start);
+        let r = ray_vs_triangles(layout, splat, start, ray.t_max, valid);
+        if r.hit != 0
+            || BitIter(r.zero)
+                .any(|lane| g.shape(layout.ids[start + lane]).intersect(ray).is_some())
+        {
+            return true;
+        }
+        start += L::W;
+    }
+    false
+}
+
+/// The mask of the first `n` lanes (all when `n >= W`).
+#[inline(always)]
+pub(crate) fn lanes_below<L: Lanes>(n: usize) -> u32 {
+    if n >= L::W {
+        (1u32 << L::W) - 1
+    } else {
+        (1u32 << n) - 1
+    }
+}
+
+/// Indices of the set bits, lowest first.
+pub(crate) struct BitIter(pub u32);
+
+impl Iterator for BitIter {
+    type Item = usize;
+    #[inline(always)]
+    fn next(&mut self) -> Option<usize> {
+        if self.0 == 0 {
+            return None;
+        }
+        let i = self.0.trailing_zeros() as usize;
+        self.0 &= self.0 - 1;
+        Some(i)
+    }
+}
+
+/// Traversal stack capacity: the BVH2 depth bound (60) times seven siblings, plus slack.
+pub(crate) const STACK: usize = 7 * 64 + 8;
+
+/// A traversal stack, allocated once per batch (initialising it per ray cost 10% of an
+/// incoherent ray).
+pub(crate) type Stack = [(u32, f32); STACK];
+
+/// The closest hit of one ray (the BVH part; `best` arrives holding the planes' hit).
+#[inline(always)]
+pub(crate) fn closest<L: Lanes, C: Counters>(
+    layout: &Layout,
+    g: &Geometry,
+    ray: &Ray,
+    mut best: Option<(u32, PrimHit)>,
+    stack: &mut Stack,
+    counters: &mut C,
+) -> Option<(u32, PrimHit)> {
+    if layout.wide.is_empty() {
+        return best;
+    }
+    let wray = WideRay::<L>::new(ray);
+    let splat = SplatRay::<L>::new(ray);
+    let bound = |best: &Option<(u32, PrimHit)>| cull_bound(best.map_or(ray.t_max, |(_, h)| h.t));
+    let mut limit = bound(&best);
+    stack[0] = (0, f32::NEG_INFINITY);
+    let mut sp = 1;
+    while sp > 0 {
+        sp -= 1;
+        let (index, entry) = stack[sp];
+        if entry > limit {
+            continue;
+        }
+        counters.add_visits(1);
+        if index & LEAF_BIT != 0 {
+            leaf_closest(
+                layout,
+                g,
+                (index & !LEAF_BIT) as usize,
+                ray,
+                &splat,
+                &mut best,
+                counters,
+            );
+            limit = bound(&best);
+            continue;
+        }
+        let node = &layout.wide[index as usize];
+        // Children entered, sorted far to near so that the nearest is popped first.
+        let mut found = [(0u32, 0.0f32); WIDE];
+        let mut n = 0;
+        let mut first = 0;
+        while first < WIDE {
+            let (t0, bits) = wray.entries(&node.min, &node.max, first, L::splat(limit));
+            if bits != 0 {
+                let mut t = [0.0f32; 16];
+                L::store(t0, &mut t);
+                for lane in BitIter(bits) {
+                    let child = node.child[first + lane];
+                    if child == EMPTY_CHILD {
+                        continue;
+                    }
+                    // Insertion sort, descending by entry.
+                    let mut j = n;
+                    while j > 0 && found[j - 1].1 < t[lane] {
+                        found[j] = found[j - 1];
+                        j -= 1;
+                    }
+                    found[j] = (child, t[lane]);
+                    n += 1;
+                }
+            }
+            first += L::W;
+        }
+        for &entry in &found[..n] {
+            stack[sp] = entry;
+            sp += 1;
+        }
+    }
+    best
+}
+
+/// Whether anything in the BVH8 blocks `ray`.
+#[inline(always)]
+pub(crate) fn occluded<L: Lanes, C: Counters>(
+    layout: &Layout,
+    g: &Geometry,
+    ray: &Ray,
+    stack: &mut Stack,
+    counters: &mut C,
+) -> bool {
+    if layout.wide.is_empty() {
+        return false;
+    }
+    let wray = WideRay::<L>::new(ray);
+    let splat = SplatRay::<L>::new(ray);
+    let limit = L::splat(ray.t_max);
+    stack[0].0 = 0;
+    let mut sp = 1;
+    while sp > 0 {
+        sp -= 1;
+        let index = stack[sp].0;
+        counters.add_visits(1);
+        if index & LEAF_BIT != 0 {
+            let leaf = (index & !LEAF_BIT) as usize;
+            counters.add_tests(u64::from(layout.leaves[leaf].count));
+            if leaf_occluded(layout, g, leaf, ray, &splat) {
+                return true;
+            }
+            continue;
+        }
+        let node = &layout.wide[index as usize];
+        let mut first = 0;
+        while first < WIDE {
+            let (_, bits) = wray.entries(&node.min, &node.max, first, limit);
+            for lane in BitIter(bits) {
+                let child = node.child[first + lane];
+                if child != EMPTY_CHILD {
+                    stack[sp].0 = child;
+                    sp += 1;
+                }
+            }
+            first += L::W;
+        }
+    }
+    false
+}

@@ -1,0 +1,209 @@
+//! The watertight ray/triangle test of `raybench_core::Triangle::intersect`, lane by lane.
+//!
+//! Both kernels perform, in every lane, exactly the IEEE operations of the scalar routine
+//! in the same order (translate, permute, shear, the three 2D edge functions, `det = (U +
+//! V) + W`, `T = (U az + V bz) + W cz`, `t = T / det`), so a lane's `t` and barycentrics
+//! are bit-identical to the scalar result. The scalar routine recomputes the edge
+//! functions in f64 when one is exactly 0; lanes where that happens are reported in
+//! `zero` and the caller hands them to the scalar routine itself.
+
+use crate::layout::Layout;
+use crate::simd::Lanes;
+
+/// Per-lane results of a triangle test.
+#[derive(Clone, Copy)]
+pub(crate) struct TriLanes<L: Lanes> {
+    /// Lanes with a hit in `[t_min, t_max]`.
+    pub hit: u32,
+    /// Lanes the scalar routine must decide (an edge function is exactly 0).
+    pub zero: u32,
+    /// Ray parameter `T / det`.
+    pub t: L::V,
+    /// Edge function `V` (the barycentric `u` is `V / det`).
+    pub v: L::V,
+    /// Edge function `W` (the barycentric `v` is `W / det`).
+    pub w: L::V,
+    /// Determinant `(U + V) + W`.
+    pub det: L::V,
+}
+
+/// One ray, splatted across the lanes, for testing `W` triangles at once.
+#[derive(Clone, Copy)]
+pub(crate) struct SplatRay<L: Lanes> {
+    pub origin: [L::V; 3],
+    pub shear: [L::V; 3],
+    pub k: [usize; 3],
+    pub t_min: L::V,
+}
+
+impl<L: Lanes> SplatRay<L> {
+    #[inline(always)]
+    pub fn new(ray: &raybench_core::Ray) -> Self {
+        Self {
+            origin: [
+                L::splat(ray.origin.x),
+                L::splat(ray.origin.y),
+                L::splat(ray.origin.z),
+            ],
+            shear: [
+                L::splat(ray.shear.x),
+                L::splat(ray.shear.y),
+                L::splat(ray.shear.z),
+            ],
+            k: [
+                usize::from(ray.kx) % 3,
+                usize::from(ray.ky) % 3,
+                usize::from(ray.kz) % 3,
+            ],
+            t_min: L::splat(ray.t_min),
+        }
+    }
+}
+
+/// `W` rays in structure-of-arrays form, for testing one triangle against all of them.
+/// The axis permutation may differ per lane: it is applied with selects, which move
+/// values without changing them.
+#[derive(Clone, Copy)]
+pub(crate) struct RayLanes<L: Lanes> {
+    pub origin: [L::V; 3],
+    pub shear: [L::V; 3],
+    /// `is[k][a]`: lanes whose permuted axis `k` (x, y, z) is axis `a` (for `a` = 0, 1).
+    pub is: [[L::M; 2]; 3],
+    pub t_min: L::V,
+}
+
+impl<L: Lanes> RayLanes<L> {
+    /// Lanes `rays[0..W]`; missing rays are padded with the last one.
+    #[inline(always)]
+    pub fn new(rays: &[raybench_core::Ray]) -> Self {
+        let mut buf = [[0.0f32; 16]; 7];
+        let mut k = [[0u32; 3]; 2];
+        for lane in 0..L::W {
+            let r = &rays[lane.min(rays.len() - 1)];
+            let vals = [
+                r.origin.x, r.origin.y, r.origin.z, r.shear.x, r.shear.y, r.shear.z, r.t_min,
+            ];
+            for (b, v) in buf.iter_mut().zip(vals) {
+                b[lane] = v;
+            }
+            for (slot, kk) in [r.kx, r.ky, r.kz].into_iter().enumerate() {
+                for (a, bits) in k.iter_mut().enumerate() {
+                    if usize::from(kk) == a {
+                        bits[slot] |= 1 << lane;
+                    }
+                }
+            }
+        }
+        Self {
+            origin: [L::load(&buf[0]), L::load(&buf[1]), L::load(&buf[2])],
+            shear: [L::load(&buf[3]), L::load(&buf[4]), L::load(&buf[5])],
+            is: [
+                [L::mask(k[0][0]), L::mask(k[1][0])],
+                [L::mask(k[0][1]), L::mask(k[1][1])],
+                [L::mask(k[0][2]), L::mask(k[1][2])],
+            ],
+            t_min: L::load(&buf[6]),
+        }
+    }
+
+    /// Component `slot` (0 = kx, 1 = ky, 2 = kz) of `a` under each lane's permutation.
+    #[inline(always)]
+    fn pick(&self, a: &[L::V; 3], slot: usize) -> L::V {
+        let [is0, is1] = self.is[slot];
+        L::select(is0, a[0], L::select(is1, a[1], a[2]))
+    }
+}
+
+/// The shared tail of both kernels: edge functions to hit lanes.
+#[inline(always)]
+fn finish<L: Lanes>(
+    p: [[L::V; 2]; 3],
+    z: [L::V; 3],
+    t_min: L::V,
+    t_max: L::V,
+    valid: u32,
+) -> TriLanes<L> {
+    let [[ax, ay], [bx, by], [cx, cy]] = p;
+    let u = L::sub(L::mul(cx, by), L::mul(cy, bx));
+    let v = L::sub(L::mul(ax, cy), L::mul(ay, cx));
+    let w = L::sub(L::mul(bx, ay), L::mul(by, ax));
+    let zero = L::splat(0.0);
+    let any_zero = L::or(L::or(L::eq(u, zero), L::eq(v, zero)), L::eq(w, zero));
+    let neg = L::or(L::or(L::lt(u, zero), L::lt(v, zero)), L::lt(w, zero));
+    let pos = L::or(L::or(L::gt(u, zero), L::gt(v, zero)), L::gt(w, zero));
+    let det = L::add(L::add(u, v), w);
+    let t_scaled = L::add(L::add(L::mul(u, z[0]), L::mul(v, z[1])), L::mul(w, z[2]));
+    let t = L::div(t_scaled, det);
+    // Accept where the scalar routine returns Some: inside (not both signs), det != 0,
+    // t_min <= t <= t_max (false for NaN t).
+    let inside = L::andnot(L::and(neg, pos), L::le(t_min, t));
+    let accept = L::and(L::andnot(L::eq(det, zero), inside), L::le(t, t_max));
+    let zero_bits = L::bits(any_zero) & valid;
+    TriLanes {
+        hit: L::bits(accept) & valid & !zero_bits,
+        zero: zero_bits,
+        t,
+        v,
+        w,
+        det,
+    }
+}
+
+/// Tests one ray against the `W` triangles at leaf positions `first..first + W`; lanes
+/// outside `valid` are ignored.
+#[inline(always)]
+pub(crate) fn ray_vs_triangles<L: Lanes>(
+    layout: &Layout,
+    ray: &SplatRay<L>,
+    first: usize,
+    t_max: f32,
+    valid: u32,
+) -> TriLanes<L> {
+    // No closures in kernels: a closure is a function of its own, compiled without the
+    // caller's target features, so its intrinsics would not be inlined.
+    let mut p = [[L::splat(0.0); 2]; 3];
+    let mut z = [L::splat(0.0); 3];
+    let [kx, ky, kz] = ray.k;
+    let [sx, sy, sz] = ray.shear;
+    for vertex in 0..3 {
+        let coord = &layout.tri[3 * vertex..3 * vertex + 3];
+        let v = [
+            L::sub(L::load(&coord[0][first..]), ray.origin[0]),
+            L::sub(L::load(&coord[1][first..]), ray.origin[1]),
+            L::sub(L::load(&coord[2][first..]), ray.origin[2]),
+        ];
+        p[vertex] = [
+            L::sub(v[kx], L::mul(sx, v[kz])),
+            L::sub(v[ky], L::mul(sy, v[kz])),
+        ];
+        z[vertex] = L::mul(sz, v[kz]);
+    }
+    finish::<L>(p, z, ray.t_min, L::splat(t_max), valid)
+}
+
+/// Tests the `W` rays of `rays` (each clipped to its lane of `t_max`) against the triangle
+/// at leaf position `pos`; lanes outside `valid` are ignored.
+#[inline(always)]
+pub(crate) fn rays_vs_triangle<L: Lanes>(
+    layout: &Layout,
+    rays: &RayLanes<L>,
+    pos: usize,
+    t_max: L::V,
+    valid: u32,
+) -> TriLanes<L> {
+    let mut p = [[L::splat(0.0); 2]; 3];
+    let mut z = [L::splat(0.0); 3];
+    let [sx, sy, sz] = rays.shear;
+    for vertex in 0..3 {
+        let coord = &layout.tri[3 * vertex..3 * vertex + 3];
+        let v = [
+            L::sub(L::splat(coord[0][pos]), rays.origin[0]),
+            L::sub(L::splat(coord[1][pos]), rays.origin[1]),
+            L::sub(L::splat(coord[2][pos]), rays.origin[2]),
+        ];
+        let (x, y, vz) = (rays.pick(&v, 0), rays.pick(&v, 1), rays.pick(&v, 2));
+        p[vertex] = [L::sub(x, L::mul(sx, vz)), L::sub(y, L::mul(sy, vz))];
+        z[vertex] = L::mul(sz, vz);
+    }
+    finish::<L>(p, z, rays.t_min, t_max, valid)
+}

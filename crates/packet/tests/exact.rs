@@ -1,0 +1,200 @@
+//! Every instruction set's kernels against the naive oracle: ids, `t` and barycentrics bit
+//! for bit, for packets (coherent rays), single rays (incoherent rays) and any-hit queries,
+//! on generated geometry and on packets built to be awkward.
+
+use raybench_core::{
+    Accel, Camera, Geometry, Hit, NoCounters, Plane, Ray, Shape, Sphere, Vec3, rays,
+};
+use raybench_naive::NaiveAccel;
+use raybench_packet::{Isa, PacketAccel, PacketParams};
+use raybench_scene::generators;
+use std::sync::Arc;
+
+fn geometries() -> Vec<(&'static str, Arc<Geometry>)> {
+    let tris =
+        |m: raybench_core::TriangleMesh| m.triangles().map(Shape::Triangle).collect::<Vec<_>>();
+    let mut mixed = tris(generators::icosphere(2));
+    mixed.extend(
+        generators::random_spheres(200, 9)
+            .into_iter()
+            .map(Shape::Sphere),
+    );
+    mixed.push(Shape::Plane(Plane::new(Vec3::new(0.0, -1.5, 0.0), Vec3::Y)));
+    mixed.extend(tris(generators::soup(300, 4)));
+    // Coincident triangles: the tie rule must pick the smaller id everywhere.
+    let twins = tris(generators::terrain(12));
+    let mut coincident = twins.clone();
+    coincident.extend(twins.iter().rev().cloned());
+    vec![
+        (
+            "soup",
+            Arc::new(Geometry::new(tris(generators::soup(4000, 1)))),
+        ),
+        (
+            "icosphere",
+            Arc::new(Geometry::new(tris(generators::icosphere(4)))),
+        ),
+        (
+            "terrain",
+            Arc::new(Geometry::new(tris(generators::terrain(48)))),
+        ),
+        ("mixed", Arc::new(Geometry::new(mixed))),
+        ("coincident", Arc::new(Geometry::new(coincident))),
+        (
+            "one sphere",
+            Arc::new(Geometry::new(vec![Shape::Sphere(Sphere::new(
+                Vec3::ZERO,
+                1.0,
+            ))])),
+        ),
+        ("empty", Arc::new(Geometry::default())),
+    ]
+}
+
+/// Coherent rays: a camera framing the geometry, row by row; plus incoherent rays; plus rays
+/// from inside the geometry's box along the axes (packets whose lanes start inside boxes)
+/// and packets mixing hits, misses, NaN and zero directions and octants.
+fn ray_sets(g: &Geometry) -> Vec<(&'static str, Vec<Ray>)> {
+    let bounds = if g.bounds().is_empty() {
+        raybench_core::Aabb::new(-Vec3::ONE, Vec3::ONE)
+    } else {
+        g.bounds()
+    };
+    let camera = Camera::framing(bounds);
+    let primary = rays::primary(&camera, 48, 40);
+    let incoherent = rays::incoherent(bounds, 3000, 7);
+    let c = bounds.center();
+    let inside: Vec<Ray> = (0..64)
+        .map(|i| {
+            let a = i as f32 * 0.37;
+            Ray::new(
+                c + 0.01 * Vec3::new(a.sin(), 0.0, a.cos()),
+                Vec3::new(0.2, -0.1 + 0.003 * i as f32, 1.0),
+            )
+        })
+        .collect();
+    let mut awkward = Vec::new();
+    for i in 0..48 {
+        let r = &primary[(i * 37) % primary.len()];
+        awkward.push(match i % 6 {
+            0 => Ray::new(r.origin, -r.dir),
+            1 => Ray::new(r.origin, Vec3::new(f32::NAN, 0.0, 1.0)),
+            2 => Ray::new(r.origin, Vec3::ZERO),
+            3 => Ray::with_interval(r.origin, r.dir, 0.0, 1e-3),
+            _ => *r,
+        });
+    }
+    vec![
+        ("primary", primary),
+        ("incoherent", incoherent),
+        ("inside", inside),
+        ("awkward", awkward),
+    ]
+}
+
+fn same(a: &Option<Hit>, b: &Option<Hit>) -> bool {
+    match (a, b) {
+        (None, None) => true,
+        (Some(a), Some(b)) => {
+            a.prim == b.prim
+                && a.t.to_bits() == b.t.to_bits()
+                && a.u.to_bits() == b.u.to_bits()
+                && a.v.to_bits() == b.v.to_bits()
+        }
+        _ => false,
+    }
+}
+
+fn check_isa(isa: Isa, packets: bool) {
+    for (name, g) in geometries() {
+        let naive = NaiveAccel::build(Arc::clone(&g));
+        let accel = PacketAccel::build_with(
+            Arc::clone(&g),
+            PacketParams {
+                isa,
+                packets,
+                ..PacketParams::default()
+            },
+        );
+        assert_eq!(accel.params().isa, isa);
+        for (set, rays) in ray_sets(&g) {
+            let want: Vec<Option<Hit>> = rays
+                .iter()
+                .map(|r| naive.intersect(r, &mut NoCounters))
+                .collect();
+            let mut got = vec![None; rays.len()];
+            // Odd batch lengths leave partial packets at the end.
+            for (r, h) in rays.chunks(203).zip(got.chunks_mut(203)) {
+                accel.intersect_batch(r, h, &mut NoCounters);
+            }
+            for (i, (w, h)) in want.iter().zip(&got).enumerate() {
+                assert!(
+                    same(w, h),
+                    "{isa} packets={packets} {name}/{set} ray {i}: naive {w:?}, packet {h:?}"
+                );
+                let one = accel.intersect(&rays[i], &mut NoCounters);
+                assert!(
+                    same(w, &one),
+                    "{isa} single {name}/{set} ray {i}: naive {w:?}, packet {one:?}"
+                );
+            }
+            // Shadow rays up to 90% of the closest hit (or 10 units): blocked exactly when
+            // naive says so.
+            let shadow: Vec<Ray> = rays
+                .iter()
+                .zip(&want)
+                .map(|(r, w)| {
+                    Ray::with_interval(r.origin, r.dir, r.t_min, w.map_or(10.0, |h| h.t * 0.9))
+                })
+                .chain(rays.iter().copied())
+                .collect();
+            let want: Vec<bool> = shadow
+                .iter()
+                .map(|r| naive.occluded(r, &mut NoCounters))
+                .collect();
+            let mut got = vec![false; shadow.len()];
+            for (r, o) in shadow.chunks(203).zip(got.chunks_mut(203)) {
+                accel.occluded_batch(r, o, &mut NoCounters);
+            }
+            for (i, (w, o)) in want.iter().zip(&got).enumerate() {
+                assert_eq!(w, o, "{isa} packets={packets} {name}/{set} shadow ray {i}");
+                assert_eq!(
+                    *w,
+                    accel.occluded(&shadow[i], &mut NoCounters),
+                    "{isa} single {name}/{set} shadow ray {i}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn portable_matches_naive() {
+    check_isa(Isa::Portable, true);
+    check_isa(Isa::Portable, false);
+}
+
+#[test]
+fn sse41_matches_naive() {
+    if Isa::Sse41.is_available() {
+        check_isa(Isa::Sse41, true);
+    } else {
+        eprintln!("SKIPPED: this CPU has no SSE4.1");
+    }
+}
+
+#[test]
+fn avx2_matches_naive() {
+    if Isa::Avx2.is_available() {
+        check_isa(Isa::Avx2, true);
+        check_isa(Isa::Avx2, false);
+    } else {
+        eprintln!("SKIPPED: this CPU has no AVX2");
+    }
+}
+
+#[test]
+fn detection_picks_an_available_set() {
+    assert!(Isa::detect().is_available());
+    assert!(Isa::Portable.is_available());
+}
