@@ -6,7 +6,7 @@ use raybench_core::{Ray, Scene, SceneBuilder, Sphere, TriangleMesh, Vec3};
 use raybench_tests::{assert_same_ray_hits, prepared};
 use std::sync::Arc;
 
-const BACKENDS: &[&str] = &["bvh", "obvhs", "grid", "grid2"];
+const BACKENDS: &[&str] = &["bvh", "obvhs", "grid", "grid2", "packet", "packet-portable"];
 
 fn mesh(tris: &[[Vec3; 3]]) -> TriangleMesh {
     TriangleMesh {

@@ -7,7 +7,16 @@ use raybench_core::{Ray, Vec3};
 use raybench_tests::{assert_same_ray_hits, check, load_or_skip, prepared};
 
 /// Backends under test (naive itself checks thread-count independence).
-const BACKENDS: &[&str] = &["naive", "bvh", "obvhs", "grid", "grid2", "packet"];
+const BACKENDS: &[&str] = &[
+    "naive",
+    "bvh",
+    "obvhs",
+    "grid",
+    "grid2",
+    "packet",
+    "packet-sse4.1",
+    "packet-portable",
+];
 
 /// 64 x 64 ray casting: about 4k rays, so naive on the 69k-triangle meshes stays near 1 s.
 const SIZE: u32 = 64;

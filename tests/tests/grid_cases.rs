@@ -7,7 +7,7 @@ use raybench_grid::{Grid, GridParams};
 use raybench_tests::{assert_same_ray_hits, prepared};
 use std::sync::Arc;
 
-const BACKENDS: &[&str] = &["bvh", "obvhs", "grid", "grid2"];
+const BACKENDS: &[&str] = &["bvh", "obvhs", "grid", "grid2", "packet", "packet-portable"];
 
 fn check(what: &str, scene: &Arc<Scene>, rays: &[Ray]) {
     let (reference, _) = prepared("naive", scene).trace_rays(rays, false).unwrap();

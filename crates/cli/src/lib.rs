@@ -8,7 +8,7 @@ use raybench_bvh::{Bvh, ObvhsAccel};
 use raybench_core::{Frame, NO_HIT, Renderer};
 use raybench_grid::{Grid, TwoLevelGrid};
 use raybench_naive::NaiveAccel;
-use raybench_packet::PacketAccel;
+use raybench_packet::{Isa, PacketAccel, PacketParams};
 use raybench_render::CpuRenderer;
 
 /// A registered backend.
@@ -24,6 +24,9 @@ pub struct Backend {
     /// Whether it tests every primitive for every ray (used to skip it by default on large
     /// workloads).
     pub brute_force: bool,
+    /// Whether it is a variant of another backend with one parameter forced (such as the
+    /// instruction set): run only when named, never in the default list.
+    pub variant: bool,
     /// Makes a fresh, unprepared renderer.
     pub make: fn() -> Box<dyn Renderer>,
 }
@@ -43,6 +46,7 @@ pub const BACKENDS: &[Backend] = &[
         description: NAIVE,
         exact: true,
         brute_force: true,
+        variant: false,
         make: || {
             Box::new(CpuRenderer::<NaiveAccel>::with_default_build(
                 "naive", NAIVE,
@@ -54,6 +58,7 @@ pub const BACKENDS: &[Backend] = &[
         description: BVH,
         exact: true,
         brute_force: false,
+        variant: false,
         make: || Box::new(CpuRenderer::<Bvh>::with_default_build("bvh", BVH)),
     },
     Backend {
@@ -61,6 +66,7 @@ pub const BACKENDS: &[Backend] = &[
         description: OBVHS,
         exact: true,
         brute_force: false,
+        variant: false,
         make: || {
             Box::new(CpuRenderer::<ObvhsAccel>::with_default_build(
                 "obvhs", OBVHS,
@@ -72,6 +78,7 @@ pub const BACKENDS: &[Backend] = &[
         description: GRID,
         exact: true,
         brute_force: false,
+        variant: false,
         make: || Box::new(CpuRenderer::<Grid>::with_default_build("grid", GRID)),
     },
     Backend {
@@ -79,6 +86,7 @@ pub const BACKENDS: &[Backend] = &[
         description: GRID2,
         exact: true,
         brute_force: false,
+        variant: false,
         make: || {
             Box::new(CpuRenderer::<TwoLevelGrid>::with_default_build(
                 "grid2", GRID2,
@@ -90,13 +98,62 @@ pub const BACKENDS: &[Backend] = &[
         description: PACKET,
         exact: true,
         brute_force: false,
+        variant: false,
         make: || {
             Box::new(CpuRenderer::<PacketAccel>::with_default_build(
                 "packet", PACKET,
             ))
         },
     },
+    Backend {
+        name: "packet-sse4.1",
+        description: PACKET_SSE41,
+        exact: true,
+        brute_force: false,
+        variant: true,
+        make: || packet_with(Isa::Sse41, "packet-sse4.1", PACKET_SSE41),
+    },
+    Backend {
+        name: "packet-portable",
+        description: PACKET_PORTABLE,
+        exact: true,
+        brute_force: false,
+        variant: true,
+        make: || packet_with(Isa::Portable, "packet-portable", PACKET_PORTABLE),
+    },
 ];
+
+const PACKET_SSE41: &str = "packet forced to SSE4.1 (4 lanes, 8-ray packets)";
+const PACKET_PORTABLE: &str = "packet forced to portable code (4 plain f32 lanes, no intrinsics)";
+
+/// The packet backend pinned to `isa`, unavailable where the CPU lacks it.
+fn packet_with(isa: Isa, name: &'static str, description: &'static str) -> Box<dyn Renderer> {
+    let check = match isa {
+        Isa::Sse41 => || {
+            Isa::Sse41
+                .is_available()
+                .then_some(())
+                .ok_or_else(|| "this CPU has no SSE4.1".to_string())
+        },
+        _ => || Ok(()),
+    };
+    Box::new(
+        CpuRenderer::<PacketAccel>::new(
+            name,
+            description,
+            Box::new(move |g| {
+                PacketAccel::build_with(
+                    g,
+                    PacketParams {
+                        isa,
+                        ..PacketParams::default()
+                    },
+                )
+            }),
+        )
+        .with_availability(check),
+    )
+}
 
 /// Backends in order of preference for `render` without `--backend` (fastest first).
 pub const PREFERENCE: &[&str] = &["packet", "bvh", "obvhs", "grid2", "grid", "naive"];

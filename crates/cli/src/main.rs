@@ -362,6 +362,7 @@ fn chosen_backends(names: Option<&[String]>, work: f64) -> Result<Vec<&'static B
     }
     Ok(BACKENDS
         .iter()
+        .filter(|b| !b.variant)
         .filter(|b| {
             let keep = !b.brute_force || work <= NAIVE_DEFAULT_BUDGET_TESTS || BACKENDS.len() == 1;
             if !keep {

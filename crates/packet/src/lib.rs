@@ -212,9 +212,15 @@ fn batch_closest<L: Lanes, C: Counters>(
             counters.add_tests(g.closest_unbounded(ray, b));
         }
         match packet::octant(rays).filter(|_| accel.params.packets) {
-            Some(oct) => {
-                packet::closest::<L, PACKET_VECTORS, C>(&accel.layout, g, rays, oct, best, counters)
-            }
+            Some(oct) => packet::closest::<L, PACKET_VECTORS, C>(
+                &accel.layout,
+                g,
+                rays,
+                oct,
+                best,
+                &mut stack,
+                counters,
+            ),
             None => {
                 for (ray, b) in rays.iter().zip(best.iter_mut()) {
                     *b = single::closest::<L, C>(&accel.layout, g, ray, *b, &mut stack, counters);

@@ -8,11 +8,78 @@
 //! near plane) and finite rays; batches are cut into packets and any packet that is not
 //! coherent in that sense takes the single-ray BVH8 path lane by lane.
 
-use crate::layout::Layout;
+use crate::layout::{Layout, Leaf};
 use crate::simd::Lanes;
-use crate::single::{BitIter, FAR_SCALE, lanes_below, prim_hit};
-use crate::tri::{RayLanes, rays_vs_triangle};
-use raybench_core::{Counters, Geometry, Hit, PrimHit, Ray, cull_bound};
+use crate::single::{BitIter, FAR_SCALE, Stack, lanes_below, leaf_closest, prim_hit};
+use crate::tri::{RayLanes, SplatRay, rays_vs_triangle};
+use raybench_core::{Counters, Geometry, Hit, PrimHit, Ray, SlabRay, cull_bound};
+
+/// Lanes at or below this count leave the packet at an interior node and finish its
+/// subtree one ray at a time (the hybrid of Benthin, Boulos, Lacewell and Wald, "Combining
+/// Single and Packet Ray Tracing for Arbitrary Ray Distributions on the Intel MIC
+/// Architecture", 2012): a packet that has spread over many small nodes would otherwise
+/// test every node against lanes that mostly miss it.
+const SPLIT_LANES: u32 = 2;
+
+/// The closest hit of one ray in the BVH2 subtree under `root`, merged into `best`: the
+/// scalar slab test for boxes, the SIMD leaf test over triangles.
+#[inline(always)]
+fn subtree_closest<L: Lanes, C: Counters>(
+    layout: &Layout,
+    g: &Geometry,
+    ray: &Ray,
+    root: usize,
+    best: &mut Option<(u32, PrimHit)>,
+    stack: &mut Stack,
+    counters: &mut C,
+) {
+    let nodes = layout.bvh.nodes();
+    let slab = SlabRay::new(ray);
+    let splat = SplatRay::<L>::new(ray);
+    let mut limit = cull_bound(best.map_or(ray.t_max, |(_, h)| h.t));
+    stack[0] = (root as u32, f32::NEG_INFINITY);
+    let mut sp = 1;
+    while sp > 0 {
+        sp -= 1;
+        let (index, entry) = stack[sp];
+        if entry > limit {
+            continue;
+        }
+        counters.add_visits(1);
+        let node = &nodes[index as usize];
+        if node.is_leaf() {
+            let leaf = Leaf {
+                first: node.first_or_right,
+                count: node.count,
+                all_triangles: layout.node_all_triangles[index as usize],
+            };
+            leaf_closest(layout, g, leaf, ray, &splat, best, counters);
+            limit = cull_bound(best.map_or(ray.t_max, |(_, h)| h.t));
+            continue;
+        }
+        let (l, r) = (index + 1, node.first_or_right);
+        let (nl, nr) = (&nodes[l as usize], &nodes[r as usize]);
+        let tl = slab.entry(nl.min.into(), nl.max.into(), limit);
+        let tr = slab.entry(nr.min.into(), nr.max.into(), limit);
+        let mut push = |entry: (u32, f32)| {
+            stack[sp] = entry;
+            sp += 1;
+        };
+        match (tl, tr) {
+            (Some(a), Some(b)) if a <= b => {
+                push((r, b));
+                push((l, a));
+            }
+            (Some(a), Some(b)) => {
+                push((l, a));
+                push((r, b));
+            }
+            (Some(a), None) => push((l, a)),
+            (None, Some(b)) => push((r, b)),
+            (None, None) => {}
+        }
+    }
+}
 
 /// Box-test lanes of one vector of a packet.
 #[derive(Clone, Copy)]
@@ -126,6 +193,7 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
     rays: &[Ray],
     oct: u8,
     best: &mut [Option<(u32, PrimHit)>],
+    scratch: &mut Stack,
     counters: &mut C,
 ) {
     let nodes = layout.bvh.nodes();
@@ -162,6 +230,26 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
             continue;
         }
         counters.add_visits(u64::from(active));
+        if !node.is_leaf() && active <= SPLIT_LANES {
+            // The packet has diverged: its last lanes finish this subtree one by one.
+            for (k, m) in masks.iter().enumerate() {
+                for lane in BitIter(*m) {
+                    let i = k * L::W + lane;
+                    subtree_closest::<L, C>(
+                        layout,
+                        g,
+                        &rays[i],
+                        index,
+                        &mut best[i],
+                        scratch,
+                        counters,
+                    );
+                    t_best[i] = best[i].map_or(rays[i].t_max, |(_, h)| h.t);
+                    limit[i] = cull_bound(t_best[i]);
+                }
+            }
+            continue;
+        }
         if !node.is_leaf() {
             let order = layout.order[index];
             let axis = usize::from(order & 3);
@@ -175,8 +263,28 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
             continue;
         }
         let (first, count) = (node.first_or_right as usize, node.count as usize);
-        counters.add_tests(u64::from(active) * count as u64);
         let all_triangles = layout.node_all_triangles[index];
+        // Few lanes left in a leaf (the packet has diverged): one SIMD test of up to `W`
+        // triangles per lane is cheaper than one SIMD test of the lanes per triangle.
+        let vectors = masks.iter().filter(|&&m| m != 0).count();
+        if all_triangles && (active as usize) * count.div_ceil(L::W) < vectors * count {
+            let leaf = Leaf {
+                first: first as u32,
+                count: count as u32,
+                all_triangles,
+            };
+            for (k, m) in masks.iter().enumerate() {
+                for lane in BitIter(*m) {
+                    let i = k * L::W + lane;
+                    let splat = SplatRay::<L>::new(&rays[i]);
+                    leaf_closest(layout, g, leaf, &rays[i], &splat, &mut best[i], counters);
+                    t_best[i] = best[i].map_or(rays[i].t_max, |(_, h)| h.t);
+                    limit[i] = cull_bound(t_best[i]);
+                }
+            }
+            continue;
+        }
+        counters.add_tests(u64::from(active) * count as u64);
         for pos in first..first + count {
             let id = layout.ids[pos];
             for (k, (lanes, _, _, _)) in chunks.iter().enumerate() {

@@ -1,7 +1,7 @@
 //! Single rays through the BVH8: one SIMD slab test checks a node's eight children, the
 //! children hit are visited nearest first, and leaves test `W` triangles at a time.
 
-use crate::layout::{EMPTY_CHILD, LEAF_BIT, Layout, WIDE};
+use crate::layout::{EMPTY_CHILD, LEAF_BIT, Layout, Leaf, WIDE};
 use crate::simd::Lanes;
 use crate::tri::{SplatRay, ray_vs_triangles};
 use raybench_core::{Counters, Geometry, Hit, PrimHit, Ray, cull_bound};
@@ -67,18 +67,17 @@ impl<L: Lanes> WideRay<L> {
     }
 }
 
-/// Tests the leaf `leaf` against `ray`, keeping the closest hit in `best`.
+/// Tests `leaf` against `ray`, keeping the closest hit in `best`.
 #[inline(always)]
 pub(crate) fn leaf_closest<L: Lanes, C: Counters>(
     layout: &Layout,
     g: &Geometry,
-    leaf: usize,
+    leaf: Leaf,
     ray: &Ray,
     splat: &SplatRay<L>,
     best: &mut Option<(u32, PrimHit)>,
     counters: &mut C,
 ) {
-    let leaf = layout.leaves[leaf];
     let (first, count) = (leaf.first as usize, leaf.count as usize);
     counters.add_tests(count as u64);
     if !leaf.all_triangles {
@@ -229,15 +228,8 @@ pub(crate) fn closest<L: Lanes, C: Counters>(
         }
         counters.add_visits(1);
         if index & LEAF_BIT != 0 {
-            leaf_closest(
-                layout,
-                g,
-                (index & !LEAF_BIT) as usize,
-                ray,
-                &splat,
-                &mut best,
-                counters,
-            );
+            let leaf = layout.leaves[(index & !LEAF_BIT) as usize];
+            leaf_closest(layout, g, leaf, ray, &splat, &mut best, counters);
             limit = bound(&best);
             continue;
         }

@@ -9,6 +9,7 @@
 
 use crate::layout::Layout;
 use crate::simd::Lanes;
+use crate::single::lanes_below;
 
 /// Per-lane results of a triangle test.
 #[derive(Clone, Copy)]
@@ -69,6 +70,9 @@ pub(crate) struct RayLanes<L: Lanes> {
     pub shear: [L::V; 3],
     /// `is[k][a]`: lanes whose permuted axis `k` (x, y, z) is axis `a` (for `a` = 0, 1).
     pub is: [[L::M; 2]; 3],
+    /// The permutation when every lane has the same one (primary rays almost always do):
+    /// then it is applied by indexing, without selects.
+    pub uniform: Option<[usize; 3]>,
     pub t_min: L::V,
 }
 
@@ -102,6 +106,24 @@ impl<L: Lanes> RayLanes<L> {
                 [L::mask(k[0][1]), L::mask(k[1][1])],
                 [L::mask(k[0][2]), L::mask(k[1][2])],
             ],
+            uniform: {
+                let all = lanes_below::<L>(L::W);
+                let axis_of = |slot: usize| {
+                    if k[0][slot] == all {
+                        Some(0)
+                    } else if k[1][slot] == all {
+                        Some(1)
+                    } else if (k[0][slot] | k[1][slot]) == 0 {
+                        Some(2)
+                    } else {
+                        None
+                    }
+                };
+                match (axis_of(0), axis_of(1), axis_of(2)) {
+                    (Some(x), Some(y), Some(z)) => Some([x, y, z]),
+                    _ => None,
+                }
+            },
             t_min: L::load(&buf[6]),
         }
     }
@@ -201,7 +223,10 @@ pub(crate) fn rays_vs_triangle<L: Lanes>(
             L::sub(L::splat(coord[1][pos]), rays.origin[1]),
             L::sub(L::splat(coord[2][pos]), rays.origin[2]),
         ];
-        let (x, y, vz) = (rays.pick(&v, 0), rays.pick(&v, 1), rays.pick(&v, 2));
+        let (x, y, vz) = match rays.uniform {
+            Some([kx, ky, kz]) => (v[kx], v[ky], v[kz]),
+            None => (rays.pick(&v, 0), rays.pick(&v, 1), rays.pick(&v, 2)),
+        };
         p[vertex] = [L::sub(x, L::mul(sx, vz)), L::sub(y, L::mul(sy, vz))];
         z[vertex] = L::mul(sz, vz);
     }

@@ -198,3 +198,54 @@ fn detection_picks_an_available_set() {
     assert!(Isa::detect().is_available());
     assert!(Isa::Portable.is_available());
 }
+
+/// One coherent packet (a shared octant, so it takes the packet path) whose lanes miss,
+/// hit a sphere, hit triangles, start inside boxes, or have a zero-length interval.
+#[test]
+fn one_packet_with_every_kind_of_lane() {
+    let mut shapes: Vec<Shape> = generators::icosphere(2)
+        .triangles()
+        .map(Shape::Triangle)
+        .collect();
+    shapes.push(Shape::Sphere(Sphere::new(Vec3::new(3.0, 0.0, 0.0), 0.5)));
+    shapes.push(Shape::Plane(Plane::new(Vec3::new(0.0, -4.0, 0.0), Vec3::Y)));
+    let g = Arc::new(Geometry::new(shapes));
+    let naive = NaiveAccel::build(Arc::clone(&g));
+    let origin = Vec3::new(-0.9, 0.3, -6.0);
+    let rays: Vec<Ray> = (0..32)
+        .map(|i| {
+            let x = 0.05 + 0.2 * i as f32;
+            let dir = Vec3::new(x, 0.01 * i as f32, 1.0);
+            match i % 8 {
+                // Lanes that start inside the icosphere's box (and inside the sphere).
+                3 => Ray::new(Vec3::new(0.1, 0.1, 0.1), dir),
+                5 => Ray::new(Vec3::new(3.0, 0.0, 0.0), dir),
+                // An empty interval.
+                6 => Ray::with_interval(origin, dir, 2.0, 2.0),
+                _ => Ray::new(origin, dir),
+            }
+        })
+        .collect();
+    for isa in Isa::ALL.into_iter().filter(|i| i.is_available()) {
+        let accel = PacketAccel::build_with(
+            Arc::clone(&g),
+            PacketParams {
+                isa,
+                ..PacketParams::default()
+            },
+        );
+        let mut hits = vec![None; rays.len()];
+        accel.intersect_batch(&rays, &mut hits, &mut NoCounters);
+        let mut kinds = std::collections::BTreeSet::new();
+        for (i, (r, h)) in rays.iter().zip(&hits).enumerate() {
+            let want = naive.intersect(r, &mut NoCounters);
+            assert!(
+                same(&want, h),
+                "{isa} lane {i}: naive {want:?}, packet {h:?}"
+            );
+            kinds.insert(h.map(|h| g.shape(h.prim).kind()));
+        }
+        // The packet really mixes misses, triangles and the sphere.
+        assert!(kinds.len() >= 3, "{kinds:?}");
+    }
+}

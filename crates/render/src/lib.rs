@@ -67,6 +67,7 @@ pub struct CpuRenderer<A: Accel> {
     name: String,
     description: String,
     build: BuildFn<A>,
+    availability: fn() -> Result<(), String>,
     prepared: Option<(Arc<Scene>, A)>,
 }
 
@@ -78,8 +79,17 @@ impl<A: Accel> CpuRenderer<A> {
             name: name.into(),
             description: description.into(),
             build,
+            availability: || Ok(()),
             prepared: None,
         }
+    }
+
+    /// The same renderer, reporting itself unavailable when `check` fails (a backend that
+    /// needs an instruction set this CPU may lack).
+    #[must_use]
+    pub fn with_availability(mut self, check: fn() -> Result<(), String>) -> Self {
+        self.availability = check;
+        self
     }
 
     /// A renderer that builds with [`Accel::build`].
@@ -102,6 +112,10 @@ impl<A: Accel> Renderer for CpuRenderer<A> {
 
     fn description(&self) -> &str {
         &self.description
+    }
+
+    fn availability(&self) -> Result<(), String> {
+        (self.availability)()
     }
 
     fn prepare(&mut self, scene: &Arc<Scene>) -> Result<Timings, RenderError> {
