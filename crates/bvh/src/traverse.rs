@@ -4,7 +4,7 @@ use crate::Bvh;
 use crate::Node;
 use crate::build::MAX_DEPTH;
 use raybench_core::{
-    Accel, AccelStats, Counters, Geometry, Hit, PrimHit, Ray, SlabRay, cull_bound,
+    Accel, AccelStats, Counters, Geometry, Hit, NodeStack, PrimHit, Ray, SlabRay, cull_bound,
 };
 use std::sync::Arc;
 
@@ -34,20 +34,13 @@ impl Accel for Bvh {
         let entry_of =
             |node: &Node, limit: f32| slab.entry(node.min.into(), node.max.into(), limit);
 
-        let mut stack = [(0u32, 0.0f32); STACK_SIZE];
-        let mut sp = 0;
+        let mut storage = [(0u32, 0.0f32); STACK_SIZE];
+        let mut stack = NodeStack::new(&mut storage);
         let mut limit = bound(&best);
         if let Some(t) = entry_of(&self.nodes[0], limit) {
-            stack[0] = (0, t);
-            sp = 1;
+            stack.push(0, t);
         }
-        while sp > 0 {
-            sp -= 1;
-            let (index, entry) = stack[sp];
-            // Strict early exit: skip only nodes entered beyond the best hit.
-            if entry > limit {
-                continue;
-            }
+        while let Some((index, _)) = stack.pop_within(limit) {
             counters.add_visits(1);
             let node = &self.nodes[index as usize];
             if node.is_leaf() {
@@ -70,18 +63,11 @@ impl Accel for Bvh {
                     } else {
                         ((r, b), (l, a))
                     };
-                    stack[sp] = far;
-                    stack[sp + 1] = near;
-                    sp += 2;
+                    stack.push(far.0, far.1);
+                    stack.push(near.0, near.1);
                 }
-                (Some(a), None) => {
-                    stack[sp] = (l, a);
-                    sp += 1;
-                }
-                (None, Some(b)) => {
-                    stack[sp] = (r, b);
-                    sp += 1;
-                }
+                (Some(a), None) => stack.push(l, a),
+                (None, Some(b)) => stack.push(r, b),
                 (None, None) => {}
             }
         }

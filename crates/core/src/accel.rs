@@ -89,6 +89,52 @@ pub fn cull_bound(best_t: f32) -> f32 {
     best_t + best_t.abs() * CULL_SLACK
 }
 
+/// A closest-hit traversal stack of `(node, entry distance)` pairs over storage the caller
+/// owns (so that a batch can reuse one allocation), which pops only the entries that pass
+/// the strict early exit of rule 3: entries entered beyond the current limit are dropped.
+#[derive(Debug)]
+pub struct NodeStack<'a> {
+    entries: &'a mut [(u32, f32)],
+    len: usize,
+}
+
+impl<'a> NodeStack<'a> {
+    /// An empty stack over `storage` (its capacity).
+    #[inline]
+    pub fn new(storage: &'a mut [(u32, f32)]) -> Self {
+        Self {
+            entries: storage,
+            len: 0,
+        }
+    }
+
+    /// Pushes `node`, entered at `entry`.
+    ///
+    /// # Panics
+    /// When the storage is full (a traversal deeper than it was sized for).
+    #[inline]
+    pub fn push(&mut self, node: u32, entry: f32) {
+        self.entries[self.len] = (node, entry);
+        self.len += 1;
+    }
+
+    /// The most recently pushed entry whose entry distance is at most `limit`
+    /// ([`cull_bound`] of the best hit so far), dropping those above it.
+    #[inline]
+    pub fn pop_within(&mut self, limit: f32) -> Option<(u32, f32)> {
+        while self.len > 0 {
+            self.len -= 1;
+            let e = self.entries[self.len];
+            // Strict: skip only entries *beyond* the limit (an equal one may hold a tie).
+            if e.1 > limit {
+                continue;
+            }
+            return Some(e);
+        }
+        None
+    }
+}
+
 /// Size and shape of a built acceleration structure, for `raybench info` and reports.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct AccelStats {

@@ -36,7 +36,9 @@ mod sphere;
 mod triangle;
 
 pub use aabb::{Aabb, SlabRay};
-pub use accel::{Accel, AccelStats, CULL_SLACK, Counters, NoCounters, RayCounters, cull_bound};
+pub use accel::{
+    Accel, AccelStats, CULL_SLACK, Counters, NoCounters, NodeStack, RayCounters, cull_bound,
+};
 pub use camera::{Camera, CameraRays};
 pub use emitters::Emitters;
 pub use error::SceneError;

@@ -12,7 +12,7 @@ use crate::layout::{Layout, Leaf};
 use crate::simd::Lanes;
 use crate::single::{BitIter, FAR_SCALE, Stack, lanes_below, leaf_closest, prim_hit};
 use crate::tri::{RayLanes, SplatRay, rays_vs_triangle};
-use raybench_core::{Counters, Geometry, Hit, PrimHit, Ray, SlabRay, cull_bound};
+use raybench_core::{Counters, Geometry, Hit, NodeStack, PrimHit, Ray, SlabRay, cull_bound};
 
 /// Lanes at or below this count leave the packet at an interior node and finish its
 /// subtree one ray at a time (the hybrid of Benthin, Boulos, Lacewell and Wald, "Combining
@@ -37,14 +37,9 @@ fn subtree_closest<L: Lanes, C: Counters>(
     let slab = SlabRay::new(ray);
     let splat = SplatRay::<L>::new(ray);
     let mut limit = cull_bound(best.map_or(ray.t_max, |(_, h)| h.t));
-    stack[0] = (root as u32, f32::NEG_INFINITY);
-    let mut sp = 1;
-    while sp > 0 {
-        sp -= 1;
-        let (index, entry) = stack[sp];
-        if entry > limit {
-            continue;
-        }
+    let mut stack = NodeStack::new(stack);
+    stack.push(root as u32, f32::NEG_INFINITY);
+    while let Some((index, _)) = stack.pop_within(limit) {
         counters.add_visits(1);
         let node = &nodes[index as usize];
         if node.is_leaf() {
@@ -61,21 +56,17 @@ fn subtree_closest<L: Lanes, C: Counters>(
         let (nl, nr) = (&nodes[l as usize], &nodes[r as usize]);
         let tl = slab.entry(nl.min.into(), nl.max.into(), limit);
         let tr = slab.entry(nr.min.into(), nr.max.into(), limit);
-        let mut push = |entry: (u32, f32)| {
-            stack[sp] = entry;
-            sp += 1;
-        };
         match (tl, tr) {
             (Some(a), Some(b)) if a <= b => {
-                push((r, b));
-                push((l, a));
+                stack.push(r, b);
+                stack.push(l, a);
             }
             (Some(a), Some(b)) => {
-                push((l, a));
-                push((r, b));
+                stack.push(l, a);
+                stack.push(r, b);
             }
-            (Some(a), None) => push((l, a)),
-            (None, Some(b)) => push((r, b)),
+            (Some(a), None) => stack.push(l, a),
+            (None, Some(b)) => stack.push(r, b),
             (None, None) => {}
         }
     }

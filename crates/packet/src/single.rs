@@ -4,7 +4,7 @@
 use crate::layout::{EMPTY_CHILD, LEAF_BIT, Layout, Leaf, WIDE};
 use crate::simd::Lanes;
 use crate::tri::{SplatRay, ray_vs_triangles};
-use raybench_core::{Counters, Geometry, Hit, PrimHit, Ray, cull_bound};
+use raybench_core::{Counters, Geometry, Hit, NodeStack, PrimHit, Ray, cull_bound};
 
 /// `1 + 2 gamma(3)`: the far-distance scale of the conservative slab test (the core's).
 pub(crate) const FAR_SCALE: f32 =
@@ -218,14 +218,9 @@ pub(crate) fn closest<L: Lanes, C: Counters>(
     let splat = SplatRay::<L>::new(ray);
     let bound = |best: &Option<(u32, PrimHit)>| cull_bound(best.map_or(ray.t_max, |(_, h)| h.t));
     let mut limit = bound(&best);
-    stack[0] = (0, f32::NEG_INFINITY);
-    let mut sp = 1;
-    while sp > 0 {
-        sp -= 1;
-        let (index, entry) = stack[sp];
-        if entry > limit {
-            continue;
-        }
+    let mut stack = NodeStack::new(stack);
+    stack.push(0, f32::NEG_INFINITY);
+    while let Some((index, _)) = stack.pop_within(limit) {
         counters.add_visits(1);
         if index & LEAF_BIT != 0 {
             let leaf = layout.leaves[(index & !LEAF_BIT) as usize];
@@ -260,9 +255,8 @@ pub(crate) fn closest<L: Lanes, C: Counters>(
             }
             first += L::W;
         }
-        for &entry in &found[..n] {
-            stack[sp] = entry;
-            sp += 1;
+        for &(child, entry) in &found[..n] {
+            stack.push(child, entry);
         }
     }
     best
