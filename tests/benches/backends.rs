@@ -297,6 +297,8 @@ struct Prepared {
     grid: Grid,
     grid2: TwoLevelGrid,
     packet: PacketAccel,
+    /// `packet` with interval culling (a measured option).
+    packet_interval: PacketAccel,
     peers: Option<(CratePeer, ObvhsPeer)>,
     /// One untimed build of each backend, to size the build benchmarks' measurement time.
     build_times: [(&'static str, Duration); 7],
@@ -341,6 +343,13 @@ fn prepare(name: &'static str) -> Option<Prepared> {
     let (grid, t_grid) = timed(|| Grid::build_with(g.clone(), GridParams::default()));
     let (grid2, t_grid2) = timed(|| TwoLevelGrid::build_with(g.clone(), TwoLevelParams::default()));
     let (packet, t_packet) = timed(|| PacketAccel::build_with(g.clone(), PacketParams::default()));
+    let packet_interval = PacketAccel::build_with(
+        g.clone(),
+        PacketParams {
+            interval_cull: true,
+            ..PacketParams::default()
+        },
+    );
     let tris = triangles(&g);
     if tris.is_none() {
         eprintln!("scene {name} has non-triangle primitives: skipping the peers");
@@ -369,6 +378,7 @@ fn prepare(name: &'static str) -> Option<Prepared> {
         grid,
         grid2,
         packet,
+        packet_interval,
         peers: crate_peer.zip(obvhs_peer),
         build_times: [
             ("bvh", t_bvh),
@@ -573,6 +583,11 @@ fn bench_trace(c: &mut Criterion, p: &Prepared) {
         group.bench_function(id("packet"), |b| {
             b.iter(|| trace(&p.packet, black_box(rays), &mut hits));
         });
+        if *set == "primary" {
+            group.bench_function(id("packet-interval"), |b| {
+                b.iter(|| trace(&p.packet_interval, black_box(rays), &mut hits));
+            });
+        }
         group.bench_function(id("obvhs"), |b| {
             b.iter(|| trace(&p.obvhs, black_box(rays), &mut hits));
         });

@@ -72,6 +72,70 @@ fn subtree_closest<L: Lanes, C: Counters>(
     }
 }
 
+/// The whole packet as intervals: per axis the range of origins and of inverse directions,
+/// and the smallest `t_min`. One scalar interval-arithmetic slab test with these bounds
+/// every lane's box test (Boulos et al., "Adaptive Ray Packet Reordering", 2008, and the
+/// interval culling of Wald's packet tracers): when it says the box is missed, every lane
+/// would have missed it, so the per-lane SIMD tests are skipped.
+///
+/// It is conservative without widening: IEEE rounding is monotonic, so the corner products
+/// of the intervals, computed with the lanes' own operations, bound every lane's computed
+/// distance; a NaN corner (`0 * inf`) leaves the axis unconstrained, as in the lanes.
+#[derive(Clone, Copy, Debug)]
+struct PacketInterval {
+    origin: [(f32, f32); 3],
+    inv: [(f32, f32); 3],
+    t_min: f32,
+}
+
+impl PacketInterval {
+    fn new(rays: &[Ray]) -> Self {
+        let mut s = Self {
+            origin: [(f32::INFINITY, f32::NEG_INFINITY); 3],
+            inv: [(f32::INFINITY, f32::NEG_INFINITY); 3],
+            t_min: f32::INFINITY,
+        };
+        for r in rays {
+            for axis in 0..3 {
+                let (o, i) = (r.origin[axis], r.inv_dir[axis]);
+                s.origin[axis] = (s.origin[axis].0.min(o), s.origin[axis].1.max(o));
+                s.inv[axis] = (s.inv[axis].0.min(i), s.inv[axis].1.max(i));
+            }
+            s.t_min = s.t_min.min(r.t_min);
+        }
+        s
+    }
+
+    /// False only when no ray of the packet can enter `node` at or before `limit` (the
+    /// largest lane limit).
+    #[inline(always)]
+    fn may_enter(&self, node: &raybench_bvh::Node, negative: &[bool; 3], limit: f32) -> bool {
+        let mut t0 = self.t_min;
+        let mut t1 = limit;
+        for (axis, &neg) in negative.iter().enumerate() {
+            let (near, far) = if neg {
+                (node.max[axis], node.min[axis])
+            } else {
+                (node.min[axis], node.max[axis])
+            };
+            let (o_lo, o_hi) = self.origin[axis];
+            let (i_lo, i_hi) = self.inv[axis];
+            let corners = |plane: f32| {
+                let (d_lo, d_hi) = (plane - o_hi, plane - o_lo);
+                [d_lo * i_lo, d_lo * i_hi, d_hi * i_lo, d_hi * i_hi]
+            };
+            let n = corners(near);
+            let f = corners(far);
+            if n.iter().chain(&f).any(|x| x.is_nan()) {
+                continue;
+            }
+            t0 = t0.max(n.into_iter().fold(f32::INFINITY, f32::min));
+            t1 = t1.min(f.into_iter().fold(f32::NEG_INFINITY, f32::max) * FAR_SCALE);
+        }
+        t0 <= t1
+    }
+}
+
 /// Box-test lanes of one vector of a packet.
 #[derive(Clone, Copy)]
 struct SlabLanes<L: Lanes> {
@@ -184,6 +248,7 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
     rays: &[Ray],
     oct: u8,
     best: &mut [Option<(u32, PrimHit)>],
+    interval_cull: bool,
     scratch: &mut Stack,
     counters: &mut C,
 ) {
@@ -201,6 +266,7 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
     }
     let chunks = split::<L, K>(rays);
     let negative = [oct & 1 != 0, oct & 2 != 0, oct & 4 != 0];
+    let interval = interval_cull.then(|| PacketInterval::new(rays));
 
     let mut stack = [0u32; 2 * 64 + 4];
     let mut sp = 1;
@@ -208,6 +274,12 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
         sp -= 1;
         let index = stack[sp] as usize;
         let node = &nodes[index];
+        if let Some(iv) = &interval {
+            let packet_limit = limit[..n].iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b));
+            if !iv.may_enter(node, &negative, packet_limit) {
+                continue;
+            }
+        }
         // Lanes entering the node before their own limit.
         let mut masks = [0u32; K];
         for (k, (_, slab, _, valid)) in chunks.iter().enumerate() {

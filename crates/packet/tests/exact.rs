@@ -106,16 +106,18 @@ fn same(a: &Option<Hit>, b: &Option<Hit>) -> bool {
 }
 
 fn check_isa(isa: Isa, packets: bool) {
+    check(PacketParams {
+        isa,
+        packets,
+        ..PacketParams::default()
+    });
+}
+
+fn check(params: PacketParams) {
+    let (isa, packets) = (params.isa, params.packets);
     for (name, g) in geometries() {
         let naive = NaiveAccel::build(Arc::clone(&g));
-        let accel = PacketAccel::build_with(
-            Arc::clone(&g),
-            PacketParams {
-                isa,
-                packets,
-                ..PacketParams::default()
-            },
-        );
+        let accel = PacketAccel::build_with(Arc::clone(&g), params);
         assert_eq!(accel.params().isa, isa);
         for (set, rays) in ray_sets(&g) {
             let want: Vec<Option<Hit>> = rays
@@ -190,6 +192,17 @@ fn avx2_matches_naive() {
         check_isa(Isa::Avx2, false);
     } else {
         eprintln!("SKIPPED: this CPU has no AVX2");
+    }
+}
+
+#[test]
+fn interval_culling_changes_nothing() {
+    for isa in [Isa::Portable, Isa::detect()] {
+        check(PacketParams {
+            isa,
+            interval_cull: true,
+            ..PacketParams::default()
+        });
     }
 }
 
