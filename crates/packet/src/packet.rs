@@ -242,6 +242,9 @@ pub(crate) fn octant(rays: &[Ray]) -> Option<u8> {
 /// arrives holding ray `i`'s hit with the unbounded primitives and leaves with its closest
 /// hit.
 #[inline(always)]
+// The kernel's inputs are separate borrows on purpose: bundling them would only move the
+// same eight names into a struct built for one call.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
     layout: &Layout,
     g: &Geometry,
