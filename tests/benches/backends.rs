@@ -1,24 +1,30 @@
-//! Criterion benchmarks of raybench's accelerated backends against two peers, on one thread
+//! Criterion benchmarks of raybench's accelerated backends against peers, on one thread
 //! per ray stream.
 //!
 //! Backends: `bvh` ([`raybench_bvh::Bvh`]), `obvhs` ([`raybench_bvh::ObvhsAccel`]), `grid`
 //! ([`raybench_grid::Grid`]), `grid2` ([`raybench_grid::TwoLevelGrid`]) and `packet`
 //! ([`raybench_packet::PacketAccel`], with the instruction set [`raybench_packet::Isa::detect`]
 //! picks; `RAYBENCH_ISA` overrides it), traced through [`Accel::intersect_batch`] in batches
-//! of 256 rays, as the renderer does; peers: `bvh-crate` (svenstaro's `bvh` crate) and `obvhs-bvh2`
-//! (obvhs's own BVH2), built over the same triangles and testing them with raybench's own
-//! primitive routine, so all of them pay the same per-primitive cost and only
-//! the structure and its traversal differ.
+//! of 256 rays, as the renderer does; peers: `bvh-crate` (svenstaro's `bvh` crate,
+//! [`raybench_peers::BvhCrateAccel`], traced through the same batch entry point) and
+//! `obvhs-bvh2` (obvhs's own BVH2), built over the same triangles and testing them with
+//! raybench's own primitive routine, so all of them pay the same per-primitive cost and only
+//! the structure and its traversal differ. With the feature `embree`
+//! (`--features embree`, needs `libembree-dev`), also Intel Embree 3, which tests triangles
+//! itself: `embree` ([`raybench_peers::EmbreeAccel`], one `rtcIntersect1` per ray) and
+//! `embree-packet` ([`raybench_peers::EmbreePacketAccel`], 16-ray packets), both through
+//! the batch entry point.
 //!
-//! Scenes: the built-in `bunny` and `sponza` (their meshes come from the assets directory;
-//! when one is missing the scene is skipped with a message) and the generators
-//! `terrain:708` (about a million triangles) and `soup:100000` (where a uniform grid should
-//! be close to a BVH).
+//! Scenes: the report's quick list (`raybench::report::QUICK_SCENES`: spheres, whitted,
+//! cornell-box, bunny, sponza; the meshes come from the assets directory, and a scene whose
+//! files are missing is skipped with a message) and the generators `terrain:708` (about a
+//! million triangles) and `soup:100000` (where a uniform grid should be close to a BVH).
 //!
 //! Benchmarks, named hierarchically so they can be filtered by regular expression:
 //!
 //! - `build/<backend>/<scene>`: building the structure from the scene's geometry (builders
-//!   use rayon's global pool, i.e. every core);
+//!   use rayon's global pool, i.e. every core; Embree its own task system, also every core;
+//!   Embree's device is created once, before any timing, and shared);
 //! - `trace/<backend>/<scene>/primary`: the 256 x 256 centre rays of the scene's camera, in
 //!   the order the renderer traces them (16 x 16 tiles of 4 x 4 pixel blocks,
 //!   [`raybench_core::rays::primary_tiled`]);
@@ -26,10 +32,13 @@
 //!   bounding box ([`raybench_core::rays::incoherent`], seed 1).
 //!
 //! Trace benchmarks run on the calling thread and report throughput in rays (criterion's
-//! `elem/s`); the peers trace single rays one after the other. Before the benchmarks of a scene run, every
+//! `elem/s`); the peers other than `embree-packet` trace single rays one after the other.
+//! Before the benchmarks of a scene run, every
 //! backend and peer traces both ray sets once, untimed, and the agreement of each with `bvh`
 //! (same primitive hit, or both miss) is printed: the peers must agree on at least 99.9% of
-//! the primary rays (they use the same triangle test, so only ties may go another way), so
+//! the primary rays (those using raybench's triangle test differ only on ties and the rare
+//! ray their box test wrongly rejects; Embree's own triangle test may also decide an edge
+//! the other way), so
 //! the benchmark is known to compare like with like; `obvhs`, an exact backend, gets a
 //! warning listing the rays where it differs at all.
 //!
@@ -39,6 +48,7 @@
 //! RAYBENCH_ASSETS=../shared/scenes cargo bench -p raybench-tests --bench backends
 //! RAYBENCH_ASSETS=../shared/scenes cargo bench -p raybench-tests --bench backends -- 'trace/.*/bunny'
 //! cargo bench -p raybench-tests --bench backends -- terrain
+//! RAYBENCH_ASSETS=../shared/scenes cargo bench -p raybench-tests --bench backends --features embree -- embree
 //! ```
 //!
 //! Save a baseline, change the code, then compare against it:
@@ -55,9 +65,6 @@
 // `criterion_group!` and `criterion_main!` generate public items without documentation.
 #![allow(missing_docs)]
 
-use bvh::aabb::{Aabb as CrateAabb, Bounded};
-use bvh::bounding_hierarchy::{BHShape, BoundingHierarchy};
-use bvh::bvh::{Bvh as CrateBvh, BvhNode};
 use criterion::{
     BenchmarkId, Criterion, SamplingMode, Throughput, criterion_group, criterion_main,
 };
@@ -70,12 +77,16 @@ use raybench_core::{
 };
 use raybench_grid::{Grid, GridParams, TwoLevelGrid, TwoLevelParams};
 use raybench_packet::{PacketAccel, PacketParams};
+use raybench_peers::BvhCrateAccel;
+#[cfg(feature = "embree")]
+use raybench_peers::{EmbreeAccel, EmbreePacketAccel};
 use std::hint::black_box;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-/// The scenes, in benchmark order.
-const SCENES: [&str; 4] = ["bunny", "sponza", "terrain:708", "soup:100000"];
+/// Scenes beyond the report's quick list: a million-triangle height field and a soup
+/// (where a uniform grid should be close to a BVH).
+const EXTRA_SCENES: [&str; 2] = ["terrain:708", "soup:100000"];
 /// Primary rays: a `PRIMARY_SIZE x PRIMARY_SIZE` image.
 const PRIMARY_SIZE: u32 = 256;
 /// Number of incoherent rays.
@@ -86,7 +97,7 @@ const INCOHERENT_SEED: u32 = 1;
 const MIN_AGREEMENT: f64 = 0.999;
 
 /// The scene's triangles indexed by primitive id, or `None` when it has other primitives
-/// (the peers only know triangles; every scene here is a triangle mesh).
+/// (the obvhs peer only knows triangles; every scene here is a triangle mesh).
 fn triangles(g: &Geometry) -> Option<Vec<Triangle>> {
     g.shapes()
         .iter()
@@ -98,131 +109,6 @@ fn triangles(g: &Geometry) -> Option<Vec<Triangle>> {
 }
 
 // ---------------------------------------------------------------------------------------
-// Peer: svenstaro's `bvh` crate.
-
-/// A triangle as the `bvh` crate's builder wants it: a box and a slot for its node index.
-#[derive(Clone, Copy, Debug)]
-struct CrateTri {
-    tri: Triangle,
-    node: usize,
-}
-
-impl Bounded<f32, 3> for CrateTri {
-    fn aabb(&self) -> CrateAabb<f32, 3> {
-        let b = self.tri.bounds();
-        CrateAabb::with_bounds(b.min.to_array().into(), b.max.to_array().into())
-    }
-}
-
-impl BHShape<f32, 3> for CrateTri {
-    fn set_bh_node_index(&mut self, index: usize) {
-        self.node = index;
-    }
-
-    fn bh_node_index(&self) -> usize {
-        self.node
-    }
-}
-
-/// The `bvh` crate's tree (binned SAH, one triangle per leaf, built with rayon).
-///
-/// The crate has no closest-hit query of its own: `traverse` and `traverse_iterator` return
-/// every shape whose box the ray touches, and the distance-ordered iterators keep a heap
-/// and never stop early. So this peer walks the crate's own tree (`Bvh::nodes`, whose
-/// interior nodes hold both children's boxes) with a small stack traversal: child boxes
-/// tested with the crate's `Ray::intersection_slice_for_aabb`, nearer child first, a child
-/// skipped when its entry lies beyond the best hit so far, leaves tested with raybench's
-/// triangle routine and the closest kept under raybench's tie rule. This is the "bvh crate
-/// tree, own stack traversal" row of `../shared/PEERS.md`.
-struct CratePeer {
-    bvh: CrateBvh<f32, 3>,
-    /// Primitive tests go through raybench's own `Geometry::test_closest`, as in every
-    /// raybench backend, so that only the structure and traversal differ.
-    geometry: Arc<Geometry>,
-}
-
-impl CratePeer {
-    fn shapes(tris: &[Triangle]) -> Vec<CrateTri> {
-        tris.iter().map(|&tri| CrateTri { tri, node: 0 }).collect()
-    }
-
-    fn build(tris: &[Triangle], geometry: &Arc<Geometry>) -> Self {
-        let mut shapes = Self::shapes(tris);
-        let bvh = CrateBvh::build_par(&mut shapes);
-        Self {
-            bvh,
-            geometry: Arc::clone(geometry),
-        }
-    }
-
-    /// The crate's ray with raybench's direction (not normalised, so `t` agrees) and inverse.
-    fn ray(ray: &Ray) -> bvh::ray::Ray<f32, 3> {
-        bvh::ray::Ray {
-            origin: ray.origin.to_array().into(),
-            direction: ray.dir.to_array().into(),
-            inv_direction: ray.inv_dir.to_array().into(),
-        }
-    }
-
-    fn closest(
-        &self,
-        ray: &Ray,
-        cray: &bvh::ray::Ray<f32, 3>,
-        stack: &mut Vec<(usize, f32)>,
-    ) -> Option<(u32, PrimHit)> {
-        let nodes = &self.bvh.nodes;
-        let mut best: Option<(u32, PrimHit)> = None;
-        if nodes.is_empty() {
-            return best;
-        }
-        let mut best_t = ray.t_max;
-        stack.clear();
-        // The crate keeps no box for the root: its children's boxes are tested on the way.
-        stack.push((0, ray.t_min));
-        while let Some((index, entry)) = stack.pop() {
-            if entry > best_t {
-                continue;
-            }
-            match &nodes[index] {
-                BvhNode::Leaf { shape_index, .. } => {
-                    self.geometry
-                        .test_closest(*shape_index as u32, ray, &mut best);
-                    best_t = best.map_or(ray.t_max, |(_, h)| h.t);
-                }
-                BvhNode::Node {
-                    child_l_index,
-                    child_l_aabb,
-                    child_r_index,
-                    child_r_aabb,
-                    ..
-                } => {
-                    let entry_of = |b: &CrateAabb<f32, 3>| {
-                        cray.intersection_slice_for_aabb(b)
-                            .map(|(t0, _)| t0)
-                            .filter(|&t0| t0 <= best_t)
-                    };
-                    match (entry_of(child_l_aabb), entry_of(child_r_aabb)) {
-                        (Some(tl), Some(tr)) => {
-                            if tl <= tr {
-                                stack.push((*child_r_index, tr));
-                                stack.push((*child_l_index, tl));
-                            } else {
-                                stack.push((*child_l_index, tl));
-                                stack.push((*child_r_index, tr));
-                            }
-                        }
-                        (Some(tl), None) => stack.push((*child_l_index, tl)),
-                        (None, Some(tr)) => stack.push((*child_r_index, tr)),
-                        (None, None) => {}
-                    }
-                }
-            }
-        }
-        best
-    }
-}
-
-// ---------------------------------------------------------------------------------------
 // Peer: obvhs's BVH2.
 
 /// obvhs's BVH2 from its own triangle builder (`build_bvh2_from_tris`, `medium_build`
@@ -231,7 +117,8 @@ impl CratePeer {
 /// and returns the best `t` so far, which obvhs uses to cull further nodes.
 struct ObvhsPeer {
     bvh: Bvh2,
-    /// As in [`CratePeer`]: raybench's primitive test.
+    /// Primitive tests go through raybench's own `Geometry::test_closest`, as in every
+    /// raybench backend, so that only the structure and traversal differ.
     geometry: Arc<Geometry>,
 }
 
@@ -299,9 +186,13 @@ struct Prepared {
     packet: PacketAccel,
     /// `packet` with interval culling (a measured option).
     packet_interval: PacketAccel,
-    peers: Option<(CratePeer, ObvhsPeer)>,
+    bvh_crate: BvhCrateAccel,
+    obvhs_peer: Option<ObvhsPeer>,
+    /// Embree with single rays and with packets, when it supports the scene.
+    #[cfg(feature = "embree")]
+    embree: Option<(EmbreeAccel, EmbreePacketAccel)>,
     /// One untimed build of each backend, to size the build benchmarks' measurement time.
-    build_times: [(&'static str, Duration); 7],
+    build_times: Vec<(&'static str, Duration)>,
 }
 
 fn timed<T>(f: impl FnOnce() -> T) -> (T, Duration) {
@@ -352,12 +243,9 @@ fn prepare(name: &'static str) -> Option<Prepared> {
     );
     let tris = triangles(&g);
     if tris.is_none() {
-        eprintln!("scene {name} has non-triangle primitives: skipping the peers");
+        eprintln!("scene {name} has non-triangle primitives: skipping the obvhs-bvh2 peer");
     }
-    let (crate_peer, t_crate) = timed(|| {
-        tris.as_deref()
-            .map(|t| CratePeer::build(t, &scene.geometry))
-    });
+    let (bvh_crate, t_crate) = timed(|| BvhCrateAccel::build(g.clone()));
     let (obvhs_peer, t_bvh2) = timed(|| {
         tris.as_deref()
             .map(|t| ObvhsPeer::build(t, &scene.geometry))
@@ -368,6 +256,37 @@ fn prepare(name: &'static str) -> Option<Prepared> {
         g.len(),
         packet.params().isa
     );
+    // Embree's build joins the list with the feature `embree`.
+    #[cfg_attr(not(feature = "embree"), allow(unused_mut))]
+    let mut build_times = vec![
+        ("bvh", t_bvh),
+        ("obvhs", t_obvhs),
+        ("grid", t_grid),
+        ("grid2", t_grid2),
+        ("packet", t_packet),
+        ("bvh-crate", t_crate),
+        ("obvhs-bvh2", t_bvh2),
+    ];
+    // The device is created by the first build (untimed, here) and shared afterwards.
+    #[cfg(feature = "embree")]
+    let embree = match raybench_peers::embree_availability()
+        .and_then(|()| raybench_peers::embree_supports(&scene))
+    {
+        Ok(()) => {
+            let (single, t_embree) = timed(|| EmbreeAccel::build(g.clone()));
+            let packets = EmbreePacketAccel::build(g.clone());
+            eprintln!(
+                "scene {name}: untimed build: embree {t_embree:.2?} ({})",
+                raybench_peers::embree_version().unwrap_or_default()
+            );
+            build_times.push(("embree", t_embree));
+            Some((single, packets))
+        }
+        Err(e) => {
+            eprintln!("scene {name}: skipping Embree: {e}");
+            None
+        }
+    };
     Some(Prepared {
         name,
         scene,
@@ -379,16 +298,11 @@ fn prepare(name: &'static str) -> Option<Prepared> {
         grid2,
         packet,
         packet_interval,
-        peers: crate_peer.zip(obvhs_peer),
-        build_times: [
-            ("bvh", t_bvh),
-            ("obvhs", t_obvhs),
-            ("grid", t_grid),
-            ("grid2", t_grid2),
-            ("packet", t_packet),
-            ("bvh-crate", t_crate),
-            ("obvhs-bvh2", t_bvh2),
-        ],
+        bvh_crate,
+        obvhs_peer,
+        #[cfg(feature = "embree")]
+        embree,
+        build_times,
     })
 }
 
@@ -431,16 +345,26 @@ fn check_agreement(p: &Prepared) {
                 ),
             ),
         ];
-        if let Some((crate_peer, obvhs_peer)) = &p.peers {
-            let mut stack = Vec::new();
+        results.push((
+            "bvh-crate",
+            agree(
+                &mut batch(&p.bvh_crate, rays)
+                    .into_iter()
+                    .map(|h| h.map(|h| h.prim)),
+            ),
+        ));
+        #[cfg(feature = "embree")]
+        if let Some((single, packets)) = &p.embree {
             results.push((
-                "bvh-crate",
-                agree(&mut rays.iter().map(|r| {
-                    crate_peer
-                        .closest(r, &CratePeer::ray(r), &mut stack)
-                        .map(|(id, _)| id)
-                })),
+                "embree",
+                agree(&mut batch(single, rays).into_iter().map(|h| h.map(|h| h.prim))),
             ));
+            results.push((
+                "embree-packet",
+                agree(&mut batch(packets, rays).into_iter().map(|h| h.map(|h| h.prim))),
+            ));
+        }
+        if let Some(obvhs_peer) = &p.obvhs_peer {
             results.push((
                 "obvhs-bvh2",
                 agree(
@@ -551,13 +475,21 @@ fn bench_build(c: &mut Criterion, p: &Prepared) {
     group.bench_function(BenchmarkId::new("grid", p.name), |b| {
         b.iter_with_large_drop(|| Grid::build_with(black_box(g.clone()), GridParams::default()));
     });
-    if let Some(tris) = &p.tris {
-        // The peers' inputs in their own formats, prepared outside the timing.
-        let mut shapes = CratePeer::shapes(tris);
-        group.measurement_time(target("bvh-crate"));
-        group.bench_function(BenchmarkId::new("bvh-crate", p.name), |b| {
-            b.iter_with_large_drop(|| CrateBvh::build_par(black_box(&mut shapes)));
+    group.measurement_time(target("bvh-crate"));
+    group.bench_function(BenchmarkId::new("bvh-crate", p.name), |b| {
+        b.iter_with_large_drop(|| BvhCrateAccel::build(black_box(g.clone())));
+    });
+    #[cfg(feature = "embree")]
+    if p.embree.is_some() {
+        // Embree's device exists already (the untimed build made it): this times the copy
+        // of the triangles into Embree's buffers and its BVH build.
+        group.measurement_time(target("embree"));
+        group.bench_function(BenchmarkId::new("embree", p.name), |b| {
+            b.iter_with_large_drop(|| EmbreeAccel::build(black_box(g.clone())));
         });
+    }
+    if let Some(tris) = &p.tris {
+        // The peer's input in its own format, prepared outside the timing.
         let otris = ObvhsPeer::obvhs_tris(tris);
         group.measurement_time(target("obvhs-bvh2"));
         group.bench_function(BenchmarkId::new("obvhs-bvh2", p.name), |b| {
@@ -597,21 +529,22 @@ fn bench_trace(c: &mut Criterion, p: &Prepared) {
         group.bench_function(id("grid"), |b| {
             b.iter(|| trace(&p.grid, black_box(rays), &mut hits));
         });
-        if let Some((crate_peer, obvhs_peer)) = &p.peers {
-            let g = &*p.scene.geometry;
-            // The peers' own ray types, like raybench's rays, are made outside the timing.
-            // Their hits are completed like the backends' (normal, barycentrics).
-            let crate_rays: Vec<_> = rays.iter().map(CratePeer::ray).collect();
-            let mut stack = Vec::with_capacity(64);
-            group.bench_function(id("bvh-crate"), |b| {
-                b.iter(|| {
-                    for (ray, cray) in rays.iter().zip(&crate_rays) {
-                        let ray = black_box(ray);
-                        let best = crate_peer.closest(ray, cray, &mut stack);
-                        black_box(g.complete(ray, best));
-                    }
-                });
+        group.bench_function(id("bvh-crate"), |b| {
+            b.iter(|| trace(&p.bvh_crate, black_box(rays), &mut hits));
+        });
+        #[cfg(feature = "embree")]
+        if let Some((single, packets)) = &p.embree {
+            group.bench_function(id("embree"), |b| {
+                b.iter(|| trace(single, black_box(rays), &mut hits));
             });
+            group.bench_function(id("embree-packet"), |b| {
+                b.iter(|| trace(packets, black_box(rays), &mut hits));
+            });
+        }
+        if let Some(obvhs_peer) = &p.obvhs_peer {
+            let g = &*p.scene.geometry;
+            // The peer's own ray type, like raybench's rays, is made outside the timing.
+            // Its hits are completed like the backends' (normal, barycentrics).
             let obvhs_rays: Vec<_> = rays.iter().map(ObvhsPeer::ray).collect();
             group.bench_function(id("obvhs-bvh2"), |b| {
                 b.iter(|| {
@@ -628,7 +561,8 @@ fn bench_trace(c: &mut Criterion, p: &Prepared) {
 }
 
 fn benches_all(c: &mut Criterion) {
-    for name in SCENES {
+    let scenes = raybench::report::QUICK_SCENES.iter().chain(&EXTRA_SCENES);
+    for &name in scenes {
         let Some(p) = prepare(name) else { continue };
         check_agreement(&p);
         bench_build(c, &p);

@@ -4,11 +4,17 @@
 //! `raybench compare` and by the cross-backend equivalence tests. The command line itself is
 //! in `main.rs`.
 
+pub mod measure;
+pub mod report;
+
 use raybench_bvh::{Bvh, ObvhsAccel};
 use raybench_core::{Frame, NO_HIT, Renderer};
 use raybench_grid::{Grid, TwoLevelGrid};
 use raybench_naive::NaiveAccel;
 use raybench_packet::{Isa, PacketAccel, PacketParams};
+use raybench_peers::BvhCrateAccel;
+#[cfg(feature = "embree")]
+use raybench_peers::{EmbreeAccel, EmbreePacketAccel, embree_availability, embree_supports};
 use raybench_render::CpuRenderer;
 
 /// A registered backend.
@@ -121,7 +127,62 @@ pub const BACKENDS: &[Backend] = &[
         variant: true,
         make: || packet_with(Isa::Portable, "packet-portable", PACKET_PORTABLE),
     },
+    Backend {
+        name: "bvh-crate",
+        description: BVH_CRATE,
+        exact: false,
+        brute_force: false,
+        variant: false,
+        make: || {
+            Box::new(CpuRenderer::<BvhCrateAccel>::with_default_build(
+                "bvh-crate",
+                BVH_CRATE,
+            ))
+        },
+    },
+    #[cfg(feature = "embree")]
+    Backend {
+        name: "embree",
+        description: EMBREE,
+        exact: false,
+        brute_force: false,
+        variant: false,
+        make: || {
+            Box::new(
+                CpuRenderer::<EmbreeAccel>::with_default_build("embree", EMBREE)
+                    .with_availability(embree_availability)
+                    .with_support_check(embree_supports)
+                    .without_test_counts(),
+            )
+        },
+    },
+    #[cfg(feature = "embree")]
+    Backend {
+        name: "embree-packet",
+        description: EMBREE_PACKET,
+        exact: false,
+        brute_force: false,
+        variant: false,
+        make: || {
+            Box::new(
+                CpuRenderer::<EmbreePacketAccel>::with_default_build(
+                    "embree-packet",
+                    EMBREE_PACKET,
+                )
+                .with_availability(embree_availability)
+                .with_support_check(embree_supports)
+                .without_test_counts(),
+            )
+        },
+    },
 ];
+
+const BVH_CRATE: &str = "peer: svenstaro's bvh crate's tree, own stack traversal, raybench's primitive tests (not exact)";
+#[cfg(feature = "embree")]
+const EMBREE: &str =
+    "peer: Intel Embree 3, rtcIntersect1 per ray, Embree's own triangle test (not exact)";
+#[cfg(feature = "embree")]
+const EMBREE_PACKET: &str = "peer: Intel Embree 3, rtcIntersect16 on 16-ray packets, Embree's own triangle test (not exact)";
 
 const PACKET_SSE41: &str = "packet forced to SSE4.1 (4 lanes, 8-ray packets)";
 const PACKET_PORTABLE: &str = "packet forced to portable code (4 plain f32 lanes, no intrinsics)";

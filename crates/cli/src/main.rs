@@ -3,10 +3,9 @@
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
+use raybench::measure::{Measured, explicit_rays, measure, median, prepare};
 use raybench::{BACKENDS, Backend, backend, compare_hits, default_backend};
-use raybench_core::{
-    Mode, NO_HIT, Ray, RayCounters, RaySet, RenderSettings, Renderer, Scene, limits,
-};
+use raybench_core::{Mode, RaySet, RenderSettings, Scene};
 use raybench_scene::{BUILTIN_SCENES, assets_dir, generators::GENERATORS};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -41,6 +40,69 @@ enum Command {
     },
     /// Show a scene's primitives and each backend's structure.
     Info(InfoCmd),
+    /// Run the benchmark matrix and write a report (REPORT.md, charts, images,
+    /// results.json).
+    Report(ReportCmd),
+    /// Join the results of report shards into one report.
+    Merge(MergeCmd),
+}
+
+#[derive(Args)]
+struct ReportCmd {
+    /// The small matrix: under 5 minutes on a 2-core machine (what the README's main
+    /// command runs).
+    #[arg(long)]
+    quick: bool,
+    /// Comma-separated scenes (default: the built-in list; see the README).
+    #[arg(long, value_delimiter = ',')]
+    scenes: Option<Vec<String>>,
+    /// Comma-separated backends (default: every backend but the pinned variants).
+    #[arg(long, value_delimiter = ',')]
+    backends: Option<Vec<String>>,
+    /// Comma-separated modes (cast, whitted, path; default: all).
+    #[arg(long, value_delimiter = ',', value_parser = parse_mode)]
+    modes: Option<Vec<Mode>>,
+    /// Output folder (created; files in it are replaced).
+    #[arg(long, default_value = "target/raybench-report", value_name = "DIR")]
+    out: PathBuf,
+    /// Run part I of N of the matrix (1-based), split by scene: `--shard 2/4`.
+    #[arg(long, value_parser = parse_shard, default_value = "1/1", value_name = "I/N")]
+    shard: (u32, u32),
+    /// Image side of the main matrix (default 256 with --quick, else 512).
+    #[arg(long)]
+    size: Option<u32>,
+    /// Timed repetitions after the warm-up (default 3 with --quick, else 5).
+    #[arg(long)]
+    repeat: Option<u32>,
+    /// Leave out the scaling experiments.
+    #[arg(long)]
+    no_scaling: bool,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
+fn parse_shard(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("'{s}' is not I/N with 1 <= I <= N (for example 2/4)");
+    let (i, n) = s.split_once('/').ok_or_else(bad)?;
+    let (i, n): (u32, u32) = (
+        i.trim().parse().map_err(|_| bad())?,
+        n.trim().parse().map_err(|_| bad())?,
+    );
+    if i == 0 || n == 0 || i > n {
+        return Err(bad());
+    }
+    Ok((i, n))
+}
+
+#[derive(Args)]
+struct MergeCmd {
+    /// Report folders (each with a results.json).
+    #[arg(required = true)]
+    dirs: Vec<PathBuf>,
+    /// Output folder of the merged report.
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
 }
 
 #[derive(Args, Clone)]
@@ -133,77 +195,6 @@ fn parse_ray_set(s: &str) -> Result<RaySet, String> {
         .ok_or_else(|| format!("unknown ray set '{s}' (known: primary, incoherent)"))
 }
 
-/// Seed of the incoherent ray set (the same rays in every run and in the benches).
-const INCOHERENT_SEED: u32 = 1;
-
-/// The rays a ray set traces explicitly: `None` for primary rays (frames are rendered),
-/// `width x height` seeded incoherent rays otherwise.
-fn explicit_rays(
-    set: RaySet,
-    scene: &Scene,
-    settings: &RenderSettings,
-) -> Result<Option<Vec<Ray>>> {
-    let count = u64::from(settings.width) * u64::from(settings.height);
-    match set {
-        RaySet::Primary => Ok(None),
-        RaySet::Incoherent if count > limits::MAX_EXPLICIT_RAYS => bail!(
-            "{count} incoherent rays exceed the limit of {} (use a smaller --width x --height)",
-            limits::MAX_EXPLICIT_RAYS
-        ),
-        RaySet::Incoherent => Ok(Some(raybench_core::rays::incoherent(
-            scene.geometry.bounds(),
-            count as usize,
-            INCOHERENT_SEED,
-        ))),
-    }
-}
-
-/// One measured workload: per-ray ids and `t`, rays traced, counters, seconds.
-struct Measured {
-    ids: Vec<u32>,
-    t: Vec<f32>,
-    rays: u64,
-    counters: Option<RayCounters>,
-    seconds: f64,
-}
-
-/// Renders a frame (primary rays) or traces the given rays (incoherent) once.
-fn measure(
-    r: &dyn Renderer,
-    settings: &RenderSettings,
-    rays: Option<&[Ray]>,
-    count: bool,
-) -> Result<Measured> {
-    let settings = RenderSettings { count, ..*settings };
-    match rays {
-        None => {
-            let f = r.render(&settings)?;
-            Ok(Measured {
-                seconds: f.timings.get("render").unwrap_or(0.0),
-                rays: f.stats.rays,
-                counters: f.stats.counters,
-                ids: f.ids,
-                t: f.t,
-            })
-        }
-        Some(rays) => {
-            let start = std::time::Instant::now();
-            let (hits, counters) = r.trace_rays(rays, count)?;
-            let seconds = start.elapsed().as_secs_f64();
-            Ok(Measured {
-                ids: hits.iter().map(|h| h.map_or(NO_HIT, |h| h.prim)).collect(),
-                t: hits
-                    .iter()
-                    .map(|h| h.map_or(f32::INFINITY, |h| h.t))
-                    .collect(),
-                rays: rays.len() as u64,
-                counters,
-                seconds,
-            })
-        }
-    }
-}
-
 #[derive(Args)]
 struct InfoCmd {
     /// Scene (as for render).
@@ -250,6 +241,11 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Scenes => scenes(&assets),
         Command::Backends { json } => backends(json),
         Command::Info(cmd) => info(&cmd, &assets),
+        Command::Report(cmd) => with_threads(cmd.threads, || report(&cmd, &assets)),
+        Command::Merge(cmd) => {
+            raybench::report::merge(&cmd.dirs, &cmd.out)?;
+            Ok(ExitCode::SUCCESS)
+        }
     }
 }
 
@@ -281,15 +277,6 @@ fn load_scene(spec: &str, assets: &Path) -> Result<Arc<Scene>> {
 }
 
 /// Makes and prepares a renderer, or says why it cannot run this scene.
-fn prepare(b: &Backend, scene: &Arc<Scene>) -> Result<(Box<dyn Renderer>, f64), String> {
-    let mut r = (b.make)();
-    r.availability()?;
-    r.supports(scene)?;
-    let timings = r.prepare(scene).map_err(|e| e.to_string())?;
-    let build = timings.0.iter().map(|(_, s)| s).sum();
-    Ok((r, build))
-}
-
 fn render(cmd: &RenderCmd, assets: &Path) -> Result<ExitCode> {
     let settings = cmd.frame.settings(false);
     settings.validate()?;
@@ -378,16 +365,6 @@ fn chosen_backends(names: Option<&[String]>, work: f64) -> Result<Vec<&'static B
 
 /// Naive-backend work above which `compare` leaves naive out of its default list.
 const NAIVE_DEFAULT_BUDGET_TESTS: f64 = 2.0e10;
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if !n.is_multiple_of(2) {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
 
 fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
     let settings = cmd.frame.settings(false);
@@ -599,6 +576,38 @@ fn backends(json: bool) -> Result<ExitCode> {
             };
             println!("{:<12} {:<12} {}", r.name, state, r.description);
         }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn report(cmd: &ReportCmd, assets: &Path) -> Result<ExitCode> {
+    let opts = raybench::report::Options {
+        quick: cmd.quick,
+        scenes: cmd.scenes.clone(),
+        backends: cmd.backends.clone(),
+        modes: cmd.modes.clone(),
+        out: cmd.out.clone(),
+        shard: cmd.shard,
+        size: cmd.size,
+        repeat: cmd.repeat,
+        scaling: !cmd.no_scaling,
+        assets: assets.to_path_buf(),
+        threads: rayon::current_num_threads(),
+        command: std::env::args().collect::<Vec<_>>().join(" "),
+    };
+    let results = raybench::report::run(&opts)?;
+    let failed: Vec<String> = results
+        .runs
+        .iter()
+        .filter(|r| r.exact && r.equality.as_ref().is_some_and(|e| !e.pass))
+        .map(|r| format!("{} on {} ({}, {})", r.backend, r.scene, r.mode, r.ray_set))
+        .collect();
+    if !failed.is_empty() {
+        eprintln!(
+            "error: raybench CPU backends disagree with the reference: {}",
+            failed.join("; ")
+        );
+        return Ok(ExitCode::from(3));
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -128,6 +128,11 @@ fn compare_incoherent_rays_with_every_backend() {
     let listed = raybench::BACKENDS.iter().filter(|b| !b.variant).count();
     assert_eq!(rows.len(), listed);
     for row in rows {
+        let b = raybench::backend(row["backend"].as_str().unwrap()).unwrap();
+        if !b.exact && row["available"] == false {
+            // A peer may refuse the scene (Embree: more spheres than it tests beside itself).
+            continue;
+        }
         assert_eq!(row["ray_set"], "incoherent");
         assert_eq!(row["rays"], 32 * 32);
         assert_eq!(row["id_match"], 1.0, "{row}");

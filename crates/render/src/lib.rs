@@ -11,7 +11,7 @@
 
 mod output;
 
-pub use output::{OutputError, id_color, srgb8, write_color_png, write_ids_png};
+pub use output::{OutputError, id_color, srgb8, write_color_png, write_ids_png, write_rgb};
 
 use raybench_core::integrator::{assemble, render_tile, tiles};
 use raybench_core::{
@@ -68,6 +68,8 @@ pub struct CpuRenderer<A: Accel> {
     description: String,
     build: BuildFn<A>,
     availability: fn() -> Result<(), String>,
+    support: fn(&Scene) -> Result<(), String>,
+    counts_tests: bool,
     prepared: Option<(Arc<Scene>, A)>,
 }
 
@@ -80,6 +82,8 @@ impl<A: Accel> CpuRenderer<A> {
             description: description.into(),
             build,
             availability: || Ok(()),
+            support: |_| Ok(()),
+            counts_tests: true,
             prepared: None,
         }
     }
@@ -89,6 +93,23 @@ impl<A: Accel> CpuRenderer<A> {
     #[must_use]
     pub fn with_availability(mut self, check: fn() -> Result<(), String>) -> Self {
         self.availability = check;
+        self
+    }
+
+    /// The same renderer, refusing scenes for which `check` fails (a backend that supports
+    /// only some primitive kinds): [`Renderer::supports`] reports it and `prepare` fails
+    /// with [`RenderError::Unsupported`].
+    #[must_use]
+    pub fn with_support_check(mut self, check: fn(&Scene) -> Result<(), String>) -> Self {
+        self.support = check;
+        self
+    }
+
+    /// The same renderer, saying that its accelerator does not count ray/primitive tests
+    /// (a peer library that tests primitives itself): [`Renderer::counts_tests`] is false.
+    #[must_use]
+    pub fn without_test_counts(mut self) -> Self {
+        self.counts_tests = false;
         self
     }
 
@@ -118,9 +139,18 @@ impl<A: Accel> Renderer for CpuRenderer<A> {
         (self.availability)()
     }
 
+    fn supports(&self, scene: &Scene) -> Result<(), String> {
+        (self.support)(scene)
+    }
+
+    fn counts_tests(&self) -> bool {
+        self.counts_tests
+    }
+
     fn prepare(&mut self, scene: &Arc<Scene>) -> Result<Timings, RenderError> {
         // Drop the previous structure first so that two never coexist in memory.
         self.prepared = None;
+        self.supports(scene).map_err(RenderError::Unsupported)?;
         let start = Instant::now();
         let accel = (self.build)(Arc::clone(&scene.geometry));
         let mut timings = Timings::default();
@@ -224,6 +254,28 @@ mod tests {
         assert_eq!(frames[0].stats.rays, rays);
         assert_eq!(frames[0].stats.counters.unwrap().prim_tests, rays);
         assert!(frames[0].ids.contains(&0) && frames[0].ids.contains(&NO_HIT));
+    }
+
+    #[test]
+    fn support_check_refuses_scenes() {
+        let mut r = CpuRenderer::<NaiveAccel>::with_default_build("naive", "test")
+            .with_support_check(|s| {
+                if s.geometry.is_empty() {
+                    Ok(())
+                } else {
+                    Err("no primitives wanted".into())
+                }
+            })
+            .without_test_counts();
+        let scene = scene();
+        assert_eq!(r.supports(&scene), Err("no primitives wanted".into()));
+        assert!(matches!(
+            r.prepare(&scene),
+            Err(RenderError::Unsupported(_))
+        ));
+        assert!(!r.counts_tests());
+        let plain = CpuRenderer::<NaiveAccel>::with_default_build("naive", "test");
+        assert!(plain.supports(&scene).is_ok() && plain.counts_tests());
     }
 
     #[test]

@@ -53,9 +53,13 @@ pub fn id_color(id: u32) -> [u8; 3] {
     [b[0] | 0x40, b[1] | 0x40, b[2] | 0x40]
 }
 
-/// Writes RGB bytes to `path` through a temporary file renamed into place, so that an
-/// interrupted run never leaves a partial image under the final name.
-fn write_rgb(path: &Path, width: u32, height: u32, rgb: Vec<u8>) -> Result<(), OutputError> {
+/// Writes RGB bytes (`3 * width * height`, row by row) to `path` as a PNG, through a
+/// temporary file renamed into place, so that an interrupted run never leaves a partial
+/// image under the final name.
+///
+/// # Errors
+/// When the file cannot be written or renamed.
+pub fn write_rgb(path: &Path, width: u32, height: u32, rgb: Vec<u8>) -> Result<(), OutputError> {
     let mut tmp = path.as_os_str().to_owned();
     tmp.push(".partial");
     let tmp = PathBuf::from(tmp);

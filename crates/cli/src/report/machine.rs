@@ -1,0 +1,139 @@
+//! The machine description at the top of every report.
+
+use super::results::Machine;
+
+/// Describes this machine; `threads` is the worker count used for rendering.
+#[must_use]
+pub fn describe(threads: usize) -> Machine {
+    Machine {
+        cpu: cpu_model(),
+        cores: std::thread::available_parallelism().map_or(1, std::num::NonZero::get),
+        threads,
+        isa: isa(),
+        gpu: "none (this build has no GPU backend)".into(),
+        os: os(),
+        version: version(),
+    }
+}
+
+fn cpu_model() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, v)| v.trim().to_string())
+        })
+        .unwrap_or_else(|| format!("unknown ({})", std::env::consts::ARCH))
+}
+
+fn isa() -> String {
+    let chosen = raybench_packet::Isa::detect();
+    #[cfg(target_arch = "x86_64")]
+    let extensions: Vec<&str> = [
+        ("sse4.1", std::arch::is_x86_feature_detected!("sse4.1")),
+        ("avx2", std::arch::is_x86_feature_detected!("avx2")),
+        ("fma", std::arch::is_x86_feature_detected!("fma")),
+        ("avx512f", std::arch::is_x86_feature_detected!("avx512f")),
+    ]
+    .into_iter()
+    .filter_map(|(n, on)| on.then_some(n))
+    .collect();
+    #[cfg(not(target_arch = "x86_64"))]
+    let extensions: Vec<&str> = Vec::new();
+    format!(
+        "packet backend uses {} ({} lanes); CPU has {}",
+        chosen.name(),
+        chosen.lanes(),
+        if extensions.is_empty() {
+            "no x86 SIMD extensions".to_string()
+        } else {
+            extensions.join(", ")
+        }
+    )
+}
+
+fn os() -> String {
+    let pretty = std::fs::read_to_string("/etc/os-release")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find_map(|l| l.strip_prefix("PRETTY_NAME="))
+                .map(|v| v.trim_matches('"').to_string())
+        });
+    let kernel = std::fs::read_to_string("/proc/sys/kernel/osrelease")
+        .ok()
+        .map(|s| s.trim().to_string());
+    match (pretty, kernel) {
+        (Some(p), Some(k)) => format!("{p}, Linux {k}"),
+        (Some(p), None) => p,
+        (None, Some(k)) => format!("Linux {k}"),
+        (None, None) => std::env::consts::OS.to_string(),
+    }
+}
+
+fn version() -> String {
+    let revision = std::process::Command::new("git")
+        .args(["rev-parse", "--short", "HEAD"])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string());
+    match revision {
+        Some(r) if !r.is_empty() => format!("raybench {} ({r})", env!("CARGO_PKG_VERSION")),
+        _ => format!("raybench {}", env!("CARGO_PKG_VERSION")),
+    }
+}
+
+/// The current UTC time as RFC 3339 (`2026-11-23T02:44:30Z`), from the system clock.
+#[must_use]
+pub fn now_utc() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let (days, rem) = (secs / 86_400, secs % 86_400);
+    let (y, m, d) = civil_from_days(days as i64);
+    format!(
+        "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z",
+        rem / 3600,
+        rem % 3600 / 60,
+        rem % 60
+    )
+}
+
+/// Proleptic Gregorian date of the day `days` after 1970-01-01 (Howard Hinnant's
+/// `civil_from_days`).
+fn civil_from_days(days: i64) -> (i64, u32, u32) {
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = (doy - (153 * mp + 2) / 5 + 1) as u32;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    (y, m, d)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn civil_dates() {
+        assert_eq!(civil_from_days(0), (1970, 1, 1));
+        assert_eq!(civil_from_days(19_723), (2024, 1, 1));
+        assert_eq!(civil_from_days(20_415), (2025, 11, 23));
+        assert_eq!(civil_from_days(11_016), (2000, 2, 29));
+    }
+
+    #[test]
+    fn machine_is_described() {
+        let m = describe(2);
+        assert!(!m.cpu.is_empty() && m.cores >= 1 && m.threads == 2);
+        assert!(m.isa.contains("lanes"));
+        assert!(now_utc().ends_with('Z'));
+    }
+}

@@ -1,0 +1,771 @@
+//! `raybench report`: renders a matrix of scenes, workloads and backends, times them, checks
+//! that the images agree, runs the scaling experiments, and writes `REPORT.md`, charts,
+//! images and `results.json` into one folder. `raybench merge` joins the results of
+//! shards (parts of the matrix run on several machines or at several times).
+
+pub mod charts;
+pub mod images;
+pub mod machine;
+mod markdown;
+pub mod results;
+
+use crate::measure::{Measured, explicit_rays, measure, prepare};
+use crate::{BACKENDS, Backend, backend, compare_hits};
+use anyhow::{Context, Result, bail};
+use images::Rgb8;
+use raybench_core::{Mode, RaySet, RenderSettings, Renderer, Scene};
+use results::{Equality, Images, Results, Run, ScalingPoint, Shard, Timing};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// What to run and where to write it.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// The small matrix (under 5 minutes on 2 cores).
+    pub quick: bool,
+    /// Scenes (default: the built-in list of the chosen size).
+    pub scenes: Option<Vec<String>>,
+    /// Backends (default: every backend but the variants).
+    pub backends: Option<Vec<String>>,
+    /// Modes (default: all three).
+    pub modes: Option<Vec<Mode>>,
+    /// Output folder.
+    pub out: PathBuf,
+    /// This run's shard `(i, n)`, 1-based.
+    pub shard: (u32, u32),
+    /// Image side for the main matrix (default 256 quick, 512 full).
+    pub size: Option<u32>,
+    /// Timed repetitions after the warm-up (default 3 quick, 5 full).
+    pub repeat: Option<u32>,
+    /// Run the scaling experiments.
+    pub scaling: bool,
+    /// Assets folder.
+    pub assets: PathBuf,
+    /// Worker threads.
+    pub threads: usize,
+    /// The command line, for the record.
+    pub command: String,
+}
+
+/// The built-in scenes of the quick matrix.
+pub const QUICK_SCENES: &[&str] = &["spheres", "whitted", "cornell-box", "bunny", "sponza"];
+/// The built-in scenes of the full matrix.
+pub const FULL_SCENES: &[&str] = &[
+    "spheres",
+    "whitted",
+    "cornell-box",
+    "bunny-lowres",
+    "bunny",
+    "sponza",
+    "suzanne",
+    "teapot",
+    "teapot-stadium",
+];
+
+/// Naive's estimated ray/primitive tests per workload above which it is left out (it is
+/// then not the reference: `bvh` is, itself checked against naive by the tests).
+const NAIVE_BUDGET_QUICK: f64 = 2.0e9;
+const NAIVE_BUDGET_FULL: f64 = 2.0e10;
+
+/// The tolerance a backend outside the equivalence contract must meet: at least this
+/// fraction of identical ids ...
+pub const PEER_MIN_ID_MATCH: f64 = 0.999;
+/// ... and at most this mean FLIP error.
+pub const PEER_MAX_FLIP: f64 = 0.05;
+
+/// One render setting of a scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Workload {
+    mode: Mode,
+    rays: RaySet,
+    width: u32,
+    height: u32,
+    spp: u32,
+}
+
+impl Workload {
+    fn settings(&self) -> RenderSettings {
+        RenderSettings {
+            width: self.width,
+            height: self.height,
+            spp: self.spp,
+            mode: self.mode,
+            seed: 0,
+            max_depth: 5,
+            count: false,
+        }
+    }
+
+    /// Rough rays per sample, for naive's budget.
+    fn rays_per_sample(&self) -> f64 {
+        match self.mode {
+            Mode::Cast => 1.0,
+            Mode::Whitted => 3.0,
+            Mode::Path => 4.0,
+        }
+    }
+
+    fn key(&self) -> String {
+        format!("{}-{}", self.mode.name(), self.rays.name())
+    }
+}
+
+/// A unit of the matrix; shards split the list of units.
+#[derive(Clone, Debug, PartialEq)]
+enum Unit {
+    Scene(String),
+    Scaling(&'static str),
+}
+
+impl Unit {
+    fn name(&self) -> String {
+        match self {
+            Self::Scene(s) => s.clone(),
+            Self::Scaling(e) => format!("scaling:{e}"),
+        }
+    }
+}
+
+/// The scaling experiments.
+const EXPERIMENTS: [&str; 3] = ["primitives", "pixels", "spp"];
+
+/// Progress on stderr: a bar, the position and the time left.
+struct Progress {
+    total: usize,
+    done: usize,
+    start: Instant,
+}
+
+impl Progress {
+    fn step(&mut self, what: &str) {
+        self.done += 1;
+        let elapsed = self.start.elapsed().as_secs_f64();
+        let left = elapsed / self.done as f64 * (self.total.saturating_sub(self.done)) as f64;
+        let width = 24;
+        let filled = (self.done * width / self.total.max(1)).min(width);
+        eprintln!(
+            "[{}{}] {}/{} {:>6} elapsed, ~{} left  {what}",
+            "#".repeat(filled),
+            ".".repeat(width - filled),
+            self.done,
+            self.total,
+            clock(elapsed),
+            clock(left)
+        );
+    }
+}
+
+fn clock(s: f64) -> String {
+    let s = s.round() as u64;
+    format!("{}m{:02}s", s / 60, s % 60)
+}
+
+/// Runs the report and writes it; returns the results.
+///
+/// # Errors
+/// Bad options, an unwritable output folder, or a scene that fails to load for another
+/// reason than a missing asset (those are reported and skipped, except under `CI=true`).
+pub fn run(opts: &Options) -> Result<Results> {
+    let (shard, shards) = opts.shard;
+    if shards == 0 || shard == 0 || shard > shards {
+        bail!("--shard must be I/N with 1 <= I <= N (got {shard}/{shards})");
+    }
+    let size = opts.size.unwrap_or(if opts.quick { 256 } else { 512 });
+    if !(16..=4096).contains(&size) {
+        bail!("--size must be in 16..=4096");
+    }
+    let repeat = opts.repeat.unwrap_or(if opts.quick { 3 } else { 5 });
+    if !(1..=100).contains(&repeat) {
+        bail!("--repeat must be in 1..=100");
+    }
+    let chosen: Vec<&'static Backend> = match &opts.backends {
+        Some(names) => names
+            .iter()
+            .map(|n| backend(n.trim()))
+            .collect::<Result<_, _>>()
+            .map_err(anyhow::Error::msg)?,
+        None => BACKENDS.iter().filter(|b| !b.variant).collect(),
+    };
+    if chosen.is_empty() {
+        bail!("no backend to run");
+    }
+    let modes = opts.modes.clone().unwrap_or_else(|| Mode::ALL.to_vec());
+    let scene_names: Vec<String> = match &opts.scenes {
+        Some(s) => s.iter().map(|s| s.trim().to_string()).collect(),
+        None => (if opts.quick {
+            QUICK_SCENES
+        } else {
+            FULL_SCENES
+        })
+        .iter()
+        .map(|s| (*s).to_string())
+        .collect(),
+    };
+    let mut units: Vec<Unit> = scene_names.into_iter().map(Unit::Scene).collect();
+    if opts.scaling {
+        units.extend(EXPERIMENTS.iter().map(|e| Unit::Scaling(e)));
+    }
+    // Whole units per shard, so that every backend of a scene runs on the same machine.
+    let mine: Vec<Unit> = units
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| (*i as u32 % shards) + 1 == shard)
+        .map(|(_, u)| u)
+        .collect();
+
+    std::fs::create_dir_all(opts.out.join("images"))
+        .with_context(|| format!("cannot create {}", opts.out.display()))?;
+    std::fs::create_dir_all(opts.out.join("charts"))?;
+    let started = machine::now_utc();
+    let wall = Instant::now();
+    let mut results = Results {
+        schema: results::SCHEMA.into(),
+        raybench_version: env!("CARGO_PKG_VERSION").into(),
+        shards: vec![Shard {
+            index: shard,
+            count: shards,
+            machine: machine::describe(opts.threads),
+            started,
+            wall_seconds: 0.0,
+            command: opts.command.clone(),
+            quick: opts.quick,
+        }],
+        ..Results::default()
+    };
+
+    let ctx = Ctx {
+        opts,
+        chosen: &chosen,
+        modes: &modes,
+        size,
+        repeat,
+        budget: if opts.quick {
+            NAIVE_BUDGET_QUICK
+        } else {
+            NAIVE_BUDGET_FULL
+        },
+    };
+    // Load the scenes first, so that the progress bar knows the whole matrix.
+    let mut plan: Vec<(Unit, Option<Arc<Scene>>, usize)> = Vec::new();
+    for unit in mine {
+        match &unit {
+            Unit::Scene(name) => match ctx.load(name)? {
+                Some(scene) => {
+                    let n = ctx.workloads(&scene).len() * chosen.len();
+                    plan.push((unit, Some(scene), n));
+                }
+                None => plan.push((unit, None, 0)),
+            },
+            Unit::Scaling(e) => {
+                let n = ctx.scaling_plan(e).len() * chosen.len();
+                plan.push((unit, None, n));
+            }
+        }
+    }
+    let mut progress = Progress {
+        total: plan.iter().map(|p| p.2).sum(),
+        done: 0,
+        start: Instant::now(),
+    };
+    for (unit, scene, _) in plan {
+        match (unit, scene) {
+            (Unit::Scene(_), Some(scene)) => {
+                results.runs.extend(ctx.run_scene(&scene, &mut progress)?);
+            }
+            (unit @ Unit::Scene(_), None) => eprintln!("skipped {}: assets missing", unit.name()),
+            (Unit::Scaling(e), _) => results.scaling.extend(ctx.run_scaling(e, &mut progress)?),
+        }
+    }
+    results.shards[0].wall_seconds = wall.elapsed().as_secs_f64();
+    results.fit();
+    write(&results, &opts.out)?;
+    Ok(results)
+}
+
+/// Writes `results.json`, the charts and `REPORT.md` into `out`.
+///
+/// # Errors
+/// When a file cannot be written.
+pub fn write(results: &Results, out: &Path) -> Result<()> {
+    std::fs::create_dir_all(out.join("charts"))?;
+    let json = serde_json::to_string_pretty(results)?;
+    std::fs::write(out.join("results.json"), json + "\n")?;
+    let charts = markdown::charts(results, &out.join("charts"));
+    std::fs::write(out.join("REPORT.md"), markdown::report(results, &charts))?;
+    eprintln!("report written to {}", out.join("REPORT.md").display());
+    Ok(())
+}
+
+/// Joins the `results.json` of several report folders into one report in `out` (images are
+/// copied; charts and `REPORT.md` are drawn anew).
+///
+/// # Errors
+/// A folder without a readable `results.json`, or an unwritable `out`.
+pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Results> {
+    if dirs.is_empty() {
+        bail!("merge needs at least one report folder");
+    }
+    let mut merged = Results {
+        schema: results::SCHEMA.into(),
+        raybench_version: env!("CARGO_PKG_VERSION").into(),
+        ..Results::default()
+    };
+    std::fs::create_dir_all(out.join("images"))
+        .with_context(|| format!("cannot create {}", out.display()))?;
+    for dir in dirs {
+        let r = Results::read(&dir.join("results.json"))?;
+        for run in &r.runs {
+            for name in [&run.images.color, &run.images.ids_diff, &run.images.flip]
+                .into_iter()
+                .flatten()
+            {
+                let (from, to) = (dir.join(name), out.join(name));
+                if from != to {
+                    std::fs::copy(&from, &to)
+                        .with_context(|| format!("cannot copy {}", from.display()))?;
+                }
+            }
+        }
+        merged.absorb(r);
+    }
+    write(&merged, out)?;
+    Ok(merged)
+}
+
+struct Ctx<'a> {
+    opts: &'a Options,
+    chosen: &'a [&'static Backend],
+    modes: &'a [Mode],
+    size: u32,
+    repeat: u32,
+    budget: f64,
+}
+
+/// A backend's measurements of one workload.
+struct Measurement {
+    warm: Measured,
+    timing: Timing,
+}
+
+impl Ctx<'_> {
+    fn load(&self, name: &str) -> Result<Option<Arc<Scene>>> {
+        match raybench_scene::load(name, &self.opts.assets) {
+            Ok(s) => Ok(Some(Arc::new(s))),
+            Err(e) if e.is_missing_asset() && std::env::var("CI").as_deref() != Ok("true") => {
+                eprintln!("skipping {name}: {e}");
+                Ok(None)
+            }
+            Err(e) => Err(anyhow::Error::new(e).context(format!("cannot load scene {name}"))),
+        }
+    }
+
+    /// The workloads of a scene: ray casting (camera and incoherent rays) everywhere,
+    /// Whitted where there are lights to shadow and mirrors to follow, path tracing on the
+    /// scenes built for it.
+    fn workloads(&self, scene: &Scene) -> Vec<Workload> {
+        let s = self.size;
+        let mut w = Vec::new();
+        let cast = |rays| Workload {
+            mode: Mode::Cast,
+            rays,
+            width: s,
+            height: s,
+            spp: 1,
+        };
+        if self.modes.contains(&Mode::Cast) {
+            w.push(cast(RaySet::Primary));
+            w.push(cast(RaySet::Incoherent));
+        }
+        let name = scene.name.as_str();
+        if self.modes.contains(&Mode::Whitted)
+            && ["spheres", "whitted", "cornell-box"].contains(&name)
+        {
+            w.push(Workload {
+                mode: Mode::Whitted,
+                ..cast(RaySet::Primary)
+            });
+        }
+        if self.modes.contains(&Mode::Path) && ["cornell-box", "whitted"].contains(&name) {
+            let (side, spp) = if self.opts.quick {
+                (s / 2, 16)
+            } else {
+                (s / 2, 64)
+            };
+            w.push(Workload {
+                mode: Mode::Path,
+                rays: RaySet::Primary,
+                width: side,
+                height: side,
+                spp,
+            });
+        }
+        w
+    }
+
+    /// Whether naive stays within its budget on `w` over a scene of `prims` primitives.
+    fn naive_fits(&self, w: &Workload, prims: usize) -> bool {
+        let tests = f64::from(w.width)
+            * f64::from(w.height)
+            * f64::from(w.spp)
+            * w.rays_per_sample()
+            * prims as f64
+            * f64::from(self.repeat + 1);
+        tests <= self.budget
+    }
+
+    /// Warm-up (counted, kept for the comparison) and timed repetitions.
+    fn measure(
+        &self,
+        r: &dyn Renderer,
+        w: &Workload,
+        rays: Option<&[raybench_core::Ray]>,
+    ) -> Result<Measurement> {
+        let settings = w.settings();
+        let warm = measure(r, &settings, rays, true)?;
+        let mut samples = Vec::new();
+        for _ in 0..self.repeat {
+            samples.push(measure(r, &settings, rays, false)?.seconds);
+        }
+        Ok(Measurement {
+            warm,
+            timing: Timing::of(samples),
+        })
+    }
+
+    fn run_scene(&self, scene: &Arc<Scene>, progress: &mut Progress) -> Result<Vec<Run>> {
+        let workloads = self.workloads(scene);
+        let prims = scene.geometry.len();
+        // The reference: naive where it fits every workload's budget, else bvh.
+        let naive_ok = workloads.iter().all(|w| self.naive_fits(w, prims));
+        let mut order: Vec<&'static Backend> = self
+            .chosen
+            .iter()
+            .copied()
+            .filter(|b| b.name != "naive" || naive_ok)
+            .collect();
+        let skipped_naive = self.chosen.iter().any(|b| b.name == "naive") && !naive_ok;
+        let reference_name = if order.iter().any(|b| b.name == "naive") {
+            "naive"
+        } else if order.iter().any(|b| b.name == "bvh") {
+            "bvh"
+        } else {
+            order[0].name
+        };
+        order.sort_by_key(|b| b.name != reference_name);
+        if skipped_naive {
+            eprintln!(
+                "{}: naive left out (over its time budget); bvh is the reference",
+                scene.name
+            );
+            progress.total -= workloads.len();
+        }
+
+        let explicit: Vec<Option<Vec<raybench_core::Ray>>> = workloads
+            .iter()
+            .map(|w| explicit_rays(w.rays, scene, &w.settings()))
+            .collect::<Result<_>>()?;
+        let mut reference: Vec<Option<(Measured, Option<Rgb8>)>> =
+            workloads.iter().map(|_| None).collect();
+        let mut runs = Vec::new();
+        for b in order {
+            let prepared = prepare(b, scene);
+            for (wi, w) in workloads.iter().enumerate() {
+                let mut run = Run {
+                    shard: 0,
+                    scene: scene.name.clone(),
+                    primitives: prims as u64,
+                    mode: w.mode.name().into(),
+                    ray_set: w.rays.name().into(),
+                    width: w.width,
+                    height: w.height,
+                    spp: w.spp,
+                    backend: b.name.into(),
+                    exact: b.exact,
+                    reference: reference_name.into(),
+                    status: "ok".into(),
+                    reason: None,
+                    build_seconds: None,
+                    memory_bytes: None,
+                    structure: BTreeMap::new(),
+                    seconds: None,
+                    rays: None,
+                    mrays_per_s: None,
+                    tests_per_ray: None,
+                    visits_per_ray: None,
+                    equality: None,
+                    images: Images::default(),
+                };
+                let (r, build) = match &prepared {
+                    Ok(x) => x,
+                    Err(reason) => {
+                        let available = (b.make)().availability().is_ok();
+                        run.status = if available {
+                            "unsupported"
+                        } else {
+                            "unavailable"
+                        }
+                        .into();
+                        run.reason = Some(reason.clone());
+                        runs.push(run);
+                        progress.step(&format!("{} {} {}: {reason}", scene.name, w.key(), b.name));
+                        continue;
+                    }
+                };
+                let m = self.measure(r.as_ref(), w, explicit[wi].as_deref())?;
+                run.build_seconds = Some(*build);
+                if let Some(s) = r.structure() {
+                    run.memory_bytes = Some(s.memory_bytes as u64);
+                    run.structure = s
+                        .counts
+                        .iter()
+                        .map(|(k, v)| ((*k).to_string(), *v))
+                        .collect();
+                }
+                let rays = m.warm.rays.max(1);
+                run.rays = Some(m.warm.rays);
+                run.mrays_per_s = Some(m.warm.rays as f64 / m.timing.median.max(1e-12) / 1e6);
+                if let Some(c) = m.warm.counters.filter(|_| r.counts_tests()) {
+                    run.tests_per_ray = Some(c.prim_tests as f64 / rays as f64);
+                    run.visits_per_ray =
+                        (c.node_visits > 0).then(|| c.node_visits as f64 / rays as f64);
+                }
+                run.seconds = Some(m.timing);
+                let image = m
+                    .warm
+                    .color
+                    .as_ref()
+                    .map(|c| Rgb8::from_linear(w.width, w.height, c));
+                let stem = format!(
+                    "{}-{}-{}",
+                    file_safe(&scene.name),
+                    w.key(),
+                    file_safe(b.name)
+                );
+                match &reference[wi] {
+                    None => {
+                        if let Some(img) = &image {
+                            let name = format!("images/{stem}.png");
+                            img.save(&self.opts.out.join(&name))?;
+                            run.images.color = Some(name);
+                        }
+                        run.equality = Some(Equality {
+                            id_match: 1.0,
+                            hit_mismatch: 0,
+                            t_mismatch: 0,
+                            max_abs_dt: 0.0,
+                            identical: true,
+                            psnr_db: None,
+                            flip_mean: image.as_ref().map(|_| 0.0),
+                            pass: true,
+                        });
+                        reference[wi] = Some((m.warm, image));
+                    }
+                    Some((ref_m, ref_img)) => {
+                        run.equality = Some(self.equality(
+                            b,
+                            ref_m,
+                            ref_img.as_ref(),
+                            &m.warm,
+                            image.as_ref(),
+                            w,
+                            &stem,
+                            &mut run.images,
+                        )?);
+                    }
+                }
+                progress.step(&format!(
+                    "{} {} {}: {:.3} Mrays/s",
+                    scene.name,
+                    w.key(),
+                    b.name,
+                    run.mrays_per_s.unwrap_or(0.0)
+                ));
+                runs.push(run);
+            }
+        }
+        Ok(runs)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn equality(
+        &self,
+        b: &Backend,
+        ref_m: &Measured,
+        ref_img: Option<&Rgb8>,
+        m: &Measured,
+        img: Option<&Rgb8>,
+        w: &Workload,
+        stem: &str,
+        files: &mut Images,
+    ) -> Result<Equality> {
+        let c = compare_hits(&ref_m.ids, &ref_m.t, &m.ids, &m.t);
+        let same_color = match (&ref_m.color, &m.color) {
+            (Some(a), Some(b)) => a
+                .iter()
+                .zip(b)
+                .all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits)),
+            _ => true,
+        };
+        let identical = c.is_exact() && same_color;
+        let (mut psnr, mut flip) = (None, None);
+        if let (Some(ri), Some(ti)) = (ref_img, img) {
+            psnr = images::psnr(ri, ti);
+            let (mean, map) = images::flip(ri, ti);
+            flip = Some(mean);
+            if !identical {
+                let color = format!("images/{stem}.png");
+                ti.save(&self.opts.out.join(&color))?;
+                files.color = Some(color);
+                let ids = format!("images/{stem}-ids-diff.png");
+                images::ids_diff(w.width, w.height, &ref_m.ids, &m.ids, Some(ri))
+                    .save(&self.opts.out.join(&ids))?;
+                files.ids_diff = Some(ids);
+                let fl = format!("images/{stem}-flip.png");
+                map.save(&self.opts.out.join(&fl))?;
+                files.flip = Some(fl);
+            }
+        }
+        let pass = if b.exact {
+            identical
+        } else {
+            c.id_match >= PEER_MIN_ID_MATCH && flip.is_none_or(|f| f <= PEER_MAX_FLIP)
+        };
+        Ok(Equality {
+            id_match: c.id_match,
+            hit_mismatch: c.hit_mismatch,
+            t_mismatch: c.t_mismatch,
+            max_abs_dt: c.max_abs_dt,
+            identical,
+            psnr_db: psnr,
+            flip_mean: flip,
+            pass,
+        })
+    }
+
+    /// The scenes and workloads of an experiment: `(series, x, scene spec, workload)`.
+    fn scaling_plan(&self, experiment: &str) -> Vec<(String, f64, String, Workload)> {
+        let small = |width: u32, spp: u32, mode: Mode| Workload {
+            mode,
+            rays: RaySet::Primary,
+            width,
+            height: width,
+            spp,
+        };
+        let mut plan = Vec::new();
+        match experiment {
+            "primitives" => {
+                for series in ["soup", "spheres"] {
+                    for e in 1..=6 {
+                        let m = 10u64.pow(e);
+                        plan.push((
+                            series.to_string(),
+                            m as f64,
+                            format!("{series}:{m}"),
+                            small(64, 1, Mode::Cast),
+                        ));
+                    }
+                }
+            }
+            "pixels" => {
+                let sides: &[u32] = if self.opts.quick {
+                    &[64, 128, 256, 512]
+                } else {
+                    &[64, 128, 256, 512, 1024]
+                };
+                for &n in sides {
+                    plan.push((
+                        "bunny".into(),
+                        f64::from(n * n),
+                        "bunny".into(),
+                        small(n, 1, Mode::Cast),
+                    ));
+                }
+            }
+            _ => {
+                let ks: &[u32] = if self.opts.quick {
+                    &[1, 2, 4, 8, 16]
+                } else {
+                    &[1, 2, 4, 8, 16, 32, 64]
+                };
+                for &k in ks {
+                    plan.push((
+                        "cornell-box".into(),
+                        f64::from(k),
+                        "cornell-box".into(),
+                        small(64, k, Mode::Path),
+                    ));
+                }
+            }
+        }
+        plan
+    }
+
+    fn run_scaling(&self, experiment: &str, progress: &mut Progress) -> Result<Vec<ScalingPoint>> {
+        let mut points = Vec::new();
+        let mut loaded: Option<(String, Arc<Scene>)> = None;
+        for (series, x, spec, w) in self.scaling_plan(experiment) {
+            let scene = match &loaded {
+                Some((s, scene)) if *s == spec => Arc::clone(scene),
+                _ => match self.load(&spec)? {
+                    Some(scene) => {
+                        loaded = Some((spec.clone(), Arc::clone(&scene)));
+                        scene
+                    }
+                    None => {
+                        progress.total -= self.chosen.len();
+                        continue;
+                    }
+                },
+            };
+            for b in self.chosen {
+                if b.name == "naive" && !self.naive_fits(&w, scene.geometry.len()) {
+                    progress.total -= 1;
+                    continue;
+                }
+                let Ok((r, _)) = prepare(b, &scene) else {
+                    progress.step(&format!(
+                        "scaling {experiment} {spec} {}: unavailable",
+                        b.name
+                    ));
+                    continue;
+                };
+                let m = self.measure(r.as_ref(), &w, None)?;
+                let rays = m.warm.rays.max(1);
+                points.push(ScalingPoint {
+                    shard: 0,
+                    experiment: experiment.into(),
+                    series: series.clone(),
+                    backend: b.name.into(),
+                    x,
+                    seconds: m.timing.median,
+                    rays: m.warm.rays,
+                    tests_per_ray: m
+                        .warm
+                        .counters
+                        .filter(|_| r.counts_tests())
+                        .map(|c| c.prim_tests as f64 / rays as f64),
+                });
+                progress.step(&format!(
+                    "scaling {experiment} {spec} x={x} {}: {:.4} s",
+                    b.name, m.timing.median
+                ));
+            }
+        }
+        Ok(points)
+    }
+}
+
+/// A name usable in a file name (generator specs contain `:`).
+fn file_safe(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '.' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,356 @@
+//! `results.json`: what a report run measured, in a form other tools can read and
+//! `raybench merge` can join (schema: `docs/results.md`).
+
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// The schema identifier written into every file; readers refuse others.
+pub const SCHEMA: &str = "raybench-results/1";
+
+/// Everything one report (or a merge of shards) measured.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct Results {
+    /// [`SCHEMA`].
+    pub schema: String,
+    /// The raybench version that wrote the file.
+    pub raybench_version: String,
+    /// One entry per shard that contributed (one for an unsharded run).
+    pub shards: Vec<Shard>,
+    /// One entry per (scene, workload, backend).
+    pub runs: Vec<Run>,
+    /// The scaling experiments' points.
+    pub scaling: Vec<ScalingPoint>,
+    /// Straight-line fits of the scaling points on log-log axes.
+    pub fits: Vec<Fit>,
+}
+
+/// One shard of the matrix: where and how it ran.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Shard {
+    /// 1-based shard number.
+    pub index: u32,
+    /// Number of shards the matrix was split into.
+    pub count: u32,
+    /// The machine it ran on.
+    pub machine: Machine,
+    /// When it started (UTC, RFC 3339).
+    pub started: String,
+    /// Wall-clock seconds it took.
+    pub wall_seconds: f64,
+    /// The command line.
+    pub command: String,
+    /// Whether it was a `--quick` run.
+    pub quick: bool,
+}
+
+/// The machine a shard ran on.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct Machine {
+    /// CPU model name.
+    pub cpu: String,
+    /// Logical cores available to the process.
+    pub cores: usize,
+    /// Worker threads used for rendering.
+    pub threads: usize,
+    /// Instruction set the `packet` backend uses, and the SIMD extensions detected.
+    pub isa: String,
+    /// GPU adapter used by GPU backends, or why there is none.
+    pub gpu: String,
+    /// Operating system and kernel.
+    pub os: String,
+    /// The raybench version and, when known, the source revision.
+    pub version: String,
+}
+
+/// Median, minimum and maximum of the timed repetitions.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Timing {
+    /// Median seconds.
+    pub median: f64,
+    /// Fastest repetition.
+    pub min: f64,
+    /// Slowest repetition.
+    pub max: f64,
+    /// Every repetition, in order.
+    pub samples: Vec<f64>,
+}
+
+impl Timing {
+    /// The timing of `samples` (at least one).
+    #[must_use]
+    pub fn of(samples: Vec<f64>) -> Self {
+        let min = samples.iter().copied().fold(f64::INFINITY, f64::min);
+        let max = samples.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        Self {
+            median: crate::measure::median(samples.clone()),
+            min,
+            max,
+            samples,
+        }
+    }
+}
+
+/// How a backend's result compares with the reference backend's on the same workload.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Equality {
+    /// Fraction of pixels or rays with the reference's primitive id.
+    pub id_match: f64,
+    /// Rays hit by one and missed by the other.
+    pub hit_mismatch: u64,
+    /// Rays with the same id but a `t` differing in any bit.
+    pub t_mismatch: u64,
+    /// Largest `|t - t_ref|` where both hit the same primitive.
+    pub max_abs_dt: f64,
+    /// Ids, `t` and (for frames) colours bit-identical.
+    pub identical: bool,
+    /// PSNR of the sRGB colour image in dB; `null` when the images are identical (infinite)
+    /// or the workload has no image.
+    pub psnr_db: Option<f64>,
+    /// Mean FLIP error (0 = indistinguishable, 1 = completely different); `null` without an
+    /// image.
+    pub flip_mean: Option<f64>,
+    /// Whether the backend passes the report's threshold (see `docs/results.md`).
+    pub pass: bool,
+}
+
+/// Files written for one run, relative to the report folder.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct Images {
+    /// The colour image (written for the reference and for backends whose image differs).
+    pub color: Option<String>,
+    /// Heat map of id mismatches against the reference.
+    pub ids_diff: Option<String>,
+    /// FLIP error map against the reference.
+    pub flip: Option<String>,
+}
+
+/// One backend on one workload of one scene.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Run {
+    /// Index into [`Results::shards`].
+    pub shard: usize,
+    /// Scene name.
+    pub scene: String,
+    /// Primitives in the scene.
+    pub primitives: u64,
+    /// Integrator (`cast`, `whitted`, `path`).
+    pub mode: String,
+    /// `primary` (frames) or `incoherent` (explicit random rays).
+    pub ray_set: String,
+    /// Image width (or rays = width x height for incoherent sets).
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Backend name.
+    pub backend: String,
+    /// Whether the backend is bound by the equivalence contract.
+    pub exact: bool,
+    /// The backend the equality figures compare with.
+    pub reference: String,
+    /// `ok`, `unavailable` (not on this machine) or `unsupported` (not this scene).
+    pub status: String,
+    /// Why it did not run.
+    pub reason: Option<String>,
+    /// Seconds to build the acceleration structure.
+    pub build_seconds: Option<f64>,
+    /// Bytes held by the structure.
+    pub memory_bytes: Option<u64>,
+    /// Named sizes of the structure (nodes, leaves, cells, ...).
+    pub structure: BTreeMap<String, u64>,
+    /// Render (or trace) time of the timed repetitions.
+    pub seconds: Option<Timing>,
+    /// Rays traced per repetition (all rays: camera, secondary, shadow).
+    pub rays: Option<u64>,
+    /// Rays per second over the median time, in millions.
+    pub mrays_per_s: Option<f64>,
+    /// Ray/primitive tests per ray.
+    pub tests_per_ray: Option<f64>,
+    /// Node or cell visits per ray.
+    pub visits_per_ray: Option<f64>,
+    /// Comparison with the reference.
+    pub equality: Option<Equality>,
+    /// Files.
+    pub images: Images,
+}
+
+/// One point of a scaling experiment.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct ScalingPoint {
+    /// Index into [`Results::shards`].
+    pub shard: usize,
+    /// `primitives` (x = M), `pixels` (x = N^2) or `spp` (x = K).
+    pub experiment: String,
+    /// The scene or generator varied (`soup`, `spheres`, `bunny`, `cornell-box`).
+    pub series: String,
+    /// Backend name.
+    pub backend: String,
+    /// The varied quantity.
+    pub x: f64,
+    /// Median render seconds.
+    pub seconds: f64,
+    /// Rays traced.
+    pub rays: u64,
+    /// Ray/primitive tests per ray.
+    pub tests_per_ray: Option<f64>,
+}
+
+/// A least-squares line through `(log10 x, log10 y)`.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Fit {
+    /// The experiment.
+    pub experiment: String,
+    /// The series.
+    pub series: String,
+    /// The backend.
+    pub backend: String,
+    /// `seconds` or `tests_per_ray`.
+    pub quantity: String,
+    /// The slope: the exponent `a` in `y ~ x^a`.
+    pub slope: f64,
+    /// Points fitted.
+    pub points: usize,
+}
+
+/// The slope of the least-squares line through `(log10 x, log10 y)` for positive pairs;
+/// `None` with fewer than two distinct `x`.
+#[must_use]
+pub fn log_log_slope(points: &[(f64, f64)]) -> Option<f64> {
+    let logs: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|(x, y)| *x > 0.0 && *y > 0.0 && x.is_finite() && y.is_finite())
+        .map(|(x, y)| (x.log10(), y.log10()))
+        .collect();
+    let n = logs.len() as f64;
+    if logs.len() < 2 {
+        return None;
+    }
+    let mx = logs.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = logs.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxx: f64 = logs.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let sxy: f64 = logs.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    (sxx > 0.0).then(|| sxy / sxx)
+}
+
+impl Results {
+    /// Recomputes [`Results::fits`] from the scaling points.
+    pub fn fit(&mut self) {
+        let mut groups: BTreeMap<(String, String, String), Vec<&ScalingPoint>> = BTreeMap::new();
+        for p in &self.scaling {
+            groups
+                .entry((p.experiment.clone(), p.series.clone(), p.backend.clone()))
+                .or_default()
+                .push(p);
+        }
+        self.fits.clear();
+        for ((experiment, series, backend), pts) in groups {
+            let time: Vec<(f64, f64)> = pts.iter().map(|p| (p.x, p.seconds)).collect();
+            let tests: Vec<(f64, f64)> = pts
+                .iter()
+                .filter_map(|p| p.tests_per_ray.map(|t| (p.x, t)))
+                .collect();
+            for (quantity, data) in [("seconds", time), ("tests_per_ray", tests)] {
+                if let Some(slope) = log_log_slope(&data) {
+                    self.fits.push(Fit {
+                        experiment: experiment.clone(),
+                        series: series.clone(),
+                        backend: backend.clone(),
+                        quantity: quantity.into(),
+                        slope,
+                        points: data.len(),
+                    });
+                }
+            }
+        }
+    }
+
+    /// The slope of `quantity` for one series and backend.
+    #[must_use]
+    pub fn slope(
+        &self,
+        experiment: &str,
+        series: &str,
+        backend: &str,
+        quantity: &str,
+    ) -> Option<f64> {
+        self.fits
+            .iter()
+            .find(|f| {
+                f.experiment == experiment
+                    && f.series == series
+                    && f.backend == backend
+                    && f.quantity == quantity
+            })
+            .map(|f| f.slope)
+    }
+
+    /// Reads a `results.json`.
+    ///
+    /// # Errors
+    /// When the file cannot be read, is not JSON of this schema, or has another schema.
+    pub fn read(path: &Path) -> anyhow::Result<Self> {
+        use anyhow::Context;
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        let value: serde_json::Value = serde_json::from_str(&text)
+            .with_context(|| format!("{} is not JSON", path.display()))?;
+        let schema = value
+            .get("schema")
+            .and_then(serde_json::Value::as_str)
+            .unwrap_or("none");
+        if schema != SCHEMA {
+            anyhow::bail!(
+                "{} has schema {schema:?}, this raybench reads {SCHEMA:?}",
+                path.display()
+            );
+        }
+        serde_json::from_value(value)
+            .with_context(|| format!("{} is not a valid {SCHEMA} file", path.display()))
+    }
+
+    /// Appends another result set, renumbering its shard references.
+    pub fn absorb(&mut self, other: Results) {
+        let offset = self.shards.len();
+        self.shards.extend(other.shards);
+        self.runs.extend(other.runs.into_iter().map(|mut r| {
+            r.shard += offset;
+            r
+        }));
+        self.scaling.extend(other.scaling.into_iter().map(|mut p| {
+            p.shard += offset;
+            p
+        }));
+        self.fit();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slopes_of_power_laws() {
+        let linear: Vec<(f64, f64)> = (1..6)
+            .map(|i| (10f64.powi(i), 3.0 * 10f64.powi(i)))
+            .collect();
+        assert!((log_log_slope(&linear).unwrap() - 1.0).abs() < 1e-12);
+        let flat: Vec<(f64, f64)> = (1..6).map(|i| (10f64.powi(i), 2.0)).collect();
+        assert!(log_log_slope(&flat).unwrap().abs() < 1e-12);
+        let half: Vec<(f64, f64)> = (1..6).map(|i| (4f64.powi(i), 2f64.powi(i))).collect();
+        assert!((log_log_slope(&half).unwrap() - 0.5).abs() < 1e-12);
+        assert_eq!(log_log_slope(&[(1.0, 1.0)]), None);
+        assert_eq!(log_log_slope(&[(1.0, 1.0), (1.0, 2.0)]), None);
+        assert_eq!(
+            log_log_slope(&[(0.0, 1.0), (-1.0, 2.0), (f64::NAN, 1.0)]),
+            None
+        );
+    }
+
+    #[test]
+    fn timing_median_and_spread() {
+        let t = Timing::of(vec![3.0, 1.0, 2.0]);
+        assert_eq!((t.median, t.min, t.max), (2.0, 1.0, 3.0));
+    }
+}

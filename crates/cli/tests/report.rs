@@ -1,0 +1,200 @@
+//! `raybench report` and `raybench merge` end to end, on small matrices: the files a report
+//! promises, the results schema, sharding by scene, merging, and bad options.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn raybench(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_raybench"))
+        .args(args)
+        .output()
+        .expect("raybench runs")
+}
+
+fn tmp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("raybench-report-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+fn results(dir: &Path) -> Value {
+    let text = std::fs::read_to_string(dir.join("results.json")).expect("results.json written");
+    serde_json::from_str(&text).expect("results.json is JSON")
+}
+
+/// A small report: two self-contained scenes, three backends, 32 x 32, no scaling.
+fn small_report(dir: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "report",
+        "--scenes",
+        "spheres,cornell-box",
+        "--backends",
+        "naive,bvh,packet",
+        "--size",
+        "32",
+        "--repeat",
+        "1",
+        "--no-scaling",
+        "--out",
+        dir.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    raybench(&args)
+}
+
+#[test]
+fn report_writes_markdown_json_images_and_charts() {
+    let dir = tmp_dir("small");
+    let out = small_report(&dir, &[]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = results(&dir);
+    assert_eq!(r["schema"], "raybench-results/1");
+    let machine = &r["shards"][0]["machine"];
+    assert!(machine["cpu"].as_str().is_some_and(|s| !s.is_empty()));
+    assert!(machine["isa"].as_str().unwrap().contains("lanes"));
+    let runs = r["runs"].as_array().unwrap();
+    // spheres: cast primary + incoherent + whitted; cornell-box: the same + path.
+    assert_eq!(runs.len(), (3 + 4) * 3);
+    for run in runs {
+        assert_eq!(run["status"], "ok", "{run}");
+        assert_eq!(run["reference"], "naive");
+        let eq = &run["equality"];
+        assert_eq!(eq["pass"], true, "{run}");
+        assert_eq!(eq["identical"], true, "{run}");
+        // Identical images: an infinite PSNR is null, flagged by `identical`.
+        assert!(eq["psnr_db"].is_null());
+        assert!(run["mrays_per_s"].as_f64().unwrap() > 0.0);
+        assert!(run["seconds"]["median"].as_f64().unwrap() > 0.0);
+        assert!(run["tests_per_ray"].as_f64().unwrap() > 0.0);
+        if run["ray_set"] == "primary" {
+            assert!(eq["flip_mean"].as_f64() == Some(0.0), "{run}");
+        }
+    }
+    // The reference's images exist; identical backends write none.
+    for run in runs {
+        match run["images"]["color"].as_str() {
+            Some(img) => {
+                assert_eq!(run["backend"], "naive");
+                assert!(dir.join(img).is_file(), "{img}");
+            }
+            None => assert!(run["backend"] != "naive" || run["ray_set"] == "incoherent"),
+        }
+    }
+    let md = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
+    assert!(md.starts_with("# raybench report"));
+    assert!(md.contains("## Summary") && md.contains("### cornell-box"));
+    // Charts need a font; CI installs one (fonts-dejavu-core).
+    if md.contains("> Charts:") {
+        assert!(
+            std::env::var("CI").as_deref() != Ok("true"),
+            "CI=true but no charts: {md}"
+        );
+    } else {
+        for ext in ["svg", "png"] {
+            assert!(
+                dir.join(format!("charts/throughput-cast-primary.{ext}"))
+                    .is_file()
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn shards_split_by_scene_and_merge_back() {
+    let (a, b, m) = (tmp_dir("shard1"), tmp_dir("shard2"), tmp_dir("merged"));
+    for (dir, shard) in [(&a, "1/2"), (&b, "2/2")] {
+        let out = small_report(dir, &["--shard", shard]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let scenes = |dir: &Path| -> Vec<String> {
+        let mut s: Vec<String> = results(dir)["runs"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|r| r["scene"].as_str().unwrap().to_string())
+            .collect();
+        s.dedup();
+        s
+    };
+    assert_eq!(scenes(&a), ["spheres"]);
+    assert_eq!(scenes(&b), ["cornell-box"]);
+    let out = raybench(&[
+        "merge",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "--out",
+        m.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = results(&m);
+    assert_eq!(r["shards"].as_array().unwrap().len(), 2);
+    assert_eq!(r["shards"][1]["index"], 2);
+    let runs = r["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), (3 + 4) * 3);
+    assert!(
+        runs.iter()
+            .any(|r| r["scene"] == "cornell-box" && r["shard"] == 1)
+    );
+    for run in runs {
+        if let Some(img) = run["images"]["color"].as_str() {
+            assert!(m.join(img).is_file(), "{img} not copied");
+        }
+    }
+    assert!(
+        std::fs::read_to_string(m.join("REPORT.md"))
+            .unwrap()
+            .contains("Shard 2/2")
+    );
+    for d in [a, b, m] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}
+
+#[test]
+fn bad_report_options_are_refused_cleanly() {
+    let dir = tmp_dir("bad");
+    let d = dir.to_str().unwrap();
+    for args in [
+        vec!["report", "--shard", "3/2", "--out", d],
+        vec!["report", "--shard", "0/2", "--out", d],
+        vec!["report", "--shard", "x", "--out", d],
+        vec!["report", "--backends", "nope", "--out", d],
+        vec![
+            "report",
+            "--scenes",
+            "no-such-scene",
+            "--no-scaling",
+            "--out",
+            d,
+        ],
+        vec!["report", "--size", "5", "--out", d],
+        vec!["report", "--modes", "raster", "--out", d],
+        vec!["merge", "/nonexistent-raybench-dir", "--out", d],
+    ] {
+        let out = raybench(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert_ne!(out.status.code(), Some(101), "{args:?} panicked: {stderr}");
+        assert!(stderr.contains("error"), "{args:?}: {stderr}");
+    }
+    // A results file of another schema is refused.
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("results.json"), r#"{"schema": "other/9"}"#).unwrap();
+    let out = raybench(&["merge", d, "--out", &format!("{d}-out")]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("schema"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,0 +1,284 @@
+//! svenstaro's `bvh` crate behind raybench's [`Accel`] (backend `bvh-crate`).
+
+use bvh::aabb::{Aabb as CrateAabb, Bounded};
+use bvh::bounding_hierarchy::{BHShape, BoundingHierarchy};
+use bvh::bvh::{Bvh as CrateBvh, BvhNode};
+use raybench_core::{Accel, AccelStats, Counters, Geometry, Hit, PrimHit, Ray};
+use std::sync::Arc;
+
+/// A bounded primitive as the `bvh` crate's builder wants it: its box and a slot for its
+/// node index. The crate only needs the box, so triangles and spheres alike go in.
+#[derive(Clone, Copy, Debug)]
+struct CrateShape {
+    aabb: CrateAabb<f32, 3>,
+    node: usize,
+}
+
+impl Bounded<f32, 3> for CrateShape {
+    fn aabb(&self) -> CrateAabb<f32, 3> {
+        self.aabb
+    }
+}
+
+impl BHShape<f32, 3> for CrateShape {
+    fn set_bh_node_index(&mut self, index: usize) {
+        self.node = index;
+    }
+
+    fn bh_node_index(&self) -> usize {
+        self.node
+    }
+}
+
+/// Traversal stack entries: node index and the ray's entry distance into its box.
+type Stack = Vec<(usize, f32)>;
+
+/// svenstaro's `bvh` crate (0.13): its binned-SAH tree (one primitive per leaf, built in
+/// parallel with rayon) over the scene's bounded primitives, traced by a stack traversal of
+/// the tree that tests primitives with raybench's own routine
+/// ([`Geometry::test_closest`]). Unbounded primitives (planes) are tested by every ray
+/// beside the tree, as in every raybench backend.
+///
+/// The crate has no closest-hit query of its own: `traverse` and `traverse_iterator` return
+/// every shape whose box the ray touches, and the distance-ordered iterators keep a heap
+/// and never stop early. So this peer walks the crate's own tree (`Bvh::nodes`, whose
+/// interior nodes hold both children's boxes): child boxes tested with the crate's
+/// `Ray::intersection_slice_for_aabb`, nearer child first, a child skipped when its entry
+/// lies beyond the best hit so far, leaves tested with raybench's primitive routine and the
+/// closest kept under raybench's tie rule. This is the "bvh crate tree, own stack
+/// traversal" row of `../shared/PEERS.md`.
+///
+/// Not bound by the equivalence contract: the crate's slab test is not conservative (a ray
+/// lying in the plane of a box face misses the box) and the early exit has no slack, so
+/// a few rays in ten thousand may find another primitive than naive does.
+pub struct BvhCrateAccel {
+    bvh: CrateBvh<f32, 3>,
+    /// The shared primitives; leaf `shape_index` `i` holds `geometry.bounded()[i]`.
+    geometry: Arc<Geometry>,
+    /// Whether every primitive is bounded, so that `shape_index` is the primitive id (no
+    /// lookup, and no cache miss on it, per leaf).
+    all_bounded: bool,
+}
+
+impl BvhCrateAccel {
+    /// The crate's tree over the bounded primitives of `geometry`.
+    fn build_tree(geometry: Arc<Geometry>) -> Self {
+        let mut shapes: Vec<CrateShape> = geometry
+            .bounded()
+            .iter()
+            .map(|&id| {
+                let b = geometry
+                    .shape(id)
+                    .bounds()
+                    .expect("bounded primitives have boxes");
+                CrateShape {
+                    aabb: CrateAabb::with_bounds(b.min.to_array().into(), b.max.to_array().into()),
+                    node: 0,
+                }
+            })
+            .collect();
+        let bvh = CrateBvh::build_par(&mut shapes);
+        let all_bounded = geometry.bounded().len() == geometry.len();
+        Self {
+            bvh,
+            geometry,
+            all_bounded,
+        }
+    }
+
+    /// The raybench id of the primitive in the leaf with `shape_index`.
+    #[inline]
+    fn id(&self, shape_index: usize) -> u32 {
+        if self.all_bounded {
+            shape_index as u32
+        } else {
+            self.geometry.bounded()[shape_index]
+        }
+    }
+
+    /// The crate's ray with raybench's direction (not normalised, so `t` agrees) and inverse.
+    fn crate_ray(ray: &Ray) -> bvh::ray::Ray<f32, 3> {
+        bvh::ray::Ray {
+            origin: ray.origin.to_array().into(),
+            direction: ray.dir.to_array().into(),
+            inv_direction: ray.inv_dir.to_array().into(),
+        }
+    }
+
+    /// The closest bounded primitive hit by `ray`, improving on `best` (the planes' answer).
+    fn closest<C: Counters>(
+        &self,
+        ray: &Ray,
+        best: &mut Option<(u32, PrimHit)>,
+        stack: &mut Stack,
+        counters: &mut C,
+    ) {
+        let nodes = &self.bvh.nodes;
+        if nodes.is_empty() {
+            return;
+        }
+        let cray = Self::crate_ray(ray);
+        let mut best_t = best.map_or(ray.t_max, |(_, h)| h.t);
+        stack.clear();
+        // The crate keeps no box for the root: its children's boxes are tested on the way.
+        stack.push((0, ray.t_min));
+        while let Some((index, entry)) = stack.pop() {
+            if entry > best_t {
+                continue;
+            }
+            counters.add_visits(1);
+            match &nodes[index] {
+                BvhNode::Leaf { shape_index, .. } => {
+                    let id = self.id(*shape_index);
+                    self.geometry.test_closest(id, ray, best);
+                    counters.add_tests(1);
+                    best_t = best.map_or(ray.t_max, |(_, h)| h.t);
+                }
+                BvhNode::Node {
+                    child_l_index,
+                    child_l_aabb,
+                    child_r_index,
+                    child_r_aabb,
+                    ..
+                } => {
+                    let entry_of = |b: &CrateAabb<f32, 3>| {
+                        cray.intersection_slice_for_aabb(b)
+                            .map(|(t0, _)| t0)
+                            .filter(|&t0| t0 <= best_t)
+                    };
+                    match (entry_of(child_l_aabb), entry_of(child_r_aabb)) {
+                        (Some(tl), Some(tr)) => {
+                            if tl <= tr {
+                                stack.push((*child_r_index, tr));
+                                stack.push((*child_l_index, tl));
+                            } else {
+                                stack.push((*child_l_index, tl));
+                                stack.push((*child_r_index, tr));
+                            }
+                        }
+                        (Some(tl), None) => stack.push((*child_l_index, tl)),
+                        (None, Some(tr)) => stack.push((*child_r_index, tr)),
+                        (None, None) => {}
+                    }
+                }
+            }
+        }
+    }
+
+    /// Whether a bounded primitive is hit in `[ray.t_min, ray.t_max]`, stopping at the first.
+    fn any_hit<C: Counters>(&self, ray: &Ray, stack: &mut Stack, counters: &mut C) -> bool {
+        let nodes = &self.bvh.nodes;
+        if nodes.is_empty() {
+            return false;
+        }
+        let cray = Self::crate_ray(ray);
+        stack.clear();
+        stack.push((0, ray.t_min));
+        while let Some((index, _)) = stack.pop() {
+            counters.add_visits(1);
+            match &nodes[index] {
+                BvhNode::Leaf { shape_index, .. } => {
+                    let id = self.id(*shape_index);
+                    counters.add_tests(1);
+                    if self.geometry.shape(id).intersect(ray).is_some() {
+                        return true;
+                    }
+                }
+                BvhNode::Node {
+                    child_l_index,
+                    child_l_aabb,
+                    child_r_index,
+                    child_r_aabb,
+                    ..
+                } => {
+                    for (child, aabb) in
+                        [(child_r_index, child_r_aabb), (child_l_index, child_l_aabb)]
+                    {
+                        if cray
+                            .intersection_slice_for_aabb(aabb)
+                            .is_some_and(|(t0, _)| t0 <= ray.t_max)
+                        {
+                            stack.push((*child, 0.0));
+                        }
+                    }
+                }
+            }
+        }
+        false
+    }
+
+    fn intersect_with<C: Counters>(
+        &self,
+        ray: &Ray,
+        stack: &mut Stack,
+        counters: &mut C,
+    ) -> Option<Hit> {
+        let g = &*self.geometry;
+        let mut best = None;
+        counters.add_tests(g.closest_unbounded(ray, &mut best));
+        self.closest(ray, &mut best, stack, counters);
+        g.complete(ray, best)
+    }
+
+    fn occluded_with<C: Counters>(&self, ray: &Ray, stack: &mut Stack, counters: &mut C) -> bool {
+        let (plane_hit, tests) = self.geometry.occluded_unbounded(ray);
+        counters.add_tests(tests);
+        plane_hit || self.any_hit(ray, stack, counters)
+    }
+}
+
+/// Initial capacity of a traversal stack (it grows if a tree is deeper).
+const STACK_CAPACITY: usize = 64;
+
+impl Accel for BvhCrateAccel {
+    fn build(geometry: Arc<Geometry>) -> Self {
+        Self::build_tree(geometry)
+    }
+
+    fn geometry(&self) -> &Geometry {
+        &self.geometry
+    }
+
+    fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
+        self.intersect_with(ray, &mut Vec::with_capacity(STACK_CAPACITY), counters)
+    }
+
+    fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
+        self.occluded_with(ray, &mut Vec::with_capacity(STACK_CAPACITY), counters)
+    }
+
+    /// Single rays one after the other, sharing one traversal stack.
+    fn intersect_batch<C: Counters>(
+        &self,
+        rays: &[Ray],
+        hits: &mut [Option<Hit>],
+        counters: &mut C,
+    ) {
+        assert_eq!(rays.len(), hits.len());
+        let mut stack = Vec::with_capacity(STACK_CAPACITY);
+        for (ray, hit) in rays.iter().zip(hits) {
+            *hit = self.intersect_with(ray, &mut stack, counters);
+        }
+    }
+
+    /// Single rays one after the other, sharing one traversal stack.
+    fn occluded_batch<C: Counters>(&self, rays: &[Ray], occluded: &mut [bool], counters: &mut C) {
+        assert_eq!(rays.len(), occluded.len());
+        let mut stack = Vec::with_capacity(STACK_CAPACITY);
+        for (ray, o) in rays.iter().zip(occluded) {
+            *o = self.occluded_with(ray, &mut stack, counters);
+        }
+    }
+
+    fn stats(&self) -> AccelStats {
+        let nodes = &self.bvh.nodes;
+        let leaves = nodes
+            .iter()
+            .filter(|n| matches!(n, BvhNode::Leaf { .. }))
+            .count();
+        AccelStats {
+            memory_bytes: std::mem::size_of_val(nodes.as_slice()),
+            counts: vec![("nodes", nodes.len() as u64), ("leaves", leaves as u64)],
+        }
+    }
+}
