@@ -251,7 +251,15 @@ pub struct Comparison {
     pub max_abs_dt: f64,
     /// Pixels whose id is equal but whose `t` differs in any bit.
     pub t_mismatch: u64,
+    /// Rays where both hit different primitives at the same distance (within
+    /// [`TIE_TOLERANCE`] relative): a tie between coincident surfaces, decided by each
+    /// backend's own tie rule rather than a wrong hit.
+    pub tie_mismatch: u64,
 }
+
+/// Relative `t` difference under which two different primitives hit by the same ray count
+/// as a tie ([`Comparison::tie_mismatch`]).
+pub const TIE_TOLERANCE: f64 = 1e-4;
 
 impl Comparison {
     /// True when ids and `t` are bit-identical.
@@ -283,6 +291,7 @@ pub fn compare_hits(ref_ids: &[u32], ref_t: &[f32], ids: &[u32], t: &[f32]) -> C
     let mut hit_mismatch = 0u64;
     let mut max_abs_dt = 0.0f64;
     let mut t_mismatch = 0u64;
+    let mut tie_mismatch = 0u64;
     for i in 0..n {
         let (a, b) = (ref_ids[i], ids[i]);
         if a == b {
@@ -296,6 +305,11 @@ pub fn compare_hits(ref_ids: &[u32], ref_t: &[f32], ids: &[u32], t: &[f32]) -> C
             }
         } else if (a == NO_HIT) != (b == NO_HIT) {
             hit_mismatch += 1;
+        } else {
+            let (ta, tb) = (f64::from(ref_t[i]), f64::from(t[i]));
+            if (ta - tb).abs() <= TIE_TOLERANCE * ta.abs().max(tb.abs()) {
+                tie_mismatch += 1;
+            }
         }
     }
     Comparison {
@@ -303,5 +317,6 @@ pub fn compare_hits(ref_ids: &[u32], ref_t: &[f32], ids: &[u32], t: &[f32]) -> C
         hit_mismatch,
         max_abs_dt,
         t_mismatch,
+        tie_mismatch,
     }
 }

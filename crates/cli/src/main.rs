@@ -474,7 +474,7 @@ fn fmt_opt<T>(v: Option<T>, f: impl Fn(T) -> String) -> String {
 
 fn print_table(rows: &[CompareRow]) {
     println!(
-        "{:<12} {:>10} {:>10} {:>10} {:>12} {:>10} {:>9} {:>8} {:>10}",
+        "{:<16} {:>10} {:>10} {:>10} {:>12} {:>10} {:>9} {:>8} {:>10}",
         "backend",
         "build s",
         "render s",
@@ -489,14 +489,14 @@ fn print_table(rows: &[CompareRow]) {
     for r in rows {
         if !r.available {
             println!(
-                "{:<12} unavailable: {}",
+                "{:<16} unavailable: {}",
                 r.backend,
                 r.reason.as_deref().unwrap_or("")
             );
             continue;
         }
         println!(
-            "{:<12} {:>10} {:>10} {:>10} {:>12} {:>10} {:>9} {:>8} {:>10}",
+            "{:<16} {:>10} {:>10} {:>10} {:>12} {:>10} {:>9} {:>8} {:>10}",
             r.backend,
             fmt_opt(r.build_seconds, |v| format!("{v:.4}")),
             fmt_opt(r.render_seconds, |v| format!("{v:.4}")),
@@ -574,7 +574,7 @@ fn backends(json: bool) -> Result<ExitCode> {
             } else {
                 format!("unavailable ({})", r.reason.unwrap_or_default())
             };
-            println!("{:<12} {:<12} {}", r.name, state, r.description);
+            println!("{:<16} {:<12} {}", r.name, state, r.description);
         }
     }
     Ok(ExitCode::SUCCESS)
@@ -654,12 +654,12 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
     let work = f64::from(cmd.width) * f64::from(cmd.height) * f64::from(cmd.spp) * g.len() as f64;
     let chosen = chosen_backends(cmd.backends.as_deref(), work)?;
     println!(
-        "{:<12} {:>10} {:>14} {:>9} {:>10} {:>10}  structure",
+        "{:<16} {:>10} {:>14} {:>9} {:>10} {:>10}  structure",
         "backend", "build s", "memory bytes", "rays/px", "tests/ray", "visits/ray"
     );
     for b in chosen {
         match prepare(b, &scene) {
-            Err(reason) => println!("{:<12} unavailable: {reason}", b.name),
+            Err(reason) => println!("{:<16} unavailable: {reason}", b.name),
             Ok((r, build)) => {
                 let s = r.structure().unwrap_or_default();
                 let counts: Vec<String> =
@@ -668,7 +668,7 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
                 let per_ray = |v: u64| format!("{:.2}", v as f64 / m.rays.max(1) as f64);
                 let pixels = f64::from(cmd.width) * f64::from(cmd.height);
                 println!(
-                    "{:<12} {:>10.4} {:>14} {:>9.2} {:>10} {:>10}  {}",
+                    "{:<16} {:>10.4} {:>14} {:>9.2} {:>10} {:>10}  {}",
                     b.name,
                     build,
                     s.memory_bytes,

@@ -13,42 +13,20 @@ use std::sync::Arc;
 fn geometries() -> Vec<(&'static str, Arc<Geometry>)> {
     let tris =
         |m: raybench_core::TriangleMesh| m.triangles().map(Shape::Triangle).collect::<Vec<_>>();
-    let mut mixed = tris(generators::icosphere(2));
-    mixed.extend(
-        generators::random_spheres(200, 9)
-            .into_iter()
-            .map(Shape::Sphere),
-    );
-    mixed.push(Shape::Plane(Plane::new(Vec3::new(0.0, -1.5, 0.0), Vec3::Y)));
-    mixed.extend(tris(generators::soup(300, 4)));
+    let mut all = generators::test_geometries(200);
     // Coincident triangles: the tie rule must pick the smaller id everywhere.
     let twins = tris(generators::terrain(12));
     let mut coincident = twins.clone();
     coincident.extend(twins.iter().rev().cloned());
-    vec![
-        (
-            "soup",
-            Arc::new(Geometry::new(tris(generators::soup(4000, 1)))),
-        ),
-        (
-            "icosphere",
-            Arc::new(Geometry::new(tris(generators::icosphere(4)))),
-        ),
-        (
-            "terrain",
-            Arc::new(Geometry::new(tris(generators::terrain(48)))),
-        ),
-        ("mixed", Arc::new(Geometry::new(mixed))),
-        ("coincident", Arc::new(Geometry::new(coincident))),
-        (
-            "one sphere",
-            Arc::new(Geometry::new(vec![Shape::Sphere(Sphere::new(
-                Vec3::ZERO,
-                1.0,
-            ))])),
-        ),
-        ("empty", Arc::new(Geometry::default())),
-    ]
+    all.push(("coincident", Arc::new(Geometry::new(coincident))));
+    all.push((
+        "one sphere",
+        Arc::new(Geometry::new(vec![Shape::Sphere(Sphere::new(
+            Vec3::ZERO,
+            1.0,
+        ))])),
+    ));
+    all
 }
 
 /// Coherent rays: a camera framing the geometry, row by row; plus incoherent rays; plus rays

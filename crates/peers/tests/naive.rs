@@ -5,8 +5,7 @@
 //! `1e-4` relative.
 
 use raybench_core::{
-    Aabb, Accel, Camera, Geometry, Hit, NoCounters, Plane, Ray, SceneBuilder, Shape, Sphere, Vec3,
-    rays,
+    Aabb, Accel, Camera, Geometry, Hit, NoCounters, Ray, SceneBuilder, Shape, Sphere, Vec3, rays,
 };
 use raybench_naive::NaiveAccel;
 use raybench_peers::BvhCrateAccel;
@@ -21,31 +20,8 @@ fn tris(m: raybench_core::TriangleMesh) -> Vec<Shape> {
 }
 
 fn geometries() -> Vec<(&'static str, Arc<Geometry>)> {
-    // Triangles, a few spheres and a plane, in mixed id order.
-    let mut mixed = tris(generators::icosphere(2));
-    mixed.extend(
-        generators::random_spheres(20, 9)
-            .into_iter()
-            .map(Shape::Sphere),
-    );
-    mixed.push(Shape::Plane(Plane::new(Vec3::new(0.0, -1.5, 0.0), Vec3::Y)));
-    mixed.extend(tris(generators::soup(300, 4)));
-    vec![
-        (
-            "soup",
-            Arc::new(Geometry::new(tris(generators::soup(4000, 1)))),
-        ),
-        (
-            "icosphere",
-            Arc::new(Geometry::new(tris(generators::icosphere(4)))),
-        ),
-        (
-            "terrain",
-            Arc::new(Geometry::new(tris(generators::terrain(48)))),
-        ),
-        ("mixed", Arc::new(Geometry::new(mixed))),
-        ("empty", Arc::new(Geometry::default())),
-    ]
+    // Embree's backends take at most 64 spheres beside their triangles.
+    generators::test_geometries(20)
 }
 
 /// Camera rays framing the geometry, seeded incoherent rays in its box, and rays that can
@@ -343,7 +319,10 @@ mod embree {
     fn a_plane_in_front_clips_embree() {
         // A plane at z = 1 hides the icosphere (radius 1 around the origin) from z = -5.
         let mut shapes = tris(generators::icosphere(2));
-        shapes.push(Shape::Plane(Plane::new(Vec3::new(0.0, 0.0, -3.0), Vec3::Z)));
+        shapes.push(Shape::Plane(raybench_core::Plane::new(
+            Vec3::new(0.0, 0.0, -3.0),
+            Vec3::Z,
+        )));
         let plane = shapes.len() as u32 - 1;
         let g = Arc::new(Geometry::new(shapes));
         let r = Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::Z);

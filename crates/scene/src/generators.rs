@@ -270,6 +270,30 @@ pub fn terrain(n: u32) -> TriangleMesh {
     TriangleMesh { positions, indices }
 }
 
+/// Geometry that exercises an acceleration structure, for tests of backends against the
+/// naive oracle: a triangle soup (4,000), an icosphere (level 4), a terrain (48 x 48 cells),
+/// a mix of triangles, `spheres` random spheres and a plane in interleaved id order, and
+/// the empty geometry.
+#[must_use]
+pub fn test_geometries(
+    spheres: u32,
+) -> Vec<(&'static str, std::sync::Arc<raybench_core::Geometry>)> {
+    use raybench_core::{Geometry, Plane, Shape};
+    use std::sync::Arc;
+    let tris = |m: TriangleMesh| m.triangles().map(Shape::Triangle).collect::<Vec<_>>();
+    let mut mixed = tris(icosphere(2));
+    mixed.extend(random_spheres(spheres, 9).into_iter().map(Shape::Sphere));
+    mixed.push(Shape::Plane(Plane::new(Vec3::new(0.0, -1.5, 0.0), Vec3::Y)));
+    mixed.extend(tris(soup(300, 4)));
+    vec![
+        ("soup", Arc::new(Geometry::new(tris(soup(4000, 1))))),
+        ("icosphere", Arc::new(Geometry::new(tris(icosphere(4))))),
+        ("terrain", Arc::new(Geometry::new(tris(terrain(48))))),
+        ("mixed", Arc::new(Geometry::new(mixed))),
+        ("empty", Arc::new(Geometry::default())),
+    ]
+}
+
 fn palette() -> [Material; 5] {
     let c = |name: &str, r, g, b| Material {
         name: name.into(),

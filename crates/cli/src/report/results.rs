@@ -100,6 +100,9 @@ pub struct Equality {
     pub hit_mismatch: u64,
     /// Rays with the same id but a `t` differing in any bit.
     pub t_mismatch: u64,
+    /// Rays where both hit different primitives at the same distance (relative difference
+    /// at most `1e-4`): ties between coincident surfaces.
+    pub tie_mismatch: u64,
     /// Largest `|t - t_ref|` where both hit the same primitive.
     pub max_abs_dt: f64,
     /// Ids, `t` and (for frames) colours bit-identical.
