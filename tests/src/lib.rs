@@ -32,6 +32,29 @@ pub fn load_or_skip(spec: &str) -> Option<Arc<Scene>> {
     }
 }
 
+/// The backends of `names` that can run on this machine; the others (a pinned instruction
+/// set this CPU lacks) are left out with a message. Unknown names panic.
+///
+/// # Panics
+/// When a name is not a registered backend.
+#[must_use]
+pub fn available<'a>(names: &[&'a str]) -> Vec<&'a str> {
+    names
+        .iter()
+        .copied()
+        .filter(|name| {
+            let b = raybench::backend(name).unwrap();
+            match (b.make)().availability() {
+                Ok(()) => true,
+                Err(e) => {
+                    eprintln!("SKIPPED backend {name}: {e}");
+                    false
+                }
+            }
+        })
+        .collect()
+}
+
 /// A prepared renderer of the backend called `name`.
 ///
 /// # Panics

@@ -43,6 +43,9 @@ use std::sync::{Arc, OnceLock};
 /// An instruction set the kernels can run on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Isa {
+    /// AVX-512F: sixteen lanes for packets, AVX2 for single rays (x86-64). A measured
+    /// extra: [`Isa::detect`] picks it only when `RAYBENCH_ISA=avx512` asks for it.
+    Avx512,
     /// AVX2: eight lanes (x86-64).
     Avx2,
     /// SSE4.1: four lanes (x86-64).
@@ -52,13 +55,17 @@ pub enum Isa {
 }
 
 impl Isa {
-    /// Every instruction set, fastest first.
-    pub const ALL: [Isa; 3] = [Isa::Avx2, Isa::Sse41, Isa::Portable];
+    /// Every instruction set.
+    pub const ALL: [Isa; 4] = [Isa::Avx512, Isa::Avx2, Isa::Sse41, Isa::Portable];
+
+    /// The ones [`Isa::detect`] chooses from by itself, preferred first.
+    const AUTOMATIC: [Isa; 3] = [Isa::Avx2, Isa::Sse41, Isa::Portable];
 
     /// The name used by `RAYBENCH_ISA` and in reports: `avx2`, `sse4.1`, `portable`.
     #[must_use]
     pub fn name(self) -> &'static str {
         match self {
+            Self::Avx512 => "avx512",
             Self::Avx2 => "avx2",
             Self::Sse41 => "sse4.1",
             Self::Portable => "portable",
@@ -69,6 +76,7 @@ impl Isa {
     #[must_use]
     pub fn lanes(self) -> usize {
         match self {
+            Self::Avx512 => 16,
             Self::Avx2 => 8,
             Self::Sse41 | Self::Portable => 4,
         }
@@ -79,11 +87,16 @@ impl Isa {
     pub fn is_available(self) -> bool {
         match self {
             #[cfg(target_arch = "x86_64")]
+            Self::Avx512 => {
+                std::arch::is_x86_feature_detected!("avx512f")
+                    && std::arch::is_x86_feature_detected!("avx2")
+            }
+            #[cfg(target_arch = "x86_64")]
             Self::Avx2 => std::arch::is_x86_feature_detected!("avx2"),
             #[cfg(target_arch = "x86_64")]
             Self::Sse41 => std::arch::is_x86_feature_detected!("sse4.1"),
             #[cfg(not(target_arch = "x86_64"))]
-            Self::Avx2 | Self::Sse41 => false,
+            Self::Avx512 | Self::Avx2 | Self::Sse41 => false,
             Self::Portable => true,
         }
     }
@@ -95,7 +108,7 @@ impl Isa {
     pub fn detect() -> Isa {
         static CHOSEN: OnceLock<Isa> = OnceLock::new();
         *CHOSEN.get_or_init(|| {
-            let best = Self::ALL
+            let best = Self::AUTOMATIC
                 .into_iter()
                 .find(|i| i.is_available())
                 .unwrap_or(Self::Portable);
@@ -228,7 +241,14 @@ fn batch_closest<L: Lanes, C: Counters>(
             ),
             None => {
                 for (ray, b) in rays.iter().zip(best.iter_mut()) {
-                    *b = single::closest::<L, C>(&accel.layout, g, ray, *b, &mut stack, counters);
+                    *b = single::closest::<L::Single, C>(
+                        &accel.layout,
+                        g,
+                        ray,
+                        *b,
+                        &mut stack,
+                        counters,
+                    );
                 }
             }
         }
@@ -262,7 +282,13 @@ fn batch_occluded<L: Lanes, C: Counters>(
             None => {
                 for (ray, o) in rays.iter().zip(out.iter_mut()) {
                     if !*o {
-                        *o = single::occluded::<L, C>(&accel.layout, g, ray, &mut stack, counters);
+                        *o = single::occluded::<L::Single, C>(
+                            &accel.layout,
+                            g,
+                            ray,
+                            &mut stack,
+                            counters,
+                        );
                     }
                 }
             }
@@ -280,7 +306,7 @@ fn one_closest<L: Lanes, C: Counters>(
     let g = &*accel.geometry;
     let mut best = None;
     counters.add_tests(g.closest_unbounded(ray, &mut best));
-    let best = single::closest::<L, C>(
+    let best = single::closest::<L::Single, C>(
         &accel.layout,
         g,
         ray,
@@ -297,7 +323,7 @@ fn one_occluded<L: Lanes, C: Counters>(accel: &PacketAccel, ray: &Ray, counters:
     let g = &*accel.geometry;
     let (hit, tests) = g.occluded_unbounded(ray);
     counters.add_tests(tests);
-    hit || single::occluded::<L, C>(
+    hit || single::occluded::<L::Single, C>(
         &accel.layout,
         g,
         ray,
@@ -346,6 +372,7 @@ macro_rules! entry_points {
     };
 }
 
+entry_points!(avx512, simd::Avx512, "avx512f,avx2");
 entry_points!(avx2, simd::Avx2, "avx2");
 entry_points!(sse41, simd::Sse41, "sse4.1");
 
@@ -353,6 +380,10 @@ entry_points!(sse41, simd::Sse41, "sse4.1");
 macro_rules! dispatch {
     ($self:ident, $f:ident($($arg:expr),*)) => {
         match $self.params.isa {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `build_with` keeps `Avx512` only when `is_available` detected
+            // AVX-512F and AVX2.
+            Isa::Avx512 => unsafe { avx512::$f($self, $($arg),*) },
             #[cfg(target_arch = "x86_64")]
             // SAFETY: `build_with` keeps `Avx2` only when `is_available` detected AVX2.
             Isa::Avx2 => unsafe { avx2::$f($self, $($arg),*) },

@@ -35,7 +35,7 @@ fn subtree_closest<L: Lanes, C: Counters>(
 ) {
     let nodes = layout.bvh.nodes();
     let slab = SlabRay::new(ray);
-    let splat = SplatRay::<L>::new(ray);
+    let splat = SplatRay::<L::Single>::new(ray);
     let mut limit = cull_bound(best.map_or(ray.t_max, |(_, h)| h.t));
     let mut stack = NodeStack::new(stack);
     stack.push(root as u32, f32::NEG_INFINITY);
@@ -333,7 +333,9 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
         // Few lanes left in a leaf (the packet has diverged): one SIMD test of up to `W`
         // triangles per lane is cheaper than one SIMD test of the lanes per triangle.
         let vectors = masks.iter().filter(|&&m| m != 0).count();
-        if all_triangles && (active as usize) * count.div_ceil(L::W) < vectors * count {
+        if all_triangles
+            && (active as usize) * count.div_ceil(<L::Single as Lanes>::W) < vectors * count
+        {
             let leaf = Leaf {
                 first: first as u32,
                 count: count as u32,
@@ -342,7 +344,7 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
             for (k, m) in masks.iter().enumerate() {
                 for lane in BitIter(*m) {
                     let i = k * L::W + lane;
-                    let splat = SplatRay::<L>::new(&rays[i]);
+                    let splat = SplatRay::<L::Single>::new(&rays[i]);
                     leaf_closest(layout, g, leaf, &rays[i], &splat, &mut best[i], counters);
                     t_best[i] = best[i].map_or(rays[i].t_max, |(_, h)| h.t);
                     limit[i] = cull_bound(t_best[i]);

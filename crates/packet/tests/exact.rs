@@ -174,6 +174,15 @@ fn avx2_matches_naive() {
 }
 
 #[test]
+fn avx512_matches_naive() {
+    if Isa::Avx512.is_available() {
+        check_isa(Isa::Avx512, true);
+    } else {
+        eprintln!("SKIPPED: this CPU has no AVX-512F");
+    }
+}
+
+#[test]
 fn interval_culling_changes_nothing() {
     for isa in [Isa::Portable, Isa::detect()] {
         check(PacketParams {
