@@ -63,6 +63,23 @@ pub fn primary_tiled(camera: &Camera, width: u32, height: u32, tile: u32) -> Vec
         .collect()
 }
 
+/// Any-hit probes for testing shadow queries: each ray clipped to 90% of its closest hit
+/// `closest[i]` (10 units when it misses), so that nothing should block it unless the
+/// structure is wrong, followed by the unclipped rays, which are blocked exactly where they
+/// hit.
+///
+/// # Panics
+/// When the slices differ in length.
+#[must_use]
+pub fn shadow_probes(rays: &[Ray], closest: &[Option<crate::Hit>]) -> Vec<Ray> {
+    assert_eq!(rays.len(), closest.len());
+    rays.iter()
+        .zip(closest)
+        .map(|(r, h)| Ray::with_interval(r.origin, r.dir, r.t_min, h.map_or(10.0, |h| h.t * 0.9)))
+        .chain(rays.iter().copied())
+        .collect()
+}
+
 /// `count` incoherent rays for `bounds` under `seed`: ray `i` starts at a uniform point of
 /// the box and points in a uniform direction (unit length), both from the counter-based
 /// hash keyed by `(i, seed)`. An empty box puts every origin at zero.

@@ -118,16 +118,8 @@ fn check(params: PacketParams) {
                     "{isa} single {name}/{set} ray {i}: naive {w:?}, packet {one:?}"
                 );
             }
-            // Shadow rays up to 90% of the closest hit (or 10 units): blocked exactly when
-            // naive says so.
-            let shadow: Vec<Ray> = rays
-                .iter()
-                .zip(&want)
-                .map(|(r, w)| {
-                    Ray::with_interval(r.origin, r.dir, r.t_min, w.map_or(10.0, |h| h.t * 0.9))
-                })
-                .chain(rays.iter().copied())
-                .collect();
+            // Shadow rays up to 90% of naive's closest hit, then the rays themselves.
+            let shadow = rays::shadow_probes(&rays, &want);
             let want: Vec<bool> = shadow
                 .iter()
                 .map(|r| naive.occluded(r, &mut NoCounters))

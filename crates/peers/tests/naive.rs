@@ -119,16 +119,8 @@ fn check_against_naive<A: Accel>(name: &str, build: impl Fn(Arc<Geometry>) -> A,
                     rays.len()
                 );
             }
-            // Shadow rays up to 90% of naive's closest hit (or 10 units), then the rays
-            // themselves.
-            let shadow: Vec<Ray> = rays
-                .iter()
-                .zip(&want)
-                .map(|(r, w)| {
-                    Ray::with_interval(r.origin, r.dir, r.t_min, w.map_or(10.0, |h| h.t * 0.9))
-                })
-                .chain(rays.iter().copied())
-                .collect();
+            // Shadow rays up to 90% of naive's closest hit, then the rays themselves.
+            let shadow = rays::shadow_probes(&rays, &want);
             let want: Vec<bool> = shadow
                 .iter()
                 .map(|r| naive.occluded(r, &mut NoCounters))
