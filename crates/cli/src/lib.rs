@@ -16,6 +16,7 @@ use raybench_peers::BvhCrateAccel;
 #[cfg(feature = "embree")]
 use raybench_peers::{EmbreeAccel, EmbreePacketAccel, embree_availability, embree_supports};
 use raybench_render::CpuRenderer;
+use raybench_wgpu::WgpuRenderer;
 
 /// A registered backend.
 #[derive(Clone, Copy, Debug)]
@@ -148,6 +149,14 @@ pub const BACKENDS: &[Backend] = &[
             ))
         },
     },
+    Backend {
+        name: "wgpu",
+        description: WGPU,
+        exact: false,
+        brute_force: false,
+        variant: false,
+        make: || Box::new(WgpuRenderer::new("wgpu", WGPU)),
+    },
     #[cfg(feature = "embree")]
     Backend {
         name: "embree",
@@ -184,6 +193,8 @@ pub const BACKENDS: &[Backend] = &[
         },
     },
 ];
+
+const WGPU: &str = "GPU: WGSL compute kernels over the CPU-built BVH2 (wgpu; WGPU_BACKEND and WGPU_ADAPTER_NAME pick the adapter; within tolerance, not exact)";
 
 const BVH_CRATE: &str = "peer: svenstaro's bvh crate's tree, own stack traversal, raybench's primitive tests (not exact)";
 #[cfg(feature = "embree")]
@@ -270,6 +281,8 @@ pub struct Comparison {
     /// [`TIE_TOLERANCE`] relative): a tie between coincident surfaces, decided by each
     /// backend's own tie rule rather than a wrong hit.
     pub tie_mismatch: u64,
+    /// Largest `|t - t_ref| / |t_ref|` where the ids agree (the GPU's tolerance).
+    pub max_rel_dt: f64,
 }
 
 /// Relative `t` difference under which two different primitives hit by the same ray count
@@ -307,6 +320,7 @@ pub fn compare_hits(ref_ids: &[u32], ref_t: &[f32], ids: &[u32], t: &[f32]) -> C
     let mut max_abs_dt = 0.0f64;
     let mut t_mismatch = 0u64;
     let mut tie_mismatch = 0u64;
+    let mut max_rel_dt = 0.0f64;
     for i in 0..n {
         let (a, b) = (ref_ids[i], ids[i]);
         if a == b {
@@ -316,7 +330,11 @@ pub fn compare_hits(ref_ids: &[u32], ref_t: &[f32], ids: &[u32], t: &[f32]) -> C
                 if ta.to_bits() != tb.to_bits() {
                     t_mismatch += 1;
                 }
-                max_abs_dt = max_abs_dt.max((f64::from(ta) - f64::from(tb)).abs());
+                let dt = (f64::from(ta) - f64::from(tb)).abs();
+                max_abs_dt = max_abs_dt.max(dt);
+                if dt > 0.0 {
+                    max_rel_dt = max_rel_dt.max(dt / f64::from(ta).abs());
+                }
             }
         } else if (a == NO_HIT) != (b == NO_HIT) {
             hit_mismatch += 1;
@@ -333,5 +351,6 @@ pub fn compare_hits(ref_ids: &[u32], ref_t: &[f32], ids: &[u32], t: &[f32]) -> C
         max_abs_dt,
         t_mismatch,
         tie_mismatch,
+        max_rel_dt,
     }
 }

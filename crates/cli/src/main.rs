@@ -3,11 +3,14 @@
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
-use raybench::measure::{Measured, explicit_rays, measure, median, prepare};
+use raybench::measure::{
+    Measured, Prepared, explicit_rays, measure, median, median_phases, prepare, timed_seconds,
+};
 use raybench::{BACKENDS, Backend, backend, compare_hits, default_backend};
-use raybench_core::{Mode, RaySet, RenderSettings, Scene};
+use raybench_core::{Mode, RaySet, RenderSettings, Scene, Timings};
 use raybench_scene::{BUILTIN_SCENES, assets_dir, generators::GENERATORS};
 use serde::Serialize;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
@@ -285,18 +288,25 @@ fn render(cmd: &RenderCmd, assets: &Path) -> Result<ExitCode> {
         None => default_backend(),
     };
     let scene = load_scene(&cmd.scene, assets)?;
-    let (r, build) =
-        prepare(b, &scene).map_err(|e| anyhow::anyhow!("backend '{}': {e}", b.name))?;
-    let frame = r.render(&settings)?;
-    let secs = frame.timings.get("render").unwrap_or(0.0);
+    let p = prepare(b, &scene).map_err(|e| anyhow::anyhow!("backend '{}': {e}", b.name))?;
+    let frame = p.renderer.render(&settings)?;
+    let secs = timed_seconds(&frame.timings);
     eprintln!(
-        "{}: build {:.3} s, render {:.3} s, {} rays, {:.2} Mrays/s",
+        "{}: build {:.3} s, {} {:.3} s, {} rays, {:.2} Mrays/s",
         b.name,
-        build,
+        p.build,
+        if frame.timings.get("gpu").is_some() {
+            "GPU execution"
+        } else {
+            "render"
+        },
         secs,
         frame.stats.rays,
         frame.stats.rays as f64 / secs.max(1e-12) / 1e6
     );
+    if let Some(line) = phase_line(&p.phases, &frame.timings) {
+        eprintln!("{}: {line}", b.name);
+    }
     let out = cmd.out.clone().unwrap_or_else(|| {
         let stem = Path::new(&cmd.scene)
             .file_stem()
@@ -335,6 +345,22 @@ struct CompareRow {
     id_match: Option<f64>,
     hit_mismatch: Option<u64>,
     max_abs_dt: Option<f64>,
+    /// Seconds per phase: `prepare.build`, `prepare.upload`, and the medians of the timed
+    /// frames' phases (`render`; `upload`, `gpu`, `readback` on the GPU).
+    phases: BTreeMap<String, f64>,
+}
+
+/// `prepare: build 0.060 s, upload 0.004 s; frame: upload ..., gpu ..., readback ...` for a
+/// backend with phases beyond `build` and `render` (a GPU), else `None`.
+fn phase_line(prepare: &Timings, frame: &Timings) -> Option<String> {
+    let join = |t: &Timings| {
+        t.0.iter()
+            .map(|(n, s)| format!("{n} {s:.4} s"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    (prepare.0.len() > 1 || frame.0.len() > 1)
+        .then(|| format!("prepare: {}; frame: {}", join(prepare), join(frame)))
 }
 
 /// The backends named on the command line, or by default every backend, leaving
@@ -404,8 +430,13 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
             id_match: None,
             hit_mismatch: None,
             max_abs_dt: None,
+            phases: BTreeMap::new(),
         };
-        let (r, build) = match prepare(b, &scene) {
+        let Prepared {
+            renderer: r,
+            build,
+            phases: prepare_phases,
+        } = match prepare(b, &scene) {
             Ok(x) => x,
             Err(reason) => {
                 eprintln!("skipping {}: {reason}", b.name);
@@ -423,10 +454,23 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
         // The warm-up is counted and is what gets compared; timed runs count nothing.
         let warm = measure(r.as_ref(), &settings, rays.as_deref(), true)?;
         let mut times = Vec::new();
+        let mut phases = Vec::new();
         for _ in 0..cmd.repeat {
-            times.push(measure(r.as_ref(), &settings, rays.as_deref(), false)?.seconds);
+            let m = measure(r.as_ref(), &settings, rays.as_deref(), false)?;
+            times.push(m.seconds);
+            phases.push(m.phases);
         }
         let secs = median(times);
+        let frame_phases = median_phases(&phases);
+        if let Some(line) = phase_line(&prepare_phases, &frame_phases) {
+            eprintln!("{}: {line}", b.name);
+        }
+        row.phases = prepare_phases
+            .0
+            .iter()
+            .map(|(n, s)| (format!("prepare.{n}"), *s))
+            .chain(frame_phases.0.iter().map(|(n, s)| (n.clone(), *s)))
+            .collect();
         row.build_seconds = Some(build);
         row.render_seconds = Some(secs);
         row.rays = Some(warm.rays);
@@ -549,19 +593,23 @@ struct BackendRow {
     reason: Option<String>,
     exact: bool,
     description: &'static str,
+    /// The device it runs on when that is not this CPU (the GPU adapter).
+    device: Option<String>,
 }
 
 fn backends(json: bool) -> Result<ExitCode> {
     let rows: Vec<BackendRow> = BACKENDS
         .iter()
         .map(|b| {
-            let avail = (b.make)().availability();
+            let r = (b.make)();
+            let avail = r.availability();
             BackendRow {
                 name: b.name,
                 available: avail.is_ok(),
                 reason: avail.err(),
                 exact: b.exact,
                 description: b.description,
+                device: r.device(),
             }
         })
         .collect();
@@ -575,6 +623,9 @@ fn backends(json: bool) -> Result<ExitCode> {
                 format!("unavailable ({})", r.reason.unwrap_or_default())
             };
             println!("{:<16} {:<12} {}", r.name, state, r.description);
+            if let Some(d) = &r.device {
+                println!("{:<16} {:<12} device: {d}", "", "");
+            }
         }
     }
     Ok(ExitCode::SUCCESS)
@@ -660,7 +711,9 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
     for b in chosen {
         match prepare(b, &scene) {
             Err(reason) => println!("{:<16} unavailable: {reason}", b.name),
-            Ok((r, build)) => {
+            Ok(Prepared {
+                renderer: r, build, ..
+            }) => {
                 let s = r.structure().unwrap_or_default();
                 let counts: Vec<String> =
                     s.counts.iter().map(|(k, v)| format!("{k}={v}")).collect();

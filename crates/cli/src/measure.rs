@@ -3,7 +3,9 @@
 
 use crate::Backend;
 use anyhow::{Result, bail};
-use raybench_core::{NO_HIT, Ray, RayCounters, RaySet, RenderSettings, Renderer, Scene, limits};
+use raybench_core::{
+    NO_HIT, Ray, RayCounters, RaySet, RenderSettings, Renderer, Scene, Timings, limits,
+};
 use std::sync::Arc;
 
 /// Seed of the incoherent ray set (the same rays in every run and in the benches).
@@ -44,8 +46,12 @@ pub struct Measured {
     pub rays: u64,
     /// Work counters, when counted.
     pub counters: Option<RayCounters>,
-    /// Seconds of rendering or tracing.
+    /// Seconds of rendering or tracing: the GPU's execution time for a backend that reports
+    /// one (phase `gpu`), else the whole call (phase `render`).
     pub seconds: f64,
+    /// The backend's timing phases (`render`; a GPU backend adds `upload`, `gpu`,
+    /// `readback`).
+    pub phases: Timings,
     /// The frame's linear colours (primary rays only).
     pub color: Option<Vec<raybench_core::Vec3>>,
 }
@@ -65,7 +71,8 @@ pub fn measure(
         None => {
             let f = r.render(&settings)?;
             Ok(Measured {
-                seconds: f.timings.get("render").unwrap_or(0.0),
+                seconds: timed_seconds(&f.timings),
+                phases: f.timings,
                 rays: f.stats.rays,
                 counters: f.stats.counters,
                 ids: f.ids,
@@ -74,10 +81,10 @@ pub fn measure(
             })
         }
         Some(rays) => {
-            let start = std::time::Instant::now();
-            let (hits, counters) = r.trace_rays(rays, count)?;
-            let seconds = start.elapsed().as_secs_f64();
+            let (hits, counters, phases) = r.trace_rays_timed(rays, count)?;
             Ok(Measured {
+                seconds: timed_seconds(&phases),
+                phases,
                 ids: hits.iter().map(|h| h.map_or(NO_HIT, |h| h.prim)).collect(),
                 t: hits
                     .iter()
@@ -85,24 +92,62 @@ pub fn measure(
                     .collect(),
                 rays: rays.len() as u64,
                 counters,
-                seconds,
                 color: None,
             })
         }
     }
 }
 
-/// A fresh renderer of `b`, prepared for `scene`, and its build time in seconds.
+/// The seconds a measurement reports: phase `gpu` (execution on the device) when the
+/// backend has one, else `render` (the whole call).
+#[must_use]
+pub fn timed_seconds(phases: &Timings) -> f64 {
+    phases
+        .get("gpu")
+        .or_else(|| phases.get("render"))
+        .unwrap_or(0.0)
+}
+
+/// A renderer prepared for a scene.
+pub struct Prepared {
+    /// The renderer.
+    pub renderer: Box<dyn Renderer>,
+    /// Seconds of preparation, all phases.
+    pub build: f64,
+    /// The phases (`build`; a GPU backend adds `upload`).
+    pub phases: Timings,
+}
+
+/// A fresh renderer of `b`, prepared for `scene`, with its preparation time.
 ///
 /// # Errors
 /// Why the backend cannot run or cannot render the scene.
-pub fn prepare(b: &Backend, scene: &Arc<Scene>) -> Result<(Box<dyn Renderer>, f64), String> {
+pub fn prepare(b: &Backend, scene: &Arc<Scene>) -> Result<Prepared, String> {
     let mut r = (b.make)();
     r.availability()?;
     r.supports(scene)?;
-    let timings = r.prepare(scene).map_err(|e| e.to_string())?;
-    let build = timings.0.iter().map(|(_, s)| s).sum();
-    Ok((r, build))
+    let phases = r.prepare(scene).map_err(|e| e.to_string())?;
+    let build = phases.0.iter().map(|(_, s)| s).sum();
+    Ok(Prepared {
+        renderer: r,
+        build,
+        phases,
+    })
+}
+
+/// The median of each phase over several measurements, in the order of the first.
+#[must_use]
+pub fn median_phases(runs: &[Timings]) -> Timings {
+    let mut out = Timings::default();
+    if let Some(first) = runs.first() {
+        for (name, _) in &first.0 {
+            out.push(
+                name.clone(),
+                median(runs.iter().filter_map(|t| t.get(name)).collect()),
+            );
+        }
+    }
+    out
 }
 
 /// The median (mean of the middle two for an even count); 0 for none.

@@ -14,7 +14,8 @@ pub struct Aabb {
 
 /// `1 + 2 * gamma(3)` with `gamma(n) = n * eps / (1 - n * eps)` and `eps = 2^-24` (pbrt):
 /// scaling the far distance by this makes the f32 slab test conservative (Ize 2013).
-const FAR_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
+pub const FAR_SCALE: f32 =
+    1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
 impl Default for Aabb {
     fn default() -> Self {

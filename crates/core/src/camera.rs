@@ -86,12 +86,18 @@ impl Camera {
 /// Primary-ray generator of a [`Camera`] for one image size.
 #[derive(Clone, Copy, Debug)]
 pub struct CameraRays {
-    origin: Vec3,
-    forward: Vec3,
-    right: Vec3,
-    up: Vec3,
-    inv_width: f32,
-    inv_height: f32,
+    /// The eye.
+    pub origin: Vec3,
+    /// Unit view direction.
+    pub forward: Vec3,
+    /// Right, scaled to half the image width at unit distance.
+    pub right: Vec3,
+    /// Up, scaled to half the image height at unit distance.
+    pub up: Vec3,
+    /// `1 / width`.
+    pub inv_width: f32,
+    /// `1 / height`.
+    pub inv_height: f32,
 }
 
 impl CameraRays {

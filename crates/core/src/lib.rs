@@ -35,7 +35,7 @@ mod scene;
 mod sphere;
 mod triangle;
 
-pub use aabb::{Aabb, SlabRay};
+pub use aabb::{Aabb, FAR_SCALE, SlabRay};
 pub use accel::{
     Accel, AccelStats, CULL_SLACK, Counters, NoCounters, NodeStack, RayCounters, cull_bound,
 };
@@ -50,7 +50,7 @@ pub use mesh::{PolygonMesh, TriangleMesh};
 pub use plane::Plane;
 pub use ray::Ray;
 pub use rays::RaySet;
-pub use renderer::{Mode, RenderError, RenderSettings, Renderer};
+pub use renderer::{Mode, RenderError, RenderSettings, Renderer, TracedRays};
 pub use scene::{ObjectInfo, Scene, SceneBuilder};
 pub use sphere::Sphere;
 pub use triangle::Triangle;

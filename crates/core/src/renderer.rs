@@ -152,6 +152,10 @@ impl fmt::Display for RenderError {
 
 impl std::error::Error for RenderError {}
 
+/// What [`Renderer::trace_rays_timed`] returns: a closest hit per ray, the work counters
+/// when counted, and the timing phases.
+pub type TracedRays = (Vec<Option<Hit>>, Option<RayCounters>, Timings);
+
 /// A frame-level renderer: one backend, prepared once for a scene, then rendering any number
 /// of frames. The harness picks renderers by name (`Box<dyn Renderer>`); the CPU backends
 /// share one generic implementation over [`crate::Accel`].
@@ -168,6 +172,12 @@ pub trait Renderer: Send + Sync {
     /// The reason it cannot run.
     fn availability(&self) -> Result<(), String> {
         Ok(())
+    }
+
+    /// The device the backend runs on, when it is not this machine's CPU (a GPU adapter's
+    /// name, type and driver), for `raybench backends` and the report's machine section.
+    fn device(&self) -> Option<String> {
+        None
     }
 
     /// Whether the backend supports every primitive kind and feature of `scene`.
@@ -213,5 +223,19 @@ pub trait Renderer: Send + Sync {
             "backend '{}' traces only whole frames",
             self.name()
         )))
+    }
+
+    /// [`Renderer::trace_rays`] with the timing of its phases, named as a frame's
+    /// [`Frame::timings`] are. The default times the whole call as `render`; a backend on
+    /// another device splits it into `upload`, `gpu` (execution) and `readback`.
+    ///
+    /// # Errors
+    /// As [`Renderer::trace_rays`].
+    fn trace_rays_timed(&self, rays: &[Ray], count: bool) -> Result<TracedRays, RenderError> {
+        let start = std::time::Instant::now();
+        let (hits, counters) = self.trace_rays(rays, count)?;
+        let mut timings = Timings::default();
+        timings.push("render", start.elapsed().as_secs_f64());
+        Ok((hits, counters, timings))
     }
 }

@@ -10,9 +10,19 @@ pub fn describe(threads: usize) -> Machine {
         cores: std::thread::available_parallelism().map_or(1, std::num::NonZero::get),
         threads,
         isa: isa(),
-        gpu: "none (this build has no GPU backend)".into(),
+        gpu: gpu(),
         os: os(),
         version: version(),
+    }
+}
+
+/// The adapter the `wgpu` backend uses, or why there is none.
+fn gpu() -> String {
+    let r = (crate::backend("wgpu").expect("wgpu is registered").make)();
+    match (r.device(), r.availability()) {
+        (Some(d), _) => d,
+        (None, Err(why)) => format!("none ({why})"),
+        (None, Ok(())) => "unknown".into(),
     }
 }
 

@@ -336,6 +336,58 @@ pub fn report(results: &Results, charts: &Charts) -> String {
         }
     }
 
+    // Phases of backends on another device (the GPU).
+    let phased: Vec<&Run> = results
+        .runs
+        .iter()
+        .filter(|r| !r.phases.is_empty())
+        .collect();
+    if !phased.is_empty() {
+        let _ = writeln!(s, "## GPU phases\n");
+        let _ = writeln!(
+            s,
+            "Seconds per phase on the GPU backend (median of the timed repetitions): the \
+             BVH built on the CPU and the scene uploaded once per scene; then per frame the \
+             parameters uploaded, the kernels' execution on the GPU (timestamp queries when \
+             the adapter has them, else wall time around submit and wait: this is the time \
+             Mrays/s uses), the image read back, and the whole call.\n"
+        );
+        let cols = [
+            "prepare.build",
+            "prepare.upload",
+            "upload",
+            "gpu",
+            "readback",
+            "render",
+        ];
+        let _ = writeln!(
+            s,
+            "| scene | workload | backend | {} | Mrays/s |",
+            cols.join(" | ")
+        );
+        let _ = writeln!(s, "|---|---|---|{}---:|", "---:|".repeat(cols.len()));
+        for r in phased {
+            let cells: Vec<String> = cols
+                .iter()
+                .map(|c| opt(r.phases.get(*c).copied(), |v| format!("{v:.4}")))
+                .collect();
+            let _ = writeln!(
+                s,
+                "| {} | {} {} {}x{} spp {} | {} | {} | {} |",
+                r.scene,
+                r.mode,
+                r.ray_set,
+                r.width,
+                r.height,
+                r.spp,
+                r.backend,
+                cells.join(" | "),
+                opt(r.mrays_per_s, |v| format!("{v:.2}"))
+            );
+        }
+        let _ = writeln!(s);
+    }
+
     // Per scene and workload.
     let _ = writeln!(s, "## Scenes\n");
     let mut keys: Vec<(String, String, String, u32, u32, u32)> = Vec::new();

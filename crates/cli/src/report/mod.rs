@@ -347,6 +347,8 @@ struct Ctx<'a> {
 struct Measurement {
     warm: Measured,
     timing: Timing,
+    /// Medians of the timed repetitions' phases.
+    phases: raybench_core::Timings,
 }
 
 impl Ctx<'_> {
@@ -425,12 +427,16 @@ impl Ctx<'_> {
         let settings = w.settings();
         let warm = measure(r, &settings, rays, true)?;
         let mut samples = Vec::new();
+        let mut phases = Vec::new();
         for _ in 0..self.repeat {
-            samples.push(measure(r, &settings, rays, false)?.seconds);
+            let m = measure(r, &settings, rays, false)?;
+            samples.push(m.seconds);
+            phases.push(m.phases);
         }
         Ok(Measurement {
             warm,
             timing: Timing::of(samples),
+            phases: crate::measure::median_phases(&phases),
         })
     }
 
@@ -496,9 +502,10 @@ impl Ctx<'_> {
                     visits_per_ray: None,
                     equality: None,
                     images: Images::default(),
+                    phases: BTreeMap::new(),
                 };
-                let (r, build) = match &prepared {
-                    Ok(x) => x,
+                let (r, build, prepare_phases) = match &prepared {
+                    Ok(p) => (&p.renderer, p.build, &p.phases),
                     Err(reason) => {
                         let available = (b.make)().availability().is_ok();
                         run.status = if available {
@@ -514,7 +521,16 @@ impl Ctx<'_> {
                     }
                 };
                 let m = self.measure(r.as_ref(), w, explicit[wi].as_deref())?;
-                run.build_seconds = Some(*build);
+                run.build_seconds = Some(build);
+                // Phases only for backends that have more than build and render (a GPU).
+                if prepare_phases.0.len() > 1 || m.phases.0.len() > 1 {
+                    run.phases = prepare_phases
+                        .0
+                        .iter()
+                        .map(|(n, s)| (format!("prepare.{n}"), *s))
+                        .chain(m.phases.0.iter().map(|(n, s)| (n.clone(), *s)))
+                        .collect();
+                }
                 if let Some(s) = r.structure() {
                     run.memory_bytes = Some(s.memory_bytes as u64);
                     run.structure = s
@@ -730,7 +746,7 @@ impl Ctx<'_> {
                     progress.total -= 1;
                     continue;
                 }
-                let Ok((r, _)) = prepare(b, &scene) else {
+                let Ok(crate::measure::Prepared { renderer: r, .. }) = prepare(b, &scene) else {
                     progress.step(&format!(
                         "scaling {experiment} {spec} {}: unavailable",
                         b.name

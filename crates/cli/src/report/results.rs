@@ -177,6 +177,12 @@ pub struct Run {
     pub equality: Option<Equality>,
     /// Files.
     pub images: Images,
+    /// Seconds per phase, for backends on another device (the GPU): `prepare.build`,
+    /// `prepare.upload`, and the medians of the timed repetitions' `upload`, `gpu`
+    /// (execution, the time `seconds` and `mrays_per_s` use), `readback` and `render`
+    /// (the whole call). Empty for CPU backends.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub phases: BTreeMap<String, f64>,
 }
 
 /// One point of a scaling experiment.

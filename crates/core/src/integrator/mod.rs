@@ -198,7 +198,8 @@ fn id_t_buffers(hits: &[Option<Hit>]) -> (Vec<u32>, Vec<f32>) {
 
 /// Direction light travels in ray-casting mode: the scene's first directional light, else a
 /// fixed light from above-front-right.
-fn cast_light(scene: &Scene) -> Vec3 {
+#[must_use]
+pub fn cast_light(scene: &Scene) -> Vec3 {
     scene
         .lights
         .iter()

@@ -1,0 +1,328 @@
+//! The data shared with the shaders (`kernels.wgsl`): `#[repr(C)]` + `bytemuck::Pod`
+//! structs laid out as WGSL lays out the matching structs, and the scene flattened into
+//! them once per `prepare`.
+
+use bytemuck::{Pod, Zeroable};
+use raybench_bvh::Bvh;
+use raybench_core::{
+    CULL_SLACK, CameraRays, FAR_SCALE, Light, MaterialKind, Mode, RenderSettings, Scene, Shape,
+    Vec3,
+};
+
+/// Primitive kinds as the shaders number them (`KIND_*`).
+const KIND_TRIANGLE: u32 = 0;
+const KIND_SPHERE: u32 = 1;
+const KIND_PLANE: u32 = 2;
+/// Set in `prim_info` for primitives that next-event estimation samples (`EMITTER_BIT`).
+const EMITTER_BIT: u32 = 1 << 31;
+
+/// Per-dispatch parameters: 176 bytes, one 256-byte-aligned slot per dispatch of a frame.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Params {
+    /// Camera origin.
+    pub origin: [f32; 3],
+    /// `1 / width`.
+    pub inv_width: f32,
+    /// Unit view direction.
+    pub forward: [f32; 3],
+    /// `1 / height`.
+    pub inv_height: f32,
+    /// Right, scaled to half the image width.
+    pub right: [f32; 3],
+    /// Seed of the random numbers.
+    pub seed: u32,
+    /// Up, scaled to half the image height.
+    pub up: [f32; 3],
+    /// Samples per pixel of the frame.
+    pub spp: u32,
+    /// Background radiance.
+    pub background: [f32; 3],
+    /// Maximum bounces.
+    pub max_depth: u32,
+    /// Light direction of ray-casting shading.
+    pub cast_light: [f32; 3],
+    /// `f32::INFINITY` (WGSL has no infinite literal).
+    pub inf: f32,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// First row of the band held by the output buffer.
+    pub band_y0: u32,
+    /// First row of this dispatch.
+    pub y0: u32,
+    /// Rows of this dispatch.
+    pub rows: u32,
+    /// First sample of this dispatch.
+    pub s0: u32,
+    /// One past its last sample.
+    pub s1: u32,
+    /// Nodes of the BVH (0: no bounded primitive).
+    pub node_count: u32,
+    /// Index of the first unbounded primitive (planes) in the primitive buffer.
+    pub unbounded_first: u32,
+    /// How many.
+    pub unbounded_count: u32,
+    /// Index of the first entry of the emitter list in the primitive buffer.
+    pub emitter_first: u32,
+    /// How many.
+    pub emitter_count: u32,
+    /// Index of the first light in the shading buffer (after the materials).
+    pub light_first: u32,
+    /// How many lights.
+    pub light_count: u32,
+    /// Total area of the emitters.
+    pub emitter_area: f32,
+    /// Explicit rays in this dispatch.
+    pub ray_count: u32,
+    /// [`FAR_SCALE`] of the conservative slab test.
+    pub far_scale: f32,
+    /// [`CULL_SLACK`] of the early exits.
+    pub cull_slack: f32,
+    /// Padding.
+    pub pad: [u32; 2],
+}
+
+const _: () = assert!(std::mem::size_of::<Params>() == 176);
+
+/// 32-byte BVH2 node, raybench-bvh's [`raybench_bvh::Node`] (Wald's layout).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuNode {
+    /// Box minimum.
+    pub min: [f32; 3],
+    /// Leaf: first index into the primitive buffer. Interior: the second child.
+    pub first_or_right: u32,
+    /// Box maximum.
+    pub max: [f32; 3],
+    /// Leaf: primitive count. Interior: 0.
+    pub count: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<GpuNode>() == 32);
+
+/// 48-byte primitive: `a.w` holds the kind, `b.w` the primitive id (as bits). Triangle:
+/// vertices in `a`, `b`, `c` (`c.w`: the cumulative area in the emitter list); sphere:
+/// centre `a`, radius `c.x`; plane: point `a`, unit normal `c`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuPrim {
+    /// First vector.
+    pub a: [f32; 4],
+    /// Second vector.
+    pub b: [f32; 4],
+    /// Third vector.
+    pub c: [f32; 4],
+}
+
+const _: () = assert!(std::mem::size_of::<GpuPrim>() == 48);
+
+/// 32-byte output record: colour sum and `t` (pixels) or `t, u, v` (explicit rays), and
+/// the primitive id.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuOut {
+    /// Colour and `t`, or `t, u, v`.
+    pub v: [f32; 4],
+    /// Primitive id ([`raybench_core::NO_HIT`] for a miss).
+    pub id: u32,
+    /// Padding.
+    pub pad: [u32; 3],
+}
+
+const _: () = assert!(std::mem::size_of::<GpuOut>() == 32);
+
+/// 32-byte explicit ray: origin and `t_min`, direction and `t_max`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuRay {
+    /// Origin and `t_min`.
+    pub o: [f32; 4],
+    /// Direction and `t_max`.
+    pub d: [f32; 4],
+}
+
+fn v4(v: Vec3, w: f32) -> [f32; 4] {
+    [v.x, v.y, v.z, w]
+}
+
+fn prim(shape: &Shape, id: u32) -> GpuPrim {
+    let idw = f32::from_bits(id);
+    match shape {
+        Shape::Triangle(t) => GpuPrim {
+            a: v4(t.v[0], f32::from_bits(KIND_TRIANGLE)),
+            b: v4(t.v[1], idw),
+            c: v4(t.v[2], 0.0),
+        },
+        Shape::Sphere(s) => GpuPrim {
+            a: v4(s.center, f32::from_bits(KIND_SPHERE)),
+            b: v4(Vec3::ZERO, idw),
+            c: [s.radius, 0.0, 0.0, 0.0],
+        },
+        Shape::Plane(p) => GpuPrim {
+            a: v4(p.point, f32::from_bits(KIND_PLANE)),
+            b: v4(Vec3::ZERO, idw),
+            c: v4(p.normal, 0.0),
+        },
+    }
+}
+
+/// Why the shaders cannot render `scene`, if they cannot: every primitive kind must have a
+/// WGSL port (triangles, spheres and planes do).
+///
+/// # Errors
+/// The first primitive kind without a port.
+pub fn check_kinds(scene: &Scene) -> Result<(), String> {
+    for s in scene.geometry.shapes() {
+        match s {
+            Shape::Triangle(_) | Shape::Sphere(_) | Shape::Plane(_) => {}
+        }
+    }
+    Ok(())
+}
+
+/// The scene flattened for the GPU.
+pub struct SceneData {
+    /// BVH2 nodes, depth first.
+    pub nodes: Vec<GpuNode>,
+    /// Bounded primitives in leaf order, then the unbounded ones, then the emitter list.
+    pub prims: Vec<GpuPrim>,
+    /// Per primitive id: material index, with [`EMITTER_BIT`] for sampled emitters.
+    pub prim_info: Vec<u32>,
+    /// Materials (four vectors each), then lights (two vectors each).
+    pub shading: Vec<[f32; 4]>,
+    /// Where the unbounded primitives start in `prims`, and how many.
+    pub unbounded: (u32, u32),
+    /// Where the emitter list starts in `prims`, and how many.
+    pub emitters: (u32, u32),
+    /// Where the lights start in `shading`, and how many.
+    pub lights: (u32, u32),
+}
+
+impl SceneData {
+    /// Flattens `scene` with its BVH.
+    #[must_use]
+    pub fn new(scene: &Scene, bvh: &Bvh) -> Self {
+        let g = &scene.geometry;
+        let nodes = bvh
+            .nodes()
+            .iter()
+            .map(|n| GpuNode {
+                min: n.min.into(),
+                first_or_right: n.first_or_right,
+                max: n.max.into(),
+                count: n.count,
+            })
+            .collect();
+        // Leaves index the primitive buffer directly: primitives are stored in leaf order.
+        let mut prims: Vec<GpuPrim> = bvh
+            .prim_ids()
+            .iter()
+            .map(|&id| prim(g.shape(id), id))
+            .collect();
+        let unbounded = (prims.len() as u32, g.unbounded().len() as u32);
+        prims.extend(g.unbounded().iter().map(|&id| prim(g.shape(id), id)));
+        let emitter_first = prims.len() as u32;
+        for (&id, &cdf) in scene.emitters.ids.iter().zip(&scene.emitters.cdf) {
+            let mut p = prim(g.shape(id), id);
+            p.c[3] = cdf as f32;
+            prims.push(p);
+        }
+        let emitters = (emitter_first, scene.emitters.ids.len() as u32);
+
+        let mut prim_info = scene.prim_material.clone();
+        for &id in &scene.emitters.ids {
+            prim_info[id as usize] |= EMITTER_BIT;
+        }
+        let mut shading = Vec::with_capacity(scene.materials.len() * 4 + scene.lights.len() * 2);
+        for m in &scene.materials {
+            let kind = match m.kind {
+                MaterialKind::Diffuse => 0u32,
+                MaterialKind::Mirror => 1,
+                MaterialKind::Glass => 2,
+            };
+            let (checker, size) = m.checker.map_or((Vec3::ZERO, 0.0), |c| (c.color, c.size));
+            shading.push(v4(m.base_color, f32::from_bits(kind)));
+            shading.push(v4(m.specular, m.shininess));
+            shading.push(v4(m.emission, m.ior));
+            shading.push(v4(checker, size));
+        }
+        let lights = (shading.len() as u32, scene.lights.len() as u32);
+        for l in &scene.lights {
+            let (a, kind, b) = match *l {
+                Light::Point {
+                    position,
+                    intensity,
+                } => (position, 0u32, intensity),
+                Light::Directional {
+                    direction,
+                    radiance,
+                } => (direction, 1, radiance),
+            };
+            shading.push(v4(a, f32::from_bits(kind)));
+            shading.push(v4(b, 0.0));
+        }
+        Self {
+            nodes,
+            prims,
+            prim_info,
+            shading,
+            unbounded,
+            emitters,
+            lights,
+        }
+    }
+
+    /// Bytes of the scene buffers.
+    #[must_use]
+    pub fn bytes(&self) -> u64 {
+        (self.nodes.len() * 32 + self.prims.len() * 48 + self.prim_info.len() * 4) as u64
+            + self.shading.len() as u64 * 16
+    }
+
+    /// The parameters every dispatch of a frame shares; the caller fills in the band,
+    /// region and sample range.
+    #[must_use]
+    pub fn params(&self, scene: &Scene, settings: &RenderSettings) -> Params {
+        let camera: CameraRays = scene.camera.rays(settings.width, settings.height);
+        Params {
+            origin: camera.origin.into(),
+            inv_width: camera.inv_width,
+            forward: camera.forward.into(),
+            inv_height: camera.inv_height,
+            right: camera.right.into(),
+            seed: settings.seed,
+            up: camera.up.into(),
+            spp: settings.spp,
+            background: scene.background.into(),
+            max_depth: settings.max_depth,
+            cast_light: raybench_core::integrator::cast_light(scene).into(),
+            inf: f32::INFINITY,
+            width: settings.width,
+            height: settings.height,
+            node_count: self.nodes.len() as u32,
+            unbounded_first: self.unbounded.0,
+            unbounded_count: self.unbounded.1,
+            emitter_first: self.emitters.0,
+            emitter_count: self.emitters.1,
+            light_first: self.lights.0,
+            light_count: self.lights.1,
+            emitter_area: scene.emitters.total_area(),
+            far_scale: FAR_SCALE,
+            cull_slack: CULL_SLACK,
+            ..Params::default()
+        }
+    }
+}
+
+/// The kernel (`entry point`) of a mode.
+#[must_use]
+pub fn entry_point(mode: Option<Mode>) -> &'static str {
+    match mode {
+        Some(Mode::Cast) => "cast_kernel",
+        Some(Mode::Whitted) => "whitted_kernel",
+        Some(Mode::Path) => "path_kernel",
+        None => "trace_kernel",
+    }
+}

@@ -1,0 +1,1034 @@
+// raybench's GPU kernels: ray casting, Whitted ray tracing, path tracing and explicit rays.
+//
+// Every routine here is a port of raybench-core's routine of the same name (the Rust
+// names are given beside each function); the buffers are laid out by `crates/wgpu/src/data.rs`.
+// The ports keep the operations and their order, so hits differ from the CPU's only where
+// the GPU rounds differently: WGSL division and square root are not correctly rounded on
+// Vulkan (2.5 ULP and 1 ULP of the reciprocal square root), drivers may fuse a * b + c,
+// and the triangle test has no double-precision retry for edge functions that are exactly
+// zero. The tolerances the tests allow are bounded by that (see `tests/equivalence.rs`).
+
+// Whether to count ray/primitive tests and node visits (a pipeline-override constant, so
+// the uncounted kernels carry no counting code).
+override COUNT: bool = false;
+
+const NO_HIT: u32 = 0xffffffffu;
+const KIND_TRIANGLE: u32 = 0u;
+const KIND_SPHERE: u32 = 1u;
+const KIND_PLANE: u32 = 2u;
+const MAT_DIFFUSE: u32 = 0u;
+const MAT_MIRROR: u32 = 1u;
+const MAT_GLASS: u32 = 2u;
+const LIGHT_POINT: u32 = 0u;
+const EMITTER_BIT: u32 = 0x80000000u;
+// Traversal stack: the BVH2's depth is at most 61 (raybench-bvh's build limit), and
+// near-child-first traversal keeps at most one entry per level plus one.
+const STACK_SIZE: u32 = 64u;
+// Whitted's depth-first stack: a popped segment pushes at most two children, so the stack
+// holds at most one entry per bounce plus one (`limits::MAX_DEPTH` is 64).
+const WHITTED_STACK: u32 = 66u;
+// `integrator::whitted::AMBIENT`.
+const AMBIENT: f32 = 0.05;
+// `integrator::path::ROULETTE_DEPTH`, `DIMENSIONS_PER_BOUNCE`, `SHADOW_SHORTEN`.
+const ROULETTE_DEPTH: u32 = 3u;
+const DIMENSIONS_PER_BOUNCE: u32 = 8u;
+const SHADOW_SHORTEN: f32 = 0.9990234375; // 1 - 1/1024
+const MIN_POSITIVE: f32 = 1.17549435e-38;
+const INV_PI: f32 = 0.31830988618379067;
+const TAU: f32 = 6.283185307179586;
+// Pixels are traced in 8 x 8 blocks (one workgroup of 64 threads per block).
+const BLOCK: u32 = 8u;
+
+// Per-dispatch parameters (`data::Params`).
+struct Params {
+    origin: vec3<f32>,
+    inv_width: f32,
+    forward: vec3<f32>,
+    inv_height: f32,
+    right: vec3<f32>,
+    seed: u32,
+    up: vec3<f32>,
+    spp: u32,
+    background: vec3<f32>,
+    max_depth: u32,
+    cast_light: vec3<f32>,
+    inf: f32,
+    width: u32,
+    height: u32,
+    band_y0: u32,
+    y0: u32,
+    rows: u32,
+    s0: u32,
+    s1: u32,
+    node_count: u32,
+    unbounded_first: u32,
+    unbounded_count: u32,
+    emitter_first: u32,
+    emitter_count: u32,
+    light_first: u32,
+    light_count: u32,
+    emitter_area: f32,
+    ray_count: u32,
+    far_scale: f32,
+    cull_slack: f32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+// 32-byte BVH2 node, raybench-bvh's `Node`: interior nodes have their first child next.
+struct Node {
+    min: vec3<f32>,
+    first_or_right: u32,
+    max: vec3<f32>,
+    count: u32,
+}
+
+// 48-byte primitive (`data::GpuPrim`): a.w holds the kind, b.w the primitive id.
+// Triangle: vertices a.xyz, b.xyz, c.xyz (c.w: the area CDF in the emitter list).
+// Sphere: centre a.xyz, radius c.x. Plane: point a.xyz, unit normal c.xyz.
+struct Prim {
+    a: vec4<f32>,
+    b: vec4<f32>,
+    c: vec4<f32>,
+}
+
+// 32-byte output: colour and t (pixels) or t, u, v (explicit rays); primitive id.
+struct Out {
+    v: vec4<f32>,
+    id: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+// Explicit rays: origin and t_min, direction and t_max.
+struct RayIn {
+    o: vec4<f32>,
+    d: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> nodes: array<Node>;
+@group(0) @binding(2) var<storage, read> prims: array<Prim>;
+@group(0) @binding(3) var<storage, read> prim_info: array<u32>;
+@group(0) @binding(4) var<storage, read> shading: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read> rays_in: array<RayIn>;
+@group(0) @binding(6) var<storage, read_write> out: array<Out>;
+@group(0) @binding(7) var<storage, read_write> counters: array<atomic<u32>, 6>;
+
+var<private> n_rays: u32;
+var<private> n_tests: u32;
+var<private> n_visits: u32;
+
+// ---------------------------------------------------------------------------------------
+// Small helpers.
+
+fn is_nan(x: f32) -> bool {
+    return (bitcast<u32>(x) & 0x7fffffffu) > 0x7f800000u;
+}
+
+fn copysign(x: f32, s: f32) -> f32 {
+    return bitcast<f32>((bitcast<u32>(x) & 0x7fffffffu) | (bitcast<u32>(s) & 0x80000000u));
+}
+
+fn max3(v: vec3<f32>) -> f32 {
+    return max(max(v.x, v.y), v.z);
+}
+
+// glam's `normalize_or_zero` / `normalize_or`.
+fn normalize_or(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
+    let inv_len = 1.0 / length(v);
+    if inv_len > 0.0 && inv_len < params.inf {
+        return v * inv_len;
+    }
+    return fallback;
+}
+
+// Adds to a 64-bit counter kept as two 32-bit words.
+fn add64(slot: u32, x: u32) {
+    if x == 0u {
+        return;
+    }
+    let old = atomicAdd(&counters[slot], x);
+    if old > 0xffffffffu - x {
+        atomicAdd(&counters[slot + 1u], 1u);
+    }
+}
+
+fn flush_counters() {
+    add64(0u, n_rays);
+    n_rays = 0u;
+    if COUNT {
+        add64(2u, n_tests);
+        add64(4u, n_visits);
+        n_tests = 0u;
+        n_visits = 0u;
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Counter-based random numbers (`sampling`, docs/sampling.md).
+
+fn pcg3d(v_in: vec3<u32>) -> vec3<u32> {
+    var v = v_in * 1664525u + 1013904223u;
+    v.x += v.y * v.z;
+    v.y += v.z * v.x;
+    v.z += v.x * v.y;
+    v ^= v >> vec3<u32>(16u);
+    v.x += v.y * v.z;
+    v.y += v.z * v.x;
+    v.z += v.x * v.y;
+    return v;
+}
+
+struct Sampler {
+    pixel: u32,
+    sample: u32,
+    dimension: u32,
+}
+
+fn next_f32(s: ptr<function, Sampler>) -> f32 {
+    let h = pcg3d(vec3<u32>((*s).pixel, (*s).sample, (*s).dimension ^ (params.seed * 0x9E3779B9u)));
+    (*s).dimension += 1u;
+    return f32(h.x >> 8u) * (1.0 / 16777216.0);
+}
+
+// ---------------------------------------------------------------------------------------
+// Rays (`Ray::with_interval`).
+
+struct Ray {
+    o: vec3<f32>,
+    d: vec3<f32>,
+    inv: vec3<f32>,
+    t_min: f32,
+    t_max: f32,
+    kx: u32,
+    ky: u32,
+    kz: u32,
+    shear: vec3<f32>,
+}
+
+fn make_ray(o: vec3<f32>, d: vec3<f32>, t_min: f32, t_max: f32) -> Ray {
+    let a = abs(d);
+    var kz = 2u;
+    if a.x >= a.y && a.x >= a.z {
+        kz = 0u;
+    } else if a.y >= a.z {
+        kz = 1u;
+    }
+    var kx = (kz + 1u) % 3u;
+    var ky = (kx + 1u) % 3u;
+    if d[kz] < 0.0 {
+        let tmp = kx;
+        kx = ky;
+        ky = tmp;
+    }
+    // 1/0 is +-infinity in IEEE arithmetic; Vulkan leaves division by zero undefined, so
+    // the infinities are made explicit.
+    var inv = 1.0 / d;
+    for (var i = 0u; i < 3u; i++) {
+        if d[i] == 0.0 {
+            inv[i] = copysign(params.inf, d[i]);
+        }
+    }
+    let shear = vec3<f32>(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
+    return Ray(o, d, inv, t_min, t_max, kx, ky, kz, shear);
+}
+
+fn ray_new(o: vec3<f32>, d: vec3<f32>) -> Ray {
+    return make_ray(o, d, 0.0, params.inf);
+}
+
+// ---------------------------------------------------------------------------------------
+// Intersection routines.
+
+// `SlabRay::entry`: the entry distance into [lo, hi] clamped to [t_min, t_max], or -1.
+fn box_entry(r: Ray, lo: vec3<f32>, hi: vec3<f32>, t_max: f32) -> f32 {
+    let pos = r.inv >= vec3<f32>(0.0);
+    let near = (select(hi, lo, pos) - r.o) * r.inv;
+    let far = (select(lo, hi, pos) - r.o) * r.inv * params.far_scale;
+    // 0 * inf = NaN: the ray lies in that slab's plane and the axis must not constrain it.
+    var t0 = r.t_min;
+    var t1 = t_max;
+    for (var i = 0u; i < 3u; i++) {
+        if !is_nan(near[i]) {
+            t0 = max(t0, near[i]);
+        }
+        if !is_nan(far[i]) {
+            t1 = min(t1, far[i]);
+        }
+    }
+    if t0 <= t1 {
+        return t0;
+    }
+    return -1.0;
+}
+
+// `Triangle::intersect` (watertight, Woop et al. 2013) without the double-precision retry:
+// (t, u, v, 1) on a hit, w = 0 on a miss.
+fn triangle_hit(r: Ray, v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>, t_max: f32) -> vec4<f32> {
+    let a = v0 - r.o;
+    let b = v1 - r.o;
+    let c = v2 - r.o;
+    let ax = a[r.kx] - r.shear.x * a[r.kz];
+    let ay = a[r.ky] - r.shear.y * a[r.kz];
+    let bx = b[r.kx] - r.shear.x * b[r.kz];
+    let by = b[r.ky] - r.shear.y * b[r.kz];
+    let cx = c[r.kx] - r.shear.x * c[r.kz];
+    let cy = c[r.ky] - r.shear.y * c[r.kz];
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    let any_negative = u < 0.0 || v < 0.0 || w < 0.0;
+    let any_positive = u > 0.0 || v > 0.0 || w > 0.0;
+    if any_negative && any_positive {
+        return vec4<f32>(0.0);
+    }
+    let det = u + v + w;
+    if det == 0.0 {
+        return vec4<f32>(0.0);
+    }
+    let az = r.shear.z * a[r.kz];
+    let bz = r.shear.z * b[r.kz];
+    let cz = r.shear.z * c[r.kz];
+    let t = (u * az + v * bz + w * cz) / det;
+    if !(t >= r.t_min && t <= t_max) || is_nan(t) {
+        return vec4<f32>(0.0);
+    }
+    return vec4<f32>(t, v / det, w / det, 1.0);
+}
+
+// `Sphere::intersect` (Ray Tracing Gems ch. 7): t, or -1 on a miss.
+fn sphere_hit(r: Ray, center: vec3<f32>, radius: f32, t_max: f32) -> f32 {
+    let f = r.o - center;
+    let d = r.d;
+    let a = dot(d, d);
+    let b = -dot(f, d);
+    let l = f + d * (b / a);
+    let r2 = radius * radius;
+    let disc = r2 - dot(l, l);
+    if disc < 0.0 || is_nan(disc) {
+        return -1.0;
+    }
+    let c = dot(f, f) - r2;
+    let q = b + copysign(sqrt(a) * sqrt(disc), b);
+    let t0 = c / q;
+    let t1 = q / a;
+    let near = select(t1, t0, t0 <= t1);
+    let far = select(t0, t1, t0 <= t1);
+    if near >= r.t_min && near <= t_max {
+        return near;
+    }
+    if far >= r.t_min && far <= t_max {
+        return far;
+    }
+    return -1.0;
+}
+
+// `Plane::intersect`: t, or -1 on a miss.
+fn plane_hit(r: Ray, point: vec3<f32>, normal: vec3<f32>, t_max: f32) -> f32 {
+    let denom = dot(normal, r.d);
+    if denom == 0.0 {
+        return -1.0;
+    }
+    let t = dot(normal, point - r.o) / denom;
+    if t >= r.t_min && t <= t_max {
+        return t;
+    }
+    return -1.0;
+}
+
+// `Shape::intersect` on prims[k] with the ray clipped to t_max: (t, u, v, 1) or w = 0.
+fn prim_hit(r: Ray, k: u32, t_max: f32) -> vec4<f32> {
+    let p = prims[k];
+    let kind = bitcast<u32>(p.a.w);
+    if COUNT {
+        n_tests += 1u;
+    }
+    if kind == KIND_TRIANGLE {
+        return triangle_hit(r, p.a.xyz, p.b.xyz, p.c.xyz, t_max);
+    }
+    var t = -1.0;
+    if kind == KIND_SPHERE {
+        t = sphere_hit(r, p.a.xyz, p.c.x, t_max);
+    } else {
+        t = plane_hit(r, p.a.xyz, p.c.xyz, t_max);
+    }
+    if t >= 0.0 && !is_nan(t) {
+        return vec4<f32>(t, 0.0, 0.0, 1.0);
+    }
+    return vec4<f32>(0.0);
+}
+
+// ---------------------------------------------------------------------------------------
+// Traversal (raybench-bvh's `intersect` and `occluded`).
+
+struct Hit {
+    t: f32,
+    id: u32,
+    u: f32,
+    v: f32,
+    k: u32,
+}
+
+// `cull_bound`: the limit beyond which a box cannot hold a closer hit.
+fn cull_bound(t: f32) -> f32 {
+    return t + abs(t) * params.cull_slack;
+}
+
+// Tests prims[k] against the best hit so far (`Geometry::test_closest`): closest t wins,
+// ties go to the smaller primitive id.
+fn test_closest(r: Ray, k: u32, best: ptr<function, Hit>) {
+    let h = prim_hit(r, k, (*best).t);
+    if h.w == 0.0 {
+        return;
+    }
+    let id = bitcast<u32>(prims[k].b.w);
+    if h.x < (*best).t || (h.x == (*best).t && id < (*best).id) {
+        *best = Hit(h.x, id, h.y, h.z, k);
+    }
+}
+
+// The closest hit of `r`: id NO_HIT when it hits nothing.
+fn closest(r: Ray) -> Hit {
+    var best = Hit(r.t_max, NO_HIT, 0.0, 0.0, 0u);
+    for (var k = params.unbounded_first; k < params.unbounded_first + params.unbounded_count; k++) {
+        test_closest(r, k, &best);
+    }
+    if params.node_count == 0u {
+        return best;
+    }
+    var stack_node: array<u32, STACK_SIZE>;
+    var stack_t: array<f32, STACK_SIZE>;
+    var sp = 0u;
+    var limit = cull_bound(best.t);
+    let root = nodes[0];
+    let t_root = box_entry(r, root.min, root.max, limit);
+    if t_root >= 0.0 {
+        stack_node[0] = 0u;
+        stack_t[0] = t_root;
+        sp = 1u;
+    }
+    while sp > 0u {
+        sp -= 1u;
+        // Strict early exit: skip only entries beyond the limit (an equal one may hold a tie).
+        if stack_t[sp] > limit {
+            continue;
+        }
+        let index = stack_node[sp];
+        if COUNT {
+            n_visits += 1u;
+        }
+        let node = nodes[index];
+        if node.count > 0u {
+            for (var k = node.first_or_right; k < node.first_or_right + node.count; k++) {
+                test_closest(r, k, &best);
+            }
+            limit = cull_bound(best.t);
+            continue;
+        }
+        let left = index + 1u;
+        let right = node.first_or_right;
+        let nl = nodes[left];
+        let nr = nodes[right];
+        let tl = box_entry(r, nl.min, nl.max, limit);
+        let tr = box_entry(r, nr.min, nr.max, limit);
+        // Near child first: the far child is pushed first and popped later.
+        if tl >= 0.0 && tr >= 0.0 {
+            if tl <= tr {
+                stack_node[sp] = right;
+                stack_t[sp] = tr;
+                stack_node[sp + 1u] = left;
+                stack_t[sp + 1u] = tl;
+            } else {
+                stack_node[sp] = left;
+                stack_t[sp] = tl;
+                stack_node[sp + 1u] = right;
+                stack_t[sp + 1u] = tr;
+            }
+            sp += 2u;
+        } else if tl >= 0.0 {
+            stack_node[sp] = left;
+            stack_t[sp] = tl;
+            sp += 1u;
+        } else if tr >= 0.0 {
+            stack_node[sp] = right;
+            stack_t[sp] = tr;
+            sp += 1u;
+        }
+    }
+    return best;
+}
+
+// Whether anything blocks `r` within [t_min, t_max].
+fn occluded(r: Ray) -> bool {
+    for (var k = params.unbounded_first; k < params.unbounded_first + params.unbounded_count; k++) {
+        if prim_hit(r, k, r.t_max).w != 0.0 {
+            return true;
+        }
+    }
+    if params.node_count == 0u {
+        return false;
+    }
+    var stack: array<u32, STACK_SIZE>;
+    var sp = 0u;
+    let root = nodes[0];
+    if box_entry(r, root.min, root.max, r.t_max) >= 0.0 {
+        stack[0] = 0u;
+        sp = 1u;
+    }
+    while sp > 0u {
+        sp -= 1u;
+        let index = stack[sp];
+        if COUNT {
+            n_visits += 1u;
+        }
+        let node = nodes[index];
+        if node.count > 0u {
+            for (var k = node.first_or_right; k < node.first_or_right + node.count; k++) {
+                if prim_hit(r, k, r.t_max).w != 0.0 {
+                    return true;
+                }
+            }
+            continue;
+        }
+        let right = node.first_or_right;
+        let nr = nodes[right];
+        if box_entry(r, nr.min, nr.max, r.t_max) >= 0.0 {
+            stack[sp] = right;
+            sp += 1u;
+        }
+        let nl = nodes[index + 1u];
+        if box_entry(r, nl.min, nl.max, r.t_max) >= 0.0 {
+            stack[sp] = index + 1u;
+            sp += 1u;
+        }
+    }
+    return false;
+}
+
+// The geometric normal at a hit (`Shape::complete_hit`).
+fn hit_normal(r: Ray, h: Hit) -> vec3<f32> {
+    let p = prims[h.k];
+    let kind = bitcast<u32>(p.a.w);
+    if kind == KIND_TRIANGLE {
+        return normalize_or(cross(p.b.xyz - p.a.xyz, p.c.xyz - p.a.xyz), vec3<f32>(0.0, 1.0, 0.0));
+    }
+    if kind == KIND_SPHERE {
+        let at = r.o + r.d * h.t;
+        return normalize_or((at - p.a.xyz) / p.c.x, vec3<f32>(0.0, 1.0, 0.0));
+    }
+    return p.c.xyz;
+}
+
+// ---------------------------------------------------------------------------------------
+// Materials, lights and optics (`material`, `optics`).
+
+struct Material {
+    base_color: vec3<f32>,
+    kind: u32,
+    specular: vec3<f32>,
+    shininess: f32,
+    emission: vec3<f32>,
+    ior: f32,
+    checker_color: vec3<f32>,
+    checker_size: f32,
+}
+
+fn material_of(id: u32) -> Material {
+    let m = (prim_info[id] & ~EMITTER_BIT) * 4u;
+    let m0 = shading[m];
+    let m1 = shading[m + 1u];
+    let m2 = shading[m + 2u];
+    let m3 = shading[m + 3u];
+    return Material(m0.xyz, bitcast<u32>(m0.w), m1.xyz, m1.w, m2.xyz, m2.w, m3.xyz, m3.w);
+}
+
+fn is_emitter(id: u32) -> bool {
+    return (prim_info[id] & EMITTER_BIT) != 0u;
+}
+
+// `Material::albedo_at`.
+fn albedo_at(m: Material, p: vec3<f32>) -> vec3<f32> {
+    if m.checker_size <= 0.0 {
+        return m.base_color;
+    }
+    let s = floor(p.x / m.checker_size) + floor(p.z / m.checker_size);
+    let parity = s - 2.0 * floor(s / 2.0);
+    if parity < 0.5 {
+        return m.base_color;
+    }
+    return m.checker_color;
+}
+
+fn reflect_dir(d: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    return d - 2.0 * dot(d, n) * n;
+}
+
+// `optics::refract`: the refracted direction, or zero on total internal reflection.
+fn refract_dir(d: vec3<f32>, n: vec3<f32>, n1: f32, n2: f32) -> vec4<f32> {
+    let eta = n1 / n2;
+    let cos_i = -dot(d, n);
+    let sin2_t = eta * eta * max(1.0 - cos_i * cos_i, 0.0);
+    if sin2_t > 1.0 {
+        return vec4<f32>(0.0);
+    }
+    let cos_t = sqrt(1.0 - sin2_t);
+    return vec4<f32>(eta * d + (eta * cos_i - cos_t) * n, 1.0);
+}
+
+fn fresnel_dielectric(cos_in: f32, n1: f32, n2: f32) -> f32 {
+    let cos_i = clamp(cos_in, 0.0, 1.0);
+    let sin_t = n1 / n2 * sqrt(max(1.0 - cos_i * cos_i, 0.0));
+    if sin_t >= 1.0 {
+        return 1.0;
+    }
+    let cos_t = sqrt(max(1.0 - sin_t * sin_t, 0.0));
+    let r_s = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t);
+    let r_p = (n2 * cos_i - n1 * cos_t) / (n2 * cos_i + n1 * cos_t);
+    return 0.5 * (r_s * r_s + r_p * r_p);
+}
+
+// `optics::offset_ray_origin` (Waechter and Binder, Ray Tracing Gems ch. 6).
+fn offset_ray_origin(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    var q = p;
+    for (var i = 0u; i < 3u; i++) {
+        if abs(p[i]) < 1.0 / 32.0 {
+            q[i] = p[i] + (1.0 / 65536.0) * n[i];
+        } else {
+            var step = i32(256.0 * n[i]);
+            if p[i] < 0.0 {
+                step = -step;
+            }
+            q[i] = bitcast<f32>(bitcast<i32>(p[i]) + step);
+        }
+    }
+    return q;
+}
+
+// `optics::basis` (Duff et al. 2017).
+fn cosine_hemisphere(n: vec3<f32>, u1: f32, u2: f32) -> vec3<f32> {
+    let sgn = copysign(1.0, n.z);
+    let a = -1.0 / (sgn + n.z);
+    let b = n.x * n.y * a;
+    let t = vec3<f32>(1.0 + sgn * n.x * n.x * a, sgn * b, -sgn * n.x);
+    let bt = vec3<f32>(b, sgn + n.y * n.y * a, -n.y);
+    let r = sqrt(u1);
+    let phi = TAU * u2;
+    let z = sqrt(max(1.0 - u1, 0.0));
+    return normalize(t * (r * cos(phi)) + bt * (r * sin(phi)) + n * z);
+}
+
+fn triangle_point(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, u1: f32, u2: f32) -> vec3<f32> {
+    let s = sqrt(u1);
+    let w0 = 1.0 - s;
+    let w1 = u2 * s;
+    return a * w0 + b * w1 + c * (1.0 - w0 - w1);
+}
+
+// `whitted::light_ray`: a shadow ray towards light j and the unshadowed irradiance and
+// direction it would bring; `ok` is false when the light is behind the surface.
+struct LightSample {
+    ray: Ray,
+    irradiance: vec3<f32>,
+    wi: vec3<f32>,
+    ok: bool,
+}
+
+fn light_ray(j: u32, p: vec3<f32>, n: vec3<f32>) -> LightSample {
+    let l0 = shading[params.light_first + 2u * j];
+    let l1 = shading[params.light_first + 2u * j + 1u];
+    let origin = offset_ray_origin(p, n);
+    var s: LightSample;
+    s.ok = false;
+    if bitcast<u32>(l0.w) == LIGHT_POINT {
+        let position = l0.xyz;
+        let to = position - p;
+        let dist2 = dot(to, to);
+        let dir = to / sqrt(dist2);
+        let cos_l = dot(n, dir);
+        if !(cos_l > 0.0 && dist2 > 0.0) {
+            return s;
+        }
+        s.ray = make_ray(origin, position - origin, 0.0, 1.0);
+        s.irradiance = l1.xyz * (cos_l / dist2);
+        s.wi = dir;
+    } else {
+        let dir = -l0.xyz;
+        let cos_l = dot(n, dir);
+        if cos_l <= 0.0 {
+            return s;
+        }
+        s.ray = ray_new(origin, dir);
+        s.irradiance = l1.xyz * cos_l;
+        s.wi = dir;
+    }
+    s.ok = true;
+    return s;
+}
+
+// ---------------------------------------------------------------------------------------
+// Pixels.
+
+struct Pixel {
+    x: u32,
+    y: u32,
+    ok: bool,
+}
+
+// Thread i of this dispatch: 8 x 8 pixel blocks, row by row, over rows [y0, y0 + rows).
+fn pixel_of(i: u32) -> Pixel {
+    let blocks_per_row = (params.width + BLOCK - 1u) / BLOCK;
+    let block = i / (BLOCK * BLOCK);
+    let within = i % (BLOCK * BLOCK);
+    let x = (block % blocks_per_row) * BLOCK + within % BLOCK;
+    let y = params.y0 + (block / blocks_per_row) * BLOCK + within / BLOCK;
+    return Pixel(x, y, x < params.width && y < params.y0 + params.rows);
+}
+
+// `CameraRays::ray`.
+fn camera_ray(px: f32, py: f32) -> Ray {
+    let sx = 2.0 * px * params.inv_width - 1.0;
+    let sy = 1.0 - 2.0 * py * params.inv_height;
+    let dir = normalize(params.forward + params.right * sx + params.up * sy);
+    return ray_new(params.origin, dir);
+}
+
+fn out_index(p: Pixel) -> u32 {
+    return (p.y - params.band_y0) * params.width + p.x;
+}
+
+// The pixel's centre ray, traced once per frame (the id and t buffers).
+fn centre(p: Pixel) -> Hit {
+    let r = camera_ray(f32(p.x) + 0.5, f32(p.y) + 0.5);
+    let h = closest(r);
+    n_rays += 1u;
+    let o = out_index(p);
+    out[o].id = h.id;
+    out[o].v.w = select(h.t, params.inf, h.id == NO_HIT);
+    return h;
+}
+
+// `integrator::shade_cast`.
+fn shade_cast(r: Ray, h: Hit) -> vec3<f32> {
+    if h.id == NO_HIT {
+        return params.background;
+    }
+    let m = material_of(h.id);
+    let n0 = hit_normal(r, h);
+    let view = -normalize_or(r.d, vec3<f32>(0.0));
+    let cos_view = dot(n0, view);
+    let n = select(n0, -n0, cos_view < 0.0);
+    let diffuse = max(dot(n, -params.cast_light), 0.0);
+    var albedo = m.base_color;
+    if m.kind == MAT_MIRROR {
+        albedo = max(m.specular, vec3<f32>(0.2));
+    } else if m.kind == MAT_GLASS {
+        albedo = vec3<f32>(0.75, 0.85, 0.9);
+    }
+    return albedo * (0.35 * abs(cos_view) + 0.65 * diffuse) + m.emission;
+}
+
+@compute @workgroup_size(64)
+fn cast_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let p = pixel_of(gid.x);
+    if !p.ok {
+        return;
+    }
+    var color = vec3<f32>(0.0);
+    if params.s0 == 0u {
+        let h = centre(p);
+        if params.spp == 1u {
+            color = shade_cast(camera_ray(f32(p.x) + 0.5, f32(p.y) + 0.5), h);
+        }
+    }
+    if params.spp > 1u {
+        // Jittered samples for colour (summed here, divided by spp after readback, as the
+        // CPU does); ids and t stay those of the centre ray.
+        let pixel = p.y * params.width + p.x;
+        for (var s = params.s0; s < params.s1; s++) {
+            var rng = Sampler(pixel, s, 0u);
+            let jx = next_f32(&rng);
+            let jy = next_f32(&rng);
+            let r = camera_ray(f32(p.x) + jx, f32(p.y) + jy);
+            color += shade_cast(r, closest(r));
+            n_rays += 1u;
+        }
+    }
+    let o = out_index(p);
+    out[o].v = vec4<f32>(out[o].v.xyz + color, out[o].v.w);
+    flush_counters();
+}
+
+// ---------------------------------------------------------------------------------------
+// Whitted ray tracing, depth first (`integrator::whitted`).
+
+struct Segment {
+    o: vec3<f32>,
+    depth: u32,
+    d: vec3<f32>,
+    weight: vec3<f32>,
+}
+
+@compute @workgroup_size(64)
+fn whitted_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let p = pixel_of(gid.x);
+    if !p.ok {
+        return;
+    }
+    let pixel = p.y * params.width + p.x;
+    let sample_weight = vec3<f32>(1.0 / f32(params.spp));
+    let cut = 1e-4 * sample_weight.x;
+    var color = vec3<f32>(0.0);
+    var centre_hit: Hit;
+    if params.s0 == 0u {
+        centre_hit = centre(p);
+    }
+    var stack: array<Segment, WHITTED_STACK>;
+    for (var s = params.s0; s < params.s1; s++) {
+        var first: Ray;
+        if params.spp == 1u {
+            first = camera_ray(f32(p.x) + 0.5, f32(p.y) + 0.5);
+        } else {
+            var rng = Sampler(pixel, s, 0u);
+            let jx = next_f32(&rng);
+            let jy = next_f32(&rng);
+            first = camera_ray(f32(p.x) + jx, f32(p.y) + jy);
+        }
+        stack[0] = Segment(first.o, 0u, first.d, sample_weight);
+        var sp = 1u;
+        while sp > 0u {
+            sp -= 1u;
+            let seg = stack[sp];
+            let r = ray_new(seg.o, seg.d);
+            var h: Hit;
+            if seg.depth == 0u && params.spp == 1u {
+                // One sample: the centre ray, already traced.
+                h = centre_hit;
+            } else {
+                h = closest(r);
+                n_rays += 1u;
+            }
+            if h.id == NO_HIT {
+                color += seg.weight * params.background;
+                continue;
+            }
+            let m = material_of(h.id);
+            let gn = hit_normal(r, h);
+            let at = r.o + r.d * h.t;
+            let front = dot(gn, r.d) < 0.0;
+            let nf = select(-gn, gn, front);
+            let d = normalize(r.d);
+            if front {
+                color += seg.weight * m.emission;
+            }
+            if m.kind == MAT_DIFFUSE {
+                let albedo = albedo_at(m, at);
+                color += seg.weight * albedo * AMBIENT;
+                for (var j = 0u; j < params.light_count; j++) {
+                    let l = light_ray(j, at, nf);
+                    if !l.ok {
+                        continue;
+                    }
+                    // Lambert plus a Blinn-Phong highlight.
+                    let hv = normalize_or(l.wi - d, vec3<f32>(0.0));
+                    let c = max(dot(nf, hv), 0.0);
+                    var spec_pow = pow(c, m.shininess);
+                    if c <= 0.0 {
+                        spec_pow = select(0.0, 1.0, m.shininess == 0.0);
+                    }
+                    let spec = m.specular * spec_pow;
+                    n_rays += 1u;
+                    if !occluded(l.ray) {
+                        color += seg.weight * l.irradiance * (albedo + spec);
+                    }
+                }
+            } else if seg.depth < params.max_depth {
+                if m.kind == MAT_MIRROR {
+                    let w = seg.weight * m.specular;
+                    if max3(w) > cut {
+                        stack[sp] = Segment(offset_ray_origin(at, nf), seg.depth + 1u, reflect_dir(d, nf), w);
+                        sp += 1u;
+                    }
+                } else {
+                    // Entering when the ray meets the side the normal points to.
+                    let n1 = select(m.ior, 1.0, front);
+                    let n2 = select(1.0, m.ior, front);
+                    let fr = fresnel_dielectric(-dot(d, nf), n1, n2);
+                    let wr = seg.weight * m.specular * fr;
+                    if max3(wr) > cut {
+                        stack[sp] = Segment(offset_ray_origin(at, nf), seg.depth + 1u, reflect_dir(d, nf), wr);
+                        sp += 1u;
+                    }
+                    let t = refract_dir(d, nf, n1, n2);
+                    let wt = seg.weight * m.specular * (1.0 - fr);
+                    if t.w != 0.0 && max3(wt) > cut {
+                        stack[sp] = Segment(offset_ray_origin(at, -nf), seg.depth + 1u, t.xyz, wt);
+                        sp += 1u;
+                    }
+                }
+            }
+        }
+        flush_counters();
+    }
+    let o = out_index(p);
+    out[o].v = vec4<f32>(out[o].v.xyz + color, out[o].v.w);
+    flush_counters();
+}
+
+// ---------------------------------------------------------------------------------------
+// Path tracing (`integrator::path`, estimator in docs/sampling.md).
+
+// `Emitters::pick`: the emitter entry whose CDF interval holds u (binary search).
+fn pick_emitter(u: f32) -> u32 {
+    let total = prims[params.emitter_first + params.emitter_count - 1u].c.w;
+    let target_cdf = u * total;
+    var lo = 0u;
+    var hi = params.emitter_count;
+    while lo < hi {
+        let mid = (lo + hi) / 2u;
+        if prims[params.emitter_first + mid].c.w <= target_cdf {
+            lo = mid + 1u;
+        } else {
+            hi = mid;
+        }
+    }
+    return params.emitter_first + min(lo, params.emitter_count - 1u);
+}
+
+@compute @workgroup_size(64)
+fn path_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let p = pixel_of(gid.x);
+    if !p.ok {
+        return;
+    }
+    let pixel = p.y * params.width + p.x;
+    let sample_weight = vec3<f32>(1.0 / f32(params.spp));
+    var color = vec3<f32>(0.0);
+    if params.s0 == 0u {
+        _ = centre(p);
+    }
+    for (var s = params.s0; s < params.s1; s++) {
+        var rng = Sampler(pixel, s, 0u);
+        let jx = next_f32(&rng);
+        let jy = next_f32(&rng);
+        var r = camera_ray(f32(p.x) + jx, f32(p.y) + jy);
+        var weight = sample_weight;
+        var specular = true;
+        for (var depth = 0u; depth <= params.max_depth; depth++) {
+            let h = closest(r);
+            n_rays += 1u;
+            if h.id == NO_HIT {
+                color += weight * params.background;
+                break;
+            }
+            let m = material_of(h.id);
+            let gn = hit_normal(r, h);
+            let at = r.o + r.d * h.t;
+            let front = dot(gn, r.d) < 0.0;
+            let nf = select(-gn, gn, front);
+            let d = normalize(r.d);
+            if front && (specular || !is_emitter(h.id)) {
+                color += weight * m.emission;
+            }
+            if depth == params.max_depth {
+                break;
+            }
+            rng.dimension = 2u + depth * DIMENSIONS_PER_BOUNCE;
+            let u_light = next_f32(&rng);
+            let u_point0 = next_f32(&rng);
+            let u_point1 = next_f32(&rng);
+            let u_dir0 = next_f32(&rng);
+            let u_dir1 = next_f32(&rng);
+            let u_choice = next_f32(&rng);
+            let u_roulette = next_f32(&rng);
+
+            let previous = weight;
+            var next: Ray;
+            if m.kind == MAT_DIFFUSE {
+                let albedo = albedo_at(m, at);
+                let brdf = albedo * INV_PI;
+                for (var j = 0u; j < params.light_count; j++) {
+                    let l = light_ray(j, at, nf);
+                    if l.ok {
+                        n_rays += 1u;
+                        if !occluded(l.ray) {
+                            color += weight * brdf * l.irradiance;
+                        }
+                    }
+                }
+                if params.emitter_count > 0u {
+                    let e = prims[pick_emitter(u_light)];
+                    let y = triangle_point(e.a.xyz, e.b.xyz, e.c.xyz, u_point0, u_point1);
+                    let origin = offset_ray_origin(at, nf);
+                    let to = y - origin;
+                    let dist2 = dot(to, to);
+                    let wi = to / sqrt(dist2);
+                    let cos_x = dot(nf, wi);
+                    // One-sided: the light's front faces the shading point.
+                    let light_n = normalize_or(cross(e.b.xyz - e.a.xyz, e.c.xyz - e.a.xyz), vec3<f32>(0.0, 1.0, 0.0));
+                    let cos_y = -dot(light_n, wi);
+                    if cos_x > 0.0 && cos_y > 0.0 && dist2 > 0.0 {
+                        let le = material_of(bitcast<u32>(e.b.w)).emission;
+                        let value = weight * brdf * le * (cos_x * cos_y / dist2 * params.emitter_area);
+                        n_rays += 1u;
+                        if !occluded(make_ray(origin, to, 0.0, SHADOW_SHORTEN)) {
+                            color += value;
+                        }
+                    }
+                }
+                weight *= albedo;
+                specular = false;
+                next = ray_new(offset_ray_origin(at, nf), cosine_hemisphere(nf, u_dir0, u_dir1));
+            } else if m.kind == MAT_MIRROR {
+                weight *= m.specular;
+                specular = true;
+                next = ray_new(offset_ray_origin(at, nf), reflect_dir(d, nf));
+            } else {
+                let n1 = select(m.ior, 1.0, front);
+                let n2 = select(1.0, m.ior, front);
+                let fr = fresnel_dielectric(-dot(d, nf), n1, n2);
+                weight *= m.specular;
+                specular = true;
+                let t = refract_dir(d, nf, n1, n2);
+                if t.w != 0.0 && u_choice >= fr {
+                    next = ray_new(offset_ray_origin(at, -nf), t.xyz);
+                } else {
+                    next = ray_new(offset_ray_origin(at, nf), reflect_dir(d, nf));
+                }
+            }
+            if depth >= ROULETTE_DEPTH {
+                let q = clamp(max3(weight) / max(max3(previous), MIN_POSITIVE), 0.05, 0.95);
+                if u_roulette >= q {
+                    break;
+                }
+                weight /= q;
+            }
+            if max3(weight) <= 0.0 {
+                break;
+            }
+            r = next;
+        }
+        flush_counters();
+    }
+    let o = out_index(p);
+    out[o].v = vec4<f32>(out[o].v.xyz + color, out[o].v.w);
+    flush_counters();
+}
+
+// ---------------------------------------------------------------------------------------
+// Explicit rays (incoherent ray sets): closest hits as (t, u, v) and id.
+
+@compute @workgroup_size(64)
+fn trace_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if i >= params.ray_count {
+        return;
+    }
+    let q = rays_in[i];
+    let h = closest(make_ray(q.o.xyz, q.d.xyz, q.o.w, q.d.w));
+    n_rays += 1u;
+    out[i].v = vec4<f32>(select(h.t, params.inf, h.id == NO_HIT), h.u, h.v, 0.0);
+    out[i].id = h.id;
+    flush_counters();
+}
