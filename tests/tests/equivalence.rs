@@ -72,14 +72,31 @@ mode_tests! {
     modes_terrain => "terrain:32",
 }
 
+/// Backends not bound by the bit-exact contract, and where each is compared with naive
+/// within its tolerance.
+const TOLERANCE_TESTED: &[(&str, &str)] = &[
+    ("wgpu", "tests/tests/gpu.rs"),
+    ("bvh-crate", "crates/peers/tests/naive.rs"),
+    ("embree", "crates/peers/tests/naive.rs (feature embree)"),
+    ("embree-packet", "crates/peers/tests/naive.rs (feature embree)"),
+];
+
 #[test]
-fn every_exact_backend_is_under_test() {
-    for b in raybench::BACKENDS.iter().filter(|b| b.exact) {
-        assert!(
-            BACKENDS.contains(&b.name),
-            "backend {} is missing from BACKENDS",
-            b.name
-        );
+fn every_backend_is_under_test() {
+    for b in raybench::BACKENDS {
+        if b.exact {
+            assert!(
+                BACKENDS.contains(&b.name),
+                "exact backend {} is missing from BACKENDS",
+                b.name
+            );
+        } else {
+            assert!(
+                TOLERANCE_TESTED.iter().any(|(n, _)| *n == b.name),
+                "backend {} is tested nowhere: add it to TOLERANCE_TESTED with its test",
+                b.name
+            );
+        }
     }
 }
 
