@@ -54,10 +54,18 @@ pub struct Gpu {
 }
 
 impl Gpu {
-    /// `name (type, backend, driver)`, as `raybench backends` shows it.
+    /// `name (type, backend, driver), timestamp queries`, as `raybench backends` shows it.
     #[must_use]
     pub fn describe(&self) -> String {
-        describe(&self.info)
+        format!(
+            "{}, {}",
+            describe(&self.info),
+            if self.timestamps {
+                "GPU time from timestamp queries"
+            } else {
+                "no timestamp queries: GPU time is wall time around submit and wait"
+            }
+        )
     }
 
     /// Takes the errors reported since the last call.
@@ -74,7 +82,7 @@ pub fn describe(info: &wgpu::AdapterInfo) -> String {
         wgpu::DeviceType::DiscreteGpu => "discrete GPU",
         wgpu::DeviceType::IntegratedGpu => "integrated GPU",
         wgpu::DeviceType::VirtualGpu => "virtual GPU",
-        wgpu::DeviceType::Cpu => "software rasteriser on the CPU",
+        wgpu::DeviceType::Cpu => "software, runs on the CPU",
         wgpu::DeviceType::Other => "other",
     };
     let driver = if info.driver_info.is_empty() {

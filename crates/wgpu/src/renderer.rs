@@ -274,8 +274,9 @@ fn word64(words: &[u32], i: usize) -> u64 {
     u64::from(words[i]) | (u64::from(words[i + 1]) << 32)
 }
 
-/// What one batch of dispatches needs besides the scene.
-struct Frame0<'a> {
+/// The buffers and pipeline of one frame (or one set of explicit rays), and the timestamp
+/// queries of its batches of dispatches.
+struct Batches<'a> {
     p: &'a Prepared,
     pipeline: &'a wgpu::ComputePipeline,
     params: &'a wgpu::Buffer,
@@ -286,7 +287,7 @@ struct Frame0<'a> {
     timestamps: Option<(wgpu::QuerySet, wgpu::Buffer, wgpu::Buffer)>,
 }
 
-impl Frame0<'_> {
+impl Batches<'_> {
     fn new<'a>(
         p: &'a Prepared,
         pipeline: &'a wgpu::ComputePipeline,
@@ -295,7 +296,7 @@ impl Frame0<'_> {
         rays: &'a wgpu::Buffer,
         out: &'a wgpu::Buffer,
         counters: &'a wgpu::Buffer,
-    ) -> Frame0<'a> {
+    ) -> Batches<'a> {
         let gpu = &p.gpu;
         let timestamps = gpu.timestamps.then(|| {
             let n = 2 * PASSES_PER_SUBMIT as u64;
@@ -319,7 +320,7 @@ impl Frame0<'_> {
                 ),
             )
         });
-        Frame0 {
+        Batches {
             p,
             pipeline,
             params,
@@ -480,7 +481,7 @@ impl Prepared {
     /// Rays, tests and node visits from the counters buffer.
     fn read_counters(
         &self,
-        f: &Frame0<'_>,
+        f: &Batches<'_>,
         count: bool,
     ) -> Result<(u64, Option<RayCounters>), RenderError> {
         let words: Vec<u32> = f.fetch(f.counters, 24, |b| bytemuck::cast_slice(b).to_vec())?;
@@ -637,7 +638,7 @@ impl Renderer for WgpuRenderer {
         );
         let rays = buffer(gpu, "no rays", 32, wgpu::BufferUsages::STORAGE);
         let counters = p.counters_buffer();
-        let f = Frame0::new(p, &pipeline, &params_buf, stride, &rays, &out, &counters);
+        let f = Batches::new(p, &pipeline, &params_buf, stride, &rays, &out, &counters);
         let mut upload = upload_start.elapsed().as_secs_f64();
 
         let n = w as usize * h as usize;
@@ -761,7 +762,7 @@ impl Renderer for WgpuRenderer {
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         );
         let counters = p.counters_buffer();
-        let f = Frame0::new(
+        let f = Batches::new(
             p,
             &pipeline,
             &params_buf,
