@@ -78,7 +78,10 @@ const TOLERANCE_TESTED: &[(&str, &str)] = &[
     ("wgpu", "tests/tests/gpu.rs"),
     ("bvh-crate", "crates/peers/tests/naive.rs"),
     ("embree", "crates/peers/tests/naive.rs (feature embree)"),
-    ("embree-packet", "crates/peers/tests/naive.rs (feature embree)"),
+    (
+        "embree-packet",
+        "crates/peers/tests/naive.rs (feature embree)",
+    ),
 ];
 
 #[test]
