@@ -4,6 +4,7 @@ use crate::camera::Camera;
 use crate::emitters::Emitters;
 use crate::error::SceneError;
 use crate::geometry::{Geometry, Shape};
+use crate::heightfield::HeightField;
 use crate::limits;
 use crate::material::{Light, Material};
 use crate::mesh::TriangleMesh;
@@ -286,6 +287,22 @@ impl SceneBuilder {
         self.check_material(material)?;
         self.check_room(mesh.indices.len())?;
         self.push_object(name.into(), mesh.triangles().map(Shape::Triangle), material);
+        Ok(self)
+    }
+
+    /// Adds a height field as one primitive (its cells are sub-primitives).
+    ///
+    /// # Errors
+    /// When the material does not exist or the scene is full.
+    pub fn add_height_field(
+        &mut self,
+        name: impl Into<String>,
+        field: Arc<HeightField>,
+        material: u32,
+    ) -> Result<&mut Self, SceneError> {
+        self.check_material(material)?;
+        self.check_room(1)?;
+        self.push_object(name.into(), [Shape::HeightField(field)], material);
         Ok(self)
     }
 

@@ -71,4 +71,9 @@ pub const BUILTIN_SCENES: &[BuiltinScene] = &[
         "the teapot inside a huge, nearly empty box (where uniform grids lose)",
         ["teapot/teapot.obj"]
     ),
+    builtin!(
+        "heightfield",
+        "a 1024^2-cell height field intersected directly, a mirror sphere, water",
+        []
+    ),
 ];

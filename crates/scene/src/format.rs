@@ -3,15 +3,17 @@
 use crate::error::LoadError;
 use crate::generators::{self, Generated};
 use crate::gltf_loader::load_gltf_file;
+use crate::grids::{SampleFormat, read_png_gray, read_raw};
 use crate::obj::{MeshData, load_obj_file};
 use crate::transform::Transform;
 use raybench_core::{
-    Camera, Light, Material, MaterialKind, PolygonMesh, Scene, SceneBuilder, SceneError, Sphere,
-    Triangle, Vec3,
+    Camera, HeightField, HeightFieldTraversal, Light, MAX_HEIGHT_FIELD_VERTICES, Material,
+    MaterialKind, PolygonMesh, Scene, SceneBuilder, SceneError, Sphere, Triangle, Vec3,
 };
 use serde::Deserialize;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// Scene files larger than this are refused before reading (meshes belong in mesh files).
 const MAX_SCENE_FILE_BYTES: u64 = 64 << 20;
@@ -128,6 +130,7 @@ enum ObjectDesc {
     Polygons(PolygonsDesc),
     Mesh(MeshDesc),
     Generator(GeneratorDesc),
+    HeightField(HeightFieldDesc),
 }
 
 #[derive(Deserialize)]
@@ -177,6 +180,35 @@ struct MeshDesc {
 struct GeneratorDesc {
     spec: String,
     seed: Option<u32>,
+    material: Option<String>,
+    #[serde(default)]
+    transform: TransformDesc,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "snake_case")]
+enum TraversalDesc {
+    Tree,
+    Dda,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct HeightFieldDesc {
+    /// `terrain:N`: the heights of the terrain generator.
+    source: Option<String>,
+    /// An 8- or 16-bit greyscale PNG: one vertex per pixel, heights in [0, 1].
+    png: Option<String>,
+    /// A raw file of `size[0] x size[1]` little-endian samples.
+    raw: Option<String>,
+    /// Vertices per row and rows (raw files).
+    size: Option<[u32; 2]>,
+    /// Sample type of the raw file (default u16).
+    format: Option<SampleFormat>,
+    /// Vertex heights inline, row by row.
+    heights: Option<Vec<Vec<f32>>>,
+    traversal: Option<TraversalDesc>,
+    smooth: Option<bool>,
     material: Option<String>,
     #[serde(default)]
     transform: TransformDesc,
@@ -504,6 +536,7 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
                 let count = match info.name {
                     "icosphere" => 20u64 << (2 * count),
                     "terrain" => 2 * count * count,
+                    "heightfield" => 1,
                     _ => count,
                 };
                 let limit = raybench_core::limits::MAX_PRIMITIVES as u64;
@@ -535,11 +568,107 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
                             b.add_sphere(s, m).map_err(&err)?;
                         }
                     }
+                    Generated::HeightField { n, heights } => {
+                        // The placement as the tessellated terrain applies it: none for
+                        // the identity, else `transform_point3` on every vertex.
+                        let field =
+                            HeightField::new(n, n, heights, (!xf.is_identity()).then_some(a))
+                                .map_err(&err)?;
+                        b.add_height_field(g.spec.as_str(), Arc::new(field), m)
+                            .map_err(err)?;
+                    }
                 }
+            }
+            ObjectDesc::HeightField(h) => {
+                let m = material(&h.material)?.unwrap_or(0);
+                let field = height_field(h, ctx, &what)?;
+                b.add_height_field("height field", Arc::new(field), m)
+                    .map_err(err)?;
             }
         }
     }
     Ok(b.build())
+}
+
+/// Builds the height field an object describes, from exactly one source.
+fn height_field(h: &HeightFieldDesc, ctx: &Context, what: &str) -> Result<HeightField, LoadError> {
+    let parse = |message: String| LoadError::Parse {
+        path: ctx.file.clone(),
+        message: format!("{what}: {message}"),
+    };
+    let sources = [
+        h.source.is_some(),
+        h.png.is_some(),
+        h.raw.is_some(),
+        h.heights.is_some(),
+    ];
+    if sources.iter().filter(|&&s| s).count() != 1 {
+        return Err(parse(
+            "a height field needs exactly one of source, png, raw and heights".into(),
+        ));
+    }
+    if h.raw.is_none() && (h.size.is_some() || h.format.is_some()) {
+        return Err(parse("size and format belong to raw height fields".into()));
+    }
+    let (cols, rows, heights) = if let Some(spec) = &h.source {
+        let (info, n) = generators::parse_spec(spec)?;
+        if info.name != "terrain" {
+            return Err(parse(format!(
+                "source '{spec}' is not a height generator (expected terrain:N)"
+            )));
+        }
+        let n = n as u32;
+        (n + 1, n + 1, generators::terrain_heights(n))
+    } else if let Some(png) = &h.png {
+        read_png_gray(&ctx.resolve(png)?, MAX_HEIGHT_FIELD_VERTICES)?
+    } else if let Some(raw) = &h.raw {
+        let [cols, rows] = h
+            .size
+            .ok_or_else(|| parse("a raw height field needs size = [columns, rows]".into()))?;
+        let count = u64::from(cols) * u64::from(rows);
+        let samples = read_raw(
+            &ctx.resolve(raw)?,
+            count,
+            h.format.unwrap_or(SampleFormat::U16),
+            MAX_HEIGHT_FIELD_VERTICES,
+        )?;
+        (cols, rows, samples.to_unit_f32())
+    } else {
+        let grid = h.heights.as_deref().unwrap_or_default();
+        let rows = grid.len();
+        let cols = grid.first().map_or(0, Vec::len);
+        if grid.iter().any(|r| r.len() != cols) {
+            return Err(parse("every row of heights needs the same length".into()));
+        }
+        (
+            u32::try_from(cols).unwrap_or(u32::MAX),
+            u32::try_from(rows).unwrap_or(u32::MAX),
+            grid.concat(),
+        )
+    };
+    if cols < 2 || rows < 2 {
+        return Err(parse(format!(
+            "a height field needs at least 2 x 2 vertices, got {cols} x {rows}"
+        )));
+    }
+    let xf = h.transform.to_transform();
+    let scene_err = |source| LoadError::Scene {
+        context: format!("{}: {what}", ctx.file.display()),
+        source,
+    };
+    let field = HeightField::new(
+        cols - 1,
+        rows - 1,
+        heights,
+        (!xf.is_identity()).then(|| xf.affine()),
+    )
+    .map_err(scene_err)?;
+    Ok(field
+        .with_traversal(match h.traversal.unwrap_or(TraversalDesc::Tree) {
+            TraversalDesc::Tree => HeightFieldTraversal::MinMaxTree,
+            TraversalDesc::Dda => HeightFieldTraversal::Dda,
+        })
+        .with_smooth_normals(h.smooth.unwrap_or(true)))
 }
 
 #[cfg(test)]

@@ -17,6 +17,7 @@ mod error;
 mod format;
 pub mod generators;
 mod gltf_loader;
+pub mod grids;
 mod obj;
 mod transform;
 
