@@ -35,6 +35,7 @@ pub mod sampling;
 mod scene;
 mod sphere;
 mod triangle;
+pub mod volume;
 
 pub use aabb::{Aabb, SlabRay};
 pub use accel::{
@@ -56,5 +57,8 @@ pub use renderer::{Mode, RenderError, RenderSettings, Renderer};
 pub use scene::{ObjectInfo, Scene, SceneBuilder};
 pub use sphere::Sphere;
 pub use triangle::Triangle;
+pub use volume::{
+    Sampling, TransferFunction, TransferPoint, Volume, VolumeData, VolumeParams, VolumeSample,
+};
 
 pub use glam::{Affine3A, Vec3, Vec3A};

@@ -11,6 +11,7 @@ use crate::mesh::TriangleMesh;
 use crate::plane::Plane;
 use crate::sphere::Sphere;
 use crate::triangle::Triangle;
+use crate::volume::Volume;
 use glam::Vec3;
 use std::sync::Arc;
 
@@ -47,6 +48,9 @@ pub struct Scene {
     pub objects: Vec<ObjectInfo>,
     /// Emissive triangles, for next-event estimation.
     pub emitters: Emitters,
+    /// Voxel volumes, rendered by the modes `mip` and `composite` (not primitives: they
+    /// have no ids and acceleration structures never see them).
+    pub volumes: Vec<Arc<Volume>>,
 }
 
 impl Scene {
@@ -70,6 +74,7 @@ pub struct SceneBuilder {
     shapes: Vec<Shape>,
     prim_material: Vec<u32>,
     objects: Vec<ObjectInfo>,
+    volumes: Vec<Arc<Volume>>,
 }
 
 fn finite(v: Vec3, what: &str) -> Result<(), SceneError> {
@@ -105,6 +110,7 @@ impl SceneBuilder {
             shapes: Vec::new(),
             prim_material: Vec::new(),
             objects: Vec::new(),
+            volumes: Vec::new(),
         }
     }
 
@@ -343,6 +349,18 @@ impl SceneBuilder {
         Ok(self)
     }
 
+    /// Adds a voxel volume.
+    ///
+    /// # Errors
+    /// When its bounds exceed [`limits::MAX_COORDINATE`].
+    pub fn add_volume(&mut self, volume: Arc<Volume>) -> Result<&mut Self, SceneError> {
+        let b = volume.bounds();
+        coordinate(b.min, "volume bounds")?;
+        coordinate(b.max, "volume bounds")?;
+        self.volumes.push(volume);
+        Ok(self)
+    }
+
     /// Number of primitives added so far.
     #[must_use]
     pub fn primitive_count(&self) -> usize {
@@ -359,9 +377,11 @@ impl SceneBuilder {
     #[must_use]
     pub fn build(self) -> Scene {
         let geometry = Geometry::new(self.shapes);
-        let camera = self
-            .camera
-            .unwrap_or_else(|| Camera::framing(geometry.bounds()));
+        let framed = self
+            .volumes
+            .iter()
+            .fold(geometry.bounds(), |b, v| b.union(v.bounds()));
+        let camera = self.camera.unwrap_or_else(|| Camera::framing(framed));
         let emitters = Emitters::new(&geometry, &self.prim_material, &self.materials);
         Scene {
             name: self.name,
@@ -373,6 +393,7 @@ impl SceneBuilder {
             prim_material: self.prim_material,
             objects: self.objects,
             emitters,
+            volumes: self.volumes,
         }
     }
 }

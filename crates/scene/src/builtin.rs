@@ -76,4 +76,9 @@ pub const BUILTIN_SCENES: &[BuiltinScene] = &[
         "a 1024^2-cell height field intersected directly, a mirror sphere, water",
         []
     ),
+    builtin!(
+        "phantom",
+        "the 3D Shepp-Logan head phantom, 128^3 voxels (modes mip and composite)",
+        []
+    ),
 ];

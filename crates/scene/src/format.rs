@@ -3,13 +3,16 @@
 use crate::error::LoadError;
 use crate::generators::{self, Generated};
 use crate::gltf_loader::load_gltf_file;
-use crate::grids::{SampleFormat, read_png_gray, read_raw};
+use crate::grids::{RawSamples, SampleFormat, read_png_gray, read_raw};
 use crate::obj::{MeshData, load_obj_file};
 use crate::transform::Transform;
+use crate::volumes;
+use raybench_core::volume::{MAX_VOLUME_VOXELS, check_volume_dims};
 use raybench_core::{
     Camera, HeightField, HeightFieldTraversal, Light, MAX_HEIGHT_FIELD_VERTICES, Material,
     MaterialKind, PolygonMesh, Scene, SceneBuilder, SceneError, Sphere, Triangle, Vec3,
 };
+use raybench_core::{Sampling, TransferFunction, TransferPoint, Volume, VolumeData, VolumeParams};
 use serde::Deserialize;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -32,6 +35,42 @@ struct SceneFile {
     lights: Vec<LightDesc>,
     #[serde(default, rename = "object")]
     objects: Vec<ObjectDesc>,
+    #[serde(default, rename = "volume")]
+    volumes: Vec<VolumeDesc>,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "snake_case")]
+enum SamplingDesc {
+    Nearest,
+    Trilinear,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TransferDesc {
+    value: f32,
+    color: V3,
+    sigma: f32,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct VolumeDesc {
+    /// `phantom:N`.
+    source: Option<String>,
+    /// A raw file of `dims` little-endian samples, x fastest.
+    raw: Option<String>,
+    dims: Option<[u32; 3]>,
+    format: Option<SampleFormat>,
+    /// Object units per voxel along x, y, z.
+    spacing: Option<ScaleDesc>,
+    sampling: Option<SamplingDesc>,
+    skip_empty: Option<bool>,
+    window: Option<[f32; 2]>,
+    transfer: Option<Vec<TransferDesc>>,
+    #[serde(default)]
+    transform: TransformDesc,
 }
 
 #[derive(Deserialize)]
@@ -587,7 +626,94 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
             }
         }
     }
+    for (index, v) in file.volumes.iter().enumerate() {
+        let what = format!("volume {}", index + 1);
+        let volume = volume(v, ctx, &what)?;
+        b.add_volume(Arc::new(volume))
+            .map_err(ctx.scene_err(&what))?;
+    }
     Ok(b.build())
+}
+
+/// Builds the volume a `[[volume]]` table describes.
+fn volume(v: &VolumeDesc, ctx: &Context, what: &str) -> Result<Volume, LoadError> {
+    let parse = |message: String| LoadError::Parse {
+        path: ctx.file.clone(),
+        message: format!("{what}: {message}"),
+    };
+    let scene_err = |source| LoadError::Scene {
+        context: format!("{}: {what}", ctx.file.display()),
+        source,
+    };
+    let (dims, data, default_spacing) = match (&v.source, &v.raw) {
+        (Some(spec), None) => {
+            if v.dims.is_some() || v.format.is_some() {
+                return Err(parse("dims and format belong to raw volumes".into()));
+            }
+            let n = volumes::parse_volume_spec(spec)?;
+            let data = volumes::rasterize(&volumes::shepp_logan_ellipsoids(), n);
+            // Generated volumes span [-1, 1]^3.
+            ([n; 3], VolumeData::F32(data), Vec3::splat(2.0 / n as f32))
+        }
+        (None, Some(raw)) => {
+            let dims = v
+                .dims
+                .ok_or_else(|| parse("a raw volume needs dims = [x, y, z]".into()))?;
+            let count = check_volume_dims(dims).map_err(scene_err)?;
+            let samples = read_raw(
+                &ctx.resolve(raw)?,
+                count,
+                v.format.unwrap_or(SampleFormat::U16),
+                MAX_VOLUME_VOXELS,
+            )?;
+            let data = match samples {
+                RawSamples::U8(d) => VolumeData::U8(d),
+                RawSamples::U16(d) => VolumeData::U16(d),
+                RawSamples::F32(d) => VolumeData::F32(d),
+            };
+            (dims, data, Vec3::ONE)
+        }
+        _ => {
+            return Err(parse("a volume needs exactly one of source and raw".into()));
+        }
+    };
+    let spacing = match v.spacing {
+        None => default_spacing,
+        Some(ScaleDesc::Uniform(s)) => Vec3::splat(s),
+        Some(ScaleDesc::PerAxis(s)) => Vec3::from(s),
+    };
+    let transfer = match &v.transfer {
+        None => TransferFunction::ramp(10.0),
+        Some(points) => TransferFunction::new(
+            points
+                .iter()
+                .map(|p| TransferPoint {
+                    value: p.value,
+                    color: Vec3::from(p.color),
+                    sigma: p.sigma,
+                })
+                .collect(),
+        )
+        .map_err(scene_err)?,
+    };
+    let defaults = VolumeParams::default();
+    let params = VolumeParams {
+        sampling: match v.sampling.unwrap_or(SamplingDesc::Nearest) {
+            SamplingDesc::Nearest => Sampling::Nearest,
+            SamplingDesc::Trilinear => Sampling::Trilinear,
+        },
+        skip_empty: v.skip_empty.unwrap_or(defaults.skip_empty),
+        window: v.window.unwrap_or(defaults.window),
+    };
+    Volume::new(
+        dims,
+        spacing,
+        data,
+        v.transform.to_transform().affine(),
+        transfer,
+        params,
+    )
+    .map_err(scene_err)
 }
 
 /// Builds the height field an object describes, from exactly one source.

@@ -20,6 +20,7 @@ mod gltf_loader;
 pub mod grids;
 mod obj;
 mod transform;
+pub mod volumes;
 
 pub use builtin::{BUILTIN_SCENES, BuiltinScene};
 pub use error::LoadError;

@@ -101,7 +101,7 @@ impl Workload {
     /// Rough rays per sample, for naive's budget.
     fn rays_per_sample(&self) -> f64 {
         match self.mode {
-            Mode::Cast => 1.0,
+            Mode::Cast | Mode::Mip | Mode::Composite => 1.0,
             Mode::Whitted => 3.0,
             Mode::Path => 4.0,
         }
