@@ -235,6 +235,23 @@ impl Geometry {
         self.bounds
     }
 
+    /// Bytes held by the primitives: the shape list, the id lists, and what objects such
+    /// as height fields hold behind their `Arc`.
+    #[must_use]
+    pub fn memory_bytes(&self) -> usize {
+        let heap: usize = self
+            .shapes
+            .iter()
+            .map(|s| match s {
+                Shape::HeightField(h) => h.memory_bytes(),
+                _ => 0,
+            })
+            .sum();
+        self.shapes.len() * std::mem::size_of::<Shape>()
+            + (self.bounded.len() + self.unbounded.len()) * 4
+            + heap
+    }
+
     /// Primitive counts by kind, in [`PrimitiveKind::ALL`] order, zero counts included.
     #[must_use]
     pub fn count_by_kind(&self) -> Vec<(PrimitiveKind, usize)> {
