@@ -910,6 +910,49 @@ mod tests {
     }
 
     #[test]
+    fn height_fields_and_volumes_from_files_and_inline() {
+        let dir = std::env::temp_dir().join(format!("raybench-format-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // A 3 x 2-pixel 16-bit PNG and a 2 x 3 x 4 raw u16 volume.
+        let png = dir.join("h.png");
+        image::ImageBuffer::<image::Luma<u16>, _>::from_raw(
+            3,
+            2,
+            vec![0u16, 100, 200, 300, 400, 65535],
+        )
+        .unwrap()
+        .save(&png)
+        .unwrap();
+        let raw = dir.join("v.raw");
+        let voxels: Vec<u8> = (0..24u16).flat_map(|v| (v * 1000).to_le_bytes()).collect();
+        std::fs::write(&raw, voxels).unwrap();
+        let text = format!(
+            "[[object]]\nkind = \"height_field\"\npng = \"{}\"\ntraversal = \"dda\"\n\
+             [[object]]\nkind = \"height_field\"\nheights = [[0, 1, 0], [1, 0.5, 1]]\n\
+             smooth = false\n\
+             [[volume]]\nraw = \"{}\"\ndims = [2, 3, 4]\nformat = \"u16\"\n\
+             spacing = [1, 1, 2.5]\nsampling = \"trilinear\"\n",
+            png.display(),
+            raw.display()
+        );
+        let s = load(&text).unwrap();
+        assert_eq!(s.geometry.len(), 2);
+        for id in 0..2 {
+            let raybench_core::Shape::HeightField(h) = s.geometry.shape(id) else {
+                panic!("not a height field")
+            };
+            assert_eq!(h.cells(), (2, 1));
+        }
+        assert_eq!(s.volumes.len(), 1);
+        assert_eq!(s.volumes[0].dims(), [2, 3, 4]);
+        // Spacing 2.5 in z: the volume spans 10 units along z, centred.
+        let b = s.volumes[0].bounds();
+        assert_eq!((b.min.z, b.max.z), (-5.0, 5.0));
+        assert_eq!(s.volumes[0].voxel([1, 0, 0]), 1000.0 / 65535.0);
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
     fn empty_scene_is_legal() {
         let s = load("").unwrap();
         assert!(s.geometry.is_empty());
