@@ -116,3 +116,48 @@ fn height_field_generator_matches_terrain_generator() {
     let (hits, _) = prepared("bvh", &direct).trace_rays(&rays, false).unwrap();
     same("heightfield:33", &reference, &hits);
 }
+
+#[test]
+fn bilinear_cells_agree_across_backends_traversals_and_threads() {
+    for placement in PLACEMENTS {
+        let (mesh, _) = pair(24, placement, "tree");
+        let rays = probes(&mesh, 800);
+        let mut reference: Option<Vec<Option<Hit>>> = None;
+        for traversal in ["tree", "dda"] {
+            let scene = load(&format!(
+                "[[object]]\nkind = \"height_field\"\nsource = \"terrain:24\"\n\
+                 cells = \"bilinear\"\ntraversal = \"{traversal}\"\n{placement}\n"
+            ));
+            let naive = prepared("naive", &scene)
+                .trace_rays(&rays, false)
+                .unwrap()
+                .0;
+            let reference = reference.get_or_insert_with(|| naive.clone());
+            let key = |h: &Option<Hit>| h.map(|h| (h.prim, h.sub, h.t.to_bits()));
+            assert!(
+                reference.iter().map(key).eq(naive.iter().map(key)),
+                "{traversal}"
+            );
+            assert!(naive.iter().filter(|h| h.is_some()).count() > rays.len() / 4);
+            for backend in ["bvh", "obvhs", "grid", "grid2", "packet"] {
+                let hits = prepared(backend, &scene)
+                    .trace_rays(&rays, false)
+                    .unwrap()
+                    .0;
+                assert!(
+                    naive.iter().map(key).eq(hits.iter().map(key)),
+                    "{backend} {traversal} [{placement}]"
+                );
+            }
+            let settings = RenderSettings {
+                width: 32,
+                height: 32,
+                ..RenderSettings::default()
+            };
+            let a = render_with("naive", &scene, &settings, 1);
+            let b = render_with("packet", &scene, &settings, 3);
+            raybench_tests::assert_same_hits("bilinear frame", &a, &b);
+            assert_eq!(a.color, b.color);
+        }
+    }
+}

@@ -59,7 +59,7 @@ struct ReportCmd {
     /// Comma-separated backends (default: every backend but the pinned variants).
     #[arg(long, value_delimiter = ',')]
     backends: Option<Vec<String>>,
-    /// Comma-separated modes (cast, whitted, path; default: all).
+    /// Comma-separated modes (cast, whitted, path, mip, composite; default: all).
     #[arg(long, value_delimiter = ',', value_parser = parse_mode)]
     modes: Option<Vec<Mode>>,
     /// Output folder (created; files in it are replaced).
@@ -618,8 +618,9 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
     println!("scene       {}", scene.name);
     println!("primitives  {}", g.len());
     for (kind, n) in g.count_by_kind() {
-        println!("  {:<10}{n}", kind.name());
+        println!("  {:<9} {n}", kind.name());
     }
+    println!("volumes     {}", scene.volumes.len());
     println!("objects     {}", scene.objects.len());
     println!("materials   {}", scene.materials.len());
     println!("lights      {}", scene.lights.len());

@@ -20,6 +20,7 @@
 
 use crate::aabb::{Aabb, SlabRay};
 use crate::accel::cull_bound;
+use crate::bilinear::BilinearPatch;
 use crate::error::SceneError;
 use crate::geometry::PrimHit;
 use crate::hit::Hit;
@@ -53,6 +54,30 @@ impl HeightFieldTraversal {
     }
 }
 
+/// What surface a cell holds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum CellSurface {
+    /// Two triangles, `(p00, p01, p11)` and `(p00, p11, p10)`: exactly the `terrain:N`
+    /// tessellation (sub-primitive `2 c` and `2 c + 1` for cell `c = j nx + i`).
+    #[default]
+    Triangles,
+    /// The bilinear patch through the four vertices (smooth where the triangles fold along
+    /// the diagonal; sub-primitive `2 c`, `u` along x and `v` along z inside the cell).
+    /// Not equal to the tessellated mesh, by design.
+    Bilinear,
+}
+
+impl CellSurface {
+    /// The name used in scene files.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Triangles => "triangles",
+            Self::Bilinear => "bilinear",
+        }
+    }
+}
+
 /// A height field, placed in the world. See the module documentation for the layout.
 #[derive(Clone, Debug, PartialEq)]
 pub struct HeightField {
@@ -78,6 +103,7 @@ pub struct HeightField {
     pad: f32,
     bounds: Aabb,
     traversal: HeightFieldTraversal,
+    surface: CellSurface,
     smooth: bool,
 }
 
@@ -135,6 +161,7 @@ impl HeightField {
             pad: 0.0,
             bounds: Aabb::EMPTY,
             traversal: HeightFieldTraversal::default(),
+            surface: CellSurface::default(),
             smooth: true,
         };
         hf.xs = (0..=nx)
@@ -175,6 +202,19 @@ impl HeightField {
     pub fn with_traversal(mut self, traversal: HeightFieldTraversal) -> Self {
         self.traversal = traversal;
         self
+    }
+
+    /// The same height field with another cell surface.
+    #[must_use]
+    pub fn with_surface(mut self, surface: CellSurface) -> Self {
+        self.surface = surface;
+        self
+    }
+
+    /// The cell surface in use.
+    #[must_use]
+    pub fn surface(&self) -> CellSurface {
+        self.surface
     }
 
     /// The same height field with smooth shading normals on or off (off: each cell
@@ -378,10 +418,35 @@ impl HeightField {
         best
     }
 
-    /// Tests the two triangles of cell `(i, j)` against `ray`, keeping the closer hit.
+    /// The bilinear patch of cell `(i, j)`.
+    #[must_use]
+    pub fn cell_patch(&self, i: u32, j: u32) -> BilinearPatch {
+        BilinearPatch {
+            q00: self.vertex(i, j),
+            q10: self.vertex(i + 1, j),
+            q11: self.vertex(i + 1, j + 1),
+            q01: self.vertex(i, j + 1),
+        }
+    }
+
+    /// Tests the surface of cell `(i, j)` against `ray`, keeping the closer hit.
     #[inline]
     fn test_cell(&self, ray: &Ray, i: u32, j: u32, best: &mut Option<PrimHit>) {
         let base = 2 * (j * self.nx + i);
+        if self.surface == CellSurface::Bilinear {
+            let t_max = best.map_or(ray.t_max, |h| h.t);
+            if let Some(h) = self.cell_patch(i, j).intersect(&ray.clipped(t_max))
+                && best.is_none_or(|b| Hit::closer(h.t, base, b.t, b.sub))
+            {
+                *best = Some(PrimHit {
+                    t: h.t,
+                    sub: base,
+                    u: h.u,
+                    v: h.v,
+                });
+            }
+            return;
+        }
         for (k, tri) in self.cell_triangles(i, j).iter().enumerate() {
             let sub = base + k as u32;
             // As `Geometry::test_closest`: the original ray, clipped to the best t so far.
@@ -553,15 +618,29 @@ impl HeightField {
     /// and `v` (of `v2`): the triangle's geometric normal, or with smooth normals the
     /// barycentric blend of the grid's vertex normals (central differences of the heights,
     /// carried to world space by the inverse transpose of the placement).
+    /// For bilinear cells, `u` and `v` are the patch parameters and the geometric normal is
+    /// the patch's, oriented as the triangles' (towards +y for an unplaced field).
     #[must_use]
     pub fn normal(&self, sub: u32, u: f32, v: f32) -> Vec3 {
+        let cell = sub / 2;
+        let (i, j) = (cell % self.nx, cell / self.nx);
+        if self.surface == CellSurface::Bilinear {
+            // dP/dv x dP/du: the triangles' winding (p00, p01, p11) turns the same way.
+            let geometric = -self.cell_patch(i, j).normal(u, v);
+            if !self.smooth {
+                return geometric;
+            }
+            let n = self.object_normal(i, j) * ((1.0 - u) * (1.0 - v))
+                + self.object_normal(i + 1, j) * (u * (1.0 - v))
+                + self.object_normal(i + 1, j + 1) * (u * v)
+                + self.object_normal(i, j + 1) * ((1.0 - u) * v);
+            return self.oriented_world_normal(n, geometric);
+        }
         let tri = self.sub_triangle(sub);
         let geometric = tri.normal();
         if !self.smooth {
             return geometric;
         }
-        let cell = sub / 2;
-        let (i, j) = (cell % self.nx, cell / self.nx);
         let verts = if sub & 1 == 0 {
             [(i, j), (i, j + 1), (i + 1, j + 1)]
         } else {
@@ -572,6 +651,12 @@ impl HeightField {
         for (&(vi, vj), &wk) in verts.iter().zip(&w) {
             n += self.object_normal(vi, vj) * wk;
         }
+        self.oriented_world_normal(n, geometric)
+    }
+
+    /// An object-space shading normal carried to world space, on the geometric normal's
+    /// side.
+    fn oriented_world_normal(&self, n: Vec3, geometric: Vec3) -> Vec3 {
         let n = match &self.transform {
             None => n,
             Some(a) => a.matrix3.inverse().transpose().mul_vec3a(n.into()).into(),
@@ -671,30 +756,60 @@ mod tests {
     #[test]
     fn tree_and_dda_agree_with_every_cell() {
         use crate::sampling::{pcg3d, to_unit_f32};
-        let tree = bumps(37);
-        let dda = tree.clone().with_traversal(HeightFieldTraversal::Dda);
-        let (nx, nz) = tree.cells();
-        for k in 0..3000u32 {
-            let u = |d| to_unit_f32(pcg3d([k, 5, d])[0]);
-            let o = Vec3::new(u(0) * 4.0 - 2.0, u(1) * 2.0 - 0.5, u(2) * 4.0 - 2.0);
-            let target = Vec3::new(u(3) * 2.0 - 1.0, u(4) * 0.4 - 0.2, u(5) * 2.0 - 1.0);
-            // Some rays axis-parallel in x or z, and some along cell borders.
-            let mut dir = target - o;
-            if k % 7 == 0 {
-                dir.x = 0.0;
-            }
-            if k % 11 == 0 {
-                dir.z = 0.0;
-            }
-            let ray = Ray::new(o, dir);
-            let mut brute: Option<PrimHit> = None;
-            for j in 0..nz {
-                for i in 0..nx {
-                    tree.test_cell(&ray, i, j, &mut brute);
+        for surface in [CellSurface::Triangles, CellSurface::Bilinear] {
+            let tree = bumps(37).with_surface(surface);
+            let dda = tree.clone().with_traversal(HeightFieldTraversal::Dda);
+            let (nx, nz) = tree.cells();
+            for k in 0..3000u32 {
+                let u = |d| to_unit_f32(pcg3d([k, 5, d])[0]);
+                let o = Vec3::new(u(0) * 4.0 - 2.0, u(1) * 2.0 - 0.5, u(2) * 4.0 - 2.0);
+                let target = Vec3::new(u(3) * 2.0 - 1.0, u(4) * 0.4 - 0.2, u(5) * 2.0 - 1.0);
+                // Some rays axis-parallel in x or z.
+                let mut dir = target - o;
+                if k.is_multiple_of(7) {
+                    dir.x = 0.0;
                 }
+                if k.is_multiple_of(11) {
+                    dir.z = 0.0;
+                }
+                let ray = Ray::new(o, dir);
+                let mut brute: Option<PrimHit> = None;
+                for j in 0..nz {
+                    for i in 0..nx {
+                        tree.test_cell(&ray, i, j, &mut brute);
+                    }
+                }
+                assert_eq!(tree.intersect(&ray), brute, "{surface:?} tree, ray {k}");
+                assert_eq!(dda.intersect(&ray), brute, "{surface:?} dda, ray {k}");
             }
-            assert_eq!(tree.intersect(&ray), brute, "tree, ray {k}");
-            assert_eq!(dda.intersect(&ray), brute, "dda, ray {k}");
+        }
+    }
+
+    #[test]
+    fn bilinear_cells_of_a_plane_hit_where_the_triangles_do() {
+        // A tilted plane: every cell's patch is flat and equals its two triangles.
+        let n = 8;
+        let mut h = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                h.push(0.1 * i as f32 / n as f32 - 0.05 * j as f32 / n as f32);
+            }
+        }
+        let tri = HeightField::new(n, n, h, None).unwrap();
+        let patch = tri.clone().with_surface(CellSurface::Bilinear);
+        for k in 0..200 {
+            let x = -0.95 + 1.9 * (k % 20) as f32 / 19.0;
+            let z = -0.95 + 1.9 * (k / 20) as f32 / 9.0;
+            let r = Ray::new(
+                Vec3::new(x * 0.5, 2.0, z * 0.5),
+                Vec3::new(x * 0.5, -2.0, z * 0.5),
+            );
+            let (a, b) = (tri.intersect(&r).unwrap(), patch.intersect(&r).unwrap());
+            assert!((a.t - b.t).abs() < 1e-5, "ray {k}: {a:?} {b:?}");
+            assert_eq!(a.sub / 2, b.sub / 2, "ray {k}: same cell");
+            let nt = tri.normal(a.sub, a.u, a.v);
+            let np = patch.normal(b.sub, b.u, b.v);
+            assert!((nt - np).length() < 1e-4, "ray {k}: {nt} {np}");
         }
     }
 }

@@ -15,6 +15,7 @@
 
 mod aabb;
 mod accel;
+mod bilinear;
 mod camera;
 mod emitters;
 mod error;
@@ -41,12 +42,13 @@ pub use aabb::{Aabb, SlabRay};
 pub use accel::{
     Accel, AccelStats, CULL_SLACK, Counters, NoCounters, NodeStack, RayCounters, cull_bound,
 };
+pub use bilinear::{BilinearPatch, PatchHit};
 pub use camera::{Camera, CameraRays};
 pub use emitters::Emitters;
 pub use error::SceneError;
 pub use frame::{Frame, FrameStats, NO_HIT, Timings};
 pub use geometry::{Geometry, PrimHit, PrimitiveKind, Shape};
-pub use heightfield::{HeightField, HeightFieldTraversal, MAX_HEIGHT_FIELD_VERTICES};
+pub use heightfield::{CellSurface, HeightField, HeightFieldTraversal, MAX_HEIGHT_FIELD_VERTICES};
 pub use hit::Hit;
 pub use material::{Checker, Light, Material, MaterialKind};
 pub use mesh::{PolygonMesh, TriangleMesh};

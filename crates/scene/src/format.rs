@@ -9,8 +9,8 @@ use crate::transform::Transform;
 use crate::volumes;
 use raybench_core::volume::{MAX_VOLUME_VOXELS, check_volume_dims};
 use raybench_core::{
-    Camera, HeightField, HeightFieldTraversal, Light, MAX_HEIGHT_FIELD_VERTICES, Material,
-    MaterialKind, PolygonMesh, Scene, SceneBuilder, SceneError, Sphere, Triangle, Vec3,
+    Camera, CellSurface, HeightField, HeightFieldTraversal, Light, MAX_HEIGHT_FIELD_VERTICES,
+    Material, MaterialKind, PolygonMesh, Scene, SceneBuilder, SceneError, Sphere, Triangle, Vec3,
 };
 use raybench_core::{Sampling, TransferFunction, TransferPoint, Volume, VolumeData, VolumeParams};
 use serde::Deserialize;
@@ -231,6 +231,13 @@ enum TraversalDesc {
     Dda,
 }
 
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "snake_case")]
+enum CellsDesc {
+    Triangles,
+    Bilinear,
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct HeightFieldDesc {
@@ -247,6 +254,7 @@ struct HeightFieldDesc {
     /// Vertex heights inline, row by row.
     heights: Option<Vec<Vec<f32>>>,
     traversal: Option<TraversalDesc>,
+    cells: Option<CellsDesc>,
     smooth: Option<bool>,
     material: Option<String>,
     #[serde(default)]
@@ -793,6 +801,10 @@ fn height_field(h: &HeightFieldDesc, ctx: &Context, what: &str) -> Result<Height
         .with_traversal(match h.traversal.unwrap_or(TraversalDesc::Tree) {
             TraversalDesc::Tree => HeightFieldTraversal::MinMaxTree,
             TraversalDesc::Dda => HeightFieldTraversal::Dda,
+        })
+        .with_surface(match h.cells.unwrap_or(CellsDesc::Triangles) {
+            CellsDesc::Triangles => CellSurface::Triangles,
+            CellsDesc::Bilinear => CellSurface::Bilinear,
         })
         .with_smooth_normals(h.smooth.unwrap_or(true)))
 }

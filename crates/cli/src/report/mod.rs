@@ -29,7 +29,7 @@ pub struct Options {
     pub scenes: Option<Vec<String>>,
     /// Backends (default: every backend but the variants).
     pub backends: Option<Vec<String>>,
-    /// Modes (default: all three).
+    /// Modes (default: all; `mip` and `composite` run only on scenes with volumes).
     pub modes: Option<Vec<Mode>>,
     /// Output folder.
     pub out: PathBuf,
