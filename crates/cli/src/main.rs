@@ -285,6 +285,12 @@ fn render(cmd: &RenderCmd, assets: &Path) -> Result<ExitCode> {
         None => default_backend(),
     };
     let scene = load_scene(&cmd.scene, assets)?;
+    if !scene.volumes.is_empty() && !matches!(settings.mode, Mode::Mip | Mode::Composite) {
+        eprintln!(
+            "note: the scene's {} volume(s) show only with --mode mip or --mode composite",
+            scene.volumes.len()
+        );
+    }
     let (r, build) =
         prepare(b, &scene).map_err(|e| anyhow::anyhow!("backend '{}': {e}", b.name))?;
     let frame = r.render(&settings)?;

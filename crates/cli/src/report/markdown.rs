@@ -105,6 +105,7 @@ pub fn charts(results: &Results, dir: &Path) -> Charts {
         let x_label = match experiment.as_str() {
             "primitives" => "primitives M",
             "pixels" => "pixels N^2",
+            "heightfield" => "height-field cells N^2",
             _ => "samples per pixel K",
         };
         for (quantity, y_label) in [
@@ -461,7 +462,8 @@ pub fn report(results: &Results, charts: &Charts) -> String {
             s,
             "Log-log fits `y ~ x^slope` of render time (and tests per ray) against the number of \
              primitives M (`soup:M`, `spheres:M` generators, 64 x 64 camera rays), the pixel \
-             count N^2 (bunny) and the samples per pixel K (Cornell box, path tracing, 64 x 64). \
+             count N^2 (bunny), the samples per pixel K (Cornell box, path tracing, 64 x 64) and \
+             the height-field cell count N^2 (direct and tessellated, see below). \
              The claims under test: naive's time grows linearly with M (slope about 1), an \
              acceleration structure's barely (slope near 0, logarithmic in theory); time grows \
              linearly with N^2 and with K for every backend.\n"
