@@ -107,8 +107,7 @@ pub struct HeightField {
     smooth: bool,
 }
 
-/// Largest number of vertices of one height field (`8193^2`, 256 MiB of heights).
-pub const MAX_HEIGHT_FIELD_VERTICES: u64 = 1 << 26;
+pub use crate::limits::MAX_HEIGHT_FIELD_VERTICES;
 
 impl HeightField {
     /// A height field of `nx x nz` cells from `(nx + 1) (nz + 1)` vertex heights in row

@@ -19,8 +19,7 @@ use crate::ray::Ray;
 use glam::{Affine3A, Vec3};
 use std::ops::ControlFlow;
 
-/// Largest number of voxels of one volume (`2^27`: 512 MiB as f32).
-pub const MAX_VOLUME_VOXELS: u64 = 1 << 27;
+pub use crate::limits::MAX_VOLUME_VOXELS;
 
 /// Side of the blocks of the coarse min-max grid used for empty-space skipping. Measured on
 /// `phantom` composite (bench `volume/phantom`): 8 beats 4 and 16 on that scene.
