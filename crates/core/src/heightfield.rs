@@ -750,6 +750,23 @@ mod tests {
             hf.intersect(&Ray::new(Vec3::new(0.1, 2.0, 0.3), Vec3::Y))
                 .is_none()
         );
+        // Degenerate rays miss with both walks.
+        for field in [
+            hf.clone(),
+            hf.clone().with_traversal(HeightFieldTraversal::Dda),
+        ] {
+            for ray in [
+                Ray::new(Vec3::new(0.1, 2.0, 0.3), Vec3::ZERO),
+                Ray::new(Vec3::splat(f32::NAN), -Vec3::Y),
+                Ray::new(Vec3::new(0.1, 2.0, 0.3), Vec3::new(f32::NAN, -1.0, 0.0)),
+            ] {
+                assert!(field.intersect(&ray).is_none(), "{ray:?}");
+            }
+            // Starting below the surface: hits it from below.
+            let up = Ray::new(Vec3::new(0.1, 0.2, 0.3), Vec3::Y);
+            let t = field.intersect(&up).unwrap().t;
+            assert!((t - 0.3).abs() < 1e-6, "{t}");
+        }
     }
 
     #[test]

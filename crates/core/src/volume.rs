@@ -461,6 +461,10 @@ impl Volume {
         let inv_s = self.spacing.recip();
         let go = (o - b.min) * inv_s;
         let gd = d * inv_s;
+        // NaN or infinite rays, and zero directions (which never leave), cross nothing.
+        if !(go.is_finite() && gd.is_finite()) || gd == Vec3::ZERO {
+            return None;
+        }
         let dims = Vec3::new(
             self.dims[0] as f32,
             self.dims[1] as f32,
@@ -478,7 +482,7 @@ impl Volume {
             t0 = t0.max(ta.min(tb));
             t1 = t1.min(ta.max(tb));
         }
-        (t0 < t1).then_some((go, gd, t0, t1))
+        (t0 < t1 && t1.is_finite()).then_some((go, gd, t0, t1))
     }
 
     /// Integrates `ray` through this volume over `[ray.t_min, t_max]` (`t_max`: the
@@ -822,6 +826,27 @@ mod tests {
                 assert!((acc.color.x - (1.0 - expected)).abs() < 1e-4);
             }
         }
+    }
+
+    #[test]
+    fn degenerate_rays_cross_nothing() {
+        let v = random_volume([4, 4, 4]);
+        for ray in [
+            Ray::new(Vec3::ZERO, Vec3::ZERO),
+            Ray::new(Vec3::splat(f32::NAN), Vec3::X),
+            Ray::new(Vec3::ZERO, Vec3::new(f32::NAN, 0.0, 1.0)),
+            Ray::new(
+                Vec3::new(0.0, 0.0, -10.0),
+                Vec3::new(0.0, 0.0, f32::INFINITY),
+            ),
+        ] {
+            let mut acc = VolumeSample::default();
+            v.integrate(&ray, f32::INFINITY, true, &mut acc);
+            assert_eq!(acc, VolumeSample::default(), "{ray:?}");
+        }
+        // A ray starting inside and going along an axis crosses to the border.
+        let inside = v.voxels_crossed(&Ray::new(Vec3::ZERO, Vec3::X), f32::INFINITY);
+        assert!(!inside.is_empty());
     }
 
     #[test]
