@@ -561,7 +561,12 @@ fn bench_trace(c: &mut Criterion, p: &Prepared) {
 }
 
 fn benches_all(c: &mut Criterion) {
-    let scenes = raybench::report::QUICK_SCENES.iter().chain(&EXTRA_SCENES);
+    // The phantom is a volume without primitives: its integration is benched in
+    // `benches/grids.rs`.
+    let scenes = raybench::report::QUICK_SCENES
+        .iter()
+        .filter(|&&n| n != "phantom")
+        .chain(&EXTRA_SCENES);
     for &name in scenes {
         let Some(p) = prepare(name) else { continue };
         check_agreement(&p);

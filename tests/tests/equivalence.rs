@@ -47,6 +47,8 @@ scene_tests! {
     terrain => "terrain:64",
     whitted => "whitted",
     teapot_stadium => "teapot-stadium",
+    heightfield => "heightfield",
+    heightfield_generator => "heightfield:64",
 }
 
 macro_rules! mode_tests {
@@ -70,6 +72,7 @@ mode_tests! {
     modes_teapot => "teapot",
     modes_random_spheres => "spheres:2000",
     modes_terrain => "terrain:32",
+    modes_heightfield => "heightfield",
 }
 
 /// Backends not bound by the bit-exact contract, and where each is compared with naive

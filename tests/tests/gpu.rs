@@ -77,3 +77,25 @@ fn the_empty_scene_renders_background() {
     assert!(f.ids.iter().all(|&id| id == raybench_core::NO_HIT));
     assert!(f.color.iter().all(|&c| c == scene.background));
 }
+
+/// Height fields and the volume modes have no WGSL port: the backend refuses them with a
+/// reason instead of rendering something else.
+#[test]
+fn kinds_and_modes_without_kernels_are_refused() {
+    let r = raybench_wgpu::WgpuRenderer::new("wgpu", "test");
+    for mode in [raybench_core::Mode::Mip, raybench_core::Mode::Composite] {
+        let why = r.supports_mode(mode).unwrap_err();
+        assert!(why.contains(mode.name()), "{why}");
+    }
+    let scene = raybench_scene::load("heightfield:8", std::path::Path::new(".")).unwrap();
+    assert!(raybench_wgpu::check_kinds(&scene).is_err());
+    if !raybench_tests::gpu::available() {
+        return;
+    }
+    let mut r = r;
+    assert!(r.supports(&scene).unwrap_err().contains("height field"));
+    assert!(matches!(
+        r.prepare(&std::sync::Arc::new(scene)),
+        Err(RenderError::Unsupported(_))
+    ));
+}

@@ -62,7 +62,7 @@ struct ReportCmd {
     /// Comma-separated backends (default: every backend but the pinned variants).
     #[arg(long, value_delimiter = ',')]
     backends: Option<Vec<String>>,
-    /// Comma-separated modes (cast, whitted, path; default: all).
+    /// Comma-separated modes (cast, whitted, path, mip, composite; default: all).
     #[arg(long, value_delimiter = ',', value_parser = parse_mode)]
     modes: Option<Vec<Mode>>,
     /// Output folder (created; files in it are replaced).
@@ -288,6 +288,12 @@ fn render(cmd: &RenderCmd, assets: &Path) -> Result<ExitCode> {
         None => default_backend(),
     };
     let scene = load_scene(&cmd.scene, assets)?;
+    if !scene.volumes.is_empty() && !matches!(settings.mode, Mode::Mip | Mode::Composite) {
+        eprintln!(
+            "note: the scene's {} volume(s) show only with --mode mip or --mode composite",
+            scene.volumes.len()
+        );
+    }
     let p = prepare(b, &scene).map_err(|e| anyhow::anyhow!("backend '{}': {e}", b.name))?;
     let frame = p.renderer.render(&settings)?;
     let secs = timed_seconds(&frame.timings);
@@ -436,7 +442,10 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
             renderer: r,
             build,
             phases: prepare_phases,
-        } = match prepare(b, &scene) {
+        } = match prepare(b, &scene).and_then(|p| {
+            p.renderer.supports_mode(settings.mode)?;
+            Ok(p)
+        }) {
             Ok(x) => x,
             Err(reason) => {
                 eprintln!("skipping {}: {reason}", b.name);
@@ -669,8 +678,9 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
     println!("scene       {}", scene.name);
     println!("primitives  {}", g.len());
     for (kind, n) in g.count_by_kind() {
-        println!("  {:<10}{n}", kind.name());
+        println!("  {:<9} {n}", kind.name());
     }
+    println!("volumes     {}", scene.volumes.len());
     println!("objects     {}", scene.objects.len());
     println!("materials   {}", scene.materials.len());
     println!("lights      {}", scene.lights.len());

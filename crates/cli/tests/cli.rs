@@ -140,6 +140,42 @@ fn compare_incoherent_rays_with_every_backend() {
 }
 
 #[test]
+fn volume_modes_render_the_phantom_and_height_fields_render() {
+    let dir = tmp_dir("volumes");
+    for (scene, mode) in [
+        ("phantom", "mip"),
+        ("phantom", "composite"),
+        ("heightfield", "whitted"),
+        ("heightfield:64", "cast"),
+    ] {
+        let out = dir.join(format!("{mode}.png"));
+        let o = raybench(&[
+            "render",
+            scene,
+            "--mode",
+            mode,
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(
+            o.status.success(),
+            "{scene} {mode}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let img = image::open(&out).unwrap().to_rgb8();
+        assert_eq!(img.dimensions(), (32, 32));
+        // Something is drawn: not one flat colour.
+        let first = *img.get_pixel(0, 0);
+        assert!(img.pixels().any(|p| *p != first), "{scene} {mode} is flat");
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
 fn every_mode_renders_and_compares() {
     for mode in ["cast", "whitted", "path"] {
         let o = raybench(&[
@@ -303,7 +339,98 @@ fn bad_files_give_one_line_errors() {
         ("no-such-scene".to_owned(), "unknown scene"),
         ("soup:0".to_owned(), "soup:0"),
         ("terrain:99999".to_owned(), "terrain:99999"),
+        ("heightfield:0".to_owned(), "heightfield:0"),
     ];
+    // Height fields and volumes from broken or absurd files.
+    write(&dir, "bad.png", b"\x89PNG\r\n\x1a\nnot really a png");
+    write(&dir, "short.raw", &[0u8; 10]);
+    let huge_png = {
+        // A valid header claiming 1,000,000 x 1,000,000 pixels, and nothing after it.
+        let mut b = b"\x89PNG\r\n\x1a\n\x00\x00\x00\x0dIHDR".to_vec();
+        b.extend_from_slice(&1_000_000u32.to_be_bytes());
+        b.extend_from_slice(&1_000_000u32.to_be_bytes());
+        b.extend_from_slice(&[16, 0, 0, 0, 0]);
+        let crc = 0u32; // Wrong on purpose: either check refuses it.
+        b.extend_from_slice(&crc.to_be_bytes());
+        b
+    };
+    write(&dir, "huge.png", &huge_png);
+    let grid_cases: Vec<(&str, &[u8], &str)> = vec![
+        (
+            "hf-png.toml",
+            b"[[object]]\nkind = \"height_field\"\npng = \"bad.png\"\n",
+            "bad.png",
+        ),
+        (
+            "hf-huge.toml",
+            b"[[object]]\nkind = \"height_field\"\npng = \"huge.png\"\n",
+            "huge.png",
+        ),
+        (
+            "hf-raw.toml",
+            b"[[object]]\nkind = \"height_field\"\nraw = \"short.raw\"\nsize = [4, 4]\n",
+            "short.raw",
+        ),
+        (
+            "hf-two.toml",
+            b"[[object]]\nkind = \"height_field\"\nsource = \"terrain:4\"\nheights = [[0, 0], [0, 0]]\n",
+            "exactly one",
+        ),
+        (
+            "hf-nan.toml",
+            b"[[object]]\nkind = \"height_field\"\nheights = [[0, nan], [0, 0]]\n",
+            "not finite",
+        ),
+        (
+            "hf-ragged.toml",
+            b"[[object]]\nkind = \"height_field\"\nheights = [[0, 0], [0]]\n",
+            "same length",
+        ),
+        (
+            "vol-raw.toml",
+            b"[[volume]]\nraw = \"short.raw\"\ndims = [2, 2, 2]\nformat = \"u16\"\n",
+            "short.raw",
+        ),
+        (
+            "vol-huge.toml",
+            b"[[volume]]\nraw = \"short.raw\"\ndims = [100000, 100000, 100000]\n",
+            "exceeds the limit",
+        ),
+        (
+            "vol-zero.toml",
+            b"[[volume]]\nraw = \"short.raw\"\ndims = [0, 2, 5]\nformat = \"u8\"\n",
+            "empty",
+        ),
+        (
+            "vol-spacing.toml",
+            b"[[volume]]\nsource = \"phantom:4\"\nspacing = [1, -1, 1]\n",
+            "spacing",
+        ),
+        (
+            "vol-tf.toml",
+            b"[[volume]]\nsource = \"phantom:4\"\ntransfer = [{ value = 0.5, color = [1, 1, 1], sigma = 1 }, { value = 0.2, color = [1, 1, 1], sigma = 1 }]\n",
+            "increasing",
+        ),
+        (
+            "vol-big.toml",
+            b"[[volume]]\nsource = \"phantom:100000\"\n",
+            "phantom:100000",
+        ),
+    ];
+    for (name, text, needle) in grid_cases {
+        let scene = write(&dir, name, text);
+        let o = raybench(&[
+            "render",
+            &scene,
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--out",
+            dir.join("o.png").to_str().unwrap(),
+        ]);
+        assert_clean_error(&o, needle);
+    }
     for (scene, needle) in &cases {
         let o = raybench(&[
             "render",

@@ -1,18 +1,20 @@
 //! The flat list of primitives that acceleration structures index into.
 
 use crate::aabb::Aabb;
+use crate::heightfield::HeightField;
 use crate::hit::Hit;
 use crate::plane::Plane;
 use crate::ray::Ray;
 use crate::sphere::Sphere;
 use crate::triangle::Triangle;
+use std::sync::Arc;
 
 /// One primitive. A closed enum so that the per-ray path dispatches with a `match`, not a
 /// virtual call (pbrt-v4's tagged pointers).
 ///
-/// Later object kinds with their own inner intersection (height fields, Bezier patches,
-/// implicit surfaces, CSG trees, volumes) join as further variants holding their data behind
-/// an `Arc`; they report a sub-primitive id in [`PrimHit::sub`].
+/// Object kinds with their own inner intersection (height fields; later Bezier patches,
+/// implicit surfaces, CSG trees) are further variants holding their data behind an `Arc`;
+/// they report a sub-primitive id in [`PrimHit::sub`].
 #[derive(Clone, Debug, PartialEq)]
 pub enum Shape {
     /// A triangle (meshes are stored as their triangles).
@@ -21,6 +23,9 @@ pub enum Shape {
     Sphere(Sphere),
     /// An infinite plane (unbounded).
     Plane(Plane),
+    /// A height field: one bounded primitive whose cells are walked directly; the
+    /// sub-primitive id is the tessellated triangle's index (two per cell).
+    HeightField(Arc<HeightField>),
 }
 
 /// The kinds of primitive, for statistics and for backends that support only some.
@@ -32,11 +37,13 @@ pub enum PrimitiveKind {
     Sphere,
     /// [`Shape::Plane`].
     Plane,
+    /// [`Shape::HeightField`].
+    HeightField,
 }
 
 impl PrimitiveKind {
     /// Every kind, in a fixed order.
-    pub const ALL: [Self; 3] = [Self::Triangle, Self::Sphere, Self::Plane];
+    pub const ALL: [Self; 4] = [Self::Triangle, Self::Sphere, Self::Plane, Self::HeightField];
 
     /// Lower-case name used in scene files and reports.
     #[must_use]
@@ -45,6 +52,7 @@ impl PrimitiveKind {
             Self::Triangle => "triangle",
             Self::Sphere => "sphere",
             Self::Plane => "plane",
+            Self::HeightField => "height field",
         }
     }
 }
@@ -71,6 +79,7 @@ impl Shape {
             Self::Triangle(_) => PrimitiveKind::Triangle,
             Self::Sphere(_) => PrimitiveKind::Sphere,
             Self::Plane(_) => PrimitiveKind::Plane,
+            Self::HeightField(_) => PrimitiveKind::HeightField,
         }
     }
 
@@ -82,6 +91,7 @@ impl Shape {
             Self::Triangle(t) => Some(t.bounds()),
             Self::Sphere(s) => Some(s.bounds()),
             Self::Plane(_) => None,
+            Self::HeightField(h) => Some(h.bounds()),
         }
     }
 
@@ -108,6 +118,7 @@ impl Shape {
                 u: 0.0,
                 v: 0.0,
             }),
+            Self::HeightField(h) => h.intersect(ray),
         }
     }
 
@@ -123,6 +134,7 @@ impl Shape {
                 (n, u, v)
             }
             Self::Plane(p) => (p.normal, h.u, h.v),
+            Self::HeightField(f) => (f.normal(h.sub, h.u, h.v), h.u, h.v),
         };
         Hit {
             t: h.t,
@@ -221,6 +233,23 @@ impl Geometry {
     #[must_use]
     pub fn bounds(&self) -> Aabb {
         self.bounds
+    }
+
+    /// Bytes held by the primitives: the shape list, the id lists, and what objects such
+    /// as height fields hold behind their `Arc`.
+    #[must_use]
+    pub fn memory_bytes(&self) -> usize {
+        let heap: usize = self
+            .shapes
+            .iter()
+            .map(|s| match s {
+                Shape::HeightField(h) => h.memory_bytes(),
+                _ => 0,
+            })
+            .sum();
+        self.shapes.len() * std::mem::size_of::<Shape>()
+            + (self.bounded.len() + self.unbounded.len()) * 4
+            + heap
     }
 
     /// Primitive counts by kind, in [`PrimitiveKind::ALL`] order, zero counts included.

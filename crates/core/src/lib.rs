@@ -15,11 +15,13 @@
 
 mod aabb;
 mod accel;
+mod bilinear;
 mod camera;
 mod emitters;
 mod error;
 mod frame;
 mod geometry;
+mod heightfield;
 mod hit;
 pub mod integrator;
 pub mod limits;
@@ -34,16 +36,19 @@ pub mod sampling;
 mod scene;
 mod sphere;
 mod triangle;
+pub mod volume;
 
 pub use aabb::{Aabb, FAR_SCALE, SlabRay};
 pub use accel::{
     Accel, AccelStats, CULL_SLACK, Counters, NoCounters, NodeStack, RayCounters, cull_bound,
 };
+pub use bilinear::{BilinearPatch, PatchHit};
 pub use camera::{Camera, CameraRays};
 pub use emitters::Emitters;
 pub use error::SceneError;
 pub use frame::{Frame, FrameStats, NO_HIT, Timings};
 pub use geometry::{Geometry, PrimHit, PrimitiveKind, Shape};
+pub use heightfield::{CellSurface, HeightField, HeightFieldTraversal, MAX_HEIGHT_FIELD_VERTICES};
 pub use hit::Hit;
 pub use material::{Checker, Light, Material, MaterialKind};
 pub use mesh::{PolygonMesh, TriangleMesh};
@@ -54,5 +59,8 @@ pub use renderer::{Mode, RenderError, RenderSettings, Renderer, TracedRays};
 pub use scene::{ObjectInfo, Scene, SceneBuilder};
 pub use sphere::Sphere;
 pub use triangle::Triangle;
+pub use volume::{
+    Sampling, TransferFunction, TransferPoint, Volume, VolumeData, VolumeParams, VolumeSample,
+};
 
-pub use glam::{Vec3, Vec3A};
+pub use glam::{Affine3A, Vec3, Vec3A};

@@ -22,3 +22,11 @@ pub const MAX_EXPLICIT_RAYS: u64 = 1 << 24;
 
 /// Largest accepted ray depth (bounces).
 pub const MAX_DEPTH: u32 = 64;
+
+/// Largest number of vertices of one height field (`8193^2`, 256 MiB of heights); PNG
+/// headers and raw sizes are checked against it before anything is decoded.
+pub const MAX_HEIGHT_FIELD_VERTICES: u64 = 1 << 26;
+
+/// Largest number of voxels of one volume (`2^27`: 512 MiB as f32); raw sizes and
+/// generator arguments are checked against it before anything is read.
+pub const MAX_VOLUME_VOXELS: u64 = 1 << 27;

@@ -21,11 +21,23 @@ pub enum Mode {
     /// Monte Carlo path tracing: cosine-weighted diffuse bounces, next-event estimation,
     /// Russian roulette, many samples per pixel.
     Path,
+    /// Maximum-intensity projection of the scene's volumes (the X-ray-like image): each
+    /// camera ray shows the grey level of the largest value it meets before a surface.
+    Mip,
+    /// Direct volume rendering by emission-absorption compositing through each volume's
+    /// transfer function, front to back, over the surface behind.
+    Composite,
 }
 
 impl Mode {
     /// Every mode.
-    pub const ALL: [Self; 3] = [Self::Cast, Self::Whitted, Self::Path];
+    pub const ALL: [Self; 5] = [
+        Self::Cast,
+        Self::Whitted,
+        Self::Path,
+        Self::Mip,
+        Self::Composite,
+    ];
 
     /// The name used on the command line.
     #[must_use]
@@ -34,6 +46,8 @@ impl Mode {
             Self::Cast => "cast",
             Self::Whitted => "whitted",
             Self::Path => "path",
+            Self::Mip => "mip",
+            Self::Composite => "composite",
         }
     }
 
@@ -185,6 +199,14 @@ pub trait Renderer: Send + Sync {
     /// # Errors
     /// The reason it does not.
     fn supports(&self, _scene: &Scene) -> Result<(), String> {
+        Ok(())
+    }
+
+    /// Whether the backend can render frames in `mode` (the GPU has no volume modes).
+    ///
+    /// # Errors
+    /// The reason it cannot.
+    fn supports_mode(&self, _mode: Mode) -> Result<(), String> {
         Ok(())
     }
 

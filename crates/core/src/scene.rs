@@ -4,12 +4,14 @@ use crate::camera::Camera;
 use crate::emitters::Emitters;
 use crate::error::SceneError;
 use crate::geometry::{Geometry, Shape};
+use crate::heightfield::HeightField;
 use crate::limits;
 use crate::material::{Light, Material};
 use crate::mesh::TriangleMesh;
 use crate::plane::Plane;
 use crate::sphere::Sphere;
 use crate::triangle::Triangle;
+use crate::volume::Volume;
 use glam::Vec3;
 use std::sync::Arc;
 
@@ -46,6 +48,9 @@ pub struct Scene {
     pub objects: Vec<ObjectInfo>,
     /// Emissive triangles, for next-event estimation.
     pub emitters: Emitters,
+    /// Voxel volumes, rendered by the modes `mip` and `composite` (not primitives: they
+    /// have no ids and acceleration structures never see them).
+    pub volumes: Vec<Arc<Volume>>,
 }
 
 impl Scene {
@@ -69,6 +74,7 @@ pub struct SceneBuilder {
     shapes: Vec<Shape>,
     prim_material: Vec<u32>,
     objects: Vec<ObjectInfo>,
+    volumes: Vec<Arc<Volume>>,
 }
 
 fn finite(v: Vec3, what: &str) -> Result<(), SceneError> {
@@ -104,6 +110,7 @@ impl SceneBuilder {
             shapes: Vec::new(),
             prim_material: Vec::new(),
             objects: Vec::new(),
+            volumes: Vec::new(),
         }
     }
 
@@ -289,6 +296,22 @@ impl SceneBuilder {
         Ok(self)
     }
 
+    /// Adds a height field as one primitive (its cells are sub-primitives).
+    ///
+    /// # Errors
+    /// When the material does not exist or the scene is full.
+    pub fn add_height_field(
+        &mut self,
+        name: impl Into<String>,
+        field: Arc<HeightField>,
+        material: u32,
+    ) -> Result<&mut Self, SceneError> {
+        self.check_material(material)?;
+        self.check_room(1)?;
+        self.push_object(name.into(), [Shape::HeightField(field)], material);
+        Ok(self)
+    }
+
     /// Adds triangles with one material each (`materials[i]` for `triangles[i]`), as one
     /// object: how OBJ files with several `usemtl` groups arrive.
     ///
@@ -326,6 +349,18 @@ impl SceneBuilder {
         Ok(self)
     }
 
+    /// Adds a voxel volume.
+    ///
+    /// # Errors
+    /// When its bounds exceed [`limits::MAX_COORDINATE`].
+    pub fn add_volume(&mut self, volume: Arc<Volume>) -> Result<&mut Self, SceneError> {
+        let b = volume.bounds();
+        coordinate(b.min, "volume bounds")?;
+        coordinate(b.max, "volume bounds")?;
+        self.volumes.push(volume);
+        Ok(self)
+    }
+
     /// Number of primitives added so far.
     #[must_use]
     pub fn primitive_count(&self) -> usize {
@@ -342,9 +377,11 @@ impl SceneBuilder {
     #[must_use]
     pub fn build(self) -> Scene {
         let geometry = Geometry::new(self.shapes);
-        let camera = self
-            .camera
-            .unwrap_or_else(|| Camera::framing(geometry.bounds()));
+        let framed = self
+            .volumes
+            .iter()
+            .fold(geometry.bounds(), |b, v| b.union(v.bounds()));
+        let camera = self.camera.unwrap_or_else(|| Camera::framing(framed));
         let emitters = Emitters::new(&geometry, &self.prim_material, &self.materials);
         Scene {
             name: self.name,
@@ -356,6 +393,7 @@ impl SceneBuilder {
             prim_material: self.prim_material,
             objects: self.objects,
             emitters,
+            volumes: self.volumes,
         }
     }
 }

@@ -117,21 +117,25 @@ pub fn version() -> Result<String, String> {
 }
 
 /// Whether the Embree backends support `scene`: triangles and planes in any number, other
-/// bounded primitives (spheres) up to [`MAX_SIDE_PRIMITIVES`].
+/// bounded primitives (spheres, height fields) up to [`MAX_SIDE_PRIMITIVES`]. A height
+/// field is one such primitive: it stays beside Embree's scene and every ray meets it
+/// through the core's own routine (its cells are not handed to Embree), so its hits are
+/// raybench's exactly.
 ///
 /// # Errors
 /// Why not.
 pub fn supports(scene: &Scene) -> Result<(), String> {
-    let spheres = scene
+    let side = scene
         .geometry
-        .shapes()
+        .bounded()
         .iter()
-        .filter(|s| s.kind() == PrimitiveKind::Sphere)
+        .filter(|&&id| scene.geometry.shape(id).kind() != PrimitiveKind::Triangle)
         .count();
-    if spheres > MAX_SIDE_PRIMITIVES {
+    if side > MAX_SIDE_PRIMITIVES {
         return Err(format!(
-            "{spheres} spheres: the Embree backends trace triangles in Embree and test other \
-             bounded primitives beside it by every ray, at most {MAX_SIDE_PRIMITIVES}"
+            "{side} spheres or height fields: the Embree backends trace triangles in Embree \
+             and test other bounded primitives beside it by every ray, at most \
+             {MAX_SIDE_PRIMITIVES}"
         ));
     }
     Ok(())

@@ -71,4 +71,14 @@ pub const BUILTIN_SCENES: &[BuiltinScene] = &[
         "the teapot inside a huge, nearly empty box (where uniform grids lose)",
         ["teapot/teapot.obj"]
     ),
+    builtin!(
+        "heightfield",
+        "a 1024^2-cell height field intersected directly, a mirror sphere, water",
+        []
+    ),
+    builtin!(
+        "phantom",
+        "the 3D Shepp-Logan head phantom, 128^3 voxels (modes mip and composite)",
+        []
+    ),
 ];

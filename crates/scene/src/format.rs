@@ -3,15 +3,20 @@
 use crate::error::LoadError;
 use crate::generators::{self, Generated};
 use crate::gltf_loader::load_gltf_file;
+use crate::grids::{RawSamples, SampleFormat, read_png_gray, read_raw};
 use crate::obj::{MeshData, load_obj_file};
 use crate::transform::Transform;
+use crate::volumes;
+use raybench_core::volume::{MAX_VOLUME_VOXELS, check_volume_dims};
 use raybench_core::{
-    Camera, Light, Material, MaterialKind, PolygonMesh, Scene, SceneBuilder, SceneError, Sphere,
-    Triangle, Vec3,
+    Camera, CellSurface, HeightField, HeightFieldTraversal, Light, MAX_HEIGHT_FIELD_VERTICES,
+    Material, MaterialKind, PolygonMesh, Scene, SceneBuilder, SceneError, Sphere, Triangle, Vec3,
 };
+use raybench_core::{Sampling, TransferFunction, TransferPoint, Volume, VolumeData, VolumeParams};
 use serde::Deserialize;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// Scene files larger than this are refused before reading (meshes belong in mesh files).
 const MAX_SCENE_FILE_BYTES: u64 = 64 << 20;
@@ -30,6 +35,42 @@ struct SceneFile {
     lights: Vec<LightDesc>,
     #[serde(default, rename = "object")]
     objects: Vec<ObjectDesc>,
+    #[serde(default, rename = "volume")]
+    volumes: Vec<VolumeDesc>,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "snake_case")]
+enum SamplingDesc {
+    Nearest,
+    Trilinear,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TransferDesc {
+    value: f32,
+    color: V3,
+    sigma: f32,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct VolumeDesc {
+    /// `phantom:N`.
+    source: Option<String>,
+    /// A raw file of `dims` little-endian samples, x fastest.
+    raw: Option<String>,
+    dims: Option<[u32; 3]>,
+    format: Option<SampleFormat>,
+    /// Object units per voxel along x, y, z.
+    spacing: Option<ScaleDesc>,
+    sampling: Option<SamplingDesc>,
+    skip_empty: Option<bool>,
+    window: Option<[f32; 2]>,
+    transfer: Option<Vec<TransferDesc>>,
+    #[serde(default)]
+    transform: TransformDesc,
 }
 
 #[derive(Deserialize)]
@@ -128,6 +169,7 @@ enum ObjectDesc {
     Polygons(PolygonsDesc),
     Mesh(MeshDesc),
     Generator(GeneratorDesc),
+    HeightField(HeightFieldDesc),
 }
 
 #[derive(Deserialize)]
@@ -177,6 +219,43 @@ struct MeshDesc {
 struct GeneratorDesc {
     spec: String,
     seed: Option<u32>,
+    material: Option<String>,
+    #[serde(default)]
+    transform: TransformDesc,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "snake_case")]
+enum TraversalDesc {
+    Tree,
+    Dda,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "snake_case")]
+enum CellsDesc {
+    Triangles,
+    Bilinear,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct HeightFieldDesc {
+    /// `terrain:N`: the heights of the terrain generator.
+    source: Option<String>,
+    /// An 8- or 16-bit greyscale PNG: one vertex per pixel, heights in [0, 1].
+    png: Option<String>,
+    /// A raw file of `size[0] x size[1]` little-endian samples.
+    raw: Option<String>,
+    /// Vertices per row and rows (raw files).
+    size: Option<[u32; 2]>,
+    /// Sample type of the raw file (default u16).
+    format: Option<SampleFormat>,
+    /// Vertex heights inline, row by row.
+    heights: Option<Vec<Vec<f32>>>,
+    traversal: Option<TraversalDesc>,
+    cells: Option<CellsDesc>,
+    smooth: Option<bool>,
     material: Option<String>,
     #[serde(default)]
     transform: TransformDesc,
@@ -504,6 +583,7 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
                 let count = match info.name {
                     "icosphere" => 20u64 << (2 * count),
                     "terrain" => 2 * count * count,
+                    "heightfield" => 1,
                     _ => count,
                 };
                 let limit = raybench_core::limits::MAX_PRIMITIVES as u64;
@@ -535,11 +615,198 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
                             b.add_sphere(s, m).map_err(&err)?;
                         }
                     }
+                    Generated::HeightField { n, heights } => {
+                        // The placement as the tessellated terrain applies it: none for
+                        // the identity, else `transform_point3` on every vertex.
+                        let field =
+                            HeightField::new(n, n, heights, (!xf.is_identity()).then_some(a))
+                                .map_err(&err)?;
+                        b.add_height_field(g.spec.as_str(), Arc::new(field), m)
+                            .map_err(err)?;
+                    }
                 }
+            }
+            ObjectDesc::HeightField(h) => {
+                let m = material(&h.material)?.unwrap_or(0);
+                let field = height_field(h, ctx, &what)?;
+                b.add_height_field("height field", Arc::new(field), m)
+                    .map_err(err)?;
             }
         }
     }
+    for (index, v) in file.volumes.iter().enumerate() {
+        let what = format!("volume {}", index + 1);
+        let volume = volume(v, ctx, &what)?;
+        b.add_volume(Arc::new(volume))
+            .map_err(ctx.scene_err(&what))?;
+    }
     Ok(b.build())
+}
+
+/// Builds the volume a `[[volume]]` table describes.
+fn volume(v: &VolumeDesc, ctx: &Context, what: &str) -> Result<Volume, LoadError> {
+    let parse = |message: String| LoadError::Parse {
+        path: ctx.file.clone(),
+        message: format!("{what}: {message}"),
+    };
+    let scene_err = |source| LoadError::Scene {
+        context: format!("{}: {what}", ctx.file.display()),
+        source,
+    };
+    let (dims, data, default_spacing) = match (&v.source, &v.raw) {
+        (Some(spec), None) => {
+            if v.dims.is_some() || v.format.is_some() {
+                return Err(parse("dims and format belong to raw volumes".into()));
+            }
+            let n = volumes::parse_volume_spec(spec)?;
+            let data = volumes::rasterize(&volumes::shepp_logan_ellipsoids(), n);
+            // Generated volumes span [-1, 1]^3.
+            ([n; 3], VolumeData::F32(data), Vec3::splat(2.0 / n as f32))
+        }
+        (None, Some(raw)) => {
+            let dims = v
+                .dims
+                .ok_or_else(|| parse("a raw volume needs dims = [x, y, z]".into()))?;
+            let count = check_volume_dims(dims).map_err(scene_err)?;
+            let samples = read_raw(
+                &ctx.resolve(raw)?,
+                count,
+                v.format.unwrap_or(SampleFormat::U16),
+                MAX_VOLUME_VOXELS,
+            )?;
+            let data = match samples {
+                RawSamples::U8(d) => VolumeData::U8(d),
+                RawSamples::U16(d) => VolumeData::U16(d),
+                RawSamples::F32(d) => VolumeData::F32(d),
+            };
+            (dims, data, Vec3::ONE)
+        }
+        _ => {
+            return Err(parse("a volume needs exactly one of source and raw".into()));
+        }
+    };
+    let spacing = match v.spacing {
+        None => default_spacing,
+        Some(ScaleDesc::Uniform(s)) => Vec3::splat(s),
+        Some(ScaleDesc::PerAxis(s)) => Vec3::from(s),
+    };
+    let transfer = match &v.transfer {
+        None => TransferFunction::ramp(10.0),
+        Some(points) => TransferFunction::new(
+            points
+                .iter()
+                .map(|p| TransferPoint {
+                    value: p.value,
+                    color: Vec3::from(p.color),
+                    sigma: p.sigma,
+                })
+                .collect(),
+        )
+        .map_err(scene_err)?,
+    };
+    let defaults = VolumeParams::default();
+    let params = VolumeParams {
+        sampling: match v.sampling.unwrap_or(SamplingDesc::Nearest) {
+            SamplingDesc::Nearest => Sampling::Nearest,
+            SamplingDesc::Trilinear => Sampling::Trilinear,
+        },
+        skip_empty: v.skip_empty.unwrap_or(defaults.skip_empty),
+        window: v.window.unwrap_or(defaults.window),
+    };
+    Volume::new(
+        dims,
+        spacing,
+        data,
+        v.transform.to_transform().affine(),
+        transfer,
+        params,
+    )
+    .map_err(scene_err)
+}
+
+/// Builds the height field an object describes, from exactly one source.
+fn height_field(h: &HeightFieldDesc, ctx: &Context, what: &str) -> Result<HeightField, LoadError> {
+    let parse = |message: String| LoadError::Parse {
+        path: ctx.file.clone(),
+        message: format!("{what}: {message}"),
+    };
+    let sources = [
+        h.source.is_some(),
+        h.png.is_some(),
+        h.raw.is_some(),
+        h.heights.is_some(),
+    ];
+    if sources.iter().filter(|&&s| s).count() != 1 {
+        return Err(parse(
+            "a height field needs exactly one of source, png, raw and heights".into(),
+        ));
+    }
+    if h.raw.is_none() && (h.size.is_some() || h.format.is_some()) {
+        return Err(parse("size and format belong to raw height fields".into()));
+    }
+    let (cols, rows, heights) = if let Some(spec) = &h.source {
+        let (info, n) = generators::parse_spec(spec)?;
+        if info.name != "terrain" {
+            return Err(parse(format!(
+                "source '{spec}' is not a height generator (expected terrain:N)"
+            )));
+        }
+        let n = n as u32;
+        (n + 1, n + 1, generators::terrain_heights(n))
+    } else if let Some(png) = &h.png {
+        read_png_gray(&ctx.resolve(png)?, MAX_HEIGHT_FIELD_VERTICES)?
+    } else if let Some(raw) = &h.raw {
+        let [cols, rows] = h
+            .size
+            .ok_or_else(|| parse("a raw height field needs size = [columns, rows]".into()))?;
+        let count = u64::from(cols) * u64::from(rows);
+        let samples = read_raw(
+            &ctx.resolve(raw)?,
+            count,
+            h.format.unwrap_or(SampleFormat::U16),
+            MAX_HEIGHT_FIELD_VERTICES,
+        )?;
+        (cols, rows, samples.to_unit_f32())
+    } else {
+        let grid = h.heights.as_deref().unwrap_or_default();
+        let rows = grid.len();
+        let cols = grid.first().map_or(0, Vec::len);
+        if grid.iter().any(|r| r.len() != cols) {
+            return Err(parse("every row of heights needs the same length".into()));
+        }
+        (
+            u32::try_from(cols).unwrap_or(u32::MAX),
+            u32::try_from(rows).unwrap_or(u32::MAX),
+            grid.concat(),
+        )
+    };
+    if cols < 2 || rows < 2 {
+        return Err(parse(format!(
+            "a height field needs at least 2 x 2 vertices, got {cols} x {rows}"
+        )));
+    }
+    let xf = h.transform.to_transform();
+    let scene_err = |source| LoadError::Scene {
+        context: format!("{}: {what}", ctx.file.display()),
+        source,
+    };
+    let field = HeightField::new(
+        cols - 1,
+        rows - 1,
+        heights,
+        (!xf.is_identity()).then(|| xf.affine()),
+    )
+    .map_err(scene_err)?;
+    Ok(field
+        .with_traversal(match h.traversal.unwrap_or(TraversalDesc::Tree) {
+            TraversalDesc::Tree => HeightFieldTraversal::MinMaxTree,
+            TraversalDesc::Dda => HeightFieldTraversal::Dda,
+        })
+        .with_surface(match h.cells.unwrap_or(CellsDesc::Triangles) {
+            CellsDesc::Triangles => CellSurface::Triangles,
+            CellsDesc::Bilinear => CellSurface::Bilinear,
+        })
+        .with_smooth_normals(h.smooth.unwrap_or(true)))
 }
 
 #[cfg(test)]
@@ -652,6 +919,49 @@ mod tests {
                 "{text:?} -> {e}"
             );
         }
+    }
+
+    #[test]
+    fn height_fields_and_volumes_from_files_and_inline() {
+        let dir = std::env::temp_dir().join(format!("raybench-format-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // A 3 x 2-pixel 16-bit PNG and a 2 x 3 x 4 raw u16 volume.
+        let png = dir.join("h.png");
+        image::ImageBuffer::<image::Luma<u16>, _>::from_raw(
+            3,
+            2,
+            vec![0u16, 100, 200, 300, 400, 65535],
+        )
+        .unwrap()
+        .save(&png)
+        .unwrap();
+        let raw = dir.join("v.raw");
+        let voxels: Vec<u8> = (0..24u16).flat_map(|v| (v * 1000).to_le_bytes()).collect();
+        std::fs::write(&raw, voxels).unwrap();
+        let text = format!(
+            "[[object]]\nkind = \"height_field\"\npng = \"{}\"\ntraversal = \"dda\"\n\
+             [[object]]\nkind = \"height_field\"\nheights = [[0, 1, 0], [1, 0.5, 1]]\n\
+             smooth = false\n\
+             [[volume]]\nraw = \"{}\"\ndims = [2, 3, 4]\nformat = \"u16\"\n\
+             spacing = [1, 1, 2.5]\nsampling = \"trilinear\"\n",
+            png.display(),
+            raw.display()
+        );
+        let s = load(&text).unwrap();
+        assert_eq!(s.geometry.len(), 2);
+        for id in 0..2 {
+            let raybench_core::Shape::HeightField(h) = s.geometry.shape(id) else {
+                panic!("not a height field")
+            };
+            assert_eq!(h.cells(), (2, 1));
+        }
+        assert_eq!(s.volumes.len(), 1);
+        assert_eq!(s.volumes[0].dims(), [2, 3, 4]);
+        // Spacing 2.5 in z: the volume spans 10 units along z, centred.
+        let b = s.volumes[0].bounds();
+        assert_eq!((b.min.z, b.max.z), (-5.0, 5.0));
+        assert_eq!(s.volumes[0].voxel([1, 0, 0]), 1000.0 / 65535.0);
+        std::fs::remove_dir_all(dir).ok();
     }
 
     #[test]

@@ -1,13 +1,16 @@
-//! Seeded procedural scenes: `soup:M`, `spheres:M`, `icosphere:L`, `terrain:N`.
+//! Seeded procedural scenes: `soup:M`, `spheres:M`, `icosphere:L`, `terrain:N`,
+//! `heightfield:N`.
 //!
 //! Every generator is a pure function of its parameters and seed (random numbers come from
 //! the core's counter-based [`pcg3d`] hash), so the same spec gives the same scene
 //! everywhere.
 
 use crate::error::LoadError;
+use raybench_core::HeightField;
 use raybench_core::sampling::{pcg3d, to_unit_f32};
 use raybench_core::{Camera, Light, Material, Scene, SceneBuilder, Sphere, TriangleMesh, Vec3};
 use std::collections::HashMap;
+use std::sync::Arc;
 
 /// A generator's description for `raybench scenes`.
 #[derive(Clone, Copy, Debug)]
@@ -23,7 +26,7 @@ pub struct GeneratorInfo {
 }
 
 /// The generators.
-pub const GENERATORS: [GeneratorInfo; 4] = [
+pub const GENERATORS: [GeneratorInfo; 5] = [
     GeneratorInfo {
         name: "soup",
         argument: "M triangles",
@@ -48,6 +51,12 @@ pub const GENERATORS: [GeneratorInfo; 4] = [
         max: 4096,
         description: "height-field terrain (sin/cos bumps) tessellated into triangles",
     },
+    GeneratorInfo {
+        name: "heightfield",
+        argument: "N x N cells (one height-field primitive)",
+        max: 4096,
+        description: "the terrain:N heights as one directly intersected height field",
+    },
 ];
 
 /// The seed used when a spec gives none.
@@ -60,6 +69,13 @@ pub enum Generated {
     Mesh(TriangleMesh),
     /// Spheres.
     Spheres(Vec<Sphere>),
+    /// The vertex heights of an `n x n`-cell height field (see [`terrain_heights`]).
+    HeightField {
+        /// Cells per side.
+        n: u32,
+        /// `(n + 1)^2` heights, row by row.
+        heights: Vec<f32>,
+    },
 }
 
 /// True when `spec` has the form `name:arg` with a known generator name.
@@ -116,6 +132,10 @@ pub fn generate(spec: &str, seed: u32) -> Result<Generated, LoadError> {
         "soup" => Generated::Mesh(soup(n as u32, seed)),
         "spheres" => Generated::Spheres(random_spheres(n as u32, seed)),
         "icosphere" => Generated::Mesh(icosphere(n as u32)),
+        "heightfield" => Generated::HeightField {
+            n: n as u32,
+            heights: terrain_heights(n as u32),
+        },
         _ => Generated::Mesh(terrain(n as u32)),
     })
 }
@@ -240,6 +260,23 @@ pub fn terrain_height(x: f32, z: f32) -> f32 {
         + 0.015 * (31.0 * x).cos() * (27.0 * z).sin()
 }
 
+/// The `(n + 1)^2` vertex heights of [`terrain`]`(n)`, row by row, computed with the same
+/// expressions (so that a [`raybench_core::HeightField`] over them has the mesh's
+/// vertices bit for bit).
+#[must_use]
+pub fn terrain_heights(n: u32) -> Vec<f32> {
+    let n = n.max(1);
+    let mut heights = Vec::with_capacity(((n + 1) * (n + 1)) as usize);
+    for j in 0..=n {
+        for i in 0..=n {
+            let x = -1.0 + 2.0 * i as f32 / n as f32;
+            let z = -1.0 + 2.0 * j as f32 / n as f32;
+            heights.push(terrain_height(x, z));
+        }
+    }
+    heights
+}
+
 /// An `n x n`-cell height field over `[-1, 1]^2` in x and z, heights along y, tessellated
 /// into `2 n^2` triangles: cell `(i, j)` (column `i`, row `j`, row-major) becomes triangles
 /// `2 (j n + i)` = `(p00, p01, p11)` and `2 (j n + i) + 1` = `(p00, p11, p10)`, where `pXY` is
@@ -279,7 +316,6 @@ pub fn test_geometries(
     spheres: u32,
 ) -> Vec<(&'static str, std::sync::Arc<raybench_core::Geometry>)> {
     use raybench_core::{Geometry, Plane, Shape};
-    use std::sync::Arc;
     let tris = |m: TriangleMesh| m.triangles().map(Shape::Triangle).collect::<Vec<_>>();
     let mut mixed = tris(icosphere(2));
     mixed.extend(random_spheres(spheres, 9).into_iter().map(Shape::Sphere));
@@ -309,8 +345,18 @@ fn palette() -> [Material; 5] {
     ]
 }
 
+/// The camera of `terrain:N` and `heightfield:N`: from above at an angle.
+fn terrain_camera() -> Camera {
+    Camera {
+        position: Vec3::new(0.0, 1.3, 2.1),
+        look_at: Vec3::new(0.0, -0.1, 0.0),
+        up: Vec3::Y,
+        vfov_degrees: 45.0,
+    }
+}
+
 /// The whole scene of a generator spec: the geometry, a light, and a camera framing it
-/// (from above at an angle for terrain).
+/// (from above at an angle for terrain and height fields).
 ///
 /// # Errors
 /// As [`parse_spec`].
@@ -338,14 +384,14 @@ pub fn generate_scene(spec: &str) -> Result<Scene, LoadError> {
             let material = if name == "terrain" { mats[1] } else { mats[4] };
             b.add_mesh(spec, &mesh, material).map_err(scene_err)?;
             if name == "terrain" {
-                b.camera(Camera {
-                    position: Vec3::new(0.0, 1.3, 2.1),
-                    look_at: Vec3::new(0.0, -0.1, 0.0),
-                    up: Vec3::Y,
-                    vfov_degrees: 45.0,
-                })
-                .map_err(scene_err)?;
+                b.camera(terrain_camera()).map_err(scene_err)?;
             }
+        }
+        Generated::HeightField { n, heights } => {
+            let field = HeightField::new(n, n, heights, None).map_err(scene_err)?;
+            b.add_height_field(spec, Arc::new(field), mats[1])
+                .map_err(scene_err)?;
+            b.camera(terrain_camera()).map_err(scene_err)?;
         }
         Generated::Spheres(spheres) => {
             for (i, s) in spheres.into_iter().enumerate() {

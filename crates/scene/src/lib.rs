@@ -17,8 +17,10 @@ mod error;
 mod format;
 pub mod generators;
 mod gltf_loader;
+pub mod grids;
 mod obj;
 mod transform;
+pub mod volumes;
 
 pub use builtin::{BUILTIN_SCENES, BuiltinScene};
 pub use error::LoadError;

@@ -147,9 +147,10 @@ fn v4(v: Vec3, w: f32) -> [f32; 4] {
     [v.x, v.y, v.z, w]
 }
 
-fn prim(shape: &Shape, id: u32) -> GpuPrim {
+/// The GPU record of a primitive, `None` for kinds without a WGSL port.
+fn prim(shape: &Shape, id: u32) -> Option<GpuPrim> {
     let idw = f32::from_bits(id);
-    match shape {
+    Some(match shape {
         Shape::Triangle(t) => GpuPrim {
             a: v4(t.v[0], f32::from_bits(KIND_TRIANGLE)),
             b: v4(t.v[1], idw),
@@ -165,21 +166,28 @@ fn prim(shape: &Shape, id: u32) -> GpuPrim {
             b: v4(Vec3::ZERO, idw),
             c: v4(p.normal, 0.0),
         },
-    }
+        Shape::HeightField(_) => return None,
+    })
 }
 
 /// Why the shaders cannot render `scene`, if they cannot: every primitive kind must have a
-/// WGSL port (triangles, spheres and planes do).
+/// WGSL port (triangles, spheres and planes do; height fields do not yet).
 ///
 /// # Errors
 /// The first primitive kind without a port.
 pub fn check_kinds(scene: &Scene) -> Result<(), String> {
-    for s in scene.geometry.shapes() {
-        match s {
-            Shape::Triangle(_) | Shape::Sphere(_) | Shape::Plane(_) => {}
-        }
+    match scene
+        .geometry
+        .shapes()
+        .iter()
+        .find(|s| prim(s, 0).is_none())
+    {
+        Some(s) => Err(format!(
+            "the GPU kernels have no {} intersection (render it with a CPU backend)",
+            s.kind().name()
+        )),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// The scene flattened for the GPU.
@@ -202,8 +210,13 @@ pub struct SceneData {
 
 impl SceneData {
     /// Flattens `scene` with its BVH.
-    #[must_use]
-    pub fn new(scene: &Scene, bvh: &Bvh) -> Self {
+    ///
+    /// # Errors
+    /// When the scene holds a primitive kind without a WGSL port ([`check_kinds`]).
+    pub fn new(scene: &Scene, bvh: &Bvh) -> Result<Self, String> {
+        check_kinds(scene)?;
+        // Kinds are checked above, so `prim` is `Some` for every primitive.
+        let flat = |id: u32| prim(scene.geometry.shape(id), id).unwrap_or_default();
         let g = &scene.geometry;
         let nodes = bvh
             .nodes()
@@ -216,16 +229,12 @@ impl SceneData {
             })
             .collect();
         // Leaves index the primitive buffer directly: primitives are stored in leaf order.
-        let mut prims: Vec<GpuPrim> = bvh
-            .prim_ids()
-            .iter()
-            .map(|&id| prim(g.shape(id), id))
-            .collect();
+        let mut prims: Vec<GpuPrim> = bvh.prim_ids().iter().map(|&id| flat(id)).collect();
         let unbounded = (prims.len() as u32, g.unbounded().len() as u32);
-        prims.extend(g.unbounded().iter().map(|&id| prim(g.shape(id), id)));
+        prims.extend(g.unbounded().iter().map(|&id| flat(id)));
         let emitter_first = prims.len() as u32;
         for (&id, &cdf) in scene.emitters.ids.iter().zip(&scene.emitters.cdf) {
-            let mut p = prim(g.shape(id), id);
+            let mut p = flat(id);
             p.c[3] = cdf as f32;
             prims.push(p);
         }
@@ -263,7 +272,7 @@ impl SceneData {
             shading.push(v4(a, f32::from_bits(kind)));
             shading.push(v4(b, 0.0));
         }
-        Self {
+        Ok(Self {
             nodes,
             prims,
             prim_info,
@@ -271,7 +280,7 @@ impl SceneData {
             unbounded,
             emitters,
             lights,
-        }
+        })
     }
 
     /// Bytes of the scene buffers.
@@ -316,13 +325,19 @@ impl SceneData {
     }
 }
 
-/// The kernel (`entry point`) of a mode.
-#[must_use]
-pub fn entry_point(mode: Option<Mode>) -> &'static str {
+/// The kernel (entry point) of a mode (`None`: explicit rays), or why there is none.
+///
+/// # Errors
+/// For the volume modes, which have no WGSL port.
+pub fn entry_point(mode: Option<Mode>) -> Result<&'static str, String> {
     match mode {
-        Some(Mode::Cast) => "cast_kernel",
-        Some(Mode::Whitted) => "whitted_kernel",
-        Some(Mode::Path) => "path_kernel",
-        None => "trace_kernel",
+        Some(Mode::Cast) => Ok("cast_kernel"),
+        Some(Mode::Whitted) => Ok("whitted_kernel"),
+        Some(Mode::Path) => Ok("path_kernel"),
+        Some(m @ (Mode::Mip | Mode::Composite)) => Err(format!(
+            "the GPU kernels have no volume mode '{}' (render it with a CPU backend)",
+            m.name()
+        )),
+        None => Ok("trace_kernel"),
     }
 }

@@ -14,7 +14,7 @@ pub const BLOCK: u32 = 8;
 #[must_use]
 pub fn budget(mode: Mode) -> u64 {
     match mode {
-        Mode::Cast => 1 << 22,
+        Mode::Cast | Mode::Mip | Mode::Composite => 1 << 22,
         Mode::Whitted | Mode::Path => 1 << 20,
     }
 }

@@ -511,6 +511,10 @@ impl Renderer for WgpuRenderer {
         gpu(&self.request).ok().map(|g| g.describe())
     }
 
+    fn supports_mode(&self, mode: Mode) -> Result<(), String> {
+        entry_point(Some(mode)).map(|_| ())
+    }
+
     fn supports(&self, scene: &Scene) -> Result<(), String> {
         check_kinds(scene)?;
         // The largest buffer: the primitives (48 bytes each, plus the emitter list).
@@ -545,7 +549,7 @@ impl Renderer for WgpuRenderer {
             )));
         }
         let start = Instant::now();
-        let data = SceneData::new(scene, &bvh);
+        let data = SceneData::new(scene, &bvh).map_err(RenderError::Unsupported)?;
         let limit = Self::binding_limit(&gpu);
         if data.nodes.len() as u64 * 32 > limit {
             return Err(RenderError::Unsupported(format!(
@@ -594,9 +598,8 @@ impl Renderer for WgpuRenderer {
         let _frame = p.frame_lock.lock().unwrap_or_else(|e| e.into_inner());
         let start = Instant::now();
         let gpu = &p.gpu;
-        let pipeline = p
-            .kernels
-            .pipeline(gpu, entry_point(Some(settings.mode)), settings.count)?;
+        let entry = entry_point(Some(settings.mode)).map_err(RenderError::Unsupported)?;
+        let pipeline = p.kernels.pipeline(gpu, entry, settings.count)?;
         let (w, h) = (settings.width, settings.height);
         let out_size = std::mem::size_of::<GpuOut>() as u64;
         let band_pixels = (Self::binding_limit(gpu) / out_size).min(1 << 24);
@@ -726,7 +729,8 @@ impl Renderer for WgpuRenderer {
         let _frame = p.frame_lock.lock().unwrap_or_else(|e| e.into_inner());
         let start = Instant::now();
         let gpu = &p.gpu;
-        let pipeline = p.kernels.pipeline(gpu, entry_point(None), count)?;
+        let entry = entry_point(None).map_err(RenderError::Unsupported)?;
+        let pipeline = p.kernels.pipeline(gpu, entry, count)?;
         let out_size = std::mem::size_of::<GpuOut>() as u64;
         let per_dispatch = u64::from(gpu.limits.max_compute_workgroups_per_dimension) * 64;
         let chunk = (Self::binding_limit(gpu) / out_size)

@@ -1,6 +1,7 @@
 //! `REPORT.md` and the charts it shows, drawn from [`Results`] alone (so that a merge of
 //! shards produces the same kind of report as one run).
 
+use super::HEIGHTFIELD_BACKEND;
 use super::charts::{self, Series};
 use super::results::{Results, Run};
 use super::{PEER_MAX_FLIP, PEER_MIN_ID_MATCH};
@@ -104,6 +105,7 @@ pub fn charts(results: &Results, dir: &Path) -> Charts {
         let x_label = match experiment.as_str() {
             "primitives" => "primitives M",
             "pixels" => "pixels N^2",
+            "heightfield" => "height-field cells N^2",
             _ => "samples per pixel K",
         };
         for (quantity, y_label) in [
@@ -512,7 +514,8 @@ pub fn report(results: &Results, charts: &Charts) -> String {
             s,
             "Log-log fits `y ~ x^slope` of render time (and tests per ray) against the number of \
              primitives M (`soup:M`, `spheres:M` generators, 64 x 64 camera rays), the pixel \
-             count N^2 (bunny) and the samples per pixel K (Cornell box, path tracing, 64 x 64). \
+             count N^2 (bunny), the samples per pixel K (Cornell box, path tracing, 64 x 64) and \
+             the height-field cell count N^2 (direct and tessellated, see below). \
              The claims under test: naive's time grows linearly with M (slope about 1), an \
              acceleration structure's barely (slope near 0, logarithmic in theory); time grows \
              linearly with N^2 and with K for every backend.\n"
@@ -538,6 +541,44 @@ pub fn report(results: &Results, charts: &Charts) -> String {
                 opt(t, |v| format!("{v:.2}")),
                 opt(k, |v| format!("{v:.2}")),
                 f.points
+            );
+        }
+        let _ = writeln!(s);
+    }
+
+    let hf: Vec<_> = results
+        .scaling
+        .iter()
+        .filter(|p| p.experiment == "heightfield")
+        .collect();
+    if !hf.is_empty() {
+        let _ = writeln!(s, "## Height fields: direct against tessellated\n");
+        let _ = writeln!(
+            s,
+            "The `terrain:N` heights as one height-field primitive intersected directly (min-max \
+             quadtree over the cells, `heightfield:N`) against the same terrain tessellated into \
+             2 N^2 triangles (`terrain:N`), both in the `{}` backend; 256 x 256 camera rays. Both \
+             give the same hits and `t` bit for bit. Load: generating the heights and \
+             tessellating, or building the min-max levels; build: the BVH; memory: primitives \
+             plus structure; a height field counts as one primitive test per ray.\n",
+            HEIGHTFIELD_BACKEND
+        );
+        let _ = writeln!(
+            s,
+            "| cells | series | memory | load s | build s | render s | tests/ray |"
+        );
+        let _ = writeln!(s, "|---:|---|---:|---:|---:|---:|---:|");
+        for p in hf {
+            let _ = writeln!(
+                s,
+                "| {}^2 | {} | {} | {} | {} | {:.4} | {} |",
+                p.x.sqrt().round(),
+                p.series,
+                p.memory_bytes.map_or("-".into(), bytes),
+                opt(p.load_seconds, |v| format!("{v:.3}")),
+                opt(p.build_seconds, |v| format!("{v:.3}")),
+                p.seconds,
+                opt(p.tests_per_ray, |v| format!("{v:.1}"))
             );
         }
         let _ = writeln!(s);

@@ -29,7 +29,7 @@ pub struct Options {
     pub scenes: Option<Vec<String>>,
     /// Backends (default: every backend but the variants).
     pub backends: Option<Vec<String>>,
-    /// Modes (default: all three).
+    /// Modes (default: all; `mip` and `composite` run only on scenes with volumes).
     pub modes: Option<Vec<Mode>>,
     /// Output folder.
     pub out: PathBuf,
@@ -50,7 +50,15 @@ pub struct Options {
 }
 
 /// The built-in scenes of the quick matrix.
-pub const QUICK_SCENES: &[&str] = &["spheres", "whitted", "cornell-box", "bunny", "sponza"];
+pub const QUICK_SCENES: &[&str] = &[
+    "spheres",
+    "whitted",
+    "cornell-box",
+    "bunny",
+    "sponza",
+    "heightfield",
+    "phantom",
+];
 /// The built-in scenes of the full matrix.
 pub const FULL_SCENES: &[&str] = &[
     "spheres",
@@ -62,6 +70,8 @@ pub const FULL_SCENES: &[&str] = &[
     "suzanne",
     "teapot",
     "teapot-stadium",
+    "heightfield",
+    "phantom",
 ];
 
 /// Naive's estimated ray/primitive tests per workload above which it is left out (it is
@@ -101,7 +111,7 @@ impl Workload {
     /// Rough rays per sample, for naive's budget.
     fn rays_per_sample(&self) -> f64 {
         match self.mode {
-            Mode::Cast => 1.0,
+            Mode::Cast | Mode::Mip | Mode::Composite => 1.0,
             Mode::Whitted => 3.0,
             Mode::Path => 4.0,
         }
@@ -128,8 +138,25 @@ impl Unit {
     }
 }
 
-/// The scaling experiments.
-const EXPERIMENTS: [&str; 3] = ["primitives", "pixels", "spp"];
+/// The scaling experiments. `heightfield` is the direct height field against the same
+/// terrain tessellated into triangles, both in the BVH, for growing grids.
+const EXPERIMENTS: [&str; 4] = ["primitives", "pixels", "spp", "heightfield"];
+
+/// The one backend of the `heightfield` experiment (the comparison: the
+/// tessellated mesh in the BVH).
+const HEIGHTFIELD_BACKEND: &str = "bvh";
+
+/// Backends that run an experiment's points.
+fn experiment_backends(experiment: &str, chosen: &[&'static Backend]) -> Vec<&'static Backend> {
+    if experiment == "heightfield" {
+        BACKENDS
+            .iter()
+            .filter(|b| b.name == HEIGHTFIELD_BACKEND)
+            .collect()
+    } else {
+        chosen.to_vec()
+    }
+}
 
 /// Progress on stderr: a bar, the position and the time left.
 struct Progress {
@@ -259,7 +286,7 @@ pub fn run(opts: &Options) -> Result<Results> {
                 None => plan.push((unit, None, 0)),
             },
             Unit::Scaling(e) => {
-                let n = ctx.scaling_plan(e).len() * chosen.len();
+                let n = ctx.scaling_plan(e).len() * experiment_backends(e, &chosen).len();
                 plan.push((unit, None, n));
             }
         }
@@ -382,12 +409,24 @@ impl Ctx<'_> {
         }
         let name = scene.name.as_str();
         if self.modes.contains(&Mode::Whitted)
-            && ["spheres", "whitted", "cornell-box"].contains(&name)
+            && ["spheres", "whitted", "cornell-box", "heightfield"].contains(&name)
         {
             w.push(Workload {
                 mode: Mode::Whitted,
                 ..cast(RaySet::Primary)
             });
+        }
+        // The volume modes where there are volumes (their integration is the core's, the
+        // same for every backend; the backend traces the surfaces that cut it).
+        if !scene.volumes.is_empty() {
+            for mode in [Mode::Mip, Mode::Composite] {
+                if self.modes.contains(&mode) {
+                    w.push(Workload {
+                        mode,
+                        ..cast(RaySet::Primary)
+                    });
+                }
+            }
         }
         if self.modes.contains(&Mode::Path) && ["cornell-box", "whitted"].contains(&name) {
             let (side, spp) = if self.opts.quick {
@@ -504,7 +543,11 @@ impl Ctx<'_> {
                     images: Images::default(),
                     phases: BTreeMap::new(),
                 };
-                let (r, build, prepare_phases) = match &prepared {
+                let checked = match &prepared {
+                    Ok(p) => p.renderer.supports_mode(w.mode).map(|()| p),
+                    Err(reason) => Err(reason.clone()),
+                };
+                let (r, build, prepare_phases) = match checked {
                     Ok(p) => (&p.renderer, p.build, &p.phases),
                     Err(reason) => {
                         let available = (b.make)().availability().is_ok();
@@ -514,9 +557,9 @@ impl Ctx<'_> {
                             "unavailable"
                         }
                         .into();
-                        run.reason = Some(reason.clone());
-                        runs.push(run);
                         progress.step(&format!("{} {} {}: {reason}", scene.name, w.key(), b.name));
+                        run.reason = Some(reason);
+                        runs.push(run);
                         continue;
                     }
                 };
@@ -705,6 +748,25 @@ impl Ctx<'_> {
                     ));
                 }
             }
+            "heightfield" => {
+                let sides: &[u32] = if self.opts.quick {
+                    &[256, 512, 1024]
+                } else {
+                    &[256, 512, 1024, 2048, 4096]
+                };
+                for &n in sides {
+                    for (series, generator) in
+                        [("direct", "heightfield"), ("tessellated", "terrain")]
+                    {
+                        plan.push((
+                            series.into(),
+                            f64::from(n) * f64::from(n),
+                            format!("{generator}:{n}"),
+                            small(256, 1, Mode::Cast),
+                        ));
+                    }
+                }
+            }
             _ => {
                 let ks: &[u32] = if self.opts.quick {
                     &[1, 2, 4, 8, 16]
@@ -726,33 +788,48 @@ impl Ctx<'_> {
 
     fn run_scaling(&self, experiment: &str, progress: &mut Progress) -> Result<Vec<ScalingPoint>> {
         let mut points = Vec::new();
-        let mut loaded: Option<(String, Arc<Scene>)> = None;
+        let mut loaded: Option<(String, Arc<Scene>, f64)> = None;
+        let backends = experiment_backends(experiment, self.chosen);
         for (series, x, spec, w) in self.scaling_plan(experiment) {
-            let scene = match &loaded {
-                Some((s, scene)) if *s == spec => Arc::clone(scene),
-                _ => match self.load(&spec)? {
-                    Some(scene) => {
-                        loaded = Some((spec.clone(), Arc::clone(&scene)));
-                        scene
+            let (scene, load_seconds) = match &loaded {
+                Some((s, scene, secs)) if *s == spec => (Arc::clone(scene), *secs),
+                _ => {
+                    // Free the previous scene first: the largest terrains take gigabytes.
+                    loaded = None;
+                    let start = Instant::now();
+                    match self.load(&spec)? {
+                        Some(scene) => {
+                            let secs = start.elapsed().as_secs_f64();
+                            loaded = Some((spec.clone(), Arc::clone(&scene), secs));
+                            (scene, secs)
+                        }
+                        None => {
+                            progress.total -= backends.len();
+                            continue;
+                        }
                     }
-                    None => {
-                        progress.total -= self.chosen.len();
-                        continue;
-                    }
-                },
+                }
             };
-            for b in self.chosen {
+            let heightfield = experiment == "heightfield";
+            for b in &backends {
                 if b.name == "naive" && !self.naive_fits(&w, scene.geometry.len()) {
                     progress.total -= 1;
                     continue;
                 }
-                let Ok(crate::measure::Prepared { renderer: r, .. }) = prepare(b, &scene) else {
+                let Ok(crate::measure::Prepared {
+                    renderer: r, build, ..
+                }) = prepare(b, &scene)
+                else {
                     progress.step(&format!(
                         "scaling {experiment} {spec} {}: unavailable",
                         b.name
                     ));
                     continue;
                 };
+                if let Err(why) = r.supports_mode(w.mode) {
+                    progress.step(&format!("scaling {experiment} {spec} {}: {why}", b.name));
+                    continue;
+                }
                 let m = self.measure(r.as_ref(), &w, None)?;
                 let rays = m.warm.rays.max(1);
                 points.push(ScalingPoint {
@@ -768,6 +845,13 @@ impl Ctx<'_> {
                         .counters
                         .filter(|_| r.counts_tests())
                         .map(|c| c.prim_tests as f64 / rays as f64),
+                    load_seconds: heightfield.then_some(load_seconds),
+                    build_seconds: heightfield.then_some(build),
+                    memory_bytes: heightfield.then(|| {
+                        (scene.geometry.memory_bytes()
+                            + r.structure().map_or(0, |s| s.memory_bytes))
+                            as u64
+                    }),
                 });
                 progress.step(&format!(
                     "scaling {experiment} {spec} x={x} {}: {:.4} s",

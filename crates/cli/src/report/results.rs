@@ -190,7 +190,8 @@ pub struct Run {
 pub struct ScalingPoint {
     /// Index into [`Results::shards`].
     pub shard: usize,
-    /// `primitives` (x = M), `pixels` (x = N^2) or `spp` (x = K).
+    /// `primitives` (x = M), `pixels` (x = N^2), `spp` (x = K) or `heightfield` (x = N^2
+    /// cells; series `direct` or `tessellated`).
     pub experiment: String,
     /// The scene or generator varied (`soup`, `spheres`, `bunny`, `cornell-box`).
     pub series: String,
@@ -204,6 +205,16 @@ pub struct ScalingPoint {
     pub rays: u64,
     /// Ray/primitive tests per ray.
     pub tests_per_ray: Option<f64>,
+    /// Seconds to load or generate the scene (experiment `heightfield`: tessellating, or
+    /// building the min-max levels).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub load_seconds: Option<f64>,
+    /// Seconds to build the backend's structure (experiment `heightfield`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub build_seconds: Option<f64>,
+    /// Bytes of primitives plus structure (experiment `heightfield`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub memory_bytes: Option<u64>,
 }
 
 /// A least-squares line through `(log10 x, log10 y)`.

@@ -14,7 +14,10 @@ use crate::scene::Scene;
 use glam::Vec3;
 
 mod path;
+mod volume;
 mod whitted;
+
+pub use volume::shade_volumes;
 
 /// A rectangle of pixels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -76,7 +79,13 @@ pub fn render_tile<A: Accel, C: Counters>(
     tile: Tile,
 ) -> TileOutput<C> {
     match settings.mode {
-        Mode::Cast => cast_tile(scene, accel, camera, settings, tile),
+        Mode::Cast => cast_tile(scene, accel, camera, settings, tile, shade_cast),
+        Mode::Mip | Mode::Composite => {
+            let composite = settings.mode == Mode::Composite;
+            cast_tile(scene, accel, camera, settings, tile, |s, l, r, h| {
+                shade_volumes(s, l, r, h, composite)
+            })
+        }
         Mode::Whitted => whitted::whitted_tile(scene, accel, camera, settings, tile),
         Mode::Path => path::path_tile(scene, accel, camera, settings, tile),
     }
@@ -236,12 +245,15 @@ pub fn shade_cast(scene: &Scene, light_dir: Vec3, ray: &Ray, hit: Option<&Hit>) 
     albedo * (0.35 * cos_view.abs() + 0.65 * diffuse) + m.emission
 }
 
+/// Camera rays only, shaded by `shade` (ray casting, and the volume modes, which integrate
+/// the volumes along the camera ray up to its surface hit).
 fn cast_tile<A: Accel, C: Counters>(
     scene: &Scene,
     accel: &A,
     camera: &CameraRays,
     settings: &RenderSettings,
     tile: Tile,
+    shade: impl Fn(&Scene, Vec3, &Ray, Option<&Hit>) -> Vec3,
 ) -> TileOutput<C> {
     let mut st = TileState::<C>::new(accel, camera, tile);
     let light_dir = cast_light(scene);
@@ -252,7 +264,7 @@ fn cast_tile<A: Accel, C: Counters>(
             .zip(&st.centre_rays)
             .zip(&st.centre_hits)
         {
-            *c = shade_cast(scene, light_dir, r, h.as_ref());
+            *c = shade(scene, light_dir, r, h.as_ref());
         }
     } else {
         // Jittered samples for colour; ids and t stay those of the centre ray.
@@ -267,7 +279,7 @@ fn cast_tile<A: Accel, C: Counters>(
             accel.intersect_batch(&rays, &mut hits, &mut st.counters);
             st.traced += n as u64;
             for ((acc, r), h) in st.color.iter_mut().zip(&rays).zip(&hits) {
-                *acc += shade_cast(scene, light_dir, r, h.as_ref());
+                *acc += shade(scene, light_dir, r, h.as_ref());
             }
         }
         let inv = 1.0 / settings.spp as f32;

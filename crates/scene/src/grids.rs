@@ -1,0 +1,207 @@
+//! Gridded data from files: greyscale PNG height maps and raw sample arrays (the common
+//! format of CT and MRI volumes: little-endian samples, dimensions given beside the file).
+//!
+//! Sizes are checked against the limits before anything is allocated or decoded, and
+//! every malformed file is a [`LoadError`] naming it.
+
+use crate::error::LoadError;
+use std::path::Path;
+
+/// The type of one sample of a raw file (little-endian).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SampleFormat {
+    /// Unsigned 8-bit.
+    U8,
+    /// Unsigned 16-bit.
+    U16,
+    /// 32-bit IEEE float.
+    F32,
+}
+
+impl SampleFormat {
+    /// Bytes per sample.
+    #[must_use]
+    pub fn bytes(self) -> u64 {
+        match self {
+            Self::U8 => 1,
+            Self::U16 => 2,
+            Self::F32 => 4,
+        }
+    }
+}
+
+/// Samples of a raw file in their stored type.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RawSamples {
+    /// 8-bit samples.
+    U8(Vec<u8>),
+    /// 16-bit samples.
+    U16(Vec<u16>),
+    /// Float samples.
+    F32(Vec<f32>),
+}
+
+impl RawSamples {
+    /// The samples as floats: integers normalised to `[0, 1]` (divided by 255 or 65535),
+    /// floats as they are.
+    #[must_use]
+    pub fn to_unit_f32(&self) -> Vec<f32> {
+        match self {
+            Self::U8(v) => v.iter().map(|&x| f32::from(x) / 255.0).collect(),
+            Self::U16(v) => v.iter().map(|&x| f32::from(x) / 65_535.0).collect(),
+            Self::F32(v) => v.clone(),
+        }
+    }
+}
+
+/// Reads `count` samples of `format` from the raw file `path`, which must hold exactly
+/// that many bytes (`count` is checked against `max_count` first).
+///
+/// # Errors
+/// [`LoadError::Io`] when unreadable, [`LoadError::Parse`] for a size that does not match
+/// or a count above the limit, and for NaN or infinite float samples.
+pub fn read_raw(
+    path: &Path,
+    count: u64,
+    format: SampleFormat,
+    max_count: u64,
+) -> Result<RawSamples, LoadError> {
+    let parse = |message: String| LoadError::Parse {
+        path: path.to_owned(),
+        message,
+    };
+    if count > max_count {
+        return Err(parse(format!(
+            "{count} samples exceed the limit of {max_count}"
+        )));
+    }
+    let io = |source| LoadError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let expected = count * format.bytes();
+    let len = std::fs::metadata(path).map_err(io)?.len();
+    if len != expected {
+        return Err(parse(format!(
+            "raw file holds {len} bytes; {count} {format:?} samples need {expected}"
+        )));
+    }
+    let bytes = std::fs::read(path).map_err(io)?;
+    if bytes.len() as u64 != expected {
+        return Err(parse("the file changed while it was read".into()));
+    }
+    Ok(match format {
+        SampleFormat::U8 => RawSamples::U8(bytes),
+        SampleFormat::U16 => RawSamples::U16(
+            bytes
+                .chunks_exact(2)
+                .map(|c| u16::from_le_bytes([c[0], c[1]]))
+                .collect(),
+        ),
+        SampleFormat::F32 => {
+            let v: Vec<f32> = bytes
+                .chunks_exact(4)
+                .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                .collect();
+            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+                return Err(parse(format!("sample {} is not finite", i + 1)));
+            }
+            RawSamples::F32(v)
+        }
+    })
+}
+
+/// Reads a greyscale (or colour: its luma) 8- or 16-bit PNG as `(width, height, samples)`
+/// with samples in `[0, 1]`, row by row from the top. Images with more than `max_pixels`
+/// pixels are refused from their header, before decoding.
+///
+/// # Errors
+/// [`LoadError::Io`] when unreadable, [`LoadError::Parse`] when not a decodable PNG or too
+/// large.
+pub fn read_png_gray(path: &Path, max_pixels: u64) -> Result<(u32, u32, Vec<f32>), LoadError> {
+    let parse = |message: String| LoadError::Parse {
+        path: path.to_owned(),
+        message,
+    };
+    let io = |source| LoadError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let open = || -> Result<image::ImageReader<std::io::BufReader<std::fs::File>>, LoadError> {
+        let mut r = image::ImageReader::open(path).map_err(io)?;
+        r.set_format(image::ImageFormat::Png);
+        Ok(r)
+    };
+    let (w, h) = open()?
+        .into_dimensions()
+        .map_err(|e| parse(format!("not a readable PNG: {e}")))?;
+    let pixels = u64::from(w) * u64::from(h);
+    if pixels > max_pixels {
+        return Err(parse(format!(
+            "{w} x {h} image has {pixels} pixels (limit {max_pixels})"
+        )));
+    }
+    let mut reader = open()?;
+    let mut limits = image::Limits::default();
+    // Room for the decoded image in its widest form (16-bit RGBA) and the conversion.
+    limits.max_alloc = Some(pixels * 8 * 2 + (1 << 20));
+    reader.limits(limits);
+    let img = reader
+        .decode()
+        .map_err(|e| parse(format!("not a readable PNG: {e}")))?;
+    let luma = img.into_luma16();
+    Ok((
+        w,
+        h,
+        luma.into_raw()
+            .into_iter()
+            .map(|x| f32::from(x) / 65_535.0)
+            .collect(),
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp(name: &str, bytes: &[u8]) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("raybench-grids-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join(name);
+        std::fs::write(&p, bytes).unwrap();
+        p
+    }
+
+    #[test]
+    fn raw_sizes_and_values() {
+        let p = temp("a.raw", &[0, 0, 255, 255]);
+        assert_eq!(
+            read_raw(&p, 2, SampleFormat::U16, 10).unwrap(),
+            RawSamples::U16(vec![0, 65535])
+        );
+        assert_eq!(
+            read_raw(&p, 4, SampleFormat::U8, 10).unwrap().to_unit_f32(),
+            vec![0.0, 0.0, 1.0, 1.0]
+        );
+        assert!(read_raw(&p, 3, SampleFormat::U8, 10).is_err());
+        assert!(read_raw(&p, 4, SampleFormat::U8, 3).is_err());
+        let nan = temp("nan.raw", &f32::NAN.to_le_bytes());
+        assert!(read_raw(&nan, 1, SampleFormat::F32, 10).is_err());
+        assert!(read_raw(Path::new("/nonexistent.raw"), 1, SampleFormat::U8, 10).is_err());
+    }
+
+    #[test]
+    fn png_round_trip_and_garbage() {
+        let p = std::env::temp_dir().join(format!("raybench-grids-{}.png", std::process::id()));
+        let img =
+            image::ImageBuffer::<image::Luma<u16>, _>::from_raw(2, 1, vec![0u16, 65535]).unwrap();
+        img.save(&p).unwrap();
+        let (w, h, v) = read_png_gray(&p, 100).unwrap();
+        assert_eq!((w, h, v), (2, 1, vec![0.0, 1.0]));
+        assert!(read_png_gray(&p, 1).is_err());
+        let bad = temp("bad.png", b"\x89PNG\r\n\x1a\nnot really");
+        assert!(read_png_gray(&bad, 100).is_err());
+        std::fs::remove_file(p).ok();
+    }
+}
