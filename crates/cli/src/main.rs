@@ -80,6 +80,9 @@ struct ReportCmd {
     /// Leave out the scaling experiments.
     #[arg(long)]
     no_scaling: bool,
+    /// Run only these scaling experiments (primitives, pixels, spp, heightfield).
+    #[arg(long, value_delimiter = ',', value_name = "A,B")]
+    experiments: Option<Vec<String>>,
     /// Worker threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
@@ -651,6 +654,7 @@ fn report(cmd: &ReportCmd, assets: &Path) -> Result<ExitCode> {
         size: cmd.size,
         repeat: cmd.repeat,
         scaling: !cmd.no_scaling,
+        experiments: cmd.experiments.clone(),
         assets: assets.to_path_buf(),
         threads: rayon::current_num_threads(),
         command: std::env::args().collect::<Vec<_>>().join(" "),

@@ -41,6 +41,8 @@ pub struct Options {
     pub repeat: Option<u32>,
     /// Run the scaling experiments.
     pub scaling: bool,
+    /// Which scaling experiments (default: all of [`EXPERIMENTS`]).
+    pub experiments: Option<Vec<String>>,
     /// Assets folder.
     pub assets: PathBuf,
     /// Worker threads.
@@ -140,7 +142,7 @@ impl Unit {
 
 /// The scaling experiments. `heightfield` is the direct height field against the same
 /// terrain tessellated into triangles, both in the BVH, for growing grids.
-const EXPERIMENTS: [&str; 4] = ["primitives", "pixels", "spp", "heightfield"];
+pub const EXPERIMENTS: [&str; 4] = ["primitives", "pixels", "spp", "heightfield"];
 
 /// The one backend of the `heightfield` experiment (the comparison: the
 /// tessellated mesh in the BVH).
@@ -232,7 +234,26 @@ pub fn run(opts: &Options) -> Result<Results> {
     };
     let mut units: Vec<Unit> = scene_names.into_iter().map(Unit::Scene).collect();
     if opts.scaling {
-        units.extend(EXPERIMENTS.iter().map(|e| Unit::Scaling(e)));
+        for e in &EXPERIMENTS {
+            if opts
+                .experiments
+                .as_ref()
+                .is_none_or(|chosen| chosen.iter().any(|c| c == e))
+            {
+                units.push(Unit::Scaling(e));
+            }
+        }
+        if let Some(unknown) = opts
+            .experiments
+            .iter()
+            .flatten()
+            .find(|c| !EXPERIMENTS.contains(&c.as_str()))
+        {
+            bail!(
+                "unknown experiment '{unknown}' (known: {})",
+                EXPERIMENTS.join(", ")
+            );
+        }
     }
     // Whole units per shard, so that every backend of a scene runs on the same machine.
     let mine: Vec<Unit> = units
