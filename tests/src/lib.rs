@@ -177,6 +177,37 @@ pub fn check(backends: &[&str], scene: &str, size: u32) {
     }
 }
 
+/// A scene with no primitives and the background `[0.25, 0.5, 0.75]`.
+///
+/// # Panics
+/// Never (the scene text is fixed).
+#[must_use]
+pub fn empty_scene() -> Arc<Scene> {
+    Arc::new(
+        raybench_scene::load_scene_str(
+            "background = [0.25, 0.5, 0.75]",
+            "empty",
+            None,
+            std::path::Path::new("."),
+        )
+        .unwrap(),
+    )
+}
+
+/// The settings of the mode tests: `size x size`, 4 bounces, seed 7, not counted.
+#[must_use]
+pub fn mode_settings(size: u32, mode: raybench_core::Mode, spp: u32) -> RenderSettings {
+    RenderSettings {
+        width: size,
+        height: size,
+        spp,
+        mode,
+        max_depth: 4,
+        seed: 7,
+        count: false,
+    }
+}
+
 /// The equivalence check for the integrators with secondary rays: Whitted (4 bounces) and
 /// path tracing (2 samples, 4 bounces) at `size x size` must give bit-identical colours, ids
 /// and `t` with every backend and thread count. Meant for scenes small enough for naive.
@@ -191,15 +222,7 @@ pub fn check_modes(backends: &[&str], scene: &str, size: u32) {
         (raybench_core::Mode::Whitted, 1),
         (raybench_core::Mode::Path, 2),
     ] {
-        let settings = RenderSettings {
-            width: size,
-            height: size,
-            spp,
-            mode,
-            max_depth: 4,
-            seed: 7,
-            count: false,
-        };
+        let settings = mode_settings(size, mode, spp);
         let reference = render_with("naive", &scene_data, &settings, 1);
         for &name in backends {
             for threads in [2, 3] {
@@ -229,7 +252,7 @@ pub fn check_modes(backends: &[&str], scene: &str, size: u32) {
 /// that rounding of an edge or of a second surface.
 pub mod gpu {
     use super::{in_ci, load_or_skip, prepared, render_with};
-    use raybench_core::{Frame, Mode, RenderSettings, Vec3};
+    use raybench_core::{Frame, Mode, Vec3};
 
     /// Least fraction of pixels (or rays) whose primitive id equals naive's, counting ties
     /// (another primitive at the same distance within `raybench::TIE_TOLERANCE`: coincident
@@ -350,15 +373,7 @@ pub mod gpu {
             cases.extend([(Mode::Cast, 4), (Mode::Whitted, 1), (Mode::Path, 4)]);
         }
         for (mode, spp) in cases {
-            let settings = RenderSettings {
-                width: size,
-                height: size,
-                spp,
-                mode,
-                max_depth: 4,
-                seed: 7,
-                count: false,
-            };
+            let settings = super::mode_settings(size, mode, spp);
             let reference = render_with("naive", &s, &settings, 2);
             let frame = gpu.render(&settings).unwrap();
             let what = format!("wgpu on {scene}, {} spp {spp}", mode.name());

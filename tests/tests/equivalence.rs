@@ -151,15 +151,7 @@ fn rays_at_shared_edges_and_vertices_never_pass_through() {
 /// An empty scene renders the background everywhere.
 #[test]
 fn empty_scene_renders_background() {
-    let scene = std::sync::Arc::new(
-        raybench_scene::load_scene_str(
-            "background = [0.25, 0.5, 0.75]",
-            "empty",
-            None,
-            std::path::Path::new("."),
-        )
-        .unwrap(),
-    );
+    let scene = raybench_tests::empty_scene();
     let settings = raybench_core::RenderSettings {
         width: 8,
         height: 8,

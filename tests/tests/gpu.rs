@@ -58,15 +58,7 @@ fn the_empty_scene_renders_background() {
     if !raybench_tests::gpu::available() {
         return;
     }
-    let scene = std::sync::Arc::new(
-        raybench_scene::load_scene_str(
-            "background = [0.25, 0.5, 0.75]",
-            "empty",
-            None,
-            std::path::Path::new("."),
-        )
-        .unwrap(),
-    );
+    let scene = raybench_tests::empty_scene();
     let r = raybench_tests::prepared("wgpu", &scene);
     let settings = raybench_core::RenderSettings {
         width: 8,

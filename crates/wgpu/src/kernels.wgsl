@@ -709,6 +709,30 @@ fn centre(p: Pixel) -> Hit {
     return h;
 }
 
+// Adds this dispatch's colour to the pixel's sum and flushes the counters.
+fn finish_pixel(p: Pixel, color: vec3<f32>) {
+    let o = out_index(p);
+    out[o].v = vec4<f32>(out[o].v.xyz + color, out[o].v.w);
+    flush_counters();
+}
+
+// `whitted::shading_frame` and the material: the hit point, the unit normal facing the
+// incoming ray, whether the ray arrived on the side the geometric normal points to, and
+// the unit direction of the ray.
+struct Surface {
+    m: Material,
+    at: vec3<f32>,
+    nf: vec3<f32>,
+    front: bool,
+    d: vec3<f32>,
+}
+
+fn surface(r: Ray, h: Hit) -> Surface {
+    let gn = hit_normal(r, h);
+    let front = dot(gn, r.d) < 0.0;
+    return Surface(material_of(h.id), r.o + r.d * h.t, select(-gn, gn, front), front, normalize(r.d));
+}
+
 // `integrator::shade_cast`.
 fn shade_cast(r: Ray, h: Hit) -> vec3<f32> {
     if h.id == NO_HIT {
@@ -755,9 +779,7 @@ fn cast_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
             n_rays += 1u;
         }
     }
-    let o = out_index(p);
-    out[o].v = vec4<f32>(out[o].v.xyz + color, out[o].v.w);
-    flush_counters();
+    finish_pixel(p, color);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -813,12 +835,12 @@ fn whitted_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
                 color += seg.weight * params.background;
                 continue;
             }
-            let m = material_of(h.id);
-            let gn = hit_normal(r, h);
-            let at = r.o + r.d * h.t;
-            let front = dot(gn, r.d) < 0.0;
-            let nf = select(-gn, gn, front);
-            let d = normalize(r.d);
+            let sf = surface(r, h);
+            let m = sf.m;
+            let at = sf.at;
+            let front = sf.front;
+            let nf = sf.nf;
+            let d = sf.d;
             if front {
                 color += seg.weight * m.emission;
             }
@@ -871,9 +893,7 @@ fn whitted_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         flush_counters();
     }
-    let o = out_index(p);
-    out[o].v = vec4<f32>(out[o].v.xyz + color, out[o].v.w);
-    flush_counters();
+    finish_pixel(p, color);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -922,12 +942,12 @@ fn path_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
                 color += weight * params.background;
                 break;
             }
-            let m = material_of(h.id);
-            let gn = hit_normal(r, h);
-            let at = r.o + r.d * h.t;
-            let front = dot(gn, r.d) < 0.0;
-            let nf = select(-gn, gn, front);
-            let d = normalize(r.d);
+            let sf = surface(r, h);
+            let m = sf.m;
+            let at = sf.at;
+            let front = sf.front;
+            let nf = sf.nf;
+            let d = sf.d;
             if front && (specular || !is_emitter(h.id)) {
                 color += weight * m.emission;
             }
@@ -1011,9 +1031,7 @@ fn path_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         flush_counters();
     }
-    let o = out_index(p);
-    out[o].v = vec4<f32>(out[o].v.xyz + color, out[o].v.w);
-    flush_counters();
+    finish_pixel(p, color);
 }
 
 // ---------------------------------------------------------------------------------------
