@@ -91,3 +91,66 @@ fn kinds_and_modes_without_kernels_are_refused() {
         Err(RenderError::Unsupported(_))
     ));
 }
+
+/// Rays no camera makes: NaN, zero and infinite directions must miss on the GPU as on the
+/// CPU (and not poison their neighbours in the same workgroup); denormal, huge and
+/// axis-aligned rays must find naive's hits.
+#[test]
+fn degenerate_and_extreme_rays_behave_as_on_the_cpu() {
+    use raybench_core::{Ray, Vec3};
+    if !raybench_tests::gpu::available() {
+        return;
+    }
+    let scene = raybench_tests::load_or_skip("spheres:200").unwrap();
+    let c = scene.geometry.bounds().center();
+    let tiny = f32::MIN_POSITIVE / 4.0;
+    let mut rays = vec![
+        Ray::new(Vec3::splat(f32::NAN), Vec3::X),
+        Ray::new(c, Vec3::new(f32::NAN, 1.0, 0.0)),
+        Ray::new(c, Vec3::ZERO),
+        Ray::new(c, Vec3::new(f32::INFINITY, 0.0, 0.0)),
+        Ray::new(c + Vec3::splat(1e30), -Vec3::ONE),
+    ];
+    let must_miss = rays.len() - 1;
+    for axis in [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Y, -Vec3::Z] {
+        rays.push(Ray::new(c, axis));
+        rays.push(Ray::new(c, axis + Vec3::splat(tiny)));
+        rays.push(Ray::new(c - axis * 1e6, axis * 1e-20));
+    }
+    // Ordinary rays between them: a bad lane must not spoil the others.
+    rays.extend(raybench_core::rays::incoherent(
+        scene.geometry.bounds(),
+        64,
+        3,
+    ));
+    let (reference, _) = raybench_tests::prepared("naive", &scene)
+        .trace_rays(&rays, false)
+        .unwrap();
+    let (hits, _) = raybench_tests::prepared("wgpu", &scene)
+        .trace_rays(&rays, false)
+        .unwrap();
+    for (i, (a, b)) in reference.iter().zip(&hits).enumerate() {
+        if i < must_miss {
+            assert!(
+                a.is_none() && b.is_none(),
+                "ray {i} {:?}: {a:?} {b:?}",
+                rays[i]
+            );
+            continue;
+        }
+        assert_eq!(
+            a.map(|h| h.prim),
+            b.map(|h| h.prim),
+            "ray {i} {:?}",
+            rays[i]
+        );
+        if let (Some(a), Some(b)) = (a, b) {
+            assert!(
+                (a.t - b.t).abs() <= raybench_tests::gpu::MAX_REL_DT as f32 * a.t.abs(),
+                "ray {i}: t {} vs {}",
+                a.t,
+                b.t
+            );
+        }
+    }
+}
