@@ -154,3 +154,53 @@ fn degenerate_and_extreme_rays_behave_as_on_the_cpu() {
         }
     }
 }
+
+/// Many samples on a small frame, split into many dispatches (progressive accumulation,
+/// `plan::MAX_SAMPLES_PER_DISPATCH`): every sample is traced and the accumulated image
+/// matches the CPU's.
+#[test]
+fn samples_split_over_dispatches_accumulate() {
+    use raybench_core::{Mode, RenderSettings};
+    if !raybench_tests::gpu::available() {
+        return;
+    }
+    let scene = raybench_tests::load_or_skip("spheres").unwrap();
+    let settings = RenderSettings {
+        width: 8,
+        height: 8,
+        spp: 2_000,
+        mode: Mode::Path,
+        max_depth: 3,
+        seed: 3,
+        count: false,
+    };
+    let pixels = u64::from(settings.width * settings.height);
+    let plan = raybench_wgpu::plan::frame(
+        settings.width,
+        settings.height,
+        settings.spp,
+        raybench_wgpu::plan::budget(Mode::Path),
+        pixels,
+        65_535,
+    );
+    assert!(
+        plan[0].dispatches.len() > 1,
+        "the test must split: {plan:?}"
+    );
+    let reference = raybench_tests::render_with("naive", &scene, &settings, 2);
+    let frame = raybench_tests::prepared("wgpu", &scene)
+        .render(&settings)
+        .unwrap();
+    assert_eq!(frame.ids, reference.ids);
+    // Every sample traced: a lost sample (as when lavapipe cut a thread's long loop, see
+    // `plan::MAX_SAMPLES_PER_DISPATCH`) shows as missing rays. Paths may branch differently
+    // on the GPU, so the counts agree within 1%.
+    let (a, b) = (reference.stats.rays as f64, frame.stats.rays as f64);
+    assert!((a - b).abs() <= 0.01 * a, "rays: naive {a}, wgpu {b}");
+    raybench_tests::gpu::assert_close_colors(
+        "wgpu, path, 2,000 samples",
+        &reference.color,
+        &frame.color,
+        raybench_tests::gpu::MAX_PATH_COLOR_MISMATCH,
+    );
+}
