@@ -690,10 +690,10 @@ fn combine(op: CsgOp, a: &[Span], b: &[Span]) -> Vec<Span> {
         let Some(e) = chosen else { continue };
         if after {
             open = Some(e);
-        } else if let Some(enter) = open.take() {
-            if enter.t < e.t {
-                out.push(Span { enter, exit: e });
-            }
+        } else if let Some(enter) = open.take()
+            && enter.t < e.t
+        {
+            out.push(Span { enter, exit: e });
         }
     }
     out
