@@ -136,3 +136,50 @@ fn deep_trees_are_refused_without_a_crash() {
     let err = nested(10_000).unwrap_err();
     assert!(err.contains("recursion"), "{err}");
 }
+
+/// White furnace with CSG solids: diffuse solids of albedo 1 under a uniform environment
+/// of radiance 1 reflect exactly what they receive, so the mean radiance is 1: paths that
+/// leaked into the solids or were caught by their own surface (a hit at the start of a
+/// continued ray) would darken the image. (Diffuse shading faces the normal towards the ray,
+/// so this does not see a normal's sign; `analytic_hits_through_the_scene` and the core's
+/// unit tests check the signs.)
+#[test]
+fn white_furnace_with_csg_solids() {
+    use raybench_core::{Mode, RenderSettings};
+    let mut text = String::from(
+        "background = [1, 1, 1]\n[camera]\nposition = [0, 0, 4]\nlook_at = [0, 0, 0]\n\
+         fov = 40\n[[material]]\nname = \"white\"\ncolor = [1, 1, 1]\nspecular = [0, 0, 0]\n",
+    );
+    text += &csg(DRILLED).replace("kind = \"csg\"", "kind = \"csg\"\nmaterial = \"white\"");
+    text += &csg(r#"{ type = "union", operands = [
+            { type = "sphere", center = [1.2, 1.0, 0.5], radius = 0.5 },
+            { type = "cone", base = [1.2, 0.0, 0.5], radius = 0.5, height = 1.0 },
+        ] }"#)
+    .replace("kind = \"csg\"", "kind = \"csg\"\nmaterial = \"white\"");
+    let scene = std::sync::Arc::new(load(&text).unwrap());
+    let settings = RenderSettings {
+        width: 40,
+        height: 40,
+        spp: 16,
+        mode: Mode::Path,
+        max_depth: 64,
+        seed: 5,
+        count: false,
+    };
+    let frame = raybench_tests::render_with("bvh", &scene, &settings, 2);
+    let n = frame.color.len() as f64;
+    let mean = frame.color.iter().map(|c| f64::from(c.x)).sum::<f64>() / n;
+    let var = frame
+        .color
+        .iter()
+        .map(|c| (f64::from(c.x) - mean).powi(2))
+        .sum::<f64>()
+        / (n - 1.0);
+    let err = (var / n).sqrt();
+    assert!(
+        (mean - 1.0).abs() < 5.0 * err + 1e-4,
+        "mean {mean} +- {err}"
+    );
+    // The solids are in view: some pixels hit them.
+    assert!(frame.ids.iter().any(|&id| id != raybench_core::NO_HIT));
+}
