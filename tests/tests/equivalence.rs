@@ -49,6 +49,7 @@ scene_tests! {
     teapot_stadium => "teapot-stadium",
     heightfield => "heightfield",
     heightfield_generator => "heightfield:64",
+    csg => "csg",
 }
 
 macro_rules! mode_tests {
@@ -73,6 +74,7 @@ mode_tests! {
     modes_random_spheres => "spheres:2000",
     modes_terrain => "terrain:32",
     modes_heightfield => "heightfield",
+    modes_csg => "csg",
 }
 
 /// Backends not bound by the bit-exact contract, and where each is compared with naive

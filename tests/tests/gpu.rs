@@ -70,7 +70,7 @@ fn the_empty_scene_renders_background() {
     assert!(f.color.iter().all(|&c| c == scene.background));
 }
 
-/// Height fields and the volume modes have no WGSL port: the backend refuses them with a
+/// Height fields, CSG trees and the volume modes have no WGSL port: the backend refuses them with a
 /// reason instead of rendering something else.
 #[test]
 fn kinds_and_modes_without_kernels_are_refused() {
@@ -81,6 +81,9 @@ fn kinds_and_modes_without_kernels_are_refused() {
     }
     let scene = raybench_scene::load("heightfield:8", std::path::Path::new(".")).unwrap();
     assert!(raybench_wgpu::check_kinds(&scene).is_err());
+    let csg = raybench_scene::load("csg", std::path::Path::new(".")).unwrap();
+    let why = raybench_wgpu::check_kinds(&csg).unwrap_err();
+    assert!(why.contains("CSG"), "{why}");
     if !raybench_tests::gpu::available() {
         return;
     }

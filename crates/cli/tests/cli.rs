@@ -140,13 +140,15 @@ fn compare_incoherent_rays_with_every_backend() {
 }
 
 #[test]
-fn volume_modes_render_the_phantom_and_height_fields_render() {
+fn volume_modes_render_the_phantom_and_height_fields_and_csg_render() {
     let dir = tmp_dir("volumes");
     for (scene, mode) in [
         ("phantom", "mip"),
         ("phantom", "composite"),
         ("heightfield", "whitted"),
         ("heightfield:64", "cast"),
+        ("csg", "whitted"),
+        ("csg", "path"),
     ] {
         let out = dir.join(format!("{mode}.png"));
         let o = raybench(&[

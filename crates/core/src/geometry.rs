@@ -1,12 +1,14 @@
 //! The flat list of primitives that acceleration structures index into.
 
 use crate::aabb::Aabb;
+use crate::csg::Csg;
 use crate::heightfield::HeightField;
 use crate::hit::Hit;
 use crate::plane::Plane;
 use crate::ray::Ray;
 use crate::sphere::Sphere;
 use crate::triangle::Triangle;
+use glam::Vec3;
 use std::sync::Arc;
 
 /// One primitive. A closed enum so that the per-ray path dispatches with a `match`, not a
@@ -26,6 +28,9 @@ pub enum Shape {
     /// A height field: one bounded primitive whose cells are walked directly; the
     /// sub-primitive id is the tessellated triangle's index (two per cell).
     HeightField(Arc<HeightField>),
+    /// A CSG tree of analytic solids: one bounded primitive; the sub-primitive id is the
+    /// index of the leaf hit.
+    Csg(Arc<Csg>),
 }
 
 /// The kinds of primitive, for statistics and for backends that support only some.
@@ -39,11 +44,19 @@ pub enum PrimitiveKind {
     Plane,
     /// [`Shape::HeightField`].
     HeightField,
+    /// [`Shape::Csg`].
+    Csg,
 }
 
 impl PrimitiveKind {
     /// Every kind, in a fixed order.
-    pub const ALL: [Self; 4] = [Self::Triangle, Self::Sphere, Self::Plane, Self::HeightField];
+    pub const ALL: [Self; 5] = [
+        Self::Triangle,
+        Self::Sphere,
+        Self::Plane,
+        Self::HeightField,
+        Self::Csg,
+    ];
 
     /// Lower-case name used in scene files and reports.
     #[must_use]
@@ -53,6 +66,7 @@ impl PrimitiveKind {
             Self::Sphere => "sphere",
             Self::Plane => "plane",
             Self::HeightField => "height field",
+            Self::Csg => "CSG solid",
         }
     }
 }
@@ -80,6 +94,7 @@ impl Shape {
             Self::Sphere(_) => PrimitiveKind::Sphere,
             Self::Plane(_) => PrimitiveKind::Plane,
             Self::HeightField(_) => PrimitiveKind::HeightField,
+            Self::Csg(_) => PrimitiveKind::Csg,
         }
     }
 
@@ -92,6 +107,7 @@ impl Shape {
             Self::Sphere(s) => Some(s.bounds()),
             Self::Plane(_) => None,
             Self::HeightField(h) => Some(h.bounds()),
+            Self::Csg(c) => Some(c.bounds()),
         }
     }
 
@@ -119,6 +135,12 @@ impl Shape {
                 v: 0.0,
             }),
             Self::HeightField(h) => h.intersect(ray),
+            Self::Csg(c) => c.intersect(ray).map(|h| PrimHit {
+                t: h.t,
+                sub: h.leaf,
+                u: 0.0,
+                v: 0.0,
+            }),
         }
     }
 
@@ -135,6 +157,14 @@ impl Shape {
             }
             Self::Plane(p) => (p.normal, h.u, h.v),
             Self::HeightField(f) => (f.normal(h.sub, h.u, h.v), h.u, h.v),
+            // The tree is evaluated again for the normal: once per closest hit, and
+            // deterministic, so it finds the same boundary.
+            Self::Csg(c) => (
+                c.intersect(&ray.clipped(h.t))
+                    .map_or(Vec3::Y, |full| full.normal),
+                h.u,
+                h.v,
+            ),
         };
         Hit {
             t: h.t,
@@ -244,6 +274,7 @@ impl Geometry {
             .iter()
             .map(|s| match s {
                 Shape::HeightField(h) => h.memory_bytes(),
+                Shape::Csg(c) => c.memory_bytes(),
                 _ => 0,
             })
             .sum();

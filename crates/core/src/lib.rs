@@ -17,6 +17,7 @@ mod aabb;
 mod accel;
 mod bilinear;
 mod camera;
+mod csg;
 mod emitters;
 mod error;
 mod frame;
@@ -44,6 +45,7 @@ pub use accel::{
 };
 pub use bilinear::{BilinearPatch, PatchHit};
 pub use camera::{Camera, CameraRays};
+pub use csg::{Csg, CsgHit, CsgNode, CsgOp, Solid};
 pub use emitters::Emitters;
 pub use error::SceneError;
 pub use frame::{Frame, FrameStats, NO_HIT, Timings};

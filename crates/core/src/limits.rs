@@ -30,3 +30,11 @@ pub const MAX_HEIGHT_FIELD_VERTICES: u64 = 1 << 26;
 /// Largest number of voxels of one volume (`2^27`: 512 MiB as f32); raw sizes and
 /// generator arguments are checked against it before anything is read.
 pub const MAX_VOLUME_VOXELS: u64 = 1 << 27;
+
+/// Deepest accepted CSG tree (operators nest at most this many levels; scene files fold
+/// n-ary operators into balanced trees first).
+pub const MAX_CSG_DEPTH: usize = 32;
+
+/// Largest accepted number of solids in one CSG tree: every ray that reaches the tree's box
+/// tests them all.
+pub const MAX_CSG_LEAVES: usize = 256;

@@ -1,6 +1,7 @@
 //! The scene: camera, materials, lights and geometry.
 
 use crate::camera::Camera;
+use crate::csg::Csg;
 use crate::emitters::Emitters;
 use crate::error::SceneError;
 use crate::geometry::{Geometry, Shape};
@@ -309,6 +310,22 @@ impl SceneBuilder {
         self.check_material(material)?;
         self.check_room(1)?;
         self.push_object(name.into(), [Shape::HeightField(field)], material);
+        Ok(self)
+    }
+
+    /// Adds a CSG tree as one primitive (its leaves are sub-primitives).
+    ///
+    /// # Errors
+    /// When the material does not exist or the scene is full.
+    pub fn add_csg(
+        &mut self,
+        name: impl Into<String>,
+        csg: Arc<Csg>,
+        material: u32,
+    ) -> Result<&mut Self, SceneError> {
+        self.check_material(material)?;
+        self.check_room(1)?;
+        self.push_object(name.into(), [Shape::Csg(csg)], material);
         Ok(self)
     }
 

@@ -81,4 +81,9 @@ pub const BUILTIN_SCENES: &[BuiltinScene] = &[
         "the 3D Shepp-Logan head phantom, 128^3 voxels (modes mip and composite)",
         []
     ),
+    builtin!(
+        "csg",
+        "CSG trees of spheres, boxes, cylinders, cones and half-spaces: all three operations",
+        []
+    ),
 ];

@@ -9,8 +9,9 @@ use crate::transform::Transform;
 use crate::volumes;
 use raybench_core::volume::{MAX_VOLUME_VOXELS, check_volume_dims};
 use raybench_core::{
-    Camera, CellSurface, HeightField, HeightFieldTraversal, Light, MAX_HEIGHT_FIELD_VERTICES,
-    Material, MaterialKind, PolygonMesh, Scene, SceneBuilder, SceneError, Sphere, Triangle, Vec3,
+    Camera, CellSurface, Csg, CsgNode, CsgOp, HeightField, HeightFieldTraversal, Light,
+    MAX_HEIGHT_FIELD_VERTICES, Material, MaterialKind, PolygonMesh, Scene, SceneBuilder,
+    SceneError, Solid, Sphere, Triangle, Vec3,
 };
 use raybench_core::{Sampling, TransferFunction, TransferPoint, Volume, VolumeData, VolumeParams};
 use serde::Deserialize;
@@ -170,6 +171,81 @@ enum ObjectDesc {
     Mesh(MeshDesc),
     Generator(GeneratorDesc),
     HeightField(HeightFieldDesc),
+    Csg(CsgDesc),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CsgDesc {
+    tree: CsgNodeDesc,
+    material: Option<String>,
+}
+
+/// A node of a CSG tree: an operator with its operands, or a solid.
+#[derive(Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+enum CsgNodeDesc {
+    Union { operands: Vec<CsgNodeDesc> },
+    Intersection { operands: Vec<CsgNodeDesc> },
+    Difference { operands: Vec<CsgNodeDesc> },
+    Sphere { center: V3, radius: f32 },
+    Box { min: V3, max: V3 },
+    Cylinder { base: V3, radius: f32, height: f32 },
+    Cone { base: V3, radius: f32, height: f32 },
+    HalfSpace { point: V3, normal: V3 },
+}
+
+/// Converts a scene file's tree into the core's, checking the depth before recursing
+/// further (operators are folded into balanced binary trees).
+fn csg_node(d: &CsgNodeDesc, depth: usize) -> Result<CsgNode, SceneError> {
+    use raybench_core::limits::MAX_CSG_DEPTH;
+    if depth > MAX_CSG_DEPTH {
+        return Err(SceneError::TooLarge(format!(
+            "the CSG tree is deeper than {MAX_CSG_DEPTH} levels"
+        )));
+    }
+    let fold = |op: CsgOp, operands: &[CsgNodeDesc]| -> Result<CsgNode, SceneError> {
+        let nodes = operands
+            .iter()
+            .map(|o| csg_node(o, depth + 1))
+            .collect::<Result<Vec<_>, _>>()?;
+        CsgNode::fold(op, nodes)
+    };
+    Ok(match d {
+        CsgNodeDesc::Union { operands } => fold(CsgOp::Union, operands)?,
+        CsgNodeDesc::Intersection { operands } => fold(CsgOp::Intersection, operands)?,
+        CsgNodeDesc::Difference { operands } => fold(CsgOp::Difference, operands)?,
+        CsgNodeDesc::Sphere { center, radius } => CsgNode::Leaf(Solid::Sphere {
+            center: Vec3::from(*center),
+            radius: *radius,
+        }),
+        CsgNodeDesc::Box { min, max } => CsgNode::Leaf(Solid::Box {
+            min: Vec3::from(*min),
+            max: Vec3::from(*max),
+        }),
+        CsgNodeDesc::Cylinder {
+            base,
+            radius,
+            height,
+        } => CsgNode::Leaf(Solid::Cylinder {
+            base: Vec3::from(*base),
+            radius: *radius,
+            height: *height,
+        }),
+        CsgNodeDesc::Cone {
+            base,
+            radius,
+            height,
+        } => CsgNode::Leaf(Solid::Cone {
+            base: Vec3::from(*base),
+            radius: *radius,
+            height: *height,
+        }),
+        CsgNodeDesc::HalfSpace { point, normal } => CsgNode::Leaf(Solid::HalfSpace {
+            point: Vec3::from(*point),
+            normal: Vec3::from(*normal),
+        }),
+    })
 }
 
 #[derive(Deserialize)]
@@ -631,6 +707,12 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
                 let field = height_field(h, ctx, &what)?;
                 b.add_height_field("height field", Arc::new(field), m)
                     .map_err(err)?;
+            }
+            ObjectDesc::Csg(c) => {
+                let m = material(&c.material)?.unwrap_or(0);
+                let tree = csg_node(&c.tree, 1).map_err(&err)?;
+                let csg = Csg::new(&tree).map_err(&err)?;
+                b.add_csg("csg", Arc::new(csg), m).map_err(err)?;
             }
         }
     }

@@ -166,12 +166,12 @@ fn prim(shape: &Shape, id: u32) -> Option<GpuPrim> {
             b: v4(Vec3::ZERO, idw),
             c: v4(p.normal, 0.0),
         },
-        Shape::HeightField(_) => return None,
+        Shape::HeightField(_) | Shape::Csg(_) => return None,
     })
 }
 
 /// Why the shaders cannot render `scene`, if they cannot: every primitive kind must have a
-/// WGSL port (triangles, spheres and planes do; height fields do not yet).
+/// WGSL port (triangles, spheres and planes do; height fields and CSG trees do not yet).
 ///
 /// # Errors
 /// The first primitive kind without a port.

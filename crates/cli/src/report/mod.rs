@@ -60,6 +60,7 @@ pub const QUICK_SCENES: &[&str] = &[
     "sponza",
     "heightfield",
     "phantom",
+    "csg",
 ];
 /// The built-in scenes of the full matrix.
 pub const FULL_SCENES: &[&str] = &[
@@ -74,6 +75,7 @@ pub const FULL_SCENES: &[&str] = &[
     "teapot-stadium",
     "heightfield",
     "phantom",
+    "csg",
 ];
 
 /// Naive's estimated ray/primitive tests per workload above which it is left out (it is
@@ -430,7 +432,7 @@ impl Ctx<'_> {
         }
         let name = scene.name.as_str();
         if self.modes.contains(&Mode::Whitted)
-            && ["spheres", "whitted", "cornell-box", "heightfield"].contains(&name)
+            && ["spheres", "whitted", "cornell-box", "heightfield", "csg"].contains(&name)
         {
             w.push(Workload {
                 mode: Mode::Whitted,

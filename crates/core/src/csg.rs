@@ -1,0 +1,936 @@
+//! Constructive solid geometry: trees of analytic solids combined by union, intersection and
+//! difference, intersected by interval arithmetic on sorted span lists.
+//!
+//! Every leaf gives the spans (entry/exit intervals) where the ray's whole line lies inside
+//! it; an operator combines its operands' sorted span lists in one merge sweep, which is the
+//! lecture's `F = min(A, max(B, -C))` evaluated only where some operand changes sign. The
+//! hit is the first span end inside `[ray.t_min, ray.t_max]`.
+//!
+//! **Rules** (tested below):
+//! - Spans are closed intervals and every operation is *regularised*: spans of zero length
+//!   are dropped, and events at the same `t` are applied together before the combined
+//!   state is read. So two solids sharing a face behave as one solid in a union (the shared
+//!   face disappears), touch in nothing in an intersection, and in a difference the
+//!   subtracted solid removes a face it shares with the first.
+//! - A tangent ray (a zero-length span, or a ray lying in a face plane) misses.
+//! - A ray starting inside the combined solid hits its exit: spans are computed over the
+//!   whole line and the first boundary at or after `t_min` is returned.
+//! - Normals point out of the combined solid: a subtracted solid's boundary takes its
+//!   normal negated.
+
+use crate::aabb::Aabb;
+use crate::error::SceneError;
+use crate::limits::{MAX_COORDINATE, MAX_CSG_DEPTH, MAX_CSG_LEAVES};
+use crate::ray::Ray;
+use glam::Vec3;
+
+/// A CSG set operation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CsgOp {
+    /// Points in either operand (`min(A, B)`).
+    Union,
+    /// Points in both operands (`max(A, B)`).
+    Intersection,
+    /// Points in the first operand and not the second (`max(A, -B)`).
+    Difference,
+}
+
+impl CsgOp {
+    /// Lower-case name used in scene files.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Union => "union",
+            Self::Intersection => "intersection",
+            Self::Difference => "difference",
+        }
+    }
+
+    #[inline]
+    fn apply(self, a: bool, b: bool) -> bool {
+        match self {
+            Self::Union => a || b,
+            Self::Intersection => a && b,
+            Self::Difference => a && !b,
+        }
+    }
+}
+
+/// An analytic solid, a leaf of a CSG tree. Cylinders and cones stand on the `y` axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Solid {
+    /// A ball.
+    Sphere {
+        /// Centre.
+        center: Vec3,
+        /// Radius (positive).
+        radius: f32,
+    },
+    /// An axis-aligned box.
+    Box {
+        /// Smallest corner.
+        min: Vec3,
+        /// Largest corner (each coordinate larger than `min`'s).
+        max: Vec3,
+    },
+    /// A capped cylinder from `base` up to `base + height * Y`.
+    Cylinder {
+        /// Centre of the bottom cap.
+        base: Vec3,
+        /// Radius (positive).
+        radius: f32,
+        /// Height (positive).
+        height: f32,
+    },
+    /// A capped cone with its base disc at `base` and its apex at `base + height * Y`.
+    Cone {
+        /// Centre of the base disc.
+        base: Vec3,
+        /// Radius of the base disc (positive).
+        radius: f32,
+        /// Height (positive).
+        height: f32,
+    },
+    /// The half-space `dot(p - point, normal) <= 0` (unbounded: only usable where an
+    /// intersection or a difference bounds it).
+    HalfSpace {
+        /// A point on the boundary plane.
+        point: Vec3,
+        /// Outward normal (normalised on construction).
+        normal: Vec3,
+    },
+}
+
+/// A CSG tree as scene files describe it: operators with two operands, solids at the
+/// leaves. [`Csg::new`] validates it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum CsgNode {
+    /// A solid.
+    Leaf(Solid),
+    /// An operator and its two operands.
+    Op(CsgOp, Box<CsgNode>, Box<CsgNode>),
+}
+
+impl CsgNode {
+    /// Folds `operands` with `op` into a balanced tree (a difference subtracts the union of
+    /// all operands after the first), so that depth grows with the logarithm of the count.
+    ///
+    /// # Errors
+    /// [`SceneError::Invalid`] when there are fewer than two operands.
+    pub fn fold(op: CsgOp, mut operands: Vec<CsgNode>) -> Result<Self, SceneError> {
+        if operands.len() < 2 {
+            return Err(SceneError::Invalid(format!(
+                "a CSG {} needs at least two operands, found {}",
+                op.name(),
+                operands.len()
+            )));
+        }
+        if op == CsgOp::Difference {
+            let first = operands.remove(0);
+            let rest = Self::balanced(CsgOp::Union, operands);
+            return Ok(Self::Op(op, Box::new(first), Box::new(rest)));
+        }
+        Ok(Self::balanced(op, operands))
+    }
+
+    fn balanced(op: CsgOp, mut operands: Vec<CsgNode>) -> Self {
+        if operands.len() == 1 {
+            return operands.pop().expect("one operand");
+        }
+        let right = operands.split_off(operands.len() / 2);
+        Self::Op(
+            op,
+            Box::new(Self::balanced(op, operands)),
+            Box::new(Self::balanced(op, right)),
+        )
+    }
+}
+
+/// One end of a span: where, the outward normal of the combined solid there, and the leaf.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct End {
+    t: f32,
+    normal: Vec3,
+    leaf: u32,
+}
+
+/// A closed interval of the ray's line inside a solid (`enter.t < exit.t`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Span {
+    enter: End,
+    exit: End,
+}
+
+/// A node of the validated tree, stored in post-order.
+#[derive(Clone, Debug, PartialEq)]
+enum Node {
+    Leaf(Solid),
+    Op(CsgOp, usize, usize),
+}
+
+/// A hit with a CSG tree: distance, the leaf hit and the outward normal there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CsgHit {
+    /// Ray parameter.
+    pub t: f32,
+    /// Index of the leaf (in the order leaves appear left to right in the tree).
+    pub leaf: u32,
+    /// Outward unit normal of the combined solid.
+    pub normal: Vec3,
+}
+
+/// A validated CSG tree: one bounded primitive.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Csg {
+    nodes: Vec<Node>,
+    leaves: u32,
+    bounds: Aabb,
+}
+
+/// A bound that may be all of space (`None`).
+type Bound = Option<Aabb>;
+
+impl Csg {
+    /// Validates `root` and computes its bounding box: leaves' boxes, joined by unions,
+    /// overlapped by intersections, and a difference's first operand's.
+    ///
+    /// # Errors
+    /// A parameter that is not finite or out of range, a tree deeper than
+    /// [`MAX_CSG_DEPTH`] or with more than [`MAX_CSG_LEAVES`] leaves, a tree that is not
+    /// bounded (a half-space not cut by an intersection) or whose box is empty.
+    pub fn new(root: &CsgNode) -> Result<Self, SceneError> {
+        let mut nodes = Vec::new();
+        let mut leaves = 0u32;
+        let bound = Self::flatten(root, 1, &mut nodes, &mut leaves)?;
+        let Some(b) = bound else {
+            return Err(SceneError::Invalid(
+                "the CSG tree is unbounded (a half-space must be cut by an intersection \
+                 or be subtracted)"
+                    .into(),
+            ));
+        };
+        if b.is_empty() || (b.max - b.min).min_element() < 0.0 {
+            return Err(SceneError::Invalid(
+                "the CSG tree is empty (the boxes of its intersected operands do not overlap)"
+                    .into(),
+            ));
+        }
+        // Padding as the sphere's: grazing hits can be computed slightly outside a leaf.
+        let pad = Vec3::splat((b.max - b.min).max_element() / 2048.0);
+        Ok(Self {
+            nodes,
+            leaves,
+            bounds: Aabb::new(b.min - pad, b.max + pad),
+        })
+    }
+
+    fn flatten(
+        node: &CsgNode,
+        depth: usize,
+        nodes: &mut Vec<Node>,
+        leaves: &mut u32,
+    ) -> Result<Bound, SceneError> {
+        if depth > MAX_CSG_DEPTH {
+            return Err(SceneError::TooLarge(format!(
+                "the CSG tree is deeper than {MAX_CSG_DEPTH} levels"
+            )));
+        }
+        match node {
+            CsgNode::Leaf(s) => {
+                if *leaves as usize >= MAX_CSG_LEAVES {
+                    return Err(SceneError::TooLarge(format!(
+                        "the CSG tree has more than {MAX_CSG_LEAVES} solids"
+                    )));
+                }
+                let s = validate(*s)?;
+                *leaves += 1;
+                nodes.push(Node::Leaf(s));
+                Ok(solid_bounds(&s))
+            }
+            CsgNode::Op(op, a, b) => {
+                let ba = Self::flatten(a, depth + 1, nodes, leaves)?;
+                let ia = nodes.len() - 1;
+                let bb = Self::flatten(b, depth + 1, nodes, leaves)?;
+                let ib = nodes.len() - 1;
+                nodes.push(Node::Op(*op, ia, ib));
+                Ok(match op {
+                    CsgOp::Union => match (ba, bb) {
+                        (Some(x), Some(y)) => Some(x.union(y)),
+                        _ => None,
+                    },
+                    CsgOp::Intersection => match (ba, bb) {
+                        (Some(x), Some(y)) => Some(Aabb::new(x.min.max(y.min), x.max.min(y.max))),
+                        (x, None) => x,
+                        (None, y) => y,
+                    },
+                    CsgOp::Difference => ba,
+                })
+            }
+        }
+    }
+
+    /// The bounding box (padded by `2^-11` of its largest extent).
+    #[inline]
+    #[must_use]
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    /// Number of leaves.
+    #[inline]
+    #[must_use]
+    pub fn leaf_count(&self) -> u32 {
+        self.leaves
+    }
+
+    /// Bytes held behind the primitive's `Arc`.
+    #[must_use]
+    pub fn memory_bytes(&self) -> usize {
+        std::mem::size_of::<Self>() + self.nodes.len() * std::mem::size_of::<Node>()
+    }
+
+    /// The first boundary of the combined solid inside `[ray.t_min, ray.t_max]`.
+    #[must_use]
+    pub fn intersect(&self, ray: &Ray) -> Option<CsgHit> {
+        let mut leaf = 0;
+        let spans = self.spans(self.nodes.len() - 1, ray, &mut leaf);
+        for s in &spans {
+            for e in [s.enter, s.exit] {
+                if e.t > ray.t_max {
+                    return None;
+                }
+                if e.t >= ray.t_min && e.t.is_finite() {
+                    return Some(CsgHit {
+                        t: e.t,
+                        leaf: e.leaf,
+                        normal: e.normal,
+                    });
+                }
+            }
+        }
+        None
+    }
+
+    /// The spans of node `i` on the ray's whole line; `leaf` counts leaves in post-order.
+    fn spans(&self, i: usize, ray: &Ray, leaf: &mut u32) -> Vec<Span> {
+        match &self.nodes[i] {
+            Node::Leaf(s) => {
+                let id = *leaf;
+                *leaf += 1;
+                solid_span(s, ray, id).into_iter().collect()
+            }
+            Node::Op(op, a, b) => {
+                let sa = self.spans(*a, ray, leaf);
+                let sb = self.spans(*b, ray, leaf);
+                combine(*op, &sa, &sb)
+            }
+        }
+    }
+}
+
+/// Checks a solid's parameters and normalises a half-space's normal.
+fn validate(s: Solid) -> Result<Solid, SceneError> {
+    let finite = |v: Vec3, what: &str| {
+        if !v.is_finite() {
+            Err(SceneError::NonFinite(format!("CSG {what}")))
+        } else if v.abs().max_element() > MAX_COORDINATE {
+            Err(SceneError::Invalid(format!(
+                "CSG {what} exceeds {MAX_COORDINATE:e} in magnitude"
+            )))
+        } else {
+            Ok(())
+        }
+    };
+    let positive = |x: f32, what: &str| {
+        if !x.is_finite() {
+            Err(SceneError::NonFinite(format!("CSG {what}")))
+        } else if !(x > 0.0 && x <= MAX_COORDINATE) {
+            Err(SceneError::Invalid(format!(
+                "CSG {what} must be positive and at most {MAX_COORDINATE:e}, found {x}"
+            )))
+        } else {
+            Ok(())
+        }
+    };
+    match s {
+        Solid::Sphere { center, radius } => {
+            finite(center, "sphere centre")?;
+            positive(radius, "sphere radius")?;
+        }
+        Solid::Box { min, max } => {
+            finite(min, "box min")?;
+            finite(max, "box max")?;
+            if !min.cmplt(max).all() {
+                return Err(SceneError::Invalid(format!(
+                    "CSG box min {min} must be below max {max} on every axis"
+                )));
+            }
+        }
+        Solid::Cylinder {
+            base,
+            radius,
+            height,
+        } => {
+            finite(base, "cylinder base")?;
+            positive(radius, "cylinder radius")?;
+            positive(height, "cylinder height")?;
+        }
+        Solid::Cone {
+            base,
+            radius,
+            height,
+        } => {
+            finite(base, "cone base")?;
+            positive(radius, "cone radius")?;
+            positive(height, "cone height")?;
+        }
+        Solid::HalfSpace { point, normal } => {
+            finite(point, "half-space point")?;
+            finite(normal, "half-space normal")?;
+            let Some(n) = normal.try_normalize() else {
+                return Err(SceneError::Invalid(
+                    "CSG half-space normal must not be zero".into(),
+                ));
+            };
+            return Ok(Solid::HalfSpace { point, normal: n });
+        }
+    }
+    Ok(s)
+}
+
+/// A solid's bounding box (`None`: all of space).
+fn solid_bounds(s: &Solid) -> Bound {
+    match *s {
+        Solid::Sphere { center, radius } => Some(Aabb::new(
+            center - Vec3::splat(radius),
+            center + Vec3::splat(radius),
+        )),
+        Solid::Box { min, max } => Some(Aabb::new(min, max)),
+        Solid::Cylinder {
+            base,
+            radius,
+            height,
+        }
+        | Solid::Cone {
+            base,
+            radius,
+            height,
+        } => Some(Aabb::new(
+            base - Vec3::new(radius, 0.0, radius),
+            base + Vec3::new(radius, height, radius),
+        )),
+        Solid::HalfSpace { .. } => None,
+    }
+}
+
+/// The roots of `a t^2 + 2 b' t + c` in ascending order (Haines et al.'s stable form with
+/// `b = -b'`), or `None` when there are none or `a` is zero.
+#[inline]
+fn quadratic(a: f32, b: f32, c: f32) -> Option<(f32, f32)> {
+    // Roots of a t^2 - 2 b t + c.
+    let disc = b * b - a * c;
+    if disc.is_nan() || disc < 0.0 || a == 0.0 {
+        return None;
+    }
+    let q = b + disc.sqrt().copysign(b);
+    let (t0, t1) = if q == 0.0 { (0.0, 0.0) } else { (c / q, q / a) };
+    Some(if t0 <= t1 { (t0, t1) } else { (t1, t0) })
+}
+
+/// The ray's line inside `slab_lo <= o + t d <= slab_hi` on one axis: `None` when it misses,
+/// the whole line when it is parallel and strictly inside (a ray lying in a face plane is
+/// tangent, and misses). Returns the interval with the outward
+/// normal's sign (`-1` at the entry when `d > 0`).
+#[inline]
+fn slab(o: f32, d: f32, lo: f32, hi: f32) -> Option<(f32, f32, f32)> {
+    if d == 0.0 {
+        return (o > lo && o < hi).then_some((f32::NEG_INFINITY, f32::INFINITY, 0.0));
+    }
+    let t_lo = (lo - o) / d;
+    let t_hi = (hi - o) / d;
+    Some(if d > 0.0 {
+        (t_lo, t_hi, -1.0)
+    } else {
+        (t_hi, t_lo, 1.0)
+    })
+}
+
+/// The span of the ray's line inside one solid (solids are convex: at most one span).
+fn solid_span(s: &Solid, ray: &Ray, leaf: u32) -> Option<Span> {
+    let o = ray.origin;
+    let d = ray.dir;
+    let end = |t: f32, normal: Vec3| End { t, normal, leaf };
+    let span = match *s {
+        Solid::Sphere { center, radius } => {
+            let f = o - center;
+            let a = d.dot(d);
+            let b = -f.dot(d);
+            // Distance from the centre to the line, as the sphere primitive computes it.
+            let l = f + d * (b / a);
+            let r2 = radius * radius;
+            let disc = r2 - l.dot(l);
+            if disc.is_nan() || disc < 0.0 {
+                return None;
+            }
+            let c = f.dot(f) - r2;
+            let q = b + (a.sqrt() * disc.sqrt()).copysign(b);
+            let (t0, t1) = (c / q, q / a);
+            let (t0, t1) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
+            let n = |t: f32| ((o + d * t - center) / radius).normalize_or(Vec3::Y);
+            Span {
+                enter: end(t0, n(t0)),
+                exit: end(t1, n(t1)),
+            }
+        }
+        Solid::Box { min, max } => {
+            let mut enter = end(f32::NEG_INFINITY, Vec3::ZERO);
+            let mut exit = end(f32::INFINITY, Vec3::ZERO);
+            for axis in 0..3 {
+                let (t0, t1, sign) = slab(o[axis], d[axis], min[axis], max[axis])?;
+                let mut n = Vec3::ZERO;
+                n[axis] = sign;
+                // Strict comparisons: on a tie (an edge) the lower axis keeps it.
+                if t0 > enter.t {
+                    enter = end(t0, n);
+                }
+                if t1 < exit.t {
+                    exit = end(t1, -n);
+                }
+            }
+            Span { enter, exit }
+        }
+        Solid::Cylinder {
+            base,
+            radius,
+            height,
+        } => {
+            let (y0, y1, sign) = slab(o.y, d.y, base.y, base.y + height)?;
+            let (fx, fz) = (o.x - base.x, o.z - base.z);
+            let a = d.x * d.x + d.z * d.z;
+            let c = fx * fx + fz * fz - radius * radius;
+            let (s0, s1) = if a == 0.0 {
+                if c.is_nan() || c > 0.0 {
+                    return None;
+                }
+                (f32::NEG_INFINITY, f32::INFINITY)
+            } else {
+                quadratic(a, -(fx * d.x + fz * d.z), c)?
+            };
+            let side = |t: f32| {
+                let p = o + d * t - base;
+                Vec3::new(p.x, 0.0, p.z).normalize_or(Vec3::X)
+            };
+            let cap = Vec3::new(0.0, sign, 0.0);
+            Span {
+                enter: if y0 > s0 {
+                    end(y0, cap)
+                } else {
+                    end(s0, side(s0))
+                },
+                exit: if y1 < s1 {
+                    end(y1, -cap)
+                } else {
+                    end(s1, side(s1))
+                },
+            }
+        }
+        Solid::Cone {
+            base,
+            radius,
+            height,
+        } => {
+            let (y0, y1, sign) = slab(o.y, d.y, base.y, base.y + height)?;
+            let k2 = (radius / height) * (radius / height);
+            // Relative to the apex: inside the double cone where x^2 + z^2 <= k^2 y^2.
+            let f = o - (base + Vec3::new(0.0, height, 0.0));
+            let a = d.x * d.x + d.z * d.z - k2 * d.y * d.y;
+            let bh = -(f.x * d.x + f.z * d.z - k2 * f.y * d.y);
+            let c = f.x * f.x + f.z * f.z - k2 * f.y * f.y;
+            let normal = |t: f32| {
+                let p = f + d * t;
+                Vec3::new(p.x, -k2 * p.y, p.z).normalize_or(Vec3::Y)
+            };
+            // The line's parts inside the double cone: one interval, or two rays.
+            let inside: [(f32, f32); 2] = if a == 0.0 {
+                // One root of the linear equation 2 b' t = c (with b' = -bh).
+                if bh == 0.0 {
+                    if c.is_nan() || c > 0.0 {
+                        return None;
+                    }
+                    [(f32::NEG_INFINITY, f32::INFINITY), (f32::NAN, f32::NAN)]
+                } else {
+                    let t = c / (2.0 * bh);
+                    if bh > 0.0 {
+                        [(t, f32::INFINITY), (f32::NAN, f32::NAN)]
+                    } else {
+                        [(f32::NEG_INFINITY, t), (f32::NAN, f32::NAN)]
+                    }
+                }
+            } else {
+                let Some((r0, r1)) = quadratic(a, bh, c) else {
+                    // No real roots: the quadratic keeps the sign of `a` everywhere.
+                    if a > 0.0 || a.is_nan() {
+                        return None;
+                    }
+                    return finish(Span {
+                        enter: end(y0, Vec3::new(0.0, sign, 0.0)),
+                        exit: end(y1, Vec3::new(0.0, -sign, 0.0)),
+                    });
+                };
+                if a > 0.0 {
+                    [(r0, r1), (f32::NAN, f32::NAN)]
+                } else {
+                    [(f32::NEG_INFINITY, r0), (r1, f32::INFINITY)]
+                }
+            };
+            // Only the nappe below the apex lies in the slab; keep the first non-empty piece.
+            let mut found = None;
+            for (s0, s1) in inside {
+                let enter = if y0 > s0 {
+                    end(y0, Vec3::new(0.0, sign, 0.0))
+                } else {
+                    end(s0, normal(s0))
+                };
+                let exit = if y1 < s1 {
+                    end(y1, Vec3::new(0.0, -sign, 0.0))
+                } else {
+                    end(s1, normal(s1))
+                };
+                if enter.t < exit.t {
+                    found = Some(Span { enter, exit });
+                    break;
+                }
+            }
+            found?
+        }
+        Solid::HalfSpace { point, normal } => {
+            let dn = d.dot(normal);
+            let dist = (o - point).dot(normal);
+            if dn == 0.0 {
+                if dist.is_nan() || dist > 0.0 {
+                    return None;
+                }
+                Span {
+                    enter: end(f32::NEG_INFINITY, -normal),
+                    exit: end(f32::INFINITY, normal),
+                }
+            } else {
+                let t = -dist / dn;
+                if dn > 0.0 {
+                    Span {
+                        enter: end(f32::NEG_INFINITY, -normal),
+                        exit: end(t, normal),
+                    }
+                } else {
+                    Span {
+                        enter: end(t, normal),
+                        exit: end(f32::INFINITY, -normal),
+                    }
+                }
+            }
+        }
+    };
+    finish(span)
+}
+
+/// Drops zero-length (tangent) and NaN spans.
+#[inline]
+fn finish(span: Span) -> Option<Span> {
+    (span.enter.t < span.exit.t).then_some(span)
+}
+
+/// Combines two sorted, disjoint span lists with `op` in one merge sweep. Events at the same
+/// `t` are applied together (the first operand's first); a span starts or ends where the
+/// combined state changes, with the normal of the last event of the group that moved the
+/// state to its new value, negated when it comes from a subtracted operand.
+fn combine(op: CsgOp, a: &[Span], b: &[Span]) -> Vec<Span> {
+    let events = |spans: &[Span]| -> Vec<(End, bool)> {
+        spans
+            .iter()
+            .flat_map(|s| [(s.enter, true), (s.exit, false)])
+            .collect()
+    };
+    let (ea, eb) = (events(a), events(b));
+    let (mut i, mut j) = (0, 0);
+    let (mut in_a, mut in_b) = (false, false);
+    let mut out = Vec::new();
+    let mut open: Option<End> = None;
+    while i < ea.len() || j < eb.len() {
+        let t = match (ea.get(i), eb.get(j)) {
+            (Some(x), Some(y)) => x.0.t.min(y.0.t),
+            (Some(x), None) => x.0.t,
+            (None, Some(y)) => y.0.t,
+            (None, None) => break,
+        };
+        let before = op.apply(in_a, in_b);
+        let mut chosen: Option<End> = None;
+        while let Some(&(e, entering)) = ea.get(i).filter(|e| e.0.t == t) {
+            in_a = entering;
+            i += 1;
+            if op.apply(in_a, in_b) != before {
+                chosen = Some(e);
+            }
+        }
+        while let Some(&(e, entering)) = eb.get(j).filter(|e| e.0.t == t) {
+            in_b = entering;
+            j += 1;
+            if op.apply(in_a, in_b) != before {
+                let normal = if op == CsgOp::Difference {
+                    -e.normal
+                } else {
+                    e.normal
+                };
+                chosen = Some(End { normal, ..e });
+            }
+        }
+        let after = op.apply(in_a, in_b);
+        if after == before {
+            continue;
+        }
+        let Some(e) = chosen else { continue };
+        if after {
+            open = Some(e);
+        } else if let Some(enter) = open.take()
+            && enter.t < e.t
+        {
+            out.push(Span { enter, exit: e });
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sphere(c: Vec3, r: f32) -> CsgNode {
+        CsgNode::Leaf(Solid::Sphere {
+            center: c,
+            radius: r,
+        })
+    }
+
+    fn cube(min: Vec3, max: Vec3) -> CsgNode {
+        CsgNode::Leaf(Solid::Box { min, max })
+    }
+
+    fn op(op: CsgOp, a: CsgNode, b: CsgNode) -> CsgNode {
+        CsgNode::Op(op, Box::new(a), Box::new(b))
+    }
+
+    fn hit(tree: &CsgNode, o: Vec3, d: Vec3) -> Option<CsgHit> {
+        Csg::new(tree).unwrap().intersect(&Ray::new(o, d))
+    }
+
+    const FROM_LEFT: Vec3 = Vec3::new(-10.0, 0.0, 0.0);
+
+    #[test]
+    fn leaves_give_analytic_distances() {
+        let cases = [
+            (sphere(Vec3::ZERO, 2.0), 8.0, -Vec3::X),
+            (cube(Vec3::splat(-1.0), Vec3::splat(1.0)), 9.0, -Vec3::X),
+            (
+                CsgNode::Leaf(Solid::Cylinder {
+                    base: Vec3::new(0.0, -1.0, 0.0),
+                    radius: 3.0,
+                    height: 2.0,
+                }),
+                7.0,
+                -Vec3::X,
+            ),
+            (
+                // Halfway up a cone of base radius 4 and height 2, the radius is 2.
+                CsgNode::Leaf(Solid::Cone {
+                    base: Vec3::new(0.0, -1.0, 0.0),
+                    radius: 4.0,
+                    height: 2.0,
+                }),
+                8.0,
+                Vec3::new(-1.0, 2.0, 0.0).normalize(),
+            ),
+        ];
+        for (tree, t, n) in cases {
+            let h = hit(&tree, FROM_LEFT, Vec3::X).unwrap();
+            assert_eq!(h.t, t, "{tree:?}");
+            assert!((h.normal - n).length() < 1e-6, "{tree:?}: {}", h.normal);
+        }
+    }
+
+    #[test]
+    fn cylinder_and_cone_caps_from_above() {
+        let cyl = CsgNode::Leaf(Solid::Cylinder {
+            base: Vec3::ZERO,
+            radius: 1.0,
+            height: 2.0,
+        });
+        let h = hit(&cyl, Vec3::new(0.5, 10.0, 0.0), -Vec3::Y).unwrap();
+        assert_eq!((h.t, h.normal), (8.0, Vec3::Y));
+        let cone = CsgNode::Leaf(Solid::Cone {
+            base: Vec3::ZERO,
+            radius: 1.0,
+            height: 2.0,
+        });
+        let h = hit(&cone, Vec3::new(0.0, -10.0, 0.0), Vec3::Y).unwrap();
+        assert_eq!((h.t, h.normal), (10.0, -Vec3::Y));
+        // Straight down the axis the apex is the first point.
+        let h = hit(&cone, Vec3::new(0.0, 10.0, 0.0), -Vec3::Y).unwrap();
+        assert_eq!(h.t, 8.0);
+    }
+
+    #[test]
+    fn the_three_operations() {
+        let a = sphere(Vec3::new(-1.0, 0.0, 0.0), 2.0); // [-3, 1] on the x axis
+        let b = sphere(Vec3::new(1.0, 0.0, 0.0), 2.0); // [-1, 3]
+        let t = |tree: &CsgNode| hit(tree, FROM_LEFT, Vec3::X).map(|h| (h.t, h.normal));
+        assert_eq!(
+            t(&op(CsgOp::Union, a.clone(), b.clone())),
+            Some((7.0, -Vec3::X))
+        );
+        assert_eq!(
+            t(&op(CsgOp::Intersection, a.clone(), b.clone())),
+            Some((9.0, -Vec3::X))
+        );
+        assert_eq!(
+            t(&op(CsgOp::Difference, b.clone(), a.clone())),
+            Some((11.0, -Vec3::X)),
+            "the subtracted sphere's exit, its normal flipped"
+        );
+        // A ray inside the union hits its far side; inside the difference's hole, the rest.
+        let inside = Ray::new(Vec3::ZERO, Vec3::X);
+        let u = Csg::new(&op(CsgOp::Union, a.clone(), b.clone())).unwrap();
+        assert_eq!(u.intersect(&inside).unwrap().t, 3.0);
+        let d = Csg::new(&op(CsgOp::Difference, b, a)).unwrap();
+        let h = d.intersect(&inside).unwrap();
+        assert_eq!((h.t, h.normal), (1.0, -Vec3::X));
+    }
+
+    #[test]
+    fn coincident_faces_follow_the_regularised_rule() {
+        let left = cube(Vec3::new(-2.0, -1.0, -1.0), Vec3::new(0.0, 1.0, 1.0));
+        let right = cube(Vec3::new(0.0, -1.0, -1.0), Vec3::new(2.0, 1.0, 1.0));
+        let u = Csg::new(&op(CsgOp::Union, left.clone(), right.clone())).unwrap();
+        // From inside the left box the shared face x = 0 is not a boundary.
+        let r = Ray::new(Vec3::new(-1.0, 0.0, 0.0), Vec3::X);
+        assert_eq!(u.intersect(&r).unwrap().t, 3.0);
+        // Touching solids intersect in nothing.
+        let i = Csg::new(&op(CsgOp::Intersection, left.clone(), right)).unwrap();
+        assert_eq!(i.intersect(&Ray::new(FROM_LEFT, Vec3::X)), None);
+        // A subtracted solid sharing the first's front face removes that face.
+        let bite = cube(Vec3::new(-2.0, -1.0, -1.0), Vec3::new(-1.0, 1.0, 1.0));
+        let d = Csg::new(&op(CsgOp::Difference, left, bite)).unwrap();
+        let h = d.intersect(&Ray::new(FROM_LEFT, Vec3::X)).unwrap();
+        assert_eq!((h.t, h.normal), (9.0, -Vec3::X));
+    }
+
+    #[test]
+    fn tangent_rays_miss() {
+        let s = sphere(Vec3::ZERO, 1.0);
+        assert_eq!(hit(&s, Vec3::new(-5.0, 1.0, 0.0), Vec3::X), None);
+        let b = cube(Vec3::splat(-1.0), Vec3::splat(1.0));
+        // Along a face of the box: a zero-thickness overlap in y.
+        assert_eq!(hit(&b, Vec3::new(-5.0, 1.0, 0.0), Vec3::X), None);
+    }
+
+    #[test]
+    fn half_spaces_cut() {
+        // A ball cut by the plane x = 0, keeping x <= 0.
+        let cut = op(
+            CsgOp::Intersection,
+            sphere(Vec3::ZERO, 2.0),
+            CsgNode::Leaf(Solid::HalfSpace {
+                point: Vec3::ZERO,
+                normal: Vec3::new(3.0, 0.0, 0.0),
+            }),
+        );
+        let c = Csg::new(&cut).unwrap();
+        assert!(c.bounds().max.x < 2.0 + 0.01);
+        let h = c
+            .intersect(&Ray::new(Vec3::new(10.0, 0.0, 0.0), -Vec3::X))
+            .unwrap();
+        assert_eq!((h.t, h.normal), (10.0, Vec3::X));
+        // A ray parallel to the plane on the kept side passes the ball's far side.
+        let h = c
+            .intersect(&Ray::new(Vec3::new(-1.0, -5.0, 0.0), Vec3::Y))
+            .unwrap();
+        assert!((h.t - (5.0 - 3.0f32.sqrt())).abs() < 1e-5);
+    }
+
+    #[test]
+    fn leaf_ids_and_bounds() {
+        let tree = CsgNode::fold(
+            CsgOp::Difference,
+            vec![
+                cube(Vec3::splat(-1.0), Vec3::splat(1.0)),
+                sphere(Vec3::new(-1.0, 0.0, 0.0), 0.5),
+                sphere(Vec3::new(1.0, 0.0, 0.0), 0.5),
+            ],
+        )
+        .unwrap();
+        let c = Csg::new(&tree).unwrap();
+        assert_eq!(c.leaf_count(), 3);
+        assert!(
+            c.bounds()
+                .contains(&Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0)))
+        );
+        assert!(c.bounds().max.x < 1.01);
+        let h = c.intersect(&Ray::new(FROM_LEFT, Vec3::X)).unwrap();
+        assert_eq!((h.t, h.leaf), (9.5, 1));
+        let h = c.intersect(&Ray::new(-FROM_LEFT, -Vec3::X)).unwrap();
+        assert_eq!((h.t, h.leaf, h.normal), (9.5, 2, Vec3::X));
+    }
+
+    #[test]
+    fn bad_trees_are_refused() {
+        let s = sphere(Vec3::ZERO, 1.0);
+        assert!(CsgNode::fold(CsgOp::Union, vec![s.clone()]).is_err());
+        assert!(CsgNode::fold(CsgOp::Difference, vec![]).is_err());
+        let bad = [
+            sphere(Vec3::new(f32::NAN, 0.0, 0.0), 1.0),
+            sphere(Vec3::ZERO, 0.0),
+            sphere(Vec3::ZERO, f32::INFINITY),
+            cube(Vec3::ONE, Vec3::ZERO),
+            CsgNode::Leaf(Solid::HalfSpace {
+                point: Vec3::ZERO,
+                normal: Vec3::ZERO,
+            }),
+            // Unbounded: a half-space alone, or in a union.
+            CsgNode::Leaf(Solid::HalfSpace {
+                point: Vec3::ZERO,
+                normal: Vec3::Y,
+            }),
+            // Empty: disjoint boxes intersected.
+            op(
+                CsgOp::Intersection,
+                s.clone(),
+                sphere(Vec3::new(5.0, 0.0, 0.0), 1.0),
+            ),
+        ];
+        for tree in bad {
+            assert!(Csg::new(&tree).is_err(), "{tree:?}");
+        }
+        let mut deep = s.clone();
+        for _ in 0..MAX_CSG_DEPTH {
+            deep = op(CsgOp::Union, deep, s.clone());
+        }
+        assert!(matches!(Csg::new(&deep), Err(SceneError::TooLarge(_))));
+        let many = CsgNode::fold(CsgOp::Union, vec![s; MAX_CSG_LEAVES + 1]).unwrap();
+        assert!(matches!(Csg::new(&many), Err(SceneError::TooLarge(_))));
+    }
+
+    #[test]
+    fn nan_and_zero_rays_miss() {
+        let tree = op(
+            CsgOp::Difference,
+            cube(Vec3::splat(-1.0), Vec3::splat(1.0)),
+            sphere(Vec3::ZERO, 1.2),
+        );
+        let c = Csg::new(&tree).unwrap();
+        for r in [
+            Ray::new(Vec3::new(f32::NAN, 0.0, 0.0), Vec3::X),
+            Ray::new(FROM_LEFT, Vec3::new(f32::NAN, 0.0, 0.0)),
+            Ray::new(FROM_LEFT, Vec3::ZERO),
+        ] {
+            assert_eq!(c.intersect(&r), None);
+        }
+    }
+}
