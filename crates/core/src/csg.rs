@@ -294,7 +294,7 @@ impl Csg {
     pub fn intersect(&self, ray: &Ray) -> Option<CsgHit> {
         let mut leaf = 0;
         let spans = self.spans(self.nodes.len() - 1, ray, &mut leaf);
-        for s in &spans {
+        for s in spans.as_slice() {
             for e in [s.enter, s.exit] {
                 if e.t > ray.t_max {
                     return None;
@@ -312,18 +312,34 @@ impl Csg {
     }
 
     /// The spans of node `i` on the ray's whole line; `leaf` counts leaves in post-order.
-    fn spans(&self, i: usize, ray: &Ray, leaf: &mut u32) -> Vec<Span> {
+    /// Leaves (one convex solid: at most one span) allocate nothing; each operator one list.
+    fn spans(&self, i: usize, ray: &Ray, leaf: &mut u32) -> Spans {
         match &self.nodes[i] {
             Node::Leaf(s) => {
                 let id = *leaf;
                 *leaf += 1;
-                solid_span(s, ray, id).into_iter().collect()
+                Spans::One(solid_span(s, ray, id))
             }
             Node::Op(op, a, b) => {
                 let sa = self.spans(*a, ray, leaf);
                 let sb = self.spans(*b, ray, leaf);
-                combine(*op, &sa, &sb)
+                Spans::Many(combine(*op, sa.as_slice(), sb.as_slice()))
             }
+        }
+    }
+}
+
+/// The spans of a subtree: a leaf's single optional span, or an operator's list.
+enum Spans {
+    One(Option<Span>),
+    Many(Vec<Span>),
+}
+
+impl Spans {
+    fn as_slice(&self) -> &[Span] {
+        match self {
+            Self::One(s) => s.as_slice(),
+            Self::Many(v) => v,
         }
     }
 }
@@ -644,13 +660,23 @@ fn finish(span: Span) -> Option<Span> {
 /// combined state changes, with the normal of the last event of the group that moved the
 /// state to its new value, negated when it comes from a subtracted operand.
 fn combine(op: CsgOp, a: &[Span], b: &[Span]) -> Vec<Span> {
-    let events = |spans: &[Span]| -> Vec<(End, bool)> {
-        spans
-            .iter()
-            .flat_map(|s| [(s.enter, true), (s.exit, false)])
-            .collect()
-    };
-    let (ea, eb) = (events(a), events(b));
+    // Event k of a span list: span k / 2's entry (even k) or exit (odd k), read in place.
+    struct Events<'a>(&'a [Span]);
+    impl Events<'_> {
+        fn len(&self) -> usize {
+            2 * self.0.len()
+        }
+        fn get(&self, k: usize) -> Option<(End, bool)> {
+            self.0.get(k / 2).map(|s| {
+                if k.is_multiple_of(2) {
+                    (s.enter, true)
+                } else {
+                    (s.exit, false)
+                }
+            })
+        }
+    }
+    let (ea, eb) = (Events(a), Events(b));
     let (mut i, mut j) = (0, 0);
     let (mut in_a, mut in_b) = (false, false);
     let mut out = Vec::new();
@@ -664,14 +690,14 @@ fn combine(op: CsgOp, a: &[Span], b: &[Span]) -> Vec<Span> {
         };
         let before = op.apply(in_a, in_b);
         let mut chosen: Option<End> = None;
-        while let Some(&(e, entering)) = ea.get(i).filter(|e| e.0.t == t) {
+        while let Some((e, entering)) = ea.get(i).filter(|e| e.0.t == t) {
             in_a = entering;
             i += 1;
             if op.apply(in_a, in_b) != before {
                 chosen = Some(e);
             }
         }
-        while let Some(&(e, entering)) = eb.get(j).filter(|e| e.0.t == t) {
+        while let Some((e, entering)) = eb.get(j).filter(|e| e.0.t == t) {
             in_b = entering;
             j += 1;
             if op.apply(in_a, in_b) != before {

@@ -351,7 +351,7 @@ fn prim_hit(r: Ray, k: u32, t_max: f32) -> vec4<f32> {
     var t = -1.0;
     if kind == KIND_SPHERE {
         t = sphere_hit(r, p.a.xyz, p.c.x, t_max);
-    } else {
+    } else if kind == KIND_PLANE {
         t = plane_hit(r, p.a.xyz, p.c.xyz, t_max);
     }
     if t >= 0.0 && !is_nan(t) {

@@ -743,10 +743,7 @@ impl Renderer for WgpuRenderer {
             .max(1) as usize;
 
         let upload_start = Instant::now();
-        let base = Params {
-            inf: f32::INFINITY,
-            ..p.data.params(&p.scene, &RenderSettings::default())
-        };
+        let base = p.data.params(&p.scene, &RenderSettings::default());
         let chunks: Vec<&[Ray]> = rays.chunks(chunk).collect();
         let params: Vec<Params> = chunks
             .iter()
