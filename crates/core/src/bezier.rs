@@ -73,6 +73,8 @@ pub struct BezierPatch {
     p64: [DVec3; 16],
     /// Absolute Newton tolerance.
     tol: f64,
+    /// Absolute padding of region boxes.
+    pad: f32,
     /// Region boxes, level by level (level `l`: `2^l x 2^l` regions, row-major in `v`).
     boxes: Vec<[Vec3A; 2]>,
 }
@@ -105,6 +107,17 @@ struct Region {
 }
 
 impl Region {
+    /// Region `(iu, iv)` of the `2^level x 2^level` grid over the patch.
+    fn cell(level: u32, iu: u32, iv: u32) -> Self {
+        let s = 1.0 / f64::from(1u32 << level);
+        Self {
+            u0: f64::from(iu) * s,
+            u1: f64::from(iu + 1) * s,
+            v0: f64::from(iv) * s,
+            v1: f64::from(iv + 1) * s,
+        }
+    }
+
     fn quarter(self, k: usize) -> Self {
         let um = 0.5 * (self.u0 + self.u1);
         let vm = 0.5 * (self.v0 + self.v1);
@@ -274,13 +287,7 @@ impl BezierPatch {
             let n = 1u32 << level;
             for iv in 0..n {
                 for iu in 0..n {
-                    let s = 1.0 / f64::from(n);
-                    let r = Region {
-                        u0: f64::from(iu) * s,
-                        u1: f64::from(iu + 1) * s,
-                        v0: f64::from(iv) * s,
-                        v1: f64::from(iv + 1) * s,
-                    };
+                    let r = Region::cell(level, iu, iv);
                     boxes.push(control_box(&restrict(&p64, r), pad));
                 }
             }
@@ -289,6 +296,7 @@ impl BezierPatch {
             points,
             p64,
             tol: TOLERANCE * extent,
+            pad,
             boxes,
         })
     }
@@ -376,8 +384,8 @@ impl BezierPatch {
         let d = ray.dir.as_dvec3();
         let mut best: Option<(f64, f64, f64)> = None;
         let bound = |best: &Option<(f64, f64, f64)>| best.map_or(f32::INFINITY, |b| b.2 as f32);
-        // Nearest-first walk of the region tree with an explicit stack of (node, level,
-        // iu, iv, entry); at most 3 children wait per level.
+        // Nearest-first walk of the region tree with an explicit stack of (level, iu, iv,
+        // entry); at most 3 siblings wait per level.
         let mut stack: [(u32, u32, u32, f32); 16] = [(0, 0, 0, 0.0); 16];
         let t0 = slab.entry(self.boxes[0][0], self.boxes[0][1], f32::INFINITY)?;
         stack[0] = (0, 0, 0, t0);
@@ -389,13 +397,7 @@ impl BezierPatch {
                 continue;
             }
             let n = 1u32 << level;
-            let s = 1.0 / f64::from(n);
-            let region = Region {
-                u0: f64::from(iu) * s,
-                u1: f64::from(iu + 1) * s,
-                v0: f64::from(iv) * s,
-                v1: f64::from(iv + 1) * s,
-            };
+            let region = Region::cell(level, iu, iv);
             if level == REGION_DEPTH {
                 self.solve_region(ray, o, d, region, entry, FALLBACK_DEPTH, &mut best, stats);
                 continue;
@@ -477,12 +479,11 @@ impl BezierPatch {
             Newton::Failed => {
                 stats.fallbacks += 1;
                 let slab = SlabRay::new(ray);
-                let pad = PAD * (self.tol / TOLERANCE) as f32;
                 let mut kids: [(Region, f32); 4] = [(region, 0.0); 4];
                 let mut count = 0;
                 for k in 0..4 {
                     let r = region.quarter(k);
-                    let b = control_box(&restrict(&self.p64, r), pad);
+                    let b = control_box(&restrict(&self.p64, r), self.pad);
                     let bound = best.map_or(f32::INFINITY, |b| b.2 as f32);
                     if let Some(t) = slab.entry(b[0], b[1], bound) {
                         kids[count] = (r, t);

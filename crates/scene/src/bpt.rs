@@ -24,21 +24,10 @@ pub struct BptPatch {
 /// Reads a `.bpt` file.
 ///
 /// # Errors
-/// [`LoadError::Io`] when it cannot be read, [`LoadError::Parse`] (with a line number) when
-/// it is malformed: see [`parse_bpt`].
+/// [`LoadError::Io`] when it cannot be read, [`LoadError::Parse`] when it is too large, not
+/// UTF-8 or malformed (with a line number: see [`parse_bpt`]).
 pub fn load_bpt_file(path: &Path) -> Result<Vec<BptPatch>, LoadError> {
-    let io = |source| LoadError::Io {
-        path: path.to_owned(),
-        source,
-    };
-    let len = std::fs::metadata(path).map_err(io)?.len();
-    if len > MAX_BPT_BYTES {
-        return Err(LoadError::Parse {
-            path: path.to_owned(),
-            message: format!("{len} bytes: larger than the {MAX_BPT_BYTES}-byte limit"),
-        });
-    }
-    let text = std::fs::read_to_string(path).map_err(io)?;
+    let text = crate::format::read_text(path, MAX_BPT_BYTES, "Bezier patch file")?;
     parse_bpt(&text, path)
 }
 

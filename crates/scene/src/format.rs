@@ -402,29 +402,33 @@ impl Context<'_> {
     }
 }
 
-/// Loads a `.toml` scene file; relative mesh paths resolve against its folder, then `assets`.
-///
-/// # Errors
-/// When the file is missing, too large, malformed or invalid, or a mesh it names is.
-pub fn load_toml_file(path: &Path, assets: &Path) -> Result<Scene, LoadError> {
+/// Reads a UTF-8 text file of at most `limit` bytes (checked before reading; `what` names
+/// the kind of file in the error).
+pub(crate) fn read_text(path: &Path, limit: u64, what: &str) -> Result<String, LoadError> {
     let io = |source| LoadError::Io {
         path: path.to_owned(),
         source,
     };
     let len = std::fs::metadata(path).map_err(io)?.len();
-    if len > MAX_SCENE_FILE_BYTES {
+    if len > limit {
         return Err(LoadError::Parse {
             path: path.to_owned(),
-            message: format!(
-                "scene file of {len} bytes exceeds the limit of {MAX_SCENE_FILE_BYTES}"
-            ),
+            message: format!("{what} of {len} bytes exceeds the limit of {limit}"),
         });
     }
     let bytes = std::fs::read(path).map_err(io)?;
-    let text = String::from_utf8(bytes).map_err(|_| LoadError::Parse {
+    String::from_utf8(bytes).map_err(|_| LoadError::Parse {
         path: path.to_owned(),
         message: "not UTF-8 text".into(),
-    })?;
+    })
+}
+
+/// Loads a `.toml` scene file; relative mesh paths resolve against its folder, then `assets`.
+///
+/// # Errors
+/// When the file is missing, too large, malformed or invalid, or a mesh it names is.
+pub fn load_toml_file(path: &Path, assets: &Path) -> Result<Scene, LoadError> {
+    let text = read_text(path, MAX_SCENE_FILE_BYTES, "scene file")?;
     let name = path
         .file_stem()
         .and_then(|s| s.to_str())
