@@ -307,6 +307,31 @@ fn reflected_rays_do_not_hit_their_own_origin() {
     assert_eq!(too_close, 0, "of {reflected} reflected rays");
 }
 
+/// The search ignores `t_max` (the module's determinism rule): clipping a ray at its own
+/// hit keeps that hit bit for bit, and clipping just before it loses it.
+#[test]
+fn hits_do_not_depend_on_t_max() {
+    let Some(scene) = teapot_scene("") else {
+        return;
+    };
+    let rays = scene.camera.rays(48, 48);
+    let mut checked = 0;
+    for y in 0..48 {
+        for x in 0..48 {
+            let ray = rays.center_ray(x, y);
+            for s in scene.geometry.shapes() {
+                let Shape::Bezier(p) = s else { continue };
+                let Some(h) = p.intersect(&ray) else { continue };
+                assert_eq!(p.intersect(&ray.clipped(h.t)), Some(h));
+                let before = f32::from_bits(h.t.to_bits() - 1);
+                assert_eq!(p.intersect(&ray.clipped(before)), None);
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 500, "{checked}");
+}
+
 /// Loads a scene whose object reads `bpt` (written to a temporary file).
 fn load_bpt(bpt: &str, options: &str, tag: &str) -> Result<Scene, String> {
     let dir = std::env::temp_dir().join(format!("raybench-bezier-{}-{tag}", std::process::id()));
