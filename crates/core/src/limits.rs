@@ -38,3 +38,7 @@ pub const MAX_CSG_DEPTH: usize = 32;
 /// Largest accepted number of solids in one CSG tree: every ray that reaches the tree's box
 /// tests them all.
 pub const MAX_CSG_LEAVES: usize = 256;
+
+/// Largest accepted number of Bezier patches in one `.bpt` file (the count on its first line
+/// is checked against it before anything is allocated).
+pub const MAX_BEZIER_PATCHES: usize = 1 << 20;

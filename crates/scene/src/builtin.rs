@@ -86,4 +86,9 @@ pub const BUILTIN_SCENES: &[BuiltinScene] = &[
         "CSG trees of spheres, boxes, cylinders, cones and half-spaces: all three operations",
         []
     ),
+    builtin!(
+        "teapot-bezier",
+        "the Utah teapot as 32 bicubic Bezier patches, intersected directly",
+        ["teapot-bezier/teapot.bpt"]
+    ),
 ];
