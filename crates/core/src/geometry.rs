@@ -5,6 +5,7 @@ use crate::csg::Csg;
 use crate::heightfield::HeightField;
 use crate::hit::Hit;
 use crate::plane::Plane;
+use crate::sdf::Sdf;
 use crate::ray::Ray;
 use crate::sphere::Sphere;
 use crate::triangle::Triangle;
@@ -31,6 +32,9 @@ pub enum Shape {
     /// A CSG tree of analytic solids: one bounded primitive; the sub-primitive id is the
     /// index of the leaf hit.
     Csg(Arc<Csg>),
+    /// A signed-distance model intersected by sphere tracing: one bounded primitive
+    /// (sub-primitive id 0).
+    Sdf(Arc<Sdf>),
 }
 
 /// The kinds of primitive, for statistics and for backends that support only some.
@@ -46,16 +50,19 @@ pub enum PrimitiveKind {
     HeightField,
     /// [`Shape::Csg`].
     Csg,
+    /// [`Shape::Sdf`].
+    Sdf,
 }
 
 impl PrimitiveKind {
     /// Every kind, in a fixed order.
-    pub const ALL: [Self; 5] = [
+    pub const ALL: [Self; 6] = [
         Self::Triangle,
         Self::Sphere,
         Self::Plane,
         Self::HeightField,
         Self::Csg,
+        Self::Sdf,
     ];
 
     /// Lower-case name used in scene files and reports.
@@ -67,6 +74,7 @@ impl PrimitiveKind {
             Self::Plane => "plane",
             Self::HeightField => "height field",
             Self::Csg => "CSG solid",
+            Self::Sdf => "SDF model",
         }
     }
 }
@@ -95,6 +103,7 @@ impl Shape {
             Self::Plane(_) => PrimitiveKind::Plane,
             Self::HeightField(_) => PrimitiveKind::HeightField,
             Self::Csg(_) => PrimitiveKind::Csg,
+            Self::Sdf(_) => PrimitiveKind::Sdf,
         }
     }
 
@@ -108,6 +117,7 @@ impl Shape {
             Self::Plane(_) => None,
             Self::HeightField(h) => Some(h.bounds()),
             Self::Csg(c) => Some(c.bounds()),
+            Self::Sdf(m) => Some(m.bounds()),
         }
     }
 
@@ -141,6 +151,12 @@ impl Shape {
                 u: 0.0,
                 v: 0.0,
             }),
+            Self::Sdf(m) => m.intersect(ray).map(|t| PrimHit {
+                t,
+                sub: 0,
+                u: 0.0,
+                v: 0.0,
+            }),
         }
     }
 
@@ -165,6 +181,7 @@ impl Shape {
                 h.u,
                 h.v,
             ),
+            Self::Sdf(m) => (m.normal(ray.at(h.t)), h.u, h.v),
         };
         Hit {
             t: h.t,
@@ -275,6 +292,7 @@ impl Geometry {
             .map(|s| match s {
                 Shape::HeightField(h) => h.memory_bytes(),
                 Shape::Csg(c) => c.memory_bytes(),
+                Shape::Sdf(m) => m.memory_bytes(),
                 _ => 0,
             })
             .sum();

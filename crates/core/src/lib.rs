@@ -35,6 +35,7 @@ pub mod rays;
 mod renderer;
 pub mod sampling;
 mod scene;
+mod sdf;
 mod sphere;
 mod triangle;
 pub mod volume;
@@ -59,6 +60,7 @@ pub use ray::Ray;
 pub use rays::RaySet;
 pub use renderer::{Mode, RenderError, RenderSettings, Renderer, TracedRays};
 pub use scene::{ObjectInfo, Scene, SceneBuilder};
+pub use sdf::{March, Sdf, SdfNode, SdfOp, SdfParams, SdfPrimitive};
 pub use sphere::Sphere;
 pub use triangle::Triangle;
 pub use volume::{

@@ -2,6 +2,7 @@
 
 use crate::camera::Camera;
 use crate::csg::Csg;
+use crate::sdf::Sdf;
 use crate::emitters::Emitters;
 use crate::error::SceneError;
 use crate::geometry::{Geometry, Shape};
@@ -326,6 +327,22 @@ impl SceneBuilder {
         self.check_material(material)?;
         self.check_room(1)?;
         self.push_object(name.into(), [Shape::Csg(csg)], material);
+        Ok(self)
+    }
+
+    /// Adds a signed-distance model as one primitive.
+    ///
+    /// # Errors
+    /// When the material does not exist or the scene is full.
+    pub fn add_sdf(
+        &mut self,
+        name: impl Into<String>,
+        sdf: Arc<Sdf>,
+        material: u32,
+    ) -> Result<&mut Self, SceneError> {
+        self.check_material(material)?;
+        self.check_room(1)?;
+        self.push_object(name.into(), [Shape::Sdf(sdf)], material);
         Ok(self)
     }
 
