@@ -86,4 +86,9 @@ pub const BUILTIN_SCENES: &[BuiltinScene] = &[
         "CSG trees of spheres, boxes, cylinders, cones and half-spaces: all three operations",
         []
     ),
+    builtin!(
+        "sdf",
+        "signed-distance models by sphere tracing: smooth union, blend, subtraction, torus",
+        []
+    ),
 ];

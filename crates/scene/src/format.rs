@@ -134,7 +134,7 @@ struct DirectionalLightDesc {
 
 #[derive(Deserialize)]
 #[serde(untagged)]
-enum ScaleDesc {
+pub(crate) enum ScaleDesc {
     Uniform(f32),
     PerAxis(V3),
 }
@@ -172,6 +172,7 @@ enum ObjectDesc {
     Generator(GeneratorDesc),
     HeightField(HeightFieldDesc),
     Csg(CsgDesc),
+    Sdf(crate::sdf_format::SdfDesc),
 }
 
 #[derive(Deserialize)]
@@ -713,6 +714,11 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
                 let tree = csg_node(&c.tree, 1).map_err(&err)?;
                 let csg = Csg::new(&tree).map_err(&err)?;
                 b.add_csg("csg", Arc::new(csg), m).map_err(err)?;
+            }
+            ObjectDesc::Sdf(d) => {
+                let m = material(&d.material)?.unwrap_or(0);
+                let model = d.build().map_err(&err)?;
+                b.add_sdf("sdf", Arc::new(model), m).map_err(err)?;
             }
         }
     }
