@@ -70,7 +70,7 @@ fn the_empty_scene_renders_background() {
     assert!(f.color.iter().all(|&c| c == scene.background));
 }
 
-/// Height fields, CSG trees and the volume modes have no WGSL port: the backend refuses them with a
+/// Height fields, CSG trees, SDF models and the volume modes have no WGSL port: the backend refuses them with a
 /// reason instead of rendering something else.
 #[test]
 fn kinds_and_modes_without_kernels_are_refused() {
@@ -84,6 +84,9 @@ fn kinds_and_modes_without_kernels_are_refused() {
     let csg = raybench_scene::load("csg", std::path::Path::new(".")).unwrap();
     let why = raybench_wgpu::check_kinds(&csg).unwrap_err();
     assert!(why.contains("CSG"), "{why}");
+    let sdf = raybench_scene::load("sdf", std::path::Path::new(".")).unwrap();
+    let why = raybench_wgpu::check_kinds(&sdf).unwrap_err();
+    assert!(why.contains("SDF model"), "{why}");
     if !raybench_tests::gpu::available() {
         return;
     }

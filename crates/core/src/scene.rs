@@ -2,7 +2,6 @@
 
 use crate::camera::Camera;
 use crate::csg::Csg;
-use crate::sdf::Sdf;
 use crate::emitters::Emitters;
 use crate::error::SceneError;
 use crate::geometry::{Geometry, Shape};
@@ -11,6 +10,7 @@ use crate::limits;
 use crate::material::{Light, Material};
 use crate::mesh::TriangleMesh;
 use crate::plane::Plane;
+use crate::sdf::Sdf;
 use crate::sphere::Sphere;
 use crate::triangle::Triangle;
 use crate::volume::Volume;

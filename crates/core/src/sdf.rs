@@ -710,8 +710,8 @@ fn primitive_distance(s: &SdfPrimitive, p: Vec3) -> f32 {
             half_height,
         } => {
             let q = p - center;
-            let d = Vec2::new(Vec2::new(q.x, q.z).length(), q.y).abs()
-                - Vec2::new(radius, half_height);
+            let d =
+                Vec2::new(Vec2::new(q.x, q.z).length(), q.y).abs() - Vec2::new(radius, half_height);
             d.max_element().min(0.0) + d.max(Vec2::ZERO).length()
         }
     }
@@ -893,7 +893,10 @@ mod tests {
         assert!((t - 1.0).abs() <= eps, "{t}");
         assert!((m.normal(r.at(t)) - Vec3::X).length() < 1e-3);
         // Miss, and clipped by t_max.
-        assert_eq!(m.intersect(&Ray::new(Vec3::new(0.0, 2.0, -5.0), Vec3::Z)), None);
+        assert_eq!(
+            m.intersect(&Ray::new(Vec3::new(0.0, 2.0, -5.0), Vec3::Z)),
+            None
+        );
         let r = Ray::with_interval(Vec3::new(0.0, 0.0, -5.0), Vec3::Z, 0.0, 3.9);
         assert_eq!(m.intersect(&r), None);
         // Unnormalised directions give the same point.
@@ -930,7 +933,13 @@ mod tests {
             ..SdfParams::DEFAULT
         };
         let short = Sdf::new(&tree, params).unwrap().march(&r);
-        assert_eq!(short, March { t: None, steps: full.steps - 1 });
+        assert_eq!(
+            short,
+            March {
+                t: None,
+                steps: full.steps - 1
+            }
+        );
     }
 
     #[test]
@@ -946,7 +955,11 @@ mod tests {
             .unwrap();
         assert!(t < 5.0 - 0.1, "the neck is filled: {t}");
         // A blend halfway between a ball and a box of the same centre.
-        let m = model(&op(SdfOp::Blend(0.5), sphere(Vec3::ZERO, 1.0), cube(Vec3::ZERO, 1.0)));
+        let m = model(&op(
+            SdfOp::Blend(0.5),
+            sphere(Vec3::ZERO, 1.0),
+            cube(Vec3::ZERO, 1.0),
+        ));
         assert!((m.distance(Vec3::new(2.0, 0.0, 0.0)) - 1.0).abs() < 1e-6);
         let diag = Vec3::ONE.normalize();
         let t = m.intersect(&Ray::new(diag * 5.0, -diag)).unwrap();

@@ -4,7 +4,7 @@
 use crate::format::ScaleDesc;
 use crate::transform::Transform;
 use raybench_core::limits::MAX_SDF_DEPTH;
-use raybench_core::{Sdf, SdfNode, SdfOp, SdfParams, SdfPrimitive, SceneError, Vec3};
+use raybench_core::{SceneError, Sdf, SdfNode, SdfOp, SdfParams, SdfPrimitive, Vec3};
 use serde::Deserialize;
 
 type V3 = [f32; 3];
