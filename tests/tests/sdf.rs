@@ -11,10 +11,13 @@
 //! - a hit's distance along the ray from the analytic hit, `|t - t_a| |dir|`, is at most
 //!   `eps / cos(theta)` (`eps` the model's absolute tolerance, `theta` the angle between the
 //!   ray and the analytic normal) plus f32 rounding, for rays with `cos(theta) >= 0.05`;
-//! - normals are within 1 degree of the analytic ones for rays with `cos(theta) >= 0.05`
-//!   away from edges (the tetrahedron samples at distance `eps` see an edge's other face);
-//! - hit and miss agree for every ray that stays so when moved by `4 eps` sideways in any of
-//!   four directions (the grazing rule: rays within `4 eps` of the silhouette may differ).
+//! - normals are within 1 degree of the analytic ones for rays with `cos(theta) >= 0.25`
+//!   and hit points at least `8 eps` from edges and creases (the tetrahedron samples at
+//!   `eps` see an edge's other face; the hit point is up to `4 eps` off the analytic one);
+//! - the grazing rule: answers (hit or miss, and which part is hit) may differ only for rays
+//!   within `4 eps` of a silhouette, found by moving the ray sideways by `4 eps` in four
+//!   directions: a ray passing within `eps` of the surface counts as a hit there, and a ray
+//!   grazing the surface may run out of steps.
 
 use raybench_core::{
     Csg, CsgNode, CsgOp, Hit, NoCounters, Ray, Scene, Sdf, Shape, Solid, Sphere, Vec3,
@@ -67,27 +70,40 @@ fn sideways(d: Vec3) -> [Vec3; 2] {
     [a, d.cross(a)]
 }
 
-/// Whether moving `ray` sideways by `delta` in any of four directions changes whether
-/// `hits` reports a hit: the ray is within `delta` of the silhouette.
-fn near_silhouette(ray: &Ray, delta: f32, hits: &dyn Fn(&Ray) -> bool) -> bool {
-    let here = hits(ray);
+/// Whether moving `ray` sideways by `delta` in any of four directions changes the analytic
+/// answer discontinuously: from hit to miss or back, or the hit's distance by more than
+/// [`JUMP`] (it moves to another part of the surface). The ray is then within `delta` of a
+/// silhouette, the outer one or one of a part in front of another.
+fn near_silhouette(ray: &Ray, delta: f32, analytic: &dyn Fn(&Ray) -> Option<(f32, Vec3)>) -> bool {
+    let len = ray.dir.length();
+    let here = analytic(ray).map(|h| h.0 * len);
     let [a, b] = sideways(ray.dir);
-    [a, -a, b, -b]
-        .iter()
-        .any(|&s| hits(&Ray::new(ray.origin + s * delta, ray.dir)) != here)
+    [a, -a, b, -b].iter().any(|&s| {
+        let there = analytic(&Ray::new(ray.origin + s * delta, ray.dir)).map(|h| h.0 * len);
+        match (here, there) {
+            (Some(x), Some(y)) => (x - y).abs() > JUMP,
+            (x, y) => x.is_some() != y.is_some(),
+        }
+    })
 }
+
+/// A change of the hit distance that counts as a jump to another part of the surface
+/// (smooth parts move the hit by at most `4 eps / cos(theta)`, below 0.03 here).
+const JUMP: f32 = 0.05;
 
 /// What one comparison found.
 #[derive(Debug, Default)]
 struct Agreement {
     hits: usize,
     misses: usize,
-    /// Rays near the silhouette whose hit/miss answers differ (allowed).
+    /// Rays near a silhouette whose answers differ (allowed).
     grazing_disagreements: usize,
     /// Largest `|t - t_a| |dir|`.
     max_dt: f32,
     /// Largest `|t - t_a| |dir| cos(theta) / eps` (at most 1 when the stated bound holds).
     max_ratio: f32,
+    /// Normals compared.
+    normals: usize,
     /// Largest normal angle, degrees.
     max_angle: f32,
 }
@@ -119,29 +135,38 @@ fn compare(
                 let dt = (t - ta).abs() * len;
                 // f32 rounding of points about 6 units out: a few ulps of 8.
                 let slack = 4.0e-6;
-                assert!(
-                    dt <= eps / cos + slack,
-                    "{ray:?}: t {t} vs {ta}, {dt} > {eps} / {cos}"
-                );
+                if dt > eps / cos + slack {
+                    // Caught by a silhouette passed within `eps` on the way.
+                    assert!(
+                        near_silhouette(&ray, 4.0 * eps, analytic),
+                        "{ray:?}: t {t} vs {ta}, {dt} > {eps} / {cos}"
+                    );
+                    a.grazing_disagreements += 1;
+                    continue;
+                }
                 a.max_dt = a.max_dt.max(dt);
                 a.max_ratio = a.max_ratio.max(dt * cos / eps);
-                if smooth(ray.at(ta)) {
+                if cos >= 0.25 && smooth(ray.at(ta)) {
                     let angle = m.normal(ray.at(t)).angle_between(na).to_degrees();
                     assert!(angle < 1.0, "{ray:?}: normal off by {angle} degrees");
                     a.max_angle = a.max_angle.max(angle);
+                    a.normals += 1;
                 }
             }
             (None, None) => a.misses += 1,
             _ => {
                 assert!(
-                    near_silhouette(&ray, 4.0 * eps, &|r| analytic(r).is_some()),
+                    near_silhouette(&ray, 4.0 * eps, analytic),
                     "{ray:?}: SDF {got:?} vs analytic {want:?} away from the silhouette"
                 );
                 a.grazing_disagreements += 1;
             }
         }
     }
-    assert!(a.hits > n / 4 && a.misses > n / 20, "{a:?}");
+    assert!(
+        a.hits > n / 4 && a.misses > n / 20 && a.normals > n / 10,
+        "{a:?}"
+    );
     a
 }
 
@@ -160,10 +185,8 @@ fn sphere_matches_the_analytic_sphere() {
 }
 
 #[test]
-fn rounded_and_sharp_boxes_match_csg_boxes() {
-    let m = model(
-        "{ type = \"box\", center = [0.0, 1.0, 0.0], half_extents = [1.0, 0.5, 0.75] }",
-    );
+fn boxes_match_csg_boxes() {
+    let m = model("{ type = \"box\", center = [0.0, 1.0, 0.0], half_extents = [1.0, 0.5, 0.75] }");
     let min = Vec3::new(-1.0, 0.5, -0.75);
     let max = Vec3::new(1.0, 1.5, 0.75);
     let c = Csg::new(&CsgNode::Leaf(Solid::Box { min, max })).unwrap();
@@ -173,7 +196,7 @@ fn rounded_and_sharp_boxes_match_csg_boxes() {
         let d = (p - min).abs().min((max - p).abs());
         let mut near = d.to_array();
         near.sort_by(f32::total_cmp);
-        near[1] > 2.0 * eps
+        near[1] > 8.0 * eps
     };
     let a = compare(&m, 20_000, Vec3::Y, 1.3, &csg_hit(&c), &smooth);
     println!("box: eps {eps} {a:?}");
@@ -212,9 +235,9 @@ fn union_and_subtraction_match_the_csg_trees_of_the_same_solids() {
             let on_ball = ball < 2.0 * eps;
             // On the ball, the box's faces are far; on a face, the ball and other faces are.
             if on_ball {
-                sorted[0] > 4.0 * eps
+                sorted[0] > 8.0 * eps
             } else {
-                ball > 4.0 * eps && sorted[1] > 4.0 * eps
+                ball > 8.0 * eps && sorted[1] > 8.0 * eps
             }
         };
         let a = compare(&m, 20_000, Vec3::ZERO, 1.2, &csg_hit(&c), &smooth);
@@ -394,7 +417,10 @@ fn whitted_reflection_and_refraction_match_analytic_balls() {
     let on_balls = a.ids.iter().filter(|&&id| id == 1 || id == 2).count();
     println!("{differing} of {on_balls} ball pixels differ");
     assert!(on_balls > 300, "{on_balls}");
-    assert!(differing * 50 < on_balls, "{differing} of {on_balls} pixels differ");
+    assert!(
+        differing * 50 < on_balls,
+        "{differing} of {on_balls} pixels differ"
+    );
 }
 
 /// White furnace with SDF models: diffuse models of albedo 1 under a uniform environment of
@@ -407,7 +433,9 @@ fn white_furnace_with_sdf_models() {
         "background = [1, 1, 1]\n[camera]\nposition = [0, 0, 4]\nlook_at = [0, 0, 0]\n\
          fov = 40\n[[material]]\nname = \"white\"\ncolor = [1, 1, 1]\nspecular = [0, 0, 0]\n",
     );
-    let white = |tree: &str| sdf_object(tree).replace("kind = \"sdf\"", "kind = \"sdf\"\nmaterial = \"white\"");
+    let white = |tree: &str| {
+        sdf_object(tree).replace("kind = \"sdf\"", "kind = \"sdf\"\nmaterial = \"white\"")
+    };
     text += &white(
         r#"{ type = "smooth_union", k = 0.3, operands = [
             { type = "sphere", center = [-0.5, 0, 0], radius = 0.6 },
@@ -496,18 +524,27 @@ fn bad_models_give_clear_errors() {
         assert!(err.contains(want), "{tree}: {err}");
     }
     let sphere = "{ type = \"sphere\", center = [0, 0, 0], radius = 1 }";
-    let mut deep = sphere.to_string();
-    for _ in 0..40 {
-        deep = format!("{{ type = \"union\", operands = [{deep}, {sphere}] }}");
-    }
-    let err = load(&sdf_object(&deep)).unwrap_err();
+    // Past MAX_SDF_DEPTH levels the loader refuses the tree; far deeper, the TOML parser's
+    // own recursion limit refuses the file first. Neither overflows the stack.
+    let nested = |levels: usize| {
+        let mut tree = sphere.to_string();
+        for _ in 0..levels {
+            tree = format!("{{ type = \"union\", operands = [{tree}, {sphere}] }}");
+        }
+        load(&sdf_object(&tree))
+    };
+    assert!(nested(raybench_core::limits::MAX_SDF_DEPTH - 1).is_ok());
+    let err = nested(raybench_core::limits::MAX_SDF_DEPTH).unwrap_err();
     assert!(err.contains("deeper than 32"), "{err}");
+    let err = nested(10_000).unwrap_err();
+    assert!(err.contains("recursion"), "{err}");
     for (option, want) in [
         ("tolerance = 0.5", "tolerance must lie in"),
         ("max_steps = 100000", "max_steps must lie in"),
         ("max_steps = 0", "max_steps must lie in"),
     ] {
-        let text = sdf_object(sphere).replace("kind = \"sdf\"", &format!("kind = \"sdf\"\n{option}"));
+        let text =
+            sdf_object(sphere).replace("kind = \"sdf\"", &format!("kind = \"sdf\"\n{option}"));
         let err = load(&text).unwrap_err();
         assert!(err.contains(want), "{option}: {err}");
     }
@@ -552,7 +589,10 @@ fn steps_per_ray_on_the_built_in_scene() {
     };
     let (ns_sdf, n_sdf) = time(&|r| m.intersect(r));
     let (ns_sphere, n_sphere) = time(&|r| s.intersect(r));
-    let sdf_steps = probe.iter().map(|r| u64::from(m.march(r).steps)).sum::<u64>() as f64
+    let sdf_steps = probe
+        .iter()
+        .map(|r| u64::from(m.march(r).steps))
+        .sum::<u64>() as f64
         / probe.len() as f64;
     println!(
         "SDF sphere {ns_sdf:.1} ns/ray ({sdf_steps:.1} steps), analytic sphere \
