@@ -453,10 +453,11 @@ impl Sdf {
         let Some((t0, t1)) = self.clip(ray) else {
             return March { t: None, steps };
         };
-        // Distance along the ray per unit of t, times L: a step of `|f| / speed` in t
-        // moves `|f| / L` in space.
-        let speed = ray.dir.length() * self.lipschitz;
+        // `1 / (L |dir|)`: a step of `|f| * per_unit` in t moves `|f| / L` in space. (Each
+        // step waits on the last: the march is latency-bound: tens of ns a step.)
+        let per_unit = 1.0 / (ray.dir.length() * self.lipschitz);
         let eps = self.eps;
+        let leave = eps * per_unit;
         let mut t = t0;
         // 0 while leaving the surface band, then the sign of f on the ray's side.
         let mut side = 0.0f32;
@@ -467,13 +468,13 @@ impl Sdf {
                 side = f.signum();
             }
             if side == 0.0 {
-                t += eps / speed;
+                t += leave;
             } else {
                 let g = side * f;
                 if g < eps {
                     return March { t: Some(t), steps };
                 }
-                t += g / speed;
+                t += g * per_unit;
             }
             if !(t <= t1) {
                 break;
