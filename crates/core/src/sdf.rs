@@ -476,7 +476,7 @@ impl Sdf {
                 }
                 t += g * per_unit;
             }
-            if !(t <= t1) {
+            if t > t1 || t.is_nan() {
                 break;
             }
         }
@@ -635,7 +635,7 @@ fn similarity_scale(m: &Affine3A) -> Result<f32, SceneError> {
              distance bound that sphere tracing relies on"
         )));
     }
-    if !(s >= 1.0 / MAX_COORDINATE && s <= MAX_COORDINATE) {
+    if !(1.0 / MAX_COORDINATE..=MAX_COORDINATE).contains(&s) {
         return Err(SceneError::Invalid(format!(
             "an SDF transform's scale must lie in [{:e}, {MAX_COORDINATE:e}], found {s}",
             1.0 / MAX_COORDINATE
