@@ -17,6 +17,7 @@ mod aabb;
 mod accel;
 mod bilinear;
 mod camera;
+mod checks;
 mod csg;
 mod emitters;
 mod error;

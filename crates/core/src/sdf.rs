@@ -37,6 +37,7 @@
 //!   the gradient of a signed distance points out of the model.
 
 use crate::aabb::Aabb;
+use crate::checks;
 use crate::error::SceneError;
 use crate::limits::{
     MAX_COORDINATE, MAX_SDF_DEPTH, MAX_SDF_NODES, MAX_SDF_STEPS, MAX_SDF_TOLERANCE,
@@ -168,37 +169,20 @@ impl SdfNode {
     /// # Errors
     /// [`SceneError::Invalid`] when there are fewer than two operands, or a blend has more.
     pub fn fold(op: SdfOp, mut operands: Vec<SdfNode>) -> Result<Self, SceneError> {
-        if operands.len() < 2 {
-            return Err(SceneError::Invalid(format!(
-                "an SDF {} needs at least two operands, found {}",
-                op.name(),
-                operands.len()
-            )));
-        }
+        checks::at_least_two(&format!("an SDF {}", op.name()), &operands)?;
         if matches!(op, SdfOp::Blend(_)) && operands.len() != 2 {
             return Err(SceneError::Invalid(format!(
                 "an SDF blend takes exactly two operands, found {}",
                 operands.len()
             )));
         }
+        let join = |op| move |a, b| Self::Op(op, Box::new(a), Box::new(b));
         if op == SdfOp::Subtraction {
             let first = operands.remove(0);
-            let rest = Self::balanced(SdfOp::Union, operands);
-            return Ok(Self::Op(op, Box::new(first), Box::new(rest)));
+            let rest = checks::balanced(operands, &join(SdfOp::Union));
+            return Ok(join(op)(first, rest));
         }
-        Ok(Self::balanced(op, operands))
-    }
-
-    fn balanced(op: SdfOp, mut operands: Vec<SdfNode>) -> Self {
-        if operands.len() == 1 {
-            return operands.pop().expect("one operand");
-        }
-        let right = operands.split_off(operands.len() / 2);
-        Self::Op(
-            op,
-            Box::new(Self::balanced(op, operands)),
-            Box::new(Self::balanced(op, right)),
-        )
+        Ok(checks::balanced(operands, &join(op)))
     }
 }
 
@@ -524,28 +508,8 @@ impl Sdf {
 
 /// Checks a primitive's parameters.
 fn validate(p: &SdfPrimitive) -> Result<(), SceneError> {
-    let point = |v: Vec3, what: &str| {
-        if !v.is_finite() {
-            Err(SceneError::NonFinite(format!("SDF {what}")))
-        } else if v.abs().max_element() > MAX_COORDINATE {
-            Err(SceneError::Invalid(format!(
-                "SDF {what} exceeds {MAX_COORDINATE:e} in magnitude"
-            )))
-        } else {
-            Ok(())
-        }
-    };
-    let positive = |x: f32, what: &str| {
-        if !x.is_finite() {
-            Err(SceneError::NonFinite(format!("SDF {what}")))
-        } else if !(x > 0.0 && x <= MAX_COORDINATE) {
-            Err(SceneError::Invalid(format!(
-                "SDF {what} must be positive and at most {MAX_COORDINATE:e}, found {x}"
-            )))
-        } else {
-            Ok(())
-        }
-    };
+    let point = |v: Vec3, what: &str| checks::point(v, &format!("SDF {what}"));
+    let positive = |x: f32, what: &str| checks::positive(x, &format!("SDF {what}"));
     match *p {
         SdfPrimitive::Sphere { center, radius } => {
             point(center, "sphere centre")?;
