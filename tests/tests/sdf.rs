@@ -428,7 +428,6 @@ fn whitted_reflection_and_refraction_match_analytic_balls() {
 /// inside would use up the depth and darken it.
 #[test]
 fn white_furnace_with_sdf_models() {
-    use raybench_core::{Mode, RenderSettings};
     let mut text = String::from(
         "background = [1, 1, 1]\n[camera]\nposition = [0, 0, 4]\nlook_at = [0, 0, 0]\n\
          fov = 40\n[[material]]\nname = \"white\"\ncolor = [1, 1, 1]\nspecular = [0, 0, 0]\n",
@@ -446,31 +445,7 @@ fn white_furnace_with_sdf_models() {
         r#"{ type = "transform", rotate = [60, 0, 20], translate = [0.6, -0.6, 0], operand =
             { type = "torus", center = [0, 0, 0], major_radius = 0.5, minor_radius = 0.2 } }"#,
     );
-    let scene = std::sync::Arc::new(load(&text).unwrap());
-    let settings = RenderSettings {
-        width: 40,
-        height: 40,
-        spp: 16,
-        mode: Mode::Path,
-        max_depth: 64,
-        seed: 5,
-        count: false,
-    };
-    let frame = raybench_tests::render_with("bvh", &scene, &settings, 2);
-    let n = frame.color.len() as f64;
-    let mean = frame.color.iter().map(|c| f64::from(c.x)).sum::<f64>() / n;
-    let var = frame
-        .color
-        .iter()
-        .map(|c| (f64::from(c.x) - mean).powi(2))
-        .sum::<f64>()
-        / (n - 1.0);
-    let err = (var / n).sqrt();
-    assert!(
-        (mean - 1.0).abs() < 5.0 * err + 1e-4,
-        "mean {mean} +- {err}"
-    );
-    assert!(frame.ids.iter().any(|&id| id != raybench_core::NO_HIT));
+    raybench_tests::assert_white_furnace(&std::sync::Arc::new(load(&text).unwrap()));
 }
 
 #[test]
