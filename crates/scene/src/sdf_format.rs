@@ -166,3 +166,53 @@ fn node(d: &SdfNodeDesc, depth: usize) -> Result<SdfNode, SceneError> {
         }),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn build(tree: &str, options: &str) -> Result<Sdf, String> {
+        let d: SdfDesc =
+            toml::from_str(&format!("{options}\ntree = {tree}")).map_err(|e| e.to_string())?;
+        d.build().map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn every_node_type_parses() {
+        let tree = r#"{ type = "smooth_union", k = 0.2, operands = [
+            { type = "sphere", center = [0, 0, 0], radius = 1 },
+            { type = "box", center = [2, 0, 0], half_extents = [0.5, 0.5, 0.5], rounding = 0.1 },
+            { type = "torus", center = [0, 2, 0], major_radius = 1, minor_radius = 0.2 },
+            { type = "capsule", a = [0, 0, 2], b = [1, 0, 2], radius = 0.2 },
+            { type = "cylinder", center = [0, -2, 0], radius = 0.5, half_height = 0.3 },
+            { type = "union", operands = [
+                { type = "sphere", center = [3, 3, 3], radius = 0.5 },
+                { type = "sphere", center = [3, 4, 3], radius = 0.5 } ] },
+            { type = "intersection", operands = [
+                { type = "sphere", center = [-3, 0, 0], radius = 0.5 },
+                { type = "sphere", center = [-3.5, 0, 0], radius = 0.5 } ] },
+            { type = "difference", operands = [
+                { type = "sphere", center = [0, 0, -3], radius = 0.5 },
+                { type = "sphere", center = [0, 0, -3.5], radius = 0.3 } ] },
+            { type = "blend", w = 0.5, operands = [
+                { type = "sphere", center = [-3, -3, 0], radius = 0.5 },
+                { type = "box", center = [-3, -3, 0], half_extents = [0.4, 0.4, 0.4] } ] },
+        ] }"#;
+        let m = build(tree, "tolerance = 1e-3\nmax_steps = 100").unwrap();
+        assert_eq!(m.max_steps(), 100);
+        assert!(m.distance(Vec3::ZERO) < -0.9);
+    }
+
+    /// Scale, then rotate (degrees about x, y, z), then translate: as object transforms.
+    #[test]
+    fn transforms_follow_the_object_transform_convention() {
+        let tree = r#"{ type = "transform", scale = 2, rotate = [0, 0, 90], translate = [5, 0, 0],
+            operand = { type = "capsule", a = [0, 0, 0], b = [1, 0, 0], radius = 0.1 } }"#;
+        let m = build(tree, "").unwrap();
+        // The segment from (5, 0, 0) to (5, 2, 0), radius 0.2.
+        assert!((m.distance(Vec3::new(5.0, 2.2, 0.0))).abs() < 1e-5);
+        assert!((m.distance(Vec3::new(6.0, 1.0, 0.0)) - 0.8).abs() < 1e-5);
+        let err = build(&tree.replace("scale = 2", "scale = [2, 2, 3]"), "").unwrap_err();
+        assert!(err.contains("non-uniform scale"), "{err}");
+    }
+}
