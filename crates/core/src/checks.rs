@@ -53,3 +53,18 @@ pub(crate) fn balanced<T>(mut operands: Vec<T>, join: &impl Fn(T, T) -> T) -> T 
     let right = operands.split_off(operands.len() / 2);
     join(balanced(operands, join), balanced(right, join))
 }
+
+/// An n-ary operator's operands folded into a balanced binary tree by `join`; for a
+/// difference, the first operand joined with the others' balanced `union`.
+pub(crate) fn fold<T>(
+    mut operands: Vec<T>,
+    difference: bool,
+    join: &impl Fn(T, T) -> T,
+    union: &impl Fn(T, T) -> T,
+) -> T {
+    if difference {
+        let first = operands.remove(0);
+        return join(first, balanced(operands, union));
+    }
+    balanced(operands, join)
+}

@@ -118,15 +118,15 @@ impl CsgNode {
     ///
     /// # Errors
     /// [`SceneError::Invalid`] when there are fewer than two operands.
-    pub fn fold(op: CsgOp, mut operands: Vec<CsgNode>) -> Result<Self, SceneError> {
+    pub fn fold(op: CsgOp, operands: Vec<CsgNode>) -> Result<Self, SceneError> {
         checks::at_least_two(&format!("a CSG {}", op.name()), &operands)?;
         let join = |op| move |a, b| Self::Op(op, Box::new(a), Box::new(b));
-        if op == CsgOp::Difference {
-            let first = operands.remove(0);
-            let rest = checks::balanced(operands, &join(CsgOp::Union));
-            return Ok(join(op)(first, rest));
-        }
-        Ok(checks::balanced(operands, &join(op)))
+        Ok(checks::fold(
+            operands,
+            op == CsgOp::Difference,
+            &join(op),
+            &join(CsgOp::Union),
+        ))
     }
 }
 

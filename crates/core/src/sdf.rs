@@ -168,7 +168,7 @@ impl SdfNode {
     ///
     /// # Errors
     /// [`SceneError::Invalid`] when there are fewer than two operands, or a blend has more.
-    pub fn fold(op: SdfOp, mut operands: Vec<SdfNode>) -> Result<Self, SceneError> {
+    pub fn fold(op: SdfOp, operands: Vec<SdfNode>) -> Result<Self, SceneError> {
         checks::at_least_two(&format!("an SDF {}", op.name()), &operands)?;
         if matches!(op, SdfOp::Blend(_)) && operands.len() != 2 {
             return Err(SceneError::Invalid(format!(
@@ -177,12 +177,12 @@ impl SdfNode {
             )));
         }
         let join = |op| move |a, b| Self::Op(op, Box::new(a), Box::new(b));
-        if op == SdfOp::Subtraction {
-            let first = operands.remove(0);
-            let rest = checks::balanced(operands, &join(SdfOp::Union));
-            return Ok(join(op)(first, rest));
-        }
-        Ok(checks::balanced(operands, &join(op)))
+        Ok(checks::fold(
+            operands,
+            op == SdfOp::Subtraction,
+            &join(op),
+            &join(SdfOp::Union),
+        ))
     }
 }
 
