@@ -22,7 +22,8 @@
 //! **Marching rules** (tested below and in `tests/tests/sdf.rs`):
 //! - The march runs only inside the model's padded bounding box: the slab interval clipped
 //!   to `[ray.t_min, ray.t_max]`, starting at its entry (which does not depend on `t_max`,
-//!   so every backend sees the same steps and the same `t`).
+//!   so every backend sees the same steps and the same `t`). The box holds every point
+//!   where `f < 2 eps` (the derivation is at `Bound`; tested by sampling).
 //! - Each step advances by `|f| / (L |dir|)`. A hit is accepted where `|f| < eps`; `eps` is
 //!   the *hit tolerance*, [`SdfParams::tolerance`] times the diagonal of the model's box
 //!   (but at least `2^-17` of its largest coordinate, about 64 ulps of f32).
@@ -223,6 +224,19 @@ enum Node {
     },
 }
 
+/// What [`Sdf::new`] derives for a subtree: its box, its Lipschitz bound, and its *spread*
+/// `g`: `{p : f(p) <= c}` lies within `g c` of the box on every axis, for every `c >= 0`
+/// (the box bounds more than the surface: smooth unions and the padding need the sets where
+/// `f` is small). Primitives are exact distances (`g = 1`); `min`, `max`, subtraction and
+/// blends keep the larger `g` (boxes overlap and join per axis, and a blend is small only
+/// where an operand is); a rotation widens it by the largest row sum of `|R|`.
+#[derive(Clone, Copy, Debug)]
+struct Bound {
+    aabb: Aabb,
+    lipschitz: f32,
+    spread: f32,
+}
+
 /// The outcome of one march: the hit distance, if any, and the field evaluations it took.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct March {
@@ -268,7 +282,11 @@ impl Sdf {
             )));
         }
         let mut nodes = Vec::new();
-        let (b, lipschitz) = Self::flatten(root, 1, &mut nodes)?;
+        let Bound {
+            aabb: b,
+            lipschitz,
+            spread,
+        } = Self::flatten(root, 1, &mut nodes)?;
         if b.is_empty() || (b.max - b.min).min_element() < 0.0 {
             return Err(SceneError::Invalid(
                 "the SDF model is empty (the boxes of its intersected operands do not overlap)"
@@ -280,7 +298,7 @@ impl Sdf {
         let eps = (params.tolerance * diagonal).max(magnitude * (1.0 / 131_072.0));
         // The surface lies inside the unpadded box; the padding keeps the march's first
         // point off it (at least `2 eps` away) and covers rounding.
-        let pad = Vec3::splat(2.0 * eps + (b.max - b.min).max_element() / 2048.0);
+        let pad = Vec3::splat(2.0 * eps * spread + (b.max - b.min).max_element() / 2048.0);
         Ok(Self {
             nodes,
             bounds: Aabb::new(b.min - pad, b.max + pad),
@@ -290,12 +308,8 @@ impl Sdf {
         })
     }
 
-    /// Appends `node`'s subtree in post-order; returns its box and Lipschitz bound.
-    fn flatten(
-        node: &SdfNode,
-        depth: usize,
-        nodes: &mut Vec<Node>,
-    ) -> Result<(Aabb, f32), SceneError> {
+    /// Appends `node`'s subtree in post-order; returns its bounds.
+    fn flatten(node: &SdfNode, depth: usize, nodes: &mut Vec<Node>) -> Result<Bound, SceneError> {
         if depth > MAX_SDF_DEPTH {
             return Err(SceneError::TooLarge(format!(
                 "the SDF tree is deeper than {MAX_SDF_DEPTH} levels"
@@ -310,30 +324,53 @@ impl Sdf {
             SdfNode::Leaf(p) => {
                 validate(p)?;
                 nodes.push(Node::Leaf(*p));
-                (primitive_bounds(p), 1.0)
+                Bound {
+                    aabb: primitive_bounds(p),
+                    lipschitz: 1.0,
+                    spread: 1.0,
+                }
             }
             SdfNode::Op(op, a, b) => {
                 validate_op(*op)?;
-                let (ba, la) = Self::flatten(a, depth + 1, nodes)?;
+                let Bound {
+                    aabb: ba,
+                    lipschitz: la,
+                    spread: ga,
+                } = Self::flatten(a, depth + 1, nodes)?;
                 let ia = nodes.len() - 1;
-                let (bb, lb) = Self::flatten(b, depth + 1, nodes)?;
+                let Bound {
+                    aabb: bb,
+                    lipschitz: lb,
+                    spread: gb,
+                } = Self::flatten(b, depth + 1, nodes)?;
                 let ib = nodes.len() - 1;
                 nodes.push(Node::Op(*op, ia, ib));
-                let bounds = match op {
+                let spread = ga.max(gb);
+                let aabb = match op {
                     SdfOp::Union | SdfOp::Blend(_) => ba.union(bb),
                     SdfOp::Intersection => Aabb::new(ba.min.max(bb.min), ba.max.min(bb.max)),
                     SdfOp::Subtraction => ba,
-                    // smin >= min(a, b) - k / 4: the surface lies within k / 4 of the union.
+                    // smin >= min(a, b) - k / 4: the surface lies where min(a, b) <= k / 4,
+                    // within `spread * k / 4` of the operands' boxes (see `Bound`).
                     SdfOp::SmoothUnion(k) => {
                         let u = ba.union(bb);
-                        Aabb::new(u.min - Vec3::splat(k / 4.0), u.max + Vec3::splat(k / 4.0))
+                        let pad = Vec3::splat(spread * k / 4.0);
+                        Aabb::new(u.min - pad, u.max + pad)
                     }
                 };
-                (bounds, op.lipschitz(la, lb))
+                Bound {
+                    aabb,
+                    lipschitz: op.lipschitz(la, lb),
+                    spread,
+                }
             }
             SdfNode::Transform(m, child) => {
                 let scale = similarity_scale(m)?;
-                let (bc, lc) = Self::flatten(child, depth + 1, nodes)?;
+                let Bound {
+                    aabb: bc,
+                    lipschitz,
+                    spread,
+                } = Self::flatten(child, depth + 1, nodes)?;
                 let ic = nodes.len() - 1;
                 nodes.push(Node::Transform {
                     inverse: m.inverse(),
@@ -356,7 +393,19 @@ impl Sdf {
                         "an SDF transform places the model beyond {MAX_COORDINATE:e}"
                     )));
                 }
-                (b, lc)
+                // A cube of half size r, rotated, has a box of half size r times the
+                // largest row sum of |R| (at most sqrt 3).
+                let r = m.matrix3 * (1.0 / scale);
+                let rows = r.transpose();
+                let turn = [rows.x_axis, rows.y_axis, rows.z_axis]
+                    .map(|row| row.abs().element_sum())
+                    .into_iter()
+                    .fold(1.0f32, f32::max);
+                Bound {
+                    aabb: b,
+                    lipschitz,
+                    spread: spread * turn,
+                }
             }
         };
         Ok(result)
@@ -840,6 +889,41 @@ mod tests {
         assert!(worst <= m.lipschitz() * 1.001, "worst ratio {worst}");
         // Not vacuous: somewhere the bound is nearly attained.
         assert!(worst > 0.9, "worst ratio {worst}");
+    }
+
+    /// Every sampled point where the field is below `2 eps` lies in the padded box, for a
+    /// smooth union whose operands are a rotated intersection (not an exact distance) and a
+    /// subtraction: the spread rule at work.
+    #[test]
+    fn the_box_holds_the_surface() {
+        let wedge = SdfNode::Transform(
+            Affine3A::from_rotation_z(0.7),
+            Box::new(op(
+                SdfOp::Intersection,
+                cube(Vec3::new(0.9, 0.0, 0.0), 1.0),
+                cube(Vec3::new(-0.9, 0.3, 0.0), 1.0),
+            )),
+        );
+        let carved = op(
+            SdfOp::Subtraction,
+            cube(Vec3::new(0.0, 1.2, 0.0), 0.4),
+            sphere(Vec3::new(0.0, 1.6, 0.0), 0.3),
+        );
+        for tree in [op(SdfOp::SmoothUnion(1.5), wedge, carved), everything()] {
+            let m = model(&tree);
+            let b = m.bounds();
+            let mut inside = 0;
+            for p in points(200_000, 4.0) {
+                if m.distance(p) < 2.0 * m.tolerance() {
+                    inside += 1;
+                    assert!(
+                        p.cmpge(b.min).all() && p.cmple(b.max).all(),
+                        "{p} outside {b:?}"
+                    );
+                }
+            }
+            assert!(inside > 1000, "{inside}");
+        }
     }
 
     #[test]
