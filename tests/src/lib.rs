@@ -88,6 +88,40 @@ pub fn render_with(
     pool.install(|| r.render(settings).unwrap())
 }
 
+/// White furnace: renders `scene` (diffuse objects of albedo 1 under a uniform background of
+/// radiance 1) with path tracing in `bvh` and asserts that the mean radiance is 1 within
+/// five standard errors, and that some pixels hit an object. Paths that leak into objects or
+/// are caught by the surface they leave use up the depth (64) and darken the mean.
+///
+/// # Panics
+/// When the mean is off, or nothing is hit.
+pub fn assert_white_furnace(scene: &Arc<Scene>) {
+    let settings = RenderSettings {
+        width: 40,
+        height: 40,
+        spp: 16,
+        mode: raybench_core::Mode::Path,
+        max_depth: 64,
+        seed: 5,
+        count: false,
+    };
+    let frame = render_with("bvh", scene, &settings, 2);
+    let n = frame.color.len() as f64;
+    let mean = frame.color.iter().map(|c| f64::from(c.x)).sum::<f64>() / n;
+    let var = frame
+        .color
+        .iter()
+        .map(|c| (f64::from(c.x) - mean).powi(2))
+        .sum::<f64>()
+        / (n - 1.0);
+    let err = (var / n).sqrt();
+    assert!(
+        (mean - 1.0).abs() < 5.0 * err + 1e-4,
+        "mean {mean} +- {err}"
+    );
+    assert!(frame.ids.iter().any(|&id| id != NO_HIT));
+}
+
 /// Asserts that two frames have bit-identical primitive ids and `t`, naming the first
 /// differing pixel.
 ///

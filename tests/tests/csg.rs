@@ -145,7 +145,6 @@ fn deep_trees_are_refused_without_a_crash() {
 /// unit tests check the signs.)
 #[test]
 fn white_furnace_with_csg_solids() {
-    use raybench_core::{Mode, RenderSettings};
     let mut text = String::from(
         "background = [1, 1, 1]\n[camera]\nposition = [0, 0, 4]\nlook_at = [0, 0, 0]\n\
          fov = 40\n[[material]]\nname = \"white\"\ncolor = [1, 1, 1]\nspecular = [0, 0, 0]\n",
@@ -156,30 +155,5 @@ fn white_furnace_with_csg_solids() {
             { type = "cone", base = [1.2, 0.0, 0.5], radius = 0.5, height = 1.0 },
         ] }"#)
     .replace("kind = \"csg\"", "kind = \"csg\"\nmaterial = \"white\"");
-    let scene = std::sync::Arc::new(load(&text).unwrap());
-    let settings = RenderSettings {
-        width: 40,
-        height: 40,
-        spp: 16,
-        mode: Mode::Path,
-        max_depth: 64,
-        seed: 5,
-        count: false,
-    };
-    let frame = raybench_tests::render_with("bvh", &scene, &settings, 2);
-    let n = frame.color.len() as f64;
-    let mean = frame.color.iter().map(|c| f64::from(c.x)).sum::<f64>() / n;
-    let var = frame
-        .color
-        .iter()
-        .map(|c| (f64::from(c.x) - mean).powi(2))
-        .sum::<f64>()
-        / (n - 1.0);
-    let err = (var / n).sqrt();
-    assert!(
-        (mean - 1.0).abs() < 5.0 * err + 1e-4,
-        "mean {mean} +- {err}"
-    );
-    // The solids are in view: some pixels hit them.
-    assert!(frame.ids.iter().any(|&id| id != raybench_core::NO_HIT));
+    raybench_tests::assert_white_furnace(&std::sync::Arc::new(load(&text).unwrap()));
 }

@@ -51,6 +51,7 @@ scene_tests! {
     heightfield_generator => "heightfield:64",
     csg => "csg",
     teapot_bezier => "teapot-bezier",
+    sdf => "sdf",
 }
 
 macro_rules! mode_tests {
@@ -77,6 +78,7 @@ mode_tests! {
     modes_heightfield => "heightfield",
     modes_csg => "csg",
     modes_teapot_bezier => "teapot-bezier",
+    modes_sdf => "sdf",
 }
 
 /// Backends not bound by the bit-exact contract, and where each is compared with naive

@@ -70,7 +70,8 @@ fn the_empty_scene_renders_background() {
     assert!(f.color.iter().all(|&c| c == scene.background));
 }
 
-/// Height fields, CSG trees and the volume modes have no WGSL port: the backend refuses them with a
+/// Height fields, CSG trees, SDF models, Bezier patches and the volume modes have no WGSL port:
+/// the backend refuses them with a
 /// reason instead of rendering something else.
 #[test]
 fn kinds_and_modes_without_kernels_are_refused() {
@@ -92,6 +93,9 @@ fn kinds_and_modes_without_kernels_are_refused() {
         .unwrap();
     let why = raybench_wgpu::check_kinds(&b.build()).unwrap_err();
     assert!(why.contains("Bezier patch"), "{why}");
+    let sdf = raybench_scene::load("sdf", std::path::Path::new(".")).unwrap();
+    let why = raybench_wgpu::check_kinds(&sdf).unwrap_err();
+    assert!(why.contains("SDF model"), "{why}");
     if !raybench_tests::gpu::available() {
         return;
     }

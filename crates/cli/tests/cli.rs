@@ -149,6 +149,8 @@ fn volume_modes_render_the_phantom_and_height_fields_and_csg_render() {
         ("heightfield:64", "cast"),
         ("csg", "whitted"),
         ("csg", "path"),
+        ("sdf", "whitted"),
+        ("sdf", "path"),
     ] {
         let out = dir.join(format!("{mode}.png"));
         let o = raybench(&[

@@ -19,8 +19,9 @@
 //!   normal negated.
 
 use crate::aabb::Aabb;
+use crate::checks;
 use crate::error::SceneError;
-use crate::limits::{MAX_COORDINATE, MAX_CSG_DEPTH, MAX_CSG_LEAVES};
+use crate::limits::{MAX_CSG_DEPTH, MAX_CSG_LEAVES};
 use crate::ray::Ray;
 use glam::Vec3;
 
@@ -117,32 +118,15 @@ impl CsgNode {
     ///
     /// # Errors
     /// [`SceneError::Invalid`] when there are fewer than two operands.
-    pub fn fold(op: CsgOp, mut operands: Vec<CsgNode>) -> Result<Self, SceneError> {
-        if operands.len() < 2 {
-            return Err(SceneError::Invalid(format!(
-                "a CSG {} needs at least two operands, found {}",
-                op.name(),
-                operands.len()
-            )));
-        }
-        if op == CsgOp::Difference {
-            let first = operands.remove(0);
-            let rest = Self::balanced(CsgOp::Union, operands);
-            return Ok(Self::Op(op, Box::new(first), Box::new(rest)));
-        }
-        Ok(Self::balanced(op, operands))
-    }
-
-    fn balanced(op: CsgOp, mut operands: Vec<CsgNode>) -> Self {
-        if operands.len() == 1 {
-            return operands.pop().expect("one operand");
-        }
-        let right = operands.split_off(operands.len() / 2);
-        Self::Op(
-            op,
-            Box::new(Self::balanced(op, operands)),
-            Box::new(Self::balanced(op, right)),
-        )
+    pub fn fold(op: CsgOp, operands: Vec<CsgNode>) -> Result<Self, SceneError> {
+        checks::at_least_two(&format!("a CSG {}", op.name()), &operands)?;
+        let join = |op| move |a, b| Self::Op(op, Box::new(a), Box::new(b));
+        Ok(checks::fold(
+            operands,
+            op == CsgOp::Difference,
+            &join(op),
+            &join(CsgOp::Union),
+        ))
     }
 }
 
@@ -346,28 +330,8 @@ impl Spans {
 
 /// Checks a solid's parameters and normalises a half-space's normal.
 fn validate(s: Solid) -> Result<Solid, SceneError> {
-    let finite = |v: Vec3, what: &str| {
-        if !v.is_finite() {
-            Err(SceneError::NonFinite(format!("CSG {what}")))
-        } else if v.abs().max_element() > MAX_COORDINATE {
-            Err(SceneError::Invalid(format!(
-                "CSG {what} exceeds {MAX_COORDINATE:e} in magnitude"
-            )))
-        } else {
-            Ok(())
-        }
-    };
-    let positive = |x: f32, what: &str| {
-        if !x.is_finite() {
-            Err(SceneError::NonFinite(format!("CSG {what}")))
-        } else if !(x > 0.0 && x <= MAX_COORDINATE) {
-            Err(SceneError::Invalid(format!(
-                "CSG {what} must be positive and at most {MAX_COORDINATE:e}, found {x}"
-            )))
-        } else {
-            Ok(())
-        }
-    };
+    let finite = |v: Vec3, what: &str| checks::point(v, &format!("CSG {what}"));
+    let positive = |x: f32, what: &str| checks::positive(x, &format!("CSG {what}"));
     match s {
         Solid::Sphere { center, radius } => {
             finite(center, "sphere centre")?;

@@ -7,6 +7,7 @@ use crate::heightfield::HeightField;
 use crate::hit::Hit;
 use crate::plane::Plane;
 use crate::ray::Ray;
+use crate::sdf::Sdf;
 use crate::sphere::Sphere;
 use crate::triangle::Triangle;
 use glam::Vec3;
@@ -35,6 +36,9 @@ pub enum Shape {
     /// A bicubic Bezier patch intersected directly (subdivision + Newton): one bounded
     /// primitive; sub-primitive id 0, `(u, v)` the patch parameters.
     Bezier(Arc<BezierPatch>),
+    /// A signed-distance model intersected by sphere tracing: one bounded primitive
+    /// (sub-primitive id 0).
+    Sdf(Arc<Sdf>),
 }
 
 /// The kinds of primitive, for statistics and for backends that support only some.
@@ -52,17 +56,20 @@ pub enum PrimitiveKind {
     Csg,
     /// [`Shape::Bezier`].
     Bezier,
+    /// [`Shape::Sdf`].
+    Sdf,
 }
 
 impl PrimitiveKind {
     /// Every kind, in a fixed order.
-    pub const ALL: [Self; 6] = [
+    pub const ALL: [Self; 7] = [
         Self::Triangle,
         Self::Sphere,
         Self::Plane,
         Self::HeightField,
         Self::Csg,
         Self::Bezier,
+        Self::Sdf,
     ];
 
     /// Lower-case name used in scene files and reports.
@@ -75,6 +82,7 @@ impl PrimitiveKind {
             Self::HeightField => "height field",
             Self::Csg => "CSG solid",
             Self::Bezier => "Bezier patch",
+            Self::Sdf => "SDF model",
         }
     }
 }
@@ -104,6 +112,7 @@ impl Shape {
             Self::HeightField(_) => PrimitiveKind::HeightField,
             Self::Csg(_) => PrimitiveKind::Csg,
             Self::Bezier(_) => PrimitiveKind::Bezier,
+            Self::Sdf(_) => PrimitiveKind::Sdf,
         }
     }
 
@@ -118,6 +127,7 @@ impl Shape {
             Self::HeightField(h) => Some(h.bounds()),
             Self::Csg(c) => Some(c.bounds()),
             Self::Bezier(b) => Some(b.bounds()),
+            Self::Sdf(m) => Some(m.bounds()),
         }
     }
 
@@ -152,6 +162,12 @@ impl Shape {
                 v: 0.0,
             }),
             Self::Bezier(b) => b.intersect(ray),
+            Self::Sdf(m) => m.intersect(ray).map(|t| PrimHit {
+                t,
+                sub: 0,
+                u: 0.0,
+                v: 0.0,
+            }),
         }
     }
 
@@ -177,6 +193,7 @@ impl Shape {
                 h.v,
             ),
             Self::Bezier(b) => (b.normal(h.u, h.v), h.u, h.v),
+            Self::Sdf(m) => (m.normal(ray.at(h.t)), h.u, h.v),
         };
         Hit {
             t: h.t,
@@ -288,6 +305,7 @@ impl Geometry {
                 Shape::HeightField(h) => h.memory_bytes(),
                 Shape::Csg(c) => c.memory_bytes(),
                 Shape::Bezier(b) => b.memory_bytes(),
+                Shape::Sdf(m) => m.memory_bytes(),
                 _ => 0,
             })
             .sum();

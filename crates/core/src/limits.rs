@@ -42,3 +42,19 @@ pub const MAX_CSG_LEAVES: usize = 256;
 /// Largest accepted number of Bezier patches in one `.bpt` file (the count on its first line
 /// is checked against it before anything is allocated).
 pub const MAX_BEZIER_PATCHES: usize = 1 << 20;
+/// Deepest accepted SDF tree (operations and transforms nest at most this many levels;
+/// scene files fold n-ary operations into balanced trees first).
+pub const MAX_SDF_DEPTH: usize = 32;
+
+/// Largest accepted number of nodes in one SDF tree: every march step evaluates them all.
+pub const MAX_SDF_NODES: usize = 512;
+
+/// Largest accepted SDF step limit (field evaluations per ray).
+pub const MAX_SDF_STEPS: u32 = 4096;
+
+/// Smallest accepted SDF hit tolerance, relative to the model's box diagonal (below it f32
+/// rounding of the field would stall the march).
+pub const MIN_SDF_TOLERANCE: f32 = 1.0e-6;
+
+/// Largest accepted SDF hit tolerance, relative to the model's box diagonal.
+pub const MAX_SDF_TOLERANCE: f32 = 1.0e-2;

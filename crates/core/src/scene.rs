@@ -11,6 +11,7 @@ use crate::limits;
 use crate::material::{Light, Material};
 use crate::mesh::TriangleMesh;
 use crate::plane::Plane;
+use crate::sdf::Sdf;
 use crate::sphere::Sphere;
 use crate::triangle::Triangle;
 use crate::volume::Volume;
@@ -347,6 +348,22 @@ impl SceneBuilder {
             patches.into_iter().map(Shape::Bezier),
             material,
         );
+        Ok(self)
+    }
+
+    /// Adds a signed-distance model as one primitive.
+    ///
+    /// # Errors
+    /// When the material does not exist or the scene is full.
+    pub fn add_sdf(
+        &mut self,
+        name: impl Into<String>,
+        sdf: Arc<Sdf>,
+        material: u32,
+    ) -> Result<&mut Self, SceneError> {
+        self.check_material(material)?;
+        self.check_room(1)?;
+        self.push_object(name.into(), [Shape::Sdf(sdf)], material);
         Ok(self)
     }
 

@@ -91,4 +91,9 @@ pub const BUILTIN_SCENES: &[BuiltinScene] = &[
         "the Utah teapot as 32 bicubic Bezier patches, intersected directly",
         ["teapot-bezier/teapot.bpt"]
     ),
+    builtin!(
+        "sdf",
+        "signed-distance models by sphere tracing: smooth union, blend, subtraction, torus",
+        []
+    ),
 ];

@@ -135,7 +135,7 @@ struct DirectionalLightDesc {
 
 #[derive(Deserialize)]
 #[serde(untagged)]
-enum ScaleDesc {
+pub(crate) enum ScaleDesc {
     Uniform(f32),
     PerAxis(V3),
 }
@@ -174,6 +174,7 @@ enum ObjectDesc {
     HeightField(HeightFieldDesc),
     Csg(CsgDesc),
     Bezier(BezierDesc),
+    Sdf(crate::sdf_format::SdfDesc),
 }
 
 /// Bicubic Bezier patches from a `.bpt` file, intersected directly or tessellated.
@@ -738,6 +739,11 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
             ObjectDesc::Bezier(bd) => {
                 let m = material(&bd.material)?.unwrap_or(0);
                 bezier(&mut b, bd, ctx, &what, m)?;
+            }
+            ObjectDesc::Sdf(d) => {
+                let m = material(&d.material)?.unwrap_or(0);
+                let model = d.build().map_err(&err)?;
+                b.add_sdf("sdf", Arc::new(model), m).map_err(err)?;
             }
         }
     }

@@ -20,6 +20,7 @@ pub mod generators;
 mod gltf_loader;
 pub mod grids;
 mod obj;
+mod sdf_format;
 mod transform;
 pub mod volumes;
 

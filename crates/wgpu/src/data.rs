@@ -169,11 +169,14 @@ fn prim(shape: &Shape, id: u32) -> Option<GpuPrim> {
         Shape::HeightField(_) | Shape::Csg(_) => return None,
         // Bezier patches: no WGSL port of the subdivision + Newton search.
         Shape::Bezier(_) => return None,
+        // Sphere tracing has no WGSL port.
+        Shape::Sdf(_) => return None,
     })
 }
 
 /// Why the shaders cannot render `scene`, if they cannot: every primitive kind must have a
-/// WGSL port (triangles, spheres and planes do; height fields and CSG trees do not yet).
+/// WGSL port (triangles, spheres and planes do; height fields, CSG trees and SDF models do not
+/// yet).
 ///
 /// # Errors
 /// The first primitive kind without a port.

@@ -62,6 +62,7 @@ pub const QUICK_SCENES: &[&str] = &[
     "phantom",
     "csg",
     "teapot-bezier",
+    "sdf",
 ];
 /// The built-in scenes of the full matrix.
 pub const FULL_SCENES: &[&str] = &[
@@ -78,6 +79,7 @@ pub const FULL_SCENES: &[&str] = &[
     "phantom",
     "csg",
     "teapot-bezier",
+    "sdf",
 ];
 
 /// Naive's estimated ray/primitive tests per workload above which it is left out (it is
@@ -467,7 +469,15 @@ impl Ctx<'_> {
         }
         let name = scene.name.as_str();
         if self.modes.contains(&Mode::Whitted)
-            && ["spheres", "whitted", "cornell-box", "heightfield", "csg"].contains(&name)
+            && [
+                "spheres",
+                "whitted",
+                "cornell-box",
+                "heightfield",
+                "csg",
+                "sdf",
+            ]
+            .contains(&name)
         {
             w.push(Workload {
                 mode: Mode::Whitted,
