@@ -17,12 +17,20 @@
 //!   whole line and the first boundary at or after `t_min` is returned.
 //! - Normals point out of the combined solid: a subtracted solid's boundary takes its
 //!   normal negated.
+//! - A leaf may be placed by an affine map ([`CsgNode::Placed`]): the ray is taken to the
+//!   solid's local space by the inverse map without renormalising its direction (so `t` is
+//!   the same in both spaces), normals come back by the inverse transpose, renormalised, and
+//!   the leaf's box is the box of its local box's eight corners. Unplaced leaves skip all
+//!   of this (bit-identical to solids without the feature).
+//! - Leaves give at most two spans (a torus); convex solids one.
 
 use crate::aabb::Aabb;
 use crate::error::SceneError;
-use crate::limits::{MAX_COORDINATE, MAX_CSG_DEPTH, MAX_CSG_LEAVES};
+use crate::limits::{MAX_COORDINATE, MAX_CSG_DEPTH, MAX_CSG_LEAVES, MAX_TRANSFORM_CONDITION};
 use crate::ray::Ray;
-use glam::Vec3;
+use glam::{Affine3A, Mat3A, Vec3};
+
+mod quartic;
 
 /// A CSG set operation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -99,6 +107,39 @@ pub enum Solid {
         /// Outward normal (normalised on construction).
         normal: Vec3,
     },
+    // Issue 10, tori and quadrics.
+    /// An axis-aligned ellipsoid: the unit ball scaled by `radii`, centred at `center` (a
+    /// rotated one is a [`CsgNode::Placed`] ellipsoid).
+    Ellipsoid {
+        /// Centre.
+        center: Vec3,
+        /// Semi-axis lengths along x, y and z (each positive).
+        radii: Vec3,
+    },
+    /// A torus about the vertical axis through `center`: the points within `minor_radius`
+    /// of the circle of `major_radius` in the plane `y = center.y`. The solid is where
+    /// `(|p|^2 + R^2 - r^2)^2 <= 4 R^2 (x^2 + z^2)` (relative to the centre), so a horn
+    /// torus (`r = R`) closes its hole to a point and a spindle torus (`r > R`) is the
+    /// outer "apple" with the inner "lemon" where the tube overlaps itself left hollow.
+    Torus {
+        /// Centre.
+        center: Vec3,
+        /// Radius `R` of the tube's centre circle (positive).
+        major_radius: f32,
+        /// Radius `r` of the tube (positive).
+        minor_radius: f32,
+    },
+    /// A capped paraboloid opening upwards from its apex at `base`: the points with
+    /// `x^2 + z^2 <= radius^2 (y / height)` (relative to the apex) up to `y = height`, where
+    /// a disc of `radius` closes it.
+    Paraboloid {
+        /// The apex.
+        base: Vec3,
+        /// Radius of the cap disc (positive).
+        radius: f32,
+        /// Height of the cap above the apex (positive).
+        height: f32,
+    },
 }
 
 /// A CSG tree as scene files describe it: operators with two operands, solids at the
@@ -107,6 +148,9 @@ pub enum Solid {
 pub enum CsgNode {
     /// A solid.
     Leaf(Solid),
+    /// A solid placed by an affine map from its local space to the tree's (scale, rotation
+    /// and translation; non-uniform scale allowed, singular maps refused).
+    Placed(Solid, Affine3A),
     /// An operator and its two operands.
     Op(CsgOp, Box<CsgNode>, Box<CsgNode>),
 }
@@ -164,8 +208,58 @@ struct Span {
 /// A node of the validated tree, stored in post-order.
 #[derive(Clone, Debug, PartialEq)]
 enum Node {
-    Leaf(Solid),
+    Leaf(Solid, Option<Placement>),
     Op(CsgOp, usize, usize),
+}
+
+/// A placed leaf's maps: world to local for rays, and the normal matrix (the inverse
+/// transpose of the local-to-world linear part) for normals.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Placement {
+    to_local: Affine3A,
+    normal: Mat3A,
+}
+
+impl Placement {
+    /// Checks `to_world` (finite, not singular, condition number at most
+    /// [`MAX_TRANSFORM_CONDITION`]) and inverts it.
+    fn new(to_world: Affine3A) -> Result<Self, SceneError> {
+        let m = to_world.matrix3;
+        if !(m.is_finite() && to_world.translation.is_finite()) {
+            return Err(SceneError::NonFinite("CSG transform".into()));
+        }
+        let inv = m.inverse();
+        let norm = |a: Mat3A| {
+            [a.x_axis, a.y_axis, a.z_axis]
+                .iter()
+                .map(|c| c.abs().max_element())
+                .fold(0.0f32, f32::max)
+        };
+        let cond = norm(m) * norm(inv);
+        if m.determinant() == 0.0 || !inv.is_finite() || !(cond <= MAX_TRANSFORM_CONDITION) {
+            return Err(SceneError::Invalid(format!(
+                "CSG transform is singular or nearly so (a zero or tiny scale?): condition \
+                 number {cond:e} above {MAX_TRANSFORM_CONDITION:e}"
+            )));
+        }
+        Ok(Self {
+            to_local: to_world.inverse(),
+            normal: inv.transpose(),
+        })
+    }
+
+    /// The box of the eight corners of `b` mapped to world space.
+    fn bounds(&self, b: Aabb) -> Aabb {
+        let to_world = self.to_local.inverse();
+        Aabb::from_points((0..8).map(|k| {
+            let pick = |bit: usize, lo: f32, hi: f32| if k & bit == 0 { lo } else { hi };
+            to_world.transform_point3(Vec3::new(
+                pick(1, b.min.x, b.max.x),
+                pick(2, b.min.y, b.max.y),
+                pick(4, b.min.z, b.max.z),
+            ))
+        }))
+    }
 }
 
 /// A hit with a CSG tree: distance, the leaf hit and the outward normal there.
@@ -236,16 +330,29 @@ impl Csg {
             )));
         }
         match node {
-            CsgNode::Leaf(s) => {
+            CsgNode::Leaf(s) | CsgNode::Placed(s, _) => {
                 if *leaves as usize >= MAX_CSG_LEAVES {
                     return Err(SceneError::TooLarge(format!(
                         "the CSG tree has more than {MAX_CSG_LEAVES} solids"
                     )));
                 }
                 let s = validate(*s)?;
+                let place = match node {
+                    CsgNode::Placed(_, a) => Some(Placement::new(*a)?),
+                    _ => None,
+                };
+                let bound = match (solid_bounds(&s), place) {
+                    (Some(b), Some(p)) => {
+                        let b = p.bounds(b);
+                        finite_point(b.min, "transformed solid's box")?;
+                        finite_point(b.max, "transformed solid's box")?;
+                        Some(b)
+                    }
+                    (b, _) => b,
+                };
                 *leaves += 1;
-                nodes.push(Node::Leaf(s));
-                Ok(solid_bounds(&s))
+                nodes.push(Node::Leaf(s, place));
+                Ok(bound)
             }
             CsgNode::Op(op, a, b) => {
                 let ba = Self::flatten(a, depth + 1, nodes, leaves)?;
@@ -312,13 +419,13 @@ impl Csg {
     }
 
     /// The spans of node `i` on the ray's whole line; `leaf` counts leaves in post-order.
-    /// Leaves (one convex solid: at most one span) allocate nothing; each operator one list.
+    /// Leaves (at most two spans) allocate nothing; each operator one list.
     fn spans(&self, i: usize, ray: &Ray, leaf: &mut u32) -> Spans {
         match &self.nodes[i] {
-            Node::Leaf(s) => {
+            Node::Leaf(s, place) => {
                 let id = *leaf;
                 *leaf += 1;
-                Spans::One(solid_span(s, ray, id))
+                Spans::Leaf(leaf_spans(s, place.as_ref(), ray, id))
             }
             Node::Op(op, a, b) => {
                 let sa = self.spans(*a, ray, leaf);
@@ -329,34 +436,111 @@ impl Csg {
     }
 }
 
-/// The spans of a subtree: a leaf's single optional span, or an operator's list.
+/// The spans of a subtree: a leaf's (at most two, inline), or an operator's list.
 enum Spans {
-    One(Option<Span>),
+    Leaf(LeafSpans),
     Many(Vec<Span>),
 }
 
 impl Spans {
     fn as_slice(&self) -> &[Span] {
         match self {
-            Self::One(s) => s.as_slice(),
+            Self::Leaf(s) => &s.spans[..s.len],
             Self::Many(v) => v,
         }
     }
 }
 
+/// Up to two sorted, disjoint spans of one leaf, without a heap allocation.
+struct LeafSpans {
+    spans: [Span; 2],
+    len: usize,
+}
+
+impl LeafSpans {
+    const NONE: Self = Self {
+        spans: [Span {
+            enter: End {
+                t: f32::NAN,
+                normal: Vec3::ZERO,
+                leaf: 0,
+            },
+            exit: End {
+                t: f32::NAN,
+                normal: Vec3::ZERO,
+                leaf: 0,
+            },
+        }; 2],
+        len: 0,
+    };
+
+    /// Appends `span` when it has positive length (tangent and NaN spans are dropped).
+    fn push(&mut self, span: Span) {
+        if let Some(s) = finish(span) {
+            self.spans[self.len] = s;
+            self.len += 1;
+        }
+    }
+}
+
+/// The spans of a leaf: the ray taken to its local space when it is placed, and its
+/// normals brought back.
+fn leaf_spans(s: &Solid, place: Option<&Placement>, ray: &Ray, leaf: u32) -> LeafSpans {
+    let (o, d) = match place {
+        None => (ray.origin, ray.dir),
+        Some(p) => (
+            p.to_local.transform_point3(ray.origin),
+            p.to_local.transform_vector3(ray.dir),
+        ),
+    };
+    let mut out = LeafSpans::NONE;
+    if let Solid::Torus {
+        center,
+        major_radius,
+        minor_radius,
+    } = *s
+    {
+        let (hits, n) = quartic::torus(o - center, d, major_radius, minor_radius);
+        let end = |(t, n): (f32, glam::DVec3)| End {
+            t,
+            normal: n.normalize_or(glam::DVec3::Y).as_vec3(),
+            leaf,
+        };
+        for pair in hits[..n].chunks_exact(2) {
+            out.push(Span {
+                enter: end(pair[0]),
+                exit: end(pair[1]),
+            });
+        }
+    } else if let Some(span) = solid_span(s, o, d, leaf) {
+        out.push(span);
+    }
+    if let Some(p) = place {
+        for span in &mut out.spans[..out.len] {
+            for e in [&mut span.enter, &mut span.exit] {
+                e.normal = (p.normal * e.normal).normalize_or(e.normal);
+            }
+        }
+    }
+    out
+}
+
+/// Checks that a point is finite and within [`MAX_COORDINATE`].
+fn finite_point(v: Vec3, what: &str) -> Result<(), SceneError> {
+    if !v.is_finite() {
+        Err(SceneError::NonFinite(format!("CSG {what}")))
+    } else if v.abs().max_element() > MAX_COORDINATE {
+        Err(SceneError::Invalid(format!(
+            "CSG {what} exceeds {MAX_COORDINATE:e} in magnitude"
+        )))
+    } else {
+        Ok(())
+    }
+}
+
 /// Checks a solid's parameters and normalises a half-space's normal.
 fn validate(s: Solid) -> Result<Solid, SceneError> {
-    let finite = |v: Vec3, what: &str| {
-        if !v.is_finite() {
-            Err(SceneError::NonFinite(format!("CSG {what}")))
-        } else if v.abs().max_element() > MAX_COORDINATE {
-            Err(SceneError::Invalid(format!(
-                "CSG {what} exceeds {MAX_COORDINATE:e} in magnitude"
-            )))
-        } else {
-            Ok(())
-        }
-    };
+    let finite = finite_point;
     let positive = |x: f32, what: &str| {
         if !x.is_finite() {
             Err(SceneError::NonFinite(format!("CSG {what}")))
@@ -410,6 +594,30 @@ fn validate(s: Solid) -> Result<Solid, SceneError> {
             };
             return Ok(Solid::HalfSpace { point, normal: n });
         }
+        Solid::Ellipsoid { center, radii } => {
+            finite(center, "ellipsoid centre")?;
+            for r in radii.to_array() {
+                positive(r, "ellipsoid radius")?;
+            }
+        }
+        Solid::Torus {
+            center,
+            major_radius,
+            minor_radius,
+        } => {
+            finite(center, "torus centre")?;
+            positive(major_radius, "torus major radius")?;
+            positive(minor_radius, "torus minor radius")?;
+        }
+        Solid::Paraboloid {
+            base,
+            radius,
+            height,
+        } => {
+            finite(base, "paraboloid base")?;
+            positive(radius, "paraboloid radius")?;
+            positive(height, "paraboloid height")?;
+        }
     }
     Ok(s)
 }
@@ -431,11 +639,28 @@ fn solid_bounds(s: &Solid) -> Bound {
             base,
             radius,
             height,
+        }
+        | Solid::Paraboloid {
+            base,
+            radius,
+            height,
         } => Some(Aabb::new(
             base - Vec3::new(radius, 0.0, radius),
             base + Vec3::new(radius, height, radius),
         )),
         Solid::HalfSpace { .. } => None,
+        Solid::Ellipsoid { center, radii } => Some(Aabb::new(center - radii, center + radii)),
+        Solid::Torus {
+            center,
+            major_radius,
+            minor_radius,
+        } => {
+            let e = major_radius + minor_radius;
+            Some(Aabb::new(
+                center - Vec3::new(e, minor_radius, e),
+                center + Vec3::new(e, minor_radius, e),
+            ))
+        }
     }
 }
 
@@ -471,33 +696,108 @@ fn slab(o: f32, d: f32, lo: f32, hi: f32) -> Option<(f32, f32, f32)> {
     })
 }
 
-/// The span of the ray's line inside one solid (solids are convex: at most one span).
-fn solid_span(s: &Solid, ray: &Ray, leaf: u32) -> Option<Span> {
-    let o = ray.origin;
-    let d = ray.dir;
+/// The line `f + t d` inside the ball of `radius` about the origin, as the sphere
+/// primitive computes it: the entry and exit `t`, ascending.
+#[inline]
+fn ball(f: Vec3, d: Vec3, radius: f32) -> Option<(f32, f32)> {
+    let a = d.dot(d);
+    let b = -f.dot(d);
+    // Distance from the centre to the line, as the sphere primitive computes it.
+    let l = f + d * (b / a);
+    let r2 = radius * radius;
+    let disc = r2 - l.dot(l);
+    if disc.is_nan() || disc < 0.0 {
+        return None;
+    }
+    let c = f.dot(f) - r2;
+    let q = b + (a.sqrt() * disc.sqrt()).copysign(b);
+    let (t0, t1) = (c / q, q / a);
+    Some(if t0 <= t1 { (t0, t1) } else { (t1, t0) })
+}
+
+/// A solid of revolution about y cut by the slab `(y0, y1)` (with the entry normal's sign,
+/// as [`slab`] returns it): the side's interval `(s0, s1)` where the caps do not cut it
+/// first. On a tie the side keeps the boundary.
+#[inline]
+fn capped(
+    (y0, y1, sign): (f32, f32, f32),
+    (s0, s1): (f32, f32),
+    side: impl Fn(f32) -> Vec3,
+    end: impl Fn(f32, Vec3) -> End,
+) -> Span {
+    Span {
+        enter: if y0 > s0 {
+            end(y0, Vec3::new(0.0, sign, 0.0))
+        } else {
+            end(s0, side(s0))
+        },
+        exit: if y1 < s1 {
+            end(y1, Vec3::new(0.0, -sign, 0.0))
+        } else {
+            end(s1, side(s1))
+        },
+    }
+}
+
+/// The span of the line `o + t d` inside one convex solid (at most one span). A torus is
+/// not convex: [`leaf_spans`] intersects it, and here it gives nothing.
+fn solid_span(s: &Solid, o: Vec3, d: Vec3, leaf: u32) -> Option<Span> {
     let end = |t: f32, normal: Vec3| End { t, normal, leaf };
     let span = match *s {
         Solid::Sphere { center, radius } => {
-            let f = o - center;
-            let a = d.dot(d);
-            let b = -f.dot(d);
-            // Distance from the centre to the line, as the sphere primitive computes it.
-            let l = f + d * (b / a);
-            let r2 = radius * radius;
-            let disc = r2 - l.dot(l);
-            if disc.is_nan() || disc < 0.0 {
-                return None;
-            }
-            let c = f.dot(f) - r2;
-            let q = b + (a.sqrt() * disc.sqrt()).copysign(b);
-            let (t0, t1) = (c / q, q / a);
-            let (t0, t1) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
+            let (t0, t1) = ball(o - center, d, radius)?;
             let n = |t: f32| ((o + d * t - center) / radius).normalize_or(Vec3::Y);
             Span {
                 enter: end(t0, n(t0)),
                 exit: end(t1, n(t1)),
             }
         }
+        Solid::Ellipsoid { center, radii } => {
+            // The unit ball in coordinates divided by the radii; t is unchanged.
+            let (f, du) = ((o - center) / radii, d / radii);
+            let (t0, t1) = ball(f, du, 1.0)?;
+            // The gradient of |p / radii|^2 is 2 p / radii^2: the unit-ball point / radii.
+            let n = |t: f32| ((f + du * t) / radii).normalize_or(Vec3::Y);
+            Span {
+                enter: end(t0, n(t0)),
+                exit: end(t1, n(t1)),
+            }
+        }
+        Solid::Paraboloid {
+            base,
+            radius,
+            height,
+        } => {
+            // Relative to the apex, inside where k (x^2 + z^2) - y <= 0; the cap is the slab's
+            // top (its bottom at -inf never cuts).
+            let f = o - base;
+            let y = slab(f.y, d.y, f32::NEG_INFINITY, height)?;
+            let k = height / (radius * radius);
+            let a = k * (d.x * d.x + d.z * d.z);
+            let bh = 0.5 * d.y - k * (f.x * d.x + f.z * d.z);
+            let c = k * (f.x * f.x + f.z * f.z) - f.y;
+            let side = if a == 0.0 {
+                // Along the axis: the linear -2 b' t + c <= 0.
+                if bh == 0.0 {
+                    if c.is_nan() || c > 0.0 {
+                        return None;
+                    }
+                    (f32::NEG_INFINITY, f32::INFINITY)
+                } else if bh > 0.0 {
+                    (c / (2.0 * bh), f32::INFINITY)
+                } else {
+                    (f32::NEG_INFINITY, c / (2.0 * bh))
+                }
+            } else {
+                quadratic(a, bh, c)?
+            };
+            let normal = |t: f32| {
+                let p = f + d * t;
+                Vec3::new(2.0 * k * p.x, -1.0, 2.0 * k * p.z).normalize_or(-Vec3::Y)
+            };
+            capped(y, side, normal, end)
+        }
+        Solid::Torus { .. } => return None,
         Solid::Box { min, max } => {
             let mut enter = end(f32::NEG_INFINITY, Vec3::ZERO);
             let mut exit = end(f32::INFINITY, Vec3::ZERO);
@@ -520,7 +820,7 @@ fn solid_span(s: &Solid, ray: &Ray, leaf: u32) -> Option<Span> {
             radius,
             height,
         } => {
-            let (y0, y1, sign) = slab(o.y, d.y, base.y, base.y + height)?;
+            let y = slab(o.y, d.y, base.y, base.y + height)?;
             let (fx, fz) = (o.x - base.x, o.z - base.z);
             let a = d.x * d.x + d.z * d.z;
             let c = fx * fx + fz * fz - radius * radius;
@@ -536,26 +836,15 @@ fn solid_span(s: &Solid, ray: &Ray, leaf: u32) -> Option<Span> {
                 let p = o + d * t - base;
                 Vec3::new(p.x, 0.0, p.z).normalize_or(Vec3::X)
             };
-            let cap = Vec3::new(0.0, sign, 0.0);
-            Span {
-                enter: if y0 > s0 {
-                    end(y0, cap)
-                } else {
-                    end(s0, side(s0))
-                },
-                exit: if y1 < s1 {
-                    end(y1, -cap)
-                } else {
-                    end(s1, side(s1))
-                },
-            }
+            capped(y, (s0, s1), side, end)
         }
         Solid::Cone {
             base,
             radius,
             height,
         } => {
-            let (y0, y1, sign) = slab(o.y, d.y, base.y, base.y + height)?;
+            let y = slab(o.y, d.y, base.y, base.y + height)?;
+            let (y0, y1, sign) = y;
             let k2 = (radius / height) * (radius / height);
             // Relative to the apex: inside the double cone where x^2 + z^2 <= k^2 y^2.
             let f = o - (base + Vec3::new(0.0, height, 0.0));
@@ -601,19 +890,10 @@ fn solid_span(s: &Solid, ray: &Ray, leaf: u32) -> Option<Span> {
             };
             // Only the nappe below the apex lies in the slab; keep the first non-empty piece.
             let mut found = None;
-            for (s0, s1) in inside {
-                let enter = if y0 > s0 {
-                    end(y0, Vec3::new(0.0, sign, 0.0))
-                } else {
-                    end(s0, normal(s0))
-                };
-                let exit = if y1 < s1 {
-                    end(y1, Vec3::new(0.0, -sign, 0.0))
-                } else {
-                    end(s1, normal(s1))
-                };
-                if enter.t < exit.t {
-                    found = Some(Span { enter, exit });
+            for piece in inside {
+                let span = capped(y, piece, normal, end);
+                if span.enter.t < span.exit.t {
+                    found = Some(span);
                     break;
                 }
             }

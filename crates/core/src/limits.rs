@@ -38,3 +38,7 @@ pub const MAX_CSG_DEPTH: usize = 32;
 /// Largest accepted number of solids in one CSG tree: every ray that reaches the tree's box
 /// tests them all.
 pub const MAX_CSG_LEAVES: usize = 256;
+
+/// Largest accepted condition number (`|M|max * |M^-1|max` of the linear part) of a CSG
+/// solid's transform: a zero or near-zero scale makes the local ray's direction overflow.
+pub const MAX_TRANSFORM_CONDITION: f32 = 1e6;
