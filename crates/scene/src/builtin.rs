@@ -86,4 +86,10 @@ pub const BUILTIN_SCENES: &[BuiltinScene] = &[
         "CSG trees of spheres, boxes, cylinders, cones and half-spaces: all three operations",
         []
     ),
+    // Issue 10, tori and quadrics.
+    builtin!(
+        "quadrics",
+        "tori, an ellipsoid, a paraboloid, a tilted cylinder and cone, a ring cut by a box",
+        []
+    ),
 ];
