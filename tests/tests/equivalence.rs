@@ -50,6 +50,7 @@ scene_tests! {
     heightfield => "heightfield",
     heightfield_generator => "heightfield:64",
     csg => "csg",
+    quadrics => "quadrics",
 }
 
 macro_rules! mode_tests {
@@ -75,6 +76,7 @@ mode_tests! {
     modes_terrain => "terrain:32",
     modes_heightfield => "heightfield",
     modes_csg => "csg",
+    modes_quadrics => "quadrics",
 }
 
 /// Backends not bound by the bit-exact contract, and where each is compared with naive

@@ -149,6 +149,8 @@ fn volume_modes_render_the_phantom_and_height_fields_and_csg_render() {
         ("heightfield:64", "cast"),
         ("csg", "whitted"),
         ("csg", "path"),
+        ("quadrics", "whitted"),
+        ("quadrics", "path"),
     ] {
         let out = dir.join(format!("{mode}.png"));
         let o = raybench(&[

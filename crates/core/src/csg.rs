@@ -228,13 +228,19 @@ impl Placement {
         if !(m.is_finite() && to_world.translation.is_finite()) {
             return Err(SceneError::NonFinite("CSG transform".into()));
         }
-        let inv = m.inverse();
         let norm = |a: Mat3A| {
             [a.x_axis, a.y_axis, a.z_axis]
                 .iter()
                 .map(|c| c.abs().max_element())
                 .fold(0.0f32, f32::max)
         };
+        if norm(m) > MAX_COORDINATE {
+            return Err(SceneError::Invalid(format!(
+                "CSG transform's scale exceeds {MAX_COORDINATE:e}"
+            )));
+        }
+        finite_point(to_world.translation.into(), "transform's translation")?;
+        let inv = m.inverse();
         let cond = norm(m) * norm(inv);
         if m.determinant() == 0.0 || !inv.is_finite() || !(cond <= MAX_TRANSFORM_CONDITION) {
             return Err(SceneError::Invalid(format!(

@@ -66,7 +66,7 @@ impl PrimitiveKind {
             Self::Sphere => "sphere",
             Self::Plane => "plane",
             Self::HeightField => "height field",
-            Self::Csg => "CSG solid",
+            Self::Csg => "analytic solid / CSG tree",
         }
     }
 }

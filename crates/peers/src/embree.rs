@@ -133,7 +133,7 @@ pub fn supports(scene: &Scene) -> Result<(), String> {
         .count();
     if side > MAX_SIDE_PRIMITIVES {
         return Err(format!(
-            "{side} spheres, height fields or CSG solids: the Embree backends trace triangles in Embree \
+            "{side} spheres, height fields or analytic solids / CSG trees: the Embree backends trace triangles in Embree \
              and test other bounded primitives beside it by every ray, at most \
              {MAX_SIDE_PRIMITIVES}"
         ));

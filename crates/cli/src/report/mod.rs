@@ -61,6 +61,7 @@ pub const QUICK_SCENES: &[&str] = &[
     "heightfield",
     "phantom",
     "csg",
+    "quadrics",
 ];
 /// The built-in scenes of the full matrix.
 pub const FULL_SCENES: &[&str] = &[
@@ -76,6 +77,7 @@ pub const FULL_SCENES: &[&str] = &[
     "heightfield",
     "phantom",
     "csg",
+    "quadrics",
 ];
 
 /// Naive's estimated ray/primitive tests per workload above which it is left out (it is
@@ -432,7 +434,15 @@ impl Ctx<'_> {
         }
         let name = scene.name.as_str();
         if self.modes.contains(&Mode::Whitted)
-            && ["spheres", "whitted", "cornell-box", "heightfield", "csg"].contains(&name)
+            && [
+                "spheres",
+                "whitted",
+                "cornell-box",
+                "heightfield",
+                "csg",
+                "quadrics",
+            ]
+            .contains(&name)
         {
             w.push(Workload {
                 mode: Mode::Whitted,
