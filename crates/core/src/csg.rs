@@ -242,7 +242,9 @@ impl Placement {
         finite_point(to_world.translation.into(), "transform's translation")?;
         let inv = m.inverse();
         let cond = norm(m) * norm(inv);
-        if m.determinant() == 0.0 || !inv.is_finite() || !(cond <= MAX_TRANSFORM_CONDITION) {
+        // NaN (from an overflowing inverse) fails the last comparison too.
+        let conditioned = cond <= MAX_TRANSFORM_CONDITION;
+        if m.determinant() == 0.0 || !inv.is_finite() || !conditioned {
             return Err(SceneError::Invalid(format!(
                 "CSG transform is singular or nearly so (a zero or tiny scale?): condition \
                  number {cond:e} above {MAX_TRANSFORM_CONDITION:e}"

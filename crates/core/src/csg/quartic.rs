@@ -80,8 +80,7 @@ pub(super) fn roots(p: &[f64], lo: f64, hi: f64, out: &mut [f64; 4]) -> usize {
     let mut count = 0;
     let mut a = lo;
     let mut fa = eval(p, a);
-    for i in 0..=k {
-        let b = if i < k { crit[i] } else { hi };
+    for &b in crit[..k].iter().chain(std::iter::once(&hi)) {
         let fb = eval(p, b);
         // Zero counts as positive (outside), so crossings pair up: a tangency at a critical
         // point is no crossing, and a sign change that starts there is bracketed once.
