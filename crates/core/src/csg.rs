@@ -578,19 +578,25 @@ fn validate(s: Solid) -> Result<Solid, SceneError> {
             base,
             radius,
             height,
-        } => {
-            finite(base, "cylinder base")?;
-            positive(radius, "cylinder radius")?;
-            positive(height, "cylinder height")?;
         }
-        Solid::Cone {
+        | Solid::Cone {
+            base,
+            radius,
+            height,
+        }
+        | Solid::Paraboloid {
             base,
             radius,
             height,
         } => {
-            finite(base, "cone base")?;
-            positive(radius, "cone radius")?;
-            positive(height, "cone height")?;
+            let kind = match s {
+                Solid::Cylinder { .. } => "cylinder",
+                Solid::Cone { .. } => "cone",
+                _ => "paraboloid",
+            };
+            finite(base, &format!("{kind} base"))?;
+            positive(radius, &format!("{kind} radius"))?;
+            positive(height, &format!("{kind} height"))?;
         }
         Solid::HalfSpace { point, normal } => {
             finite(point, "half-space point")?;
@@ -616,15 +622,6 @@ fn validate(s: Solid) -> Result<Solid, SceneError> {
             finite(center, "torus centre")?;
             positive(major_radius, "torus major radius")?;
             positive(minor_radius, "torus minor radius")?;
-        }
-        Solid::Paraboloid {
-            base,
-            radius,
-            height,
-        } => {
-            finite(base, "paraboloid base")?;
-            positive(radius, "paraboloid radius")?;
-            positive(height, "paraboloid height")?;
         }
     }
     Ok(s)
