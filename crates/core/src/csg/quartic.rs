@@ -259,6 +259,22 @@ mod tests {
             ts(Vec3::new(-10.0, 0.0, 0.0), Vec3::X * 4.0, 2.0, 0.5),
             [1.875, 2.125, 2.875, 3.125]
         );
+        // Small and huge tori seen from 10^4 of their sizes away: the coefficients are
+        // scaled to the torus, so the relative error stays at f32 rounding.
+        for scale in [1e-3f32, 1e5] {
+            let (o, big, small) = (Vec3::new(-1e4 * scale, 0.0, 0.0), 2.0 * scale, 0.5 * scale);
+            let got = ts(o, Vec3::X, big, small);
+            // Exact in f64 from the f32 inputs.
+            let (x, b, r) = (-f64::from(o.x), f64::from(big), f64::from(small));
+            let want = [x - b - r, x - b + r, x + b - r, x + b + r];
+            assert_eq!(got.len(), 4, "{scale}: {got:?}");
+            for (g, w) in got.iter().zip(want) {
+                assert!(
+                    (f64::from(*g) - w).abs() <= 1e-7 * w,
+                    "{scale}: {got:?} {want:?}"
+                );
+            }
+        }
         // The normals point out of the tube.
         let (h, _) = torus(Vec3::new(-10.0, 0.0, 0.0), Vec3::X, 2.0, 0.5);
         let n: Vec<Vec3> = h.iter().map(|h| h.1.normalize().as_vec3()).collect();
