@@ -720,24 +720,25 @@ fn ball(f: Vec3, d: Vec3, radius: f32) -> Option<(f32, f32)> {
     Some(if t0 <= t1 { (t0, t1) } else { (t1, t0) })
 }
 
-/// A solid of revolution about y cut by the slab `(y0, y1)` (with the entry normal's sign,
-/// as [`slab`] returns it): the side's interval `(s0, s1)` where the caps do not cut it
-/// first. On a tie the side keeps the boundary.
+/// A solid of revolution about y cut by the slab `(y0, y1)` whose caps have the normals
+/// `caps` (entry, exit): the side's interval `(s0, s1)` where the caps do not cut it first.
+/// On a tie the side keeps the boundary.
 #[inline]
 fn capped(
-    (y0, y1, sign): (f32, f32, f32),
+    (y0, y1): (f32, f32),
+    (enter_cap, exit_cap): (Vec3, Vec3),
     (s0, s1): (f32, f32),
     side: impl Fn(f32) -> Vec3,
     end: impl Fn(f32, Vec3) -> End,
 ) -> Span {
     Span {
         enter: if y0 > s0 {
-            end(y0, Vec3::new(0.0, sign, 0.0))
+            end(y0, enter_cap)
         } else {
             end(s0, side(s0))
         },
         exit: if y1 < s1 {
-            end(y1, Vec3::new(0.0, -sign, 0.0))
+            end(y1, exit_cap)
         } else {
             end(s1, side(s1))
         },
@@ -776,7 +777,7 @@ fn solid_span(s: &Solid, o: Vec3, d: Vec3, leaf: u32) -> Option<Span> {
             // Relative to the apex, inside where k (x^2 + z^2) - y <= 0; the cap is the slab's
             // top (its bottom at -inf never cuts).
             let f = o - base;
-            let y = slab(f.y, d.y, f32::NEG_INFINITY, height)?;
+            let (y0, y1, sign) = slab(f.y, d.y, f32::NEG_INFINITY, height)?;
             let k = height / (radius * radius);
             let a = k * (d.x * d.x + d.z * d.z);
             let bh = 0.5 * d.y - k * (f.x * d.x + f.z * d.z);
@@ -800,7 +801,8 @@ fn solid_span(s: &Solid, o: Vec3, d: Vec3, leaf: u32) -> Option<Span> {
                 let p = f + d * t;
                 Vec3::new(2.0 * k * p.x, -1.0, 2.0 * k * p.z).normalize_or(-Vec3::Y)
             };
-            capped(y, side, normal, end)
+            let cap = Vec3::new(0.0, sign, 0.0);
+            capped((y0, y1), (cap, -cap), side, normal, end)
         }
         Solid::Torus { .. } => return None,
         Solid::Box { min, max } => {
@@ -825,7 +827,7 @@ fn solid_span(s: &Solid, o: Vec3, d: Vec3, leaf: u32) -> Option<Span> {
             radius,
             height,
         } => {
-            let y = slab(o.y, d.y, base.y, base.y + height)?;
+            let (y0, y1, sign) = slab(o.y, d.y, base.y, base.y + height)?;
             let (fx, fz) = (o.x - base.x, o.z - base.z);
             let a = d.x * d.x + d.z * d.z;
             let c = fx * fx + fz * fz - radius * radius;
@@ -841,15 +843,15 @@ fn solid_span(s: &Solid, o: Vec3, d: Vec3, leaf: u32) -> Option<Span> {
                 let p = o + d * t - base;
                 Vec3::new(p.x, 0.0, p.z).normalize_or(Vec3::X)
             };
-            capped(y, (s0, s1), side, end)
+            let cap = Vec3::new(0.0, sign, 0.0);
+            capped((y0, y1), (cap, -cap), (s0, s1), side, end)
         }
         Solid::Cone {
             base,
             radius,
             height,
         } => {
-            let y = slab(o.y, d.y, base.y, base.y + height)?;
-            let (y0, y1, sign) = y;
+            let (y0, y1, sign) = slab(o.y, d.y, base.y, base.y + height)?;
             let k2 = (radius / height) * (radius / height);
             // Relative to the apex: inside the double cone where x^2 + z^2 <= k^2 y^2.
             let f = o - (base + Vec3::new(0.0, height, 0.0));
@@ -896,7 +898,8 @@ fn solid_span(s: &Solid, o: Vec3, d: Vec3, leaf: u32) -> Option<Span> {
             // Only the nappe below the apex lies in the slab; keep the first non-empty piece.
             let mut found = None;
             for piece in inside {
-                let span = capped(y, piece, normal, end);
+                let caps = (Vec3::new(0.0, sign, 0.0), Vec3::new(0.0, -sign, 0.0));
+                let span = capped((y0, y1), caps, piece, normal, end);
                 if span.enter.t < span.exit.t {
                     found = Some(span);
                     break;
