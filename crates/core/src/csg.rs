@@ -256,9 +256,8 @@ impl Placement {
         })
     }
 
-    /// The box of the eight corners of `b` mapped to world space.
-    fn bounds(&self, b: Aabb) -> Aabb {
-        let to_world = self.to_local.inverse();
+    /// The box of the eight corners of `b` mapped by `to_world`.
+    fn bounds(to_world: Affine3A, b: Aabb) -> Aabb {
         Aabb::from_points((0..8).map(|k| {
             let pick = |bit: usize, lo: f32, hi: f32| if k & bit == 0 { lo } else { hi };
             to_world.transform_point3(Vec3::new(
@@ -345,13 +344,14 @@ impl Csg {
                     )));
                 }
                 let s = validate(*s)?;
-                let place = match node {
-                    CsgNode::Placed(_, a) => Some(Placement::new(*a)?),
+                let to_world = match node {
+                    CsgNode::Placed(_, a) => Some(*a),
                     _ => None,
                 };
-                let bound = match (solid_bounds(&s), place) {
-                    (Some(b), Some(p)) => {
-                        let b = p.bounds(b);
+                let place = to_world.map(Placement::new).transpose()?;
+                let bound = match (solid_bounds(&s), to_world) {
+                    (Some(b), Some(a)) => {
+                        let b = Placement::bounds(a, b);
                         finite_point(b.min, "transformed solid's box")?;
                         finite_point(b.max, "transformed solid's box")?;
                         Some(b)
