@@ -51,6 +51,7 @@ scene_tests! {
     heightfield_generator => "heightfield:64",
     csg => "csg",
     quadrics => "quadrics",
+    teapot_bezier => "teapot-bezier",
 }
 
 macro_rules! mode_tests {
@@ -77,6 +78,7 @@ mode_tests! {
     modes_heightfield => "heightfield",
     modes_csg => "csg",
     modes_quadrics => "quadrics",
+    modes_teapot_bezier => "teapot-bezier",
 }
 
 /// Backends not bound by the bit-exact contract, and where each is compared with naive

@@ -86,6 +86,14 @@ fn kinds_and_modes_without_kernels_are_refused() {
     assert!(why.contains("CSG"), "{why}");
     let quadrics = raybench_scene::load("quadrics", std::path::Path::new(".")).unwrap();
     assert!(raybench_wgpu::check_kinds(&quadrics).is_err());
+    let mut b = raybench_core::SceneBuilder::new("bezier");
+    let points =
+        std::array::from_fn(|k| raybench_core::Vec3::new((k % 4) as f32, (k / 4) as f32, 0.0));
+    let patch = raybench_core::BezierPatch::new(points).unwrap();
+    b.add_bezier_patches("patch", vec![std::sync::Arc::new(patch)], 0)
+        .unwrap();
+    let why = raybench_wgpu::check_kinds(&b.build()).unwrap_err();
+    assert!(why.contains("Bezier patch"), "{why}");
     if !raybench_tests::gpu::available() {
         return;
     }

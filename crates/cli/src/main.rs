@@ -80,7 +80,7 @@ struct ReportCmd {
     /// Leave out the scaling experiments.
     #[arg(long)]
     no_scaling: bool,
-    /// Run only these scaling experiments (primitives, pixels, spp, heightfield).
+    /// Run only these scaling experiments (primitives, pixels, spp, heightfield, bezier).
     #[arg(long, value_delimiter = ',', value_name = "A,B")]
     experiments: Option<Vec<String>>,
     /// Worker threads (default: all cores).

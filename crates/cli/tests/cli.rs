@@ -511,6 +511,15 @@ fn bad_options_give_one_line_errors() {
             ],
             "stanford-bunny.obj",
         ),
+        (
+            &[
+                "render",
+                "teapot-bezier",
+                "--assets",
+                "/nonexistent-raybench-assets",
+            ],
+            "teapot-bezier/teapot.bpt",
+        ),
     ];
     for (args, needle) in cases {
         let o = raybench(args);
@@ -536,5 +545,76 @@ fn empty_scene_file_renders_background() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let bytes = std::fs::read(&out).unwrap();
     assert_eq!(&bytes[1..4], b"PNG");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// A `.bpt` file of one bicubic patch (a bump over `[0, 3]^2`) and `count` declared.
+fn bump_bpt(count: u32) -> String {
+    let mut s = format!("{count}\n3 3\n");
+    for j in 0..4 {
+        for i in 0..4 {
+            let z = if (1..3).contains(&i) && (1..3).contains(&j) {
+                1.5
+            } else {
+                0.0
+            };
+            s += &format!("{i} {j} {z}\n");
+        }
+    }
+    s
+}
+
+#[test]
+fn bezier_patches_render_directly_and_tessellated() {
+    let dir = tmp_dir("bezier");
+    write(&dir, "bump.bpt", bump_bpt(1).as_bytes());
+    write(&dir, "short.bpt", bump_bpt(2).as_bytes());
+    let scene = |extra: &str, file: &str| {
+        format!(
+            "[camera]\nposition = [1.5, 6.0, 4.0]\nlook_at = [1.5, 0.5, -1.5]\n\
+             [[light]]\nkind = \"point\"\nposition = [0.0, 8.0, 0.0]\nintensity = [40.0, 40.0, 40.0]\n\
+             [[object]]\nkind = \"bezier\"\nfile = \"{file}\"\n\
+             transform = {{ rotate = [-90.0, 0.0, 0.0] }}\n{extra}"
+        )
+    };
+    for (name, extra, mode) in [
+        ("direct", "", "whitted"),
+        ("direct", "", "path"),
+        ("tessellated", "tessellate = 4", "cast"),
+    ] {
+        let file = write(
+            &dir,
+            &format!("{name}.toml"),
+            scene(extra, "bump.bpt").as_bytes(),
+        );
+        let out = dir.join(format!("{name}-{mode}.png"));
+        let o = raybench(&[
+            "render",
+            &file,
+            "--mode",
+            mode,
+            "--width",
+            "24",
+            "--height",
+            "24",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(
+            o.status.success(),
+            "{name} {mode}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let img = image::open(&out).unwrap().to_rgb8();
+        let first = *img.get_pixel(0, 0);
+        assert!(img.pixels().any(|p| *p != first), "{name} {mode} is flat");
+    }
+    // A file that declares more patches than it holds: a clean error with the line.
+    let bad = write(&dir, "bad.toml", scene("", "short.bpt").as_bytes());
+    let o = raybench(&["render", &bad, "--width", "8", "--height", "8"]);
+    assert_clean_error(
+        &o,
+        "line 18: the file ends after 1 patches; the first line declares 2",
+    );
     std::fs::remove_dir_all(dir).unwrap();
 }

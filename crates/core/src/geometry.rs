@@ -1,6 +1,7 @@
 //! The flat list of primitives that acceleration structures index into.
 
 use crate::aabb::Aabb;
+use crate::bezier::BezierPatch;
 use crate::csg::Csg;
 use crate::heightfield::HeightField;
 use crate::hit::Hit;
@@ -31,6 +32,9 @@ pub enum Shape {
     /// A CSG tree of analytic solids: one bounded primitive; the sub-primitive id is the
     /// index of the leaf hit.
     Csg(Arc<Csg>),
+    /// A bicubic Bezier patch intersected directly (subdivision + Newton): one bounded
+    /// primitive; sub-primitive id 0, `(u, v)` the patch parameters.
+    Bezier(Arc<BezierPatch>),
 }
 
 /// The kinds of primitive, for statistics and for backends that support only some.
@@ -46,16 +50,19 @@ pub enum PrimitiveKind {
     HeightField,
     /// [`Shape::Csg`].
     Csg,
+    /// [`Shape::Bezier`].
+    Bezier,
 }
 
 impl PrimitiveKind {
     /// Every kind, in a fixed order.
-    pub const ALL: [Self; 5] = [
+    pub const ALL: [Self; 6] = [
         Self::Triangle,
         Self::Sphere,
         Self::Plane,
         Self::HeightField,
         Self::Csg,
+        Self::Bezier,
     ];
 
     /// Lower-case name used in scene files and reports.
@@ -67,6 +74,7 @@ impl PrimitiveKind {
             Self::Plane => "plane",
             Self::HeightField => "height field",
             Self::Csg => "analytic solid / CSG tree",
+            Self::Bezier => "Bezier patch",
         }
     }
 }
@@ -95,6 +103,7 @@ impl Shape {
             Self::Plane(_) => PrimitiveKind::Plane,
             Self::HeightField(_) => PrimitiveKind::HeightField,
             Self::Csg(_) => PrimitiveKind::Csg,
+            Self::Bezier(_) => PrimitiveKind::Bezier,
         }
     }
 
@@ -108,6 +117,7 @@ impl Shape {
             Self::Plane(_) => None,
             Self::HeightField(h) => Some(h.bounds()),
             Self::Csg(c) => Some(c.bounds()),
+            Self::Bezier(b) => Some(b.bounds()),
         }
     }
 
@@ -141,6 +151,7 @@ impl Shape {
                 u: 0.0,
                 v: 0.0,
             }),
+            Self::Bezier(b) => b.intersect(ray),
         }
     }
 
@@ -165,6 +176,7 @@ impl Shape {
                 h.u,
                 h.v,
             ),
+            Self::Bezier(b) => (b.normal(h.u, h.v), h.u, h.v),
         };
         Hit {
             t: h.t,
@@ -275,6 +287,7 @@ impl Geometry {
             .map(|s| match s {
                 Shape::HeightField(h) => h.memory_bytes(),
                 Shape::Csg(c) => c.memory_bytes(),
+                Shape::Bezier(b) => b.memory_bytes(),
                 _ => 0,
             })
             .sum();

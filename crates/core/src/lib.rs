@@ -15,6 +15,7 @@
 
 mod aabb;
 mod accel;
+mod bezier;
 mod bilinear;
 mod camera;
 mod csg;
@@ -43,6 +44,7 @@ pub use aabb::{Aabb, FAR_SCALE, SlabRay};
 pub use accel::{
     Accel, AccelStats, CULL_SLACK, Counters, NoCounters, NodeStack, RayCounters, cull_bound,
 };
+pub use bezier::{BezierPatch, BezierStats, FALLBACK_DEPTH, MAX_NEWTON_ITERATIONS, REGION_DEPTH};
 pub use bilinear::{BilinearPatch, PatchHit};
 pub use camera::{Camera, CameraRays};
 pub use csg::{Csg, CsgHit, CsgNode, CsgOp, Solid};

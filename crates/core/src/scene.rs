@@ -1,5 +1,6 @@
 //! The scene: camera, materials, lights and geometry.
 
+use crate::bezier::BezierPatch;
 use crate::camera::Camera;
 use crate::csg::Csg;
 use crate::emitters::Emitters;
@@ -326,6 +327,26 @@ impl SceneBuilder {
         self.check_material(material)?;
         self.check_room(1)?;
         self.push_object(name.into(), [Shape::Csg(csg)], material);
+        Ok(self)
+    }
+
+    /// Adds Bezier patches as one object, one primitive per patch.
+    ///
+    /// # Errors
+    /// When the material does not exist or the scene is full.
+    pub fn add_bezier_patches(
+        &mut self,
+        name: impl Into<String>,
+        patches: Vec<Arc<BezierPatch>>,
+        material: u32,
+    ) -> Result<&mut Self, SceneError> {
+        self.check_material(material)?;
+        self.check_room(patches.len())?;
+        self.push_object(
+            name.into(),
+            patches.into_iter().map(Shape::Bezier),
+            material,
+        );
         Ok(self)
     }
 

@@ -120,7 +120,8 @@ pub fn version() -> Result<String, String> {
 /// bounded primitives (spheres, height fields, CSG trees) up to [`MAX_SIDE_PRIMITIVES`]. A height
 /// field is one such primitive: it stays beside Embree's scene and every ray meets it
 /// through the core's own routine (its cells are not handed to Embree), so its hits are
-/// raybench's exactly. A CSG tree is likewise one side primitive.
+/// raybench's exactly. A CSG tree is likewise one side primitive, and so is each Bezier
+/// patch.
 ///
 /// # Errors
 /// Why not.
@@ -133,7 +134,7 @@ pub fn supports(scene: &Scene) -> Result<(), String> {
         .count();
     if side > MAX_SIDE_PRIMITIVES {
         return Err(format!(
-            "{side} spheres, height fields or analytic solids / CSG trees: the Embree backends trace triangles in Embree \
+            "{side} spheres, height fields, analytic solids / CSG trees or Bezier patches: the Embree backends trace triangles in Embree \
              and test other bounded primitives beside it by every ray, at most \
              {MAX_SIDE_PRIMITIVES}"
         ));

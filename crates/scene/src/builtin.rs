@@ -92,4 +92,9 @@ pub const BUILTIN_SCENES: &[BuiltinScene] = &[
         "tori, an ellipsoid, a paraboloid, a tilted cylinder and cone, a ring cut by a box",
         []
     ),
+    builtin!(
+        "teapot-bezier",
+        "the Utah teapot as 32 bicubic Bezier patches, intersected directly",
+        ["teapot-bezier/teapot.bpt"]
+    ),
 ];

@@ -1,5 +1,6 @@
 //! The TOML scene format (documented in `docs/scene-format.md`).
 
+use crate::bpt::load_bpt_file;
 use crate::error::LoadError;
 use crate::generators::{self, Generated};
 use crate::gltf_loader::load_gltf_file;
@@ -9,9 +10,9 @@ use crate::transform::Transform;
 use crate::volumes;
 use raybench_core::volume::{MAX_VOLUME_VOXELS, check_volume_dims};
 use raybench_core::{
-    Camera, CellSurface, Csg, CsgNode, CsgOp, HeightField, HeightFieldTraversal, Light,
-    MAX_HEIGHT_FIELD_VERTICES, Material, MaterialKind, PolygonMesh, Scene, SceneBuilder,
-    SceneError, Solid, Sphere, Triangle, Vec3,
+    BezierPatch, Camera, CellSurface, Csg, CsgNode, CsgOp, HeightField, HeightFieldTraversal,
+    Light, MAX_HEIGHT_FIELD_VERTICES, Material, MaterialKind, PolygonMesh, Scene, SceneBuilder,
+    SceneError, Solid, Sphere, Triangle, TriangleMesh, Vec3,
 };
 use raybench_core::{Sampling, TransferFunction, TransferPoint, Volume, VolumeData, VolumeParams};
 use serde::Deserialize;
@@ -178,7 +179,23 @@ enum ObjectDesc {
     Cylinder(RevolvedDesc),
     Cone(RevolvedDesc),
     Paraboloid(RevolvedDesc),
+    Bezier(BezierDesc),
 }
+
+/// Bicubic Bezier patches from a `.bpt` file, intersected directly or tessellated.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BezierDesc {
+    file: String,
+    material: Option<String>,
+    #[serde(default)]
+    transform: TransformDesc,
+    /// `N`: `N x N` quads (two triangles each) per patch instead of the direct patches.
+    tessellate: Option<u32>,
+}
+
+/// Largest accepted `tessellate = N` (`2 N^2` triangles per patch).
+const MAX_TESSELLATE: u32 = 1024;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -543,29 +560,33 @@ impl Context<'_> {
     }
 }
 
-/// Loads a `.toml` scene file; relative mesh paths resolve against its folder, then `assets`.
-///
-/// # Errors
-/// When the file is missing, too large, malformed or invalid, or a mesh it names is.
-pub fn load_toml_file(path: &Path, assets: &Path) -> Result<Scene, LoadError> {
+/// Reads a UTF-8 text file of at most `limit` bytes (checked before reading; `what` names
+/// the kind of file in the error).
+pub(crate) fn read_text(path: &Path, limit: u64, what: &str) -> Result<String, LoadError> {
     let io = |source| LoadError::Io {
         path: path.to_owned(),
         source,
     };
     let len = std::fs::metadata(path).map_err(io)?.len();
-    if len > MAX_SCENE_FILE_BYTES {
+    if len > limit {
         return Err(LoadError::Parse {
             path: path.to_owned(),
-            message: format!(
-                "scene file of {len} bytes exceeds the limit of {MAX_SCENE_FILE_BYTES}"
-            ),
+            message: format!("{what} of {len} bytes exceeds the limit of {limit}"),
         });
     }
     let bytes = std::fs::read(path).map_err(io)?;
-    let text = String::from_utf8(bytes).map_err(|_| LoadError::Parse {
+    String::from_utf8(bytes).map_err(|_| LoadError::Parse {
         path: path.to_owned(),
         message: "not UTF-8 text".into(),
-    })?;
+    })
+}
+
+/// Loads a `.toml` scene file; relative mesh paths resolve against its folder, then `assets`.
+///
+/// # Errors
+/// When the file is missing, too large, malformed or invalid, or a mesh it names is.
+pub fn load_toml_file(path: &Path, assets: &Path) -> Result<Scene, LoadError> {
+    let text = read_text(path, MAX_SCENE_FILE_BYTES, "scene file")?;
     let name = path
         .file_stem()
         .and_then(|s| s.to_str())
@@ -889,6 +910,10 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
                 let m = material(&r.material)?.unwrap_or(0);
                 add_solid(&mut b, name, r.solid(name), r.transform.as_ref(), m).map_err(err)?;
             }
+            ObjectDesc::Bezier(bd) => {
+                let m = material(&bd.material)?.unwrap_or(0);
+                bezier(&mut b, bd, ctx, &what, m)?;
+            }
         }
     }
     for (index, v) in file.volumes.iter().enumerate() {
@@ -898,6 +923,64 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
             .map_err(ctx.scene_err(&what))?;
     }
     Ok(b.build())
+}
+
+/// Adds the patches of a `kind = "bezier"` object: one primitive per patch, or with
+/// `tessellate = N` one mesh of `2 N^2` triangles per patch.
+fn bezier(
+    b: &mut SceneBuilder,
+    d: &BezierDesc,
+    ctx: &Context,
+    what: &str,
+    material: u32,
+) -> Result<(), LoadError> {
+    let path = ctx.resolve(&d.file)?;
+    let patches = load_bpt_file(&path)?;
+    let scene_err = |context: String| {
+        move |source| LoadError::Scene {
+            context: format!("{}: {what}: {context}", ctx.file.display()),
+            source,
+        }
+    };
+    if let Some(n) = d.tessellate
+        && !(1..=MAX_TESSELLATE).contains(&n)
+    {
+        return Err(scene_err(d.file.clone())(SceneError::Invalid(format!(
+            "tessellate = {n}: between 1 and {MAX_TESSELLATE} quads per patch side are accepted"
+        ))));
+    }
+    let a = d.transform.to_transform().affine();
+    let mut built = Vec::with_capacity(patches.len());
+    for p in &patches {
+        let patch = BezierPatch::new(p.points.map(|q| a.transform_point3(q)))
+            .map_err(scene_err(format!("{} line {}", d.file, p.line)))?;
+        built.push(Arc::new(patch));
+    }
+    match d.tessellate {
+        None => b
+            .add_bezier_patches(d.file.as_str(), built, material)
+            .map_err(scene_err(d.file.clone()))?,
+        Some(n) => {
+            let triangles = 2 * u64::from(n) * u64::from(n) * built.len() as u64;
+            let limit = raybench_core::limits::MAX_PRIMITIVES as u64;
+            if b.primitive_count() as u64 + triangles > limit {
+                return Err(scene_err(d.file.clone())(SceneError::TooLarge(format!(
+                    "tessellate = {n} would take the scene past {limit} primitives"
+                ))));
+            }
+            let mut mesh = TriangleMesh::default();
+            for p in &built {
+                let part = p.tessellate(n);
+                let base = mesh.positions.len() as u32;
+                mesh.positions.extend(part.positions);
+                mesh.indices
+                    .extend(part.indices.iter().map(|t| t.map(|i| i + base)));
+            }
+            b.add_mesh(d.file.as_str(), &mesh, material)
+                .map_err(scene_err(d.file.clone()))?
+        }
+    };
+    Ok(())
 }
 
 /// Builds the volume a `[[volume]]` table describes.

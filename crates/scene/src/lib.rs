@@ -12,6 +12,7 @@
 //! Nothing here panics on bad input: every malformed, truncated or out-of-range file gives a
 //! [`LoadError`] that names the file and the problem.
 
+mod bpt;
 mod builtin;
 mod error;
 mod format;
@@ -22,6 +23,7 @@ mod obj;
 mod transform;
 pub mod volumes;
 
+pub use bpt::{BptPatch, load_bpt_file, parse_bpt};
 pub use builtin::{BUILTIN_SCENES, BuiltinScene};
 pub use error::LoadError;
 pub use format::{load_scene_str, load_toml_file};

@@ -102,6 +102,10 @@ pub fn charts(results: &Results, dir: &Path) -> Charts {
             .insert(p.backend.clone());
     }
     for ((experiment, series_name), backends) in &groups {
+        if experiment == "bezier" {
+            // Drawn below: direct and tessellated on one chart, and the image difference.
+            continue;
+        }
         let x_label = match experiment.as_str() {
             "primitives" => "primitives M",
             "pixels" => "pixels N^2",
@@ -201,6 +205,90 @@ pub fn charts(results: &Results, dir: &Path) -> Charts {
                 );
             }
         }
+    }
+    for (title, stem, x_label, y_label, series) in bezier_charts(results) {
+        add(
+            &title,
+            charts::log_log(&dir.join(stem), &title, x_label, y_label, &series),
+        );
+    }
+    out
+}
+
+/// A chart's title, file stem, axis labels and series.
+type ChartSpec = (
+    String,
+    &'static str,
+    &'static str,
+    &'static str,
+    Vec<Series>,
+);
+
+/// Experiment `bezier`: render time against primitives (the direct patches as one point at
+/// their count, 32, and as a level line across the triangle counts for comparison), and
+/// the tessellations' difference from the direct image against their triangle count (zero
+/// fractions are left off the log scale; the table has them).
+fn bezier_charts(results: &Results) -> Vec<ChartSpec> {
+    let points = |series: &str| -> Vec<&super::results::ScalingPoint> {
+        results
+            .scaling
+            .iter()
+            .filter(|p| p.experiment == "bezier" && p.series == series)
+            .collect()
+    };
+    let (direct, tess) = (points("direct"), points("tessellated"));
+    let Some(d) = direct.first() else {
+        return Vec::new();
+    };
+    if tess.is_empty() {
+        return Vec::new();
+    }
+    let x_max = tess.iter().map(|p| p.x).fold(d.x, f64::max);
+    let times = vec![
+        Series {
+            label: "tessellated (triangles)".into(),
+            points: tess.iter().map(|p| (p.x, p.seconds)).collect(),
+        },
+        Series {
+            label: "direct (32 patches; level line for comparison)".into(),
+            points: vec![(d.x, d.seconds), (x_max, d.seconds)],
+        },
+    ];
+    let diff = |label: &str, f: fn(&super::results::ImageDifference) -> f64| Series {
+        label: label.into(),
+        points: tess
+            .iter()
+            .filter_map(|p| p.difference.as_ref().map(|q| (p.x, f(q))))
+            .filter(|&(_, y)| y > 0.0)
+            .collect(),
+    };
+    let differences = vec![
+        diff("mean FLIP", |q| q.mean_flip),
+        diff("fraction of pixels: other patch or hit/miss", |q| {
+            q.patch_mismatch
+        }),
+        diff("fraction of pixels: depth off by > 1%", |q| {
+            q.depth_mismatch
+        }),
+    ]
+    .into_iter()
+    .filter(|s| !s.points.is_empty())
+    .collect::<Vec<_>>();
+    let mut out = vec![(
+        "render seconds vs primitives (Bezier teapot: direct against tessellated)".to_string(),
+        "scaling-bezier-seconds",
+        "primitives (patches or triangles)",
+        "render seconds",
+        times,
+    )];
+    if !differences.is_empty() {
+        out.push((
+            "difference from the direct image vs triangles (Bezier teapot)".to_string(),
+            "scaling-bezier-difference",
+            "triangles 2 N^2 32",
+            "difference",
+            differences,
+        ));
     }
     out
 }
@@ -579,6 +667,56 @@ pub fn report(results: &Results, charts: &Charts) -> String {
                 opt(p.build_seconds, |v| format!("{v:.3}")),
                 p.seconds,
                 opt(p.tests_per_ray, |v| format!("{v:.1}"))
+            );
+        }
+        let _ = writeln!(s);
+    }
+
+    let bz: Vec<_> = results
+        .scaling
+        .iter()
+        .filter(|p| p.experiment == "bezier")
+        .collect();
+    if !bz.is_empty() {
+        let _ = writeln!(s, "## Bezier patches: direct against tessellated\n");
+        let _ = writeln!(
+            s,
+            "The Utah teapot's 32 bicubic patches (`teapot-bezier`) intersected directly \
+             (subdivision of the control-point boxes, then Newton iteration on (u, v, t)) against \
+             the same patches tessellated into N x N quads (2 N^2 triangles) each, vertices on \
+             the exact surface, both in the `{}` backend; 256 x 256 camera rays. Difference \
+             from the direct image: mean FLIP, the fraction of pixels whose patch differs (or \
+             one hits and the other misses), and the fraction hit in both whose depth differs \
+             by more than 1%.\n",
+            HEIGHTFIELD_BACKEND
+        );
+        let _ = writeln!(
+            s,
+            "| series | N | primitives | render s | mean FLIP | other patch | depth > 1% |"
+        );
+        let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|");
+        for p in bz {
+            let n = if p.series == "direct" {
+                "-".to_string()
+            } else {
+                format!("{}", (p.x / 64.0).sqrt().round())
+            };
+            let d = p.difference;
+            let _ = writeln!(
+                s,
+                "| {} | {n} | {} | {:.4} | {} | {} | {} |",
+                p.series,
+                p.x,
+                p.seconds,
+                opt(d.map(|d| d.mean_flip), |v| format!("{v:.4}")),
+                opt(d.map(|d| d.patch_mismatch), |v| format!(
+                    "{:.3}%",
+                    100.0 * v
+                )),
+                opt(d.map(|d| d.depth_mismatch), |v| format!(
+                    "{:.3}%",
+                    100.0 * v
+                )),
             );
         }
         let _ = writeln!(s);

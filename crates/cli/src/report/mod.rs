@@ -13,8 +13,8 @@ use crate::measure::{Measured, explicit_rays, measure, prepare};
 use crate::{BACKENDS, Backend, backend, compare_hits};
 use anyhow::{Context, Result, bail};
 use images::Rgb8;
-use raybench_core::{Mode, RaySet, RenderSettings, Renderer, Scene};
-use results::{Equality, Images, Results, Run, ScalingPoint, Shard, Timing};
+use raybench_core::{Mode, NO_HIT, RaySet, RenderSettings, Renderer, Scene};
+use results::{Equality, ImageDifference, Images, Results, Run, ScalingPoint, Shard, Timing};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -62,6 +62,7 @@ pub const QUICK_SCENES: &[&str] = &[
     "phantom",
     "csg",
     "quadrics",
+    "teapot-bezier",
 ];
 /// The built-in scenes of the full matrix.
 pub const FULL_SCENES: &[&str] = &[
@@ -78,6 +79,7 @@ pub const FULL_SCENES: &[&str] = &[
     "phantom",
     "csg",
     "quadrics",
+    "teapot-bezier",
 ];
 
 /// Naive's estimated ray/primitive tests per workload above which it is left out (it is
@@ -145,16 +147,21 @@ impl Unit {
 }
 
 /// The scaling experiments. `heightfield` is the direct height field against the same
-/// terrain tessellated into triangles, both in the BVH, for growing grids.
-pub const EXPERIMENTS: [&str; 4] = ["primitives", "pixels", "spp", "heightfield"];
+/// terrain tessellated into triangles, both in the BVH, for growing grids; `bezier` is the
+/// Bezier teapot intersected directly against its tessellations into `2 N^2` triangles per
+/// patch, with their image difference from the direct rendering.
+pub const EXPERIMENTS: [&str; 5] = ["primitives", "pixels", "spp", "heightfield", "bezier"];
 
-/// The one backend of the `heightfield` experiment (the comparison: the
-/// tessellated mesh in the BVH).
+/// The scene of the `bezier` experiment.
+const BEZIER_SCENE: &str = "teapot-bezier";
+
+/// The one backend of the `heightfield` and `bezier` experiments (the comparison:
+/// the tessellated mesh in the BVH).
 const HEIGHTFIELD_BACKEND: &str = "bvh";
 
 /// Backends that run an experiment's points.
 fn experiment_backends(experiment: &str, chosen: &[&'static Backend]) -> Vec<&'static Backend> {
-    if experiment == "heightfield" {
+    if matches!(experiment, "heightfield" | "bezier") {
         BACKENDS
             .iter()
             .filter(|b| b.name == HEIGHTFIELD_BACKEND)
@@ -412,6 +419,34 @@ impl Ctx<'_> {
                 Ok(None)
             }
             Err(e) => Err(anyhow::Error::new(e).context(format!("cannot load scene {name}"))),
+        }
+    }
+
+    /// [`Self::load`], and `teapot-bezier:tessellate=N` (experiment `bezier`): the built-in
+    /// scene with its patches tessellated into `N x N` quads each.
+    fn load_scaling(&self, spec: &str) -> Result<Option<Arc<Scene>>> {
+        let Some(n) = spec
+            .strip_prefix(BEZIER_SCENE)
+            .and_then(|r| r.strip_prefix(":tessellate="))
+        else {
+            return self.load(spec);
+        };
+        let source = raybench_scene::BUILTIN_SCENES
+            .iter()
+            .find(|s| s.name == BEZIER_SCENE)
+            .map(|s| s.source)
+            .unwrap_or_default()
+            .replace(
+                "kind = \"bezier\"",
+                &format!("kind = \"bezier\"\ntessellate = {n}"),
+            );
+        match raybench_scene::load_scene_str(&source, BEZIER_SCENE, None, &self.opts.assets) {
+            Ok(s) => Ok(Some(Arc::new(s))),
+            Err(e) if e.is_missing_asset() && std::env::var("CI").as_deref() != Ok("true") => {
+                eprintln!("skipping {spec}: {e}");
+                Ok(None)
+            }
+            Err(e) => Err(anyhow::Error::new(e).context(format!("cannot load scene {spec}"))),
         }
     }
 
@@ -800,6 +835,25 @@ impl Ctx<'_> {
                     }
                 }
             }
+            "bezier" => {
+                // The direct patches at x = their primitive count, then the tessellations
+                // at x = their triangle count (spec `teapot-bezier` + `tessellate = N`).
+                let w = small(256, 1, Mode::Cast);
+                plan.push(("direct".into(), 32.0, BEZIER_SCENE.into(), w));
+                let ns: &[u32] = if self.opts.quick {
+                    &[1, 2, 4, 8, 16]
+                } else {
+                    &[1, 2, 4, 8, 16, 32]
+                };
+                for &n in ns {
+                    plan.push((
+                        "tessellated".into(),
+                        f64::from(2 * n * n * 32),
+                        format!("{BEZIER_SCENE}:tessellate={n}"),
+                        w,
+                    ));
+                }
+            }
             _ => {
                 let ks: &[u32] = if self.opts.quick {
                     &[1, 2, 4, 8, 16]
@@ -822,6 +876,8 @@ impl Ctx<'_> {
     fn run_scaling(&self, experiment: &str, progress: &mut Progress) -> Result<Vec<ScalingPoint>> {
         let mut points = Vec::new();
         let mut loaded: Option<(String, Arc<Scene>, f64)> = None;
+        // Experiment `bezier`: the direct rendering the tessellations are compared with.
+        let mut reference: Option<BezierReference> = None;
         let backends = experiment_backends(experiment, self.chosen);
         for (series, x, spec, w) in self.scaling_plan(experiment) {
             let (scene, load_seconds) = match &loaded {
@@ -830,7 +886,7 @@ impl Ctx<'_> {
                     // Free the previous scene first: the largest terrains take gigabytes.
                     loaded = None;
                     let start = Instant::now();
-                    match self.load(&spec)? {
+                    match self.load_scaling(&spec)? {
                         Some(scene) => {
                             let secs = start.elapsed().as_secs_f64();
                             loaded = Some((spec.clone(), Arc::clone(&scene), secs));
@@ -844,6 +900,7 @@ impl Ctx<'_> {
                 }
             };
             let heightfield = experiment == "heightfield";
+            let bezier = experiment == "bezier";
             for b in &backends {
                 if b.name == "naive" && !self.naive_fits(&w, scene.geometry.len()) {
                     progress.total -= 1;
@@ -865,6 +922,11 @@ impl Ctx<'_> {
                 }
                 let m = self.measure(r.as_ref(), &w, None)?;
                 let rays = m.warm.rays.max(1);
+                let difference = if bezier {
+                    bezier_difference(&mut reference, &series, x, &w, &m.warm)
+                } else {
+                    None
+                };
                 points.push(ScalingPoint {
                     shard: 0,
                     experiment: experiment.into(),
@@ -885,6 +947,7 @@ impl Ctx<'_> {
                             + r.structure().map_or(0, |s| s.memory_bytes))
                             as u64
                     }),
+                    difference,
                 });
                 progress.step(&format!(
                     "scaling {experiment} {spec} x={x} {}: {:.4} s",
@@ -894,6 +957,53 @@ impl Ctx<'_> {
         }
         Ok(points)
     }
+}
+
+/// Experiment `bezier`: keeps the direct rendering as the reference, and compares a
+/// tessellated one with it (mean FLIP of the images; fractions of pixels whose patch differs,
+/// hit or miss included, and of pixels both hit whose depth differs by more than 1%). The
+/// tessellation of `x` triangles has `x / 32` triangles per patch, in patch order.
+fn bezier_difference(
+    reference: &mut Option<BezierReference>,
+    series: &str,
+    x: f64,
+    w: &Workload,
+    m: &Measured,
+) -> Option<ImageDifference> {
+    let image = |c: &[raybench_core::Vec3]| Rgb8::from_linear(w.width, w.height, c);
+    let color = m.color.as_deref().unwrap_or_default();
+    if series == "direct" {
+        *reference = Some(BezierReference {
+            ids: m.ids.clone(),
+            t: m.t.clone(),
+            image: image(color),
+        });
+        return None;
+    }
+    let r = reference.as_ref()?;
+    let per_patch = (x / 32.0).round().max(1.0) as u32;
+    let (mean_flip, _) = images::flip(&r.image, &image(color));
+    let patch = |id: u32, per: u32| if id == NO_HIT { NO_HIT } else { id / per };
+    let (mut patch_differs, mut depth_differs) = (0u64, 0u64);
+    for i in 0..r.ids.len() {
+        let (a, b) = (patch(r.ids[i], 1), patch(m.ids[i], per_patch));
+        patch_differs += u64::from(a != b);
+        depth_differs +=
+            u64::from(a != NO_HIT && b != NO_HIT && (r.t[i] - m.t[i]).abs() > 0.01 * r.t[i]);
+    }
+    let n = r.ids.len().max(1) as f64;
+    Some(ImageDifference {
+        mean_flip,
+        patch_mismatch: patch_differs as f64 / n,
+        depth_mismatch: depth_differs as f64 / n,
+    })
+}
+
+/// The direct rendering of experiment `bezier`: ids, depths and the image.
+struct BezierReference {
+    ids: Vec<u32>,
+    t: Vec<f32>,
+    image: Rgb8,
 }
 
 /// A name usable in a file name (generator specs contain `:`).

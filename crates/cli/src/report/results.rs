@@ -190,8 +190,9 @@ pub struct Run {
 pub struct ScalingPoint {
     /// Index into [`Results::shards`].
     pub shard: usize,
-    /// `primitives` (x = M), `pixels` (x = N^2), `spp` (x = K) or `heightfield` (x = N^2
-    /// cells; series `direct` or `tessellated`).
+    /// `primitives` (x = M), `pixels` (x = N^2), `spp` (x = K), `heightfield` (x = N^2
+    /// cells; series `direct` or `tessellated`) or `bezier` (x = primitives: 32 patches, or
+    /// `2 N^2 32` triangles; series `direct` or `tessellated`).
     pub experiment: String,
     /// The scene or generator varied (`soup`, `spheres`, `bunny`, `cornell-box`).
     pub series: String,
@@ -215,6 +216,21 @@ pub struct ScalingPoint {
     /// Bytes of primitives plus structure (experiment `heightfield`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub memory_bytes: Option<u64>,
+    /// The image against the direct rendering (experiment `bezier`, tessellated points).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub difference: Option<ImageDifference>,
+}
+
+/// How far a rendering is from a reference rendering of the same view.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
+pub struct ImageDifference {
+    /// Mean FLIP error of the colour images.
+    pub mean_flip: f64,
+    /// Fraction of pixels whose object differs (a Bezier patch against its triangles; a hit
+    /// against a miss).
+    pub patch_mismatch: f64,
+    /// Fraction of pixels hit in both whose depth differs by more than 1%.
+    pub depth_mismatch: f64,
 }
 
 /// A least-squares line through `(log10 x, log10 y)`.
