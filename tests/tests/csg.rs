@@ -108,7 +108,7 @@ fn bad_trees_give_clear_errors() {
             "empty",
         ),
         (
-            r#"{ type = "torus", center = [0, 0, 0] }"#.into(),
+            r#"{ type = "klein_bottle", center = [0, 0, 0] }"#.into(),
             "unknown variant",
         ),
     ];
@@ -155,5 +155,13 @@ fn white_furnace_with_csg_solids() {
             { type = "cone", base = [1.2, 0.0, 0.5], radius = 0.5, height = 1.0 },
         ] }"#)
     .replace("kind = \"csg\"", "kind = \"csg\"\nmaterial = \"white\"");
+    // Issue 10: a tilted torus, a squashed ellipsoid and a paraboloid, placed by transforms.
+    text += "[[object]]\nkind = \"torus\"\ncenter = [0, 0, 0]\nmajor_radius = 0.5\n\
+             minor_radius = 0.2\nmaterial = \"white\"\n\
+             transform = { rotate = [60, 0, 20], translate = [-1.2, 1.0, 0.5] }\n\
+             [[object]]\nkind = \"ellipsoid\"\ncenter = [0, 0, 0]\nradii = [0.6, 0.3, 0.4]\n\
+             material = \"white\"\ntransform = { rotate = [0, 30, 0], translate = [-1.2, -1.0, 0.5] }\n\
+             [[object]]\nkind = \"paraboloid\"\nbase = [1.2, -1.4, 0.5]\nradius = 0.5\n\
+             height = 0.8\nmaterial = \"white\"\n";
     raybench_tests::assert_white_furnace(&std::sync::Arc::new(load(&text).unwrap()));
 }

@@ -50,6 +50,7 @@ scene_tests! {
     heightfield => "heightfield",
     heightfield_generator => "heightfield:64",
     csg => "csg",
+    quadrics => "quadrics",
     teapot_bezier => "teapot-bezier",
     sdf => "sdf",
 }
@@ -77,6 +78,7 @@ mode_tests! {
     modes_terrain => "terrain:32",
     modes_heightfield => "heightfield",
     modes_csg => "csg",
+    modes_quadrics => "quadrics",
     modes_teapot_bezier => "teapot-bezier",
     modes_sdf => "sdf",
 }

@@ -85,6 +85,8 @@ fn kinds_and_modes_without_kernels_are_refused() {
     let csg = raybench_scene::load("csg", std::path::Path::new(".")).unwrap();
     let why = raybench_wgpu::check_kinds(&csg).unwrap_err();
     assert!(why.contains("CSG"), "{why}");
+    let quadrics = raybench_scene::load("quadrics", std::path::Path::new(".")).unwrap();
+    assert!(raybench_wgpu::check_kinds(&quadrics).is_err());
     let mut b = raybench_core::SceneBuilder::new("bezier");
     let points =
         std::array::from_fn(|k| raybench_core::Vec3::new((k % 4) as f32, (k / 4) as f32, 0.0));

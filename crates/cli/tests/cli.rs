@@ -151,6 +151,8 @@ fn volume_modes_render_the_phantom_and_height_fields_and_csg_render() {
         ("csg", "path"),
         ("sdf", "whitted"),
         ("sdf", "path"),
+        ("quadrics", "whitted"),
+        ("quadrics", "path"),
     ] {
         let out = dir.join(format!("{mode}.png"));
         let o = raybench(&[

@@ -17,13 +17,21 @@
 //!   whole line and the first boundary at or after `t_min` is returned.
 //! - Normals point out of the combined solid: a subtracted solid's boundary takes its
 //!   normal negated.
+//! - A leaf may be placed by an affine map ([`CsgNode::Placed`]): the ray is taken to the
+//!   solid's local space by the inverse map without renormalising its direction (so `t` is
+//!   the same in both spaces), normals come back by the inverse transpose, renormalised, and
+//!   the leaf's box is the box of its local box's eight corners. Unplaced leaves skip all
+//!   of this (bit-identical to solids without the feature).
+//! - Leaves give at most two spans (a torus); convex solids one.
 
 use crate::aabb::Aabb;
 use crate::checks;
 use crate::error::SceneError;
-use crate::limits::{MAX_CSG_DEPTH, MAX_CSG_LEAVES};
+use crate::limits::{MAX_COORDINATE, MAX_CSG_DEPTH, MAX_CSG_LEAVES, MAX_TRANSFORM_CONDITION};
 use crate::ray::Ray;
-use glam::Vec3;
+use glam::{Affine3A, Mat3A, Vec3};
+
+mod quartic;
 
 /// A CSG set operation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -100,6 +108,39 @@ pub enum Solid {
         /// Outward normal (normalised on construction).
         normal: Vec3,
     },
+    // Issue 10, tori and quadrics.
+    /// An axis-aligned ellipsoid: the unit ball scaled by `radii`, centred at `center` (a
+    /// rotated one is a [`CsgNode::Placed`] ellipsoid).
+    Ellipsoid {
+        /// Centre.
+        center: Vec3,
+        /// Semi-axis lengths along x, y and z (each positive).
+        radii: Vec3,
+    },
+    /// A torus about the vertical axis through `center`: the points within `minor_radius`
+    /// of the circle of `major_radius` in the plane `y = center.y`. The solid is where
+    /// `(|p|^2 + R^2 - r^2)^2 <= 4 R^2 (x^2 + z^2)` (relative to the centre), so a horn
+    /// torus (`r = R`) closes its hole to a point and a spindle torus (`r > R`) is the
+    /// outer "apple" with the inner "lemon" where the tube overlaps itself left hollow.
+    Torus {
+        /// Centre.
+        center: Vec3,
+        /// Radius `R` of the tube's centre circle (positive).
+        major_radius: f32,
+        /// Radius `r` of the tube (positive).
+        minor_radius: f32,
+    },
+    /// A capped paraboloid opening upwards from its apex at `base`: the points with
+    /// `x^2 + z^2 <= radius^2 (y / height)` (relative to the apex) up to `y = height`, where
+    /// a disc of `radius` closes it.
+    Paraboloid {
+        /// The apex.
+        base: Vec3,
+        /// Radius of the cap disc (positive).
+        radius: f32,
+        /// Height of the cap above the apex (positive).
+        height: f32,
+    },
 }
 
 /// A CSG tree as scene files describe it: operators with two operands, solids at the
@@ -108,6 +149,9 @@ pub enum Solid {
 pub enum CsgNode {
     /// A solid.
     Leaf(Solid),
+    /// A solid placed by an affine map from its local space to the tree's (scale, rotation
+    /// and translation; non-uniform scale allowed, singular maps refused).
+    Placed(Solid, Affine3A),
     /// An operator and its two operands.
     Op(CsgOp, Box<CsgNode>, Box<CsgNode>),
 }
@@ -148,8 +192,65 @@ struct Span {
 /// A node of the validated tree, stored in post-order.
 #[derive(Clone, Debug, PartialEq)]
 enum Node {
-    Leaf(Solid),
+    Leaf(Solid, Option<Placement>),
     Op(CsgOp, usize, usize),
+}
+
+/// A placed leaf's maps: world to local for rays, and the normal matrix (the inverse
+/// transpose of the local-to-world linear part) for normals.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Placement {
+    to_local: Affine3A,
+    normal: Mat3A,
+}
+
+impl Placement {
+    /// Checks `to_world` (finite, not singular, condition number at most
+    /// [`MAX_TRANSFORM_CONDITION`]) and inverts it.
+    fn new(to_world: Affine3A) -> Result<Self, SceneError> {
+        let m = to_world.matrix3;
+        if !(m.is_finite() && to_world.translation.is_finite()) {
+            return Err(SceneError::NonFinite("CSG transform".into()));
+        }
+        let norm = |a: Mat3A| {
+            [a.x_axis, a.y_axis, a.z_axis]
+                .iter()
+                .map(|c| c.abs().max_element())
+                .fold(0.0f32, f32::max)
+        };
+        if norm(m) > MAX_COORDINATE {
+            return Err(SceneError::Invalid(format!(
+                "CSG transform's scale exceeds {MAX_COORDINATE:e}"
+            )));
+        }
+        finite_point(to_world.translation.into(), "transform's translation")?;
+        let inv = m.inverse();
+        let cond = norm(m) * norm(inv);
+        // NaN (from an overflowing inverse) fails the last comparison too.
+        let conditioned = cond <= MAX_TRANSFORM_CONDITION;
+        if m.determinant() == 0.0 || !inv.is_finite() || !conditioned {
+            return Err(SceneError::Invalid(format!(
+                "CSG transform is singular or nearly so (a zero or tiny scale?): condition \
+                 number {cond:e} above {MAX_TRANSFORM_CONDITION:e}"
+            )));
+        }
+        Ok(Self {
+            to_local: to_world.inverse(),
+            normal: inv.transpose(),
+        })
+    }
+
+    /// The box of the eight corners of `b` mapped by `to_world`.
+    fn bounds(to_world: Affine3A, b: Aabb) -> Aabb {
+        Aabb::from_points((0..8).map(|k| {
+            let pick = |bit: usize, lo: f32, hi: f32| if k & bit == 0 { lo } else { hi };
+            to_world.transform_point3(Vec3::new(
+                pick(1, b.min.x, b.max.x),
+                pick(2, b.min.y, b.max.y),
+                pick(4, b.min.z, b.max.z),
+            ))
+        }))
+    }
 }
 
 /// A hit with a CSG tree: distance, the leaf hit and the outward normal there.
@@ -220,16 +321,30 @@ impl Csg {
             )));
         }
         match node {
-            CsgNode::Leaf(s) => {
+            CsgNode::Leaf(s) | CsgNode::Placed(s, _) => {
                 if *leaves as usize >= MAX_CSG_LEAVES {
                     return Err(SceneError::TooLarge(format!(
                         "the CSG tree has more than {MAX_CSG_LEAVES} solids"
                     )));
                 }
                 let s = validate(*s)?;
+                let to_world = match node {
+                    CsgNode::Placed(_, a) => Some(*a),
+                    _ => None,
+                };
+                let place = to_world.map(Placement::new).transpose()?;
+                let bound = match (solid_bounds(&s), to_world) {
+                    (Some(b), Some(a)) => {
+                        let b = Placement::bounds(a, b);
+                        finite_point(b.min, "transformed solid's box")?;
+                        finite_point(b.max, "transformed solid's box")?;
+                        Some(b)
+                    }
+                    (b, _) => b,
+                };
                 *leaves += 1;
-                nodes.push(Node::Leaf(s));
-                Ok(solid_bounds(&s))
+                nodes.push(Node::Leaf(s, place));
+                Ok(bound)
             }
             CsgNode::Op(op, a, b) => {
                 let ba = Self::flatten(a, depth + 1, nodes, leaves)?;
@@ -296,13 +411,13 @@ impl Csg {
     }
 
     /// The spans of node `i` on the ray's whole line; `leaf` counts leaves in post-order.
-    /// Leaves (one convex solid: at most one span) allocate nothing; each operator one list.
+    /// Leaves (at most two spans) allocate nothing; each operator one list.
     fn spans(&self, i: usize, ray: &Ray, leaf: &mut u32) -> Spans {
         match &self.nodes[i] {
-            Node::Leaf(s) => {
+            Node::Leaf(s, place) => {
                 let id = *leaf;
                 *leaf += 1;
-                Spans::One(solid_span(s, ray, id))
+                Spans::Leaf(leaf_spans(s, place.as_ref(), ray, id))
             }
             Node::Op(op, a, b) => {
                 let sa = self.spans(*a, ray, leaf);
@@ -313,24 +428,103 @@ impl Csg {
     }
 }
 
-/// The spans of a subtree: a leaf's single optional span, or an operator's list.
+/// The spans of a subtree: a leaf's (at most two, inline), or an operator's list.
 enum Spans {
-    One(Option<Span>),
+    Leaf(LeafSpans),
     Many(Vec<Span>),
 }
 
 impl Spans {
     fn as_slice(&self) -> &[Span] {
         match self {
-            Self::One(s) => s.as_slice(),
+            Self::Leaf(s) => &s.spans[..s.len],
             Self::Many(v) => v,
         }
     }
 }
 
+/// Up to two sorted, disjoint spans of one leaf, without a heap allocation.
+struct LeafSpans {
+    spans: [Span; 2],
+    len: usize,
+}
+
+impl LeafSpans {
+    const NONE: Self = Self {
+        spans: [Span {
+            enter: End {
+                t: f32::NAN,
+                normal: Vec3::ZERO,
+                leaf: 0,
+            },
+            exit: End {
+                t: f32::NAN,
+                normal: Vec3::ZERO,
+                leaf: 0,
+            },
+        }; 2],
+        len: 0,
+    };
+
+    /// Appends `span` when it has positive length (tangent and NaN spans are dropped).
+    fn push(&mut self, span: Span) {
+        if let Some(s) = finish(span) {
+            self.spans[self.len] = s;
+            self.len += 1;
+        }
+    }
+}
+
+/// The spans of a leaf: the ray taken to its local space when it is placed, and its
+/// normals brought back.
+fn leaf_spans(s: &Solid, place: Option<&Placement>, ray: &Ray, leaf: u32) -> LeafSpans {
+    let (o, d) = match place {
+        None => (ray.origin, ray.dir),
+        Some(p) => (
+            p.to_local.transform_point3(ray.origin),
+            p.to_local.transform_vector3(ray.dir),
+        ),
+    };
+    let mut out = LeafSpans::NONE;
+    if let Solid::Torus {
+        center,
+        major_radius,
+        minor_radius,
+    } = *s
+    {
+        let (hits, n) = quartic::torus(o - center, d, major_radius, minor_radius);
+        let end = |(t, n): (f32, glam::DVec3)| End {
+            t,
+            normal: n.normalize_or(glam::DVec3::Y).as_vec3(),
+            leaf,
+        };
+        for pair in hits[..n].chunks_exact(2) {
+            out.push(Span {
+                enter: end(pair[0]),
+                exit: end(pair[1]),
+            });
+        }
+    } else if let Some(span) = solid_span(s, o, d, leaf) {
+        out.push(span);
+    }
+    if let Some(p) = place {
+        for span in &mut out.spans[..out.len] {
+            for e in [&mut span.enter, &mut span.exit] {
+                e.normal = (p.normal * e.normal).normalize_or(e.normal);
+            }
+        }
+    }
+    out
+}
+
+/// Checks that a point is finite and within [`MAX_COORDINATE`].
+fn finite_point(v: Vec3, what: &str) -> Result<(), SceneError> {
+    checks::point(v, &format!("CSG {what}"))
+}
+
 /// Checks a solid's parameters and normalises a half-space's normal.
 fn validate(s: Solid) -> Result<Solid, SceneError> {
-    let finite = |v: Vec3, what: &str| checks::point(v, &format!("CSG {what}"));
+    let finite = finite_point;
     let positive = |x: f32, what: &str| checks::positive(x, &format!("CSG {what}"));
     match s {
         Solid::Sphere { center, radius } => {
@@ -350,19 +544,25 @@ fn validate(s: Solid) -> Result<Solid, SceneError> {
             base,
             radius,
             height,
-        } => {
-            finite(base, "cylinder base")?;
-            positive(radius, "cylinder radius")?;
-            positive(height, "cylinder height")?;
         }
-        Solid::Cone {
+        | Solid::Cone {
+            base,
+            radius,
+            height,
+        }
+        | Solid::Paraboloid {
             base,
             radius,
             height,
         } => {
-            finite(base, "cone base")?;
-            positive(radius, "cone radius")?;
-            positive(height, "cone height")?;
+            let kind = match s {
+                Solid::Cylinder { .. } => "cylinder",
+                Solid::Cone { .. } => "cone",
+                _ => "paraboloid",
+            };
+            finite(base, &format!("{kind} base"))?;
+            positive(radius, &format!("{kind} radius"))?;
+            positive(height, &format!("{kind} height"))?;
         }
         Solid::HalfSpace { point, normal } => {
             finite(point, "half-space point")?;
@@ -373,6 +573,21 @@ fn validate(s: Solid) -> Result<Solid, SceneError> {
                 ));
             };
             return Ok(Solid::HalfSpace { point, normal: n });
+        }
+        Solid::Ellipsoid { center, radii } => {
+            finite(center, "ellipsoid centre")?;
+            for r in radii.to_array() {
+                positive(r, "ellipsoid radius")?;
+            }
+        }
+        Solid::Torus {
+            center,
+            major_radius,
+            minor_radius,
+        } => {
+            finite(center, "torus centre")?;
+            positive(major_radius, "torus major radius")?;
+            positive(minor_radius, "torus minor radius")?;
         }
     }
     Ok(s)
@@ -395,11 +610,28 @@ fn solid_bounds(s: &Solid) -> Bound {
             base,
             radius,
             height,
+        }
+        | Solid::Paraboloid {
+            base,
+            radius,
+            height,
         } => Some(Aabb::new(
             base - Vec3::new(radius, 0.0, radius),
             base + Vec3::new(radius, height, radius),
         )),
         Solid::HalfSpace { .. } => None,
+        Solid::Ellipsoid { center, radii } => Some(Aabb::new(center - radii, center + radii)),
+        Solid::Torus {
+            center,
+            major_radius,
+            minor_radius,
+        } => {
+            let e = major_radius + minor_radius;
+            Some(Aabb::new(
+                center - Vec3::new(e, minor_radius, e),
+                center + Vec3::new(e, minor_radius, e),
+            ))
+        }
     }
 }
 
@@ -435,33 +667,110 @@ fn slab(o: f32, d: f32, lo: f32, hi: f32) -> Option<(f32, f32, f32)> {
     })
 }
 
-/// The span of the ray's line inside one solid (solids are convex: at most one span).
-fn solid_span(s: &Solid, ray: &Ray, leaf: u32) -> Option<Span> {
-    let o = ray.origin;
-    let d = ray.dir;
+/// The line `f + t d` inside the ball of `radius` about the origin, as the sphere
+/// primitive computes it: the entry and exit `t`, ascending.
+#[inline]
+fn ball(f: Vec3, d: Vec3, radius: f32) -> Option<(f32, f32)> {
+    let a = d.dot(d);
+    let b = -f.dot(d);
+    // Distance from the centre to the line, as the sphere primitive computes it.
+    let l = f + d * (b / a);
+    let r2 = radius * radius;
+    let disc = r2 - l.dot(l);
+    if disc.is_nan() || disc < 0.0 {
+        return None;
+    }
+    let c = f.dot(f) - r2;
+    let q = b + (a.sqrt() * disc.sqrt()).copysign(b);
+    let (t0, t1) = (c / q, q / a);
+    Some(if t0 <= t1 { (t0, t1) } else { (t1, t0) })
+}
+
+/// A solid of revolution about y cut by the slab `(y0, y1)` whose caps have the normals
+/// `caps` (entry, exit): the side's interval `(s0, s1)` where the caps do not cut it first.
+/// On a tie the side keeps the boundary.
+#[inline]
+fn capped(
+    (y0, y1): (f32, f32),
+    (enter_cap, exit_cap): (Vec3, Vec3),
+    (s0, s1): (f32, f32),
+    side: impl Fn(f32) -> Vec3,
+    end: impl Fn(f32, Vec3) -> End,
+) -> Span {
+    Span {
+        enter: if y0 > s0 {
+            end(y0, enter_cap)
+        } else {
+            end(s0, side(s0))
+        },
+        exit: if y1 < s1 {
+            end(y1, exit_cap)
+        } else {
+            end(s1, side(s1))
+        },
+    }
+}
+
+/// The span of the line `o + t d` inside one convex solid (at most one span). A torus is
+/// not convex: [`leaf_spans`] intersects it, and here it gives nothing.
+fn solid_span(s: &Solid, o: Vec3, d: Vec3, leaf: u32) -> Option<Span> {
     let end = |t: f32, normal: Vec3| End { t, normal, leaf };
     let span = match *s {
         Solid::Sphere { center, radius } => {
-            let f = o - center;
-            let a = d.dot(d);
-            let b = -f.dot(d);
-            // Distance from the centre to the line, as the sphere primitive computes it.
-            let l = f + d * (b / a);
-            let r2 = radius * radius;
-            let disc = r2 - l.dot(l);
-            if disc.is_nan() || disc < 0.0 {
-                return None;
-            }
-            let c = f.dot(f) - r2;
-            let q = b + (a.sqrt() * disc.sqrt()).copysign(b);
-            let (t0, t1) = (c / q, q / a);
-            let (t0, t1) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
+            let (t0, t1) = ball(o - center, d, radius)?;
             let n = |t: f32| ((o + d * t - center) / radius).normalize_or(Vec3::Y);
             Span {
                 enter: end(t0, n(t0)),
                 exit: end(t1, n(t1)),
             }
         }
+        Solid::Ellipsoid { center, radii } => {
+            // The unit ball in coordinates divided by the radii; t is unchanged.
+            let (f, du) = ((o - center) / radii, d / radii);
+            let (t0, t1) = ball(f, du, 1.0)?;
+            // The gradient of |p / radii|^2 is 2 p / radii^2: the unit-ball point / radii.
+            let n = |t: f32| ((f + du * t) / radii).normalize_or(Vec3::Y);
+            Span {
+                enter: end(t0, n(t0)),
+                exit: end(t1, n(t1)),
+            }
+        }
+        Solid::Paraboloid {
+            base,
+            radius,
+            height,
+        } => {
+            // Relative to the apex, inside where k (x^2 + z^2) - y <= 0; the cap is the slab's
+            // top (its bottom at -inf never cuts).
+            let f = o - base;
+            let (y0, y1, sign) = slab(f.y, d.y, f32::NEG_INFINITY, height)?;
+            let k = height / (radius * radius);
+            let a = k * (d.x * d.x + d.z * d.z);
+            let bh = 0.5 * d.y - k * (f.x * d.x + f.z * d.z);
+            let c = k * (f.x * f.x + f.z * f.z) - f.y;
+            let side = if a == 0.0 {
+                // Along the axis: the linear -2 b' t + c <= 0.
+                if bh == 0.0 {
+                    if c.is_nan() || c > 0.0 {
+                        return None;
+                    }
+                    (f32::NEG_INFINITY, f32::INFINITY)
+                } else if bh > 0.0 {
+                    (c / (2.0 * bh), f32::INFINITY)
+                } else {
+                    (f32::NEG_INFINITY, c / (2.0 * bh))
+                }
+            } else {
+                quadratic(a, bh, c)?
+            };
+            let normal = |t: f32| {
+                let p = f + d * t;
+                Vec3::new(2.0 * k * p.x, -1.0, 2.0 * k * p.z).normalize_or(-Vec3::Y)
+            };
+            let cap = Vec3::new(0.0, sign, 0.0);
+            capped((y0, y1), (cap, -cap), side, normal, end)
+        }
+        Solid::Torus { .. } => return None,
         Solid::Box { min, max } => {
             let mut enter = end(f32::NEG_INFINITY, Vec3::ZERO);
             let mut exit = end(f32::INFINITY, Vec3::ZERO);
@@ -501,18 +810,7 @@ fn solid_span(s: &Solid, ray: &Ray, leaf: u32) -> Option<Span> {
                 Vec3::new(p.x, 0.0, p.z).normalize_or(Vec3::X)
             };
             let cap = Vec3::new(0.0, sign, 0.0);
-            Span {
-                enter: if y0 > s0 {
-                    end(y0, cap)
-                } else {
-                    end(s0, side(s0))
-                },
-                exit: if y1 < s1 {
-                    end(y1, -cap)
-                } else {
-                    end(s1, side(s1))
-                },
-            }
+            capped((y0, y1), (cap, -cap), (s0, s1), side, end)
         }
         Solid::Cone {
             base,
@@ -565,19 +863,11 @@ fn solid_span(s: &Solid, ray: &Ray, leaf: u32) -> Option<Span> {
             };
             // Only the nappe below the apex lies in the slab; keep the first non-empty piece.
             let mut found = None;
-            for (s0, s1) in inside {
-                let enter = if y0 > s0 {
-                    end(y0, Vec3::new(0.0, sign, 0.0))
-                } else {
-                    end(s0, normal(s0))
-                };
-                let exit = if y1 < s1 {
-                    end(y1, Vec3::new(0.0, -sign, 0.0))
-                } else {
-                    end(s1, normal(s1))
-                };
-                if enter.t < exit.t {
-                    found = Some(Span { enter, exit });
+            for piece in inside {
+                let caps = (Vec3::new(0.0, sign, 0.0), Vec3::new(0.0, -sign, 0.0));
+                let span = capped((y0, y1), caps, piece, normal, end);
+                if span.enter.t < span.exit.t {
+                    found = Some(span);
                     break;
                 }
             }
@@ -905,6 +1195,252 @@ mod tests {
         assert!(matches!(Csg::new(&deep), Err(SceneError::TooLarge(_))));
         let many = CsgNode::fold(CsgOp::Union, vec![s; MAX_CSG_LEAVES + 1]).unwrap();
         assert!(matches!(Csg::new(&many), Err(SceneError::TooLarge(_))));
+    }
+
+    fn torus(r_big: f32, r_small: f32) -> Solid {
+        Solid::Torus {
+            center: Vec3::ZERO,
+            major_radius: r_big,
+            minor_radius: r_small,
+        }
+    }
+
+    fn close(a: Vec3, b: Vec3) -> bool {
+        (a - b).length() < 1e-6
+    }
+
+    #[test]
+    fn quadrics_and_torus_give_analytic_hits() {
+        // An ellipsoid of radii (2, 1, 3) from the left, from above, from behind.
+        let e = CsgNode::Leaf(Solid::Ellipsoid {
+            center: Vec3::new(1.0, 0.0, 0.0),
+            radii: Vec3::new(2.0, 1.0, 3.0),
+        });
+        let h = hit(&e, FROM_LEFT, Vec3::X).unwrap();
+        assert_eq!((h.t, h.normal), (9.0, -Vec3::X));
+        let h = hit(&e, Vec3::new(1.0, 5.0, 0.0), -Vec3::Y).unwrap();
+        assert_eq!((h.t, h.normal), (4.0, Vec3::Y));
+        // At (x, 0, z) with x/2 = z/3 = 1/sqrt2 the normal is along (x/4, 0, z/9).
+        let p = Vec3::new(1.0 + 2.0f32.sqrt(), 0.0, 1.5 * 2.0f32.sqrt());
+        let h = hit(&e, p + Vec3::new(0.0, 0.0, 5.0), -Vec3::Z).unwrap();
+        assert!((h.t - 5.0).abs() < 1e-5, "{}", h.t);
+        let want = Vec3::new((p.x - 1.0) / 4.0, 0.0, p.z / 9.0).normalize();
+        assert!(close(h.normal, want), "{}", h.normal);
+        // A paraboloid y = x^2 + z^2 (radius 2 at height 4): its wall at height 1 is at
+        // x = 1, the normal there along (2, -1, 0); straight down the axis, the cap then
+        // the apex.
+        let par = CsgNode::Leaf(Solid::Paraboloid {
+            base: Vec3::ZERO,
+            radius: 2.0,
+            height: 4.0,
+        });
+        let h = hit(&par, Vec3::new(-10.0, 1.0, 0.0), Vec3::X).unwrap();
+        assert_eq!(h.t, 9.0);
+        assert!(close(h.normal, Vec3::new(-2.0, -1.0, 0.0).normalize()));
+        let h = hit(&par, Vec3::new(0.0, 10.0, 0.0), -Vec3::Y).unwrap();
+        assert_eq!((h.t, h.normal), (6.0, Vec3::Y));
+        let inside = Csg::new(&par).unwrap();
+        let h = inside.intersect(&Ray::new(Vec3::new(0.0, 2.0, 0.0), -Vec3::Y));
+        assert_eq!(h.map(|h| h.t), Some(2.0));
+        // Above the cap, beside it: miss; below the apex along the axis, the apex first.
+        assert_eq!(hit(&par, Vec3::new(-10.0, 4.5, 0.0), Vec3::X), None);
+        assert_eq!(
+            hit(&par, Vec3::new(0.0, -3.0, 0.0), Vec3::Y).map(|h| h.t),
+            Some(3.0)
+        );
+        // A torus R = 2, r = 0.5: the outer wall, then from inside the hole the inner wall,
+        // and down the axis nothing.
+        let t = CsgNode::Leaf(torus(2.0, 0.5));
+        let h = hit(&t, FROM_LEFT, Vec3::X).unwrap();
+        assert_eq!((h.t, h.normal), (7.5, -Vec3::X));
+        let h = hit(&t, Vec3::ZERO, Vec3::X).unwrap();
+        assert_eq!((h.t, h.normal), (1.5, -Vec3::X));
+        assert_eq!(hit(&t, Vec3::new(0.0, 10.0, 0.0), -Vec3::Y), None);
+        // From inside the tube: its far wall.
+        let h = hit(&t, Vec3::new(2.0, 0.0, 0.0), Vec3::Y).unwrap();
+        assert_eq!((h.t, h.normal), (0.5, Vec3::Y));
+    }
+
+    #[test]
+    fn horn_and_spindle_tori() {
+        // r = R: the hole closes to a point; along x through the centre the two halves meet
+        // at the origin (a tangency in the middle of one span).
+        let horn = CsgNode::Leaf(torus(1.0, 1.0));
+        assert_eq!(hit(&horn, FROM_LEFT, Vec3::X).map(|h| h.t), Some(8.0));
+        // r > R: the inner lemon (up to |y| = sqrt(r^2 - R^2) on the axis) is hollow.
+        // At x = 0.2 the apple's top is at y = sqrt(4 - 0.8^2), the lemon's at
+        // sqrt(4 - 1.2^2) = 1.6. (On the axis apple and lemon touch: a tangency.)
+        let spindle = Csg::new(&CsgNode::Leaf(torus(1.0, 2.0))).unwrap();
+        let down = Ray::new(Vec3::new(0.2, 10.0, 0.0), -Vec3::Y);
+        let h = spindle.intersect(&down).unwrap();
+        assert!((h.t - (10.0 - 3.36f32.sqrt())).abs() < 1e-5, "{h:?}");
+        let h = spindle
+            .intersect(&Ray::new(Vec3::new(0.2, 0.0, 0.0), Vec3::Y))
+            .unwrap();
+        assert!((h.t - 1.6).abs() < 1e-6 && h.normal.y < -0.5, "{h:?}");
+    }
+
+    #[test]
+    fn placed_leaves() {
+        use glam::Quat;
+        // A cylinder of radius 1 and height 4 laid along x by a rotation about z, moved up.
+        let cyl = Solid::Cylinder {
+            base: Vec3::ZERO,
+            radius: 1.0,
+            height: 4.0,
+        };
+        let to_world = Affine3A::from_rotation_translation(
+            Quat::from_rotation_z(-std::f32::consts::FRAC_PI_2),
+            Vec3::new(0.0, 1.0, 0.0),
+        );
+        let c = Csg::new(&CsgNode::Placed(cyl, to_world)).unwrap();
+        // Its axis runs from (0, 1, 0) to (4, 1, 0).
+        assert!(c.bounds().contains(&Aabb::new(
+            Vec3::new(0.0, 0.0, -1.0),
+            Vec3::new(4.0, 2.0, 1.0)
+        )));
+        assert!(c.bounds().max.x < 4.01 && c.bounds().min.y > -0.01);
+        let h = c
+            .intersect(&Ray::new(Vec3::new(2.0, 10.0, 0.0), -Vec3::Y))
+            .unwrap();
+        assert!(
+            (h.t - 8.0).abs() < 1e-5 && close(h.normal, Vec3::Y),
+            "{h:?}"
+        );
+        let h = c
+            .intersect(&Ray::new(FROM_LEFT + Vec3::Y, Vec3::X))
+            .unwrap();
+        assert!(
+            (h.t - 10.0).abs() < 1e-5 && close(h.normal, -Vec3::X),
+            "{h:?}"
+        );
+        // A non-uniform scale: a unit sphere stretched to radii (2, 1, 1) is the ellipsoid,
+        // normals by the inverse transpose; t is unchanged for an unnormalised direction.
+        let ball = Solid::Sphere {
+            center: Vec3::ZERO,
+            radius: 1.0,
+        };
+        let stretched = Csg::new(&CsgNode::Placed(
+            ball,
+            Affine3A::from_scale(Vec3::new(2.0, 1.0, 1.0)),
+        ))
+        .unwrap();
+        let ellipsoid = Csg::new(&CsgNode::Leaf(Solid::Ellipsoid {
+            center: Vec3::ZERO,
+            radii: Vec3::new(2.0, 1.0, 1.0),
+        }))
+        .unwrap();
+        for (o, d) in [
+            (FROM_LEFT, Vec3::X * 3.0),
+            (Vec3::new(-3.0, 2.0, 0.5), Vec3::new(1.0, -0.7, 0.0)),
+        ] {
+            let (a, b) = (
+                stretched.intersect(&Ray::new(o, d)).unwrap(),
+                ellipsoid.intersect(&Ray::new(o, d)).unwrap(),
+            );
+            assert!((a.t - b.t).abs() < 1e-5 * b.t, "{a:?} {b:?}");
+            assert!(close(a.normal, b.normal), "{a:?} {b:?}");
+        }
+        // An identity placement gives the unplaced leaf's answers.
+        let plain = Csg::new(&CsgNode::Leaf(torus(2.0, 0.5))).unwrap();
+        let placed = Csg::new(&CsgNode::Placed(torus(2.0, 0.5), Affine3A::IDENTITY)).unwrap();
+        let r = Ray::new(Vec3::new(-6.0, 0.2, 0.3), Vec3::new(1.0, 0.0, 0.05));
+        let (a, b) = (plain.intersect(&r).unwrap(), placed.intersect(&r).unwrap());
+        assert!(a.t == b.t && close(a.normal, b.normal), "{a:?} {b:?}");
+    }
+
+    #[test]
+    fn a_ring_cut_by_a_rotated_box() {
+        use glam::Quat;
+        // A torus R = 2, r = 0.5 minus a box rotated 45 degrees about y covering its +x
+        // part: rays along the x axis see the ring on the left only.
+        let cut = Affine3A::from_rotation_translation(
+            Quat::from_rotation_y(std::f32::consts::FRAC_PI_4),
+            Vec3::new(2.0, 0.0, 0.0),
+        );
+        let tree = op(
+            CsgOp::Difference,
+            CsgNode::Leaf(torus(2.0, 0.5)),
+            CsgNode::Placed(
+                Solid::Box {
+                    min: Vec3::splat(-1.0),
+                    max: Vec3::splat(1.0),
+                },
+                cut,
+            ),
+        );
+        let c = Csg::new(&tree).unwrap();
+        let h = c.intersect(&Ray::new(FROM_LEFT, Vec3::X)).unwrap();
+        assert_eq!((h.t, h.leaf), (7.5, 0));
+        // Along z at x = 1.8 the ring spans |z| <= sqrt(2.5^2 - 1.8^2) and the box
+        // |z| <= sqrt2 - 0.2: the ring's wall, then from inside it the box's face, its
+        // outward normal (-1, 0, -1) / sqrt2 flipped.
+        let ring = (2.5f32 * 2.5 - 1.8 * 1.8).sqrt();
+        let h = c
+            .intersect(&Ray::new(Vec3::new(1.8, 0.0, -10.0), Vec3::Z))
+            .unwrap();
+        assert!((h.t - (10.0 - ring)).abs() < 1e-5 && h.leaf == 0, "{h:?}");
+        let h = c
+            .intersect(&Ray::new(Vec3::new(1.8, 0.0, -1.5), Vec3::Z))
+            .unwrap();
+        let face = 1.5 - (2.0f32.sqrt() - 0.2);
+        assert!((h.t - face).abs() < 1e-5 && h.leaf == 1, "{h:?}");
+        assert!(
+            close(h.normal, Vec3::new(1.0, 0.0, 1.0).normalize()),
+            "{h:?}"
+        );
+    }
+
+    #[test]
+    fn bad_solids_and_transforms_are_refused() {
+        let torus_with = |r_big: f32, r_small: f32| CsgNode::Leaf(torus(r_big, r_small));
+        let ball = Solid::Sphere {
+            center: Vec3::ZERO,
+            radius: 1.0,
+        };
+        let cases = [
+            (torus_with(0.0, 1.0), "torus major radius must be positive"),
+            (torus_with(1.0, -1.0), "torus minor radius must be positive"),
+            (torus_with(f32::NAN, 1.0), "torus major radius"),
+            (
+                CsgNode::Leaf(Solid::Ellipsoid {
+                    center: Vec3::ZERO,
+                    radii: Vec3::new(1.0, 0.0, 1.0),
+                }),
+                "ellipsoid radius must be positive",
+            ),
+            (
+                CsgNode::Leaf(Solid::Paraboloid {
+                    base: Vec3::ZERO,
+                    radius: 1.0,
+                    height: f32::INFINITY,
+                }),
+                "paraboloid height",
+            ),
+            (
+                CsgNode::Placed(ball, Affine3A::from_scale(Vec3::new(1.0, 0.0, 1.0))),
+                "singular",
+            ),
+            (
+                CsgNode::Placed(ball, Affine3A::from_scale(Vec3::new(1.0, 1e-7, 1.0))),
+                "singular",
+            ),
+            (
+                CsgNode::Placed(
+                    ball,
+                    Affine3A::from_translation(Vec3::new(f32::NAN, 0.0, 0.0)),
+                ),
+                "transform",
+            ),
+            (
+                CsgNode::Placed(ball, Affine3A::from_translation(Vec3::new(1e30, 0.0, 0.0))),
+                "exceeds",
+            ),
+        ];
+        for (tree, want) in cases {
+            let e = Csg::new(&tree).unwrap_err().to_string();
+            assert!(e.contains(want), "{tree:?}: {e}");
+        }
     }
 
     #[test]

@@ -80,7 +80,7 @@ impl PrimitiveKind {
             Self::Sphere => "sphere",
             Self::Plane => "plane",
             Self::HeightField => "height field",
-            Self::Csg => "CSG solid",
+            Self::Csg => "analytic solid / CSG tree",
             Self::Bezier => "Bezier patch",
             Self::Sdf => "SDF model",
         }

@@ -39,6 +39,10 @@ pub const MAX_CSG_DEPTH: usize = 32;
 /// tests them all.
 pub const MAX_CSG_LEAVES: usize = 256;
 
+/// Largest accepted condition number (`|M|max * |M^-1|max` of the linear part) of a CSG
+/// solid's transform: a zero or near-zero scale makes the local ray's direction overflow.
+pub const MAX_TRANSFORM_CONDITION: f32 = 1e6;
+
 /// Largest accepted number of Bezier patches in one `.bpt` file (the count on its first line
 /// is checked against it before anything is allocated).
 pub const MAX_BEZIER_PATCHES: usize = 1 << 20;

@@ -135,7 +135,7 @@ pub fn supports(scene: &Scene) -> Result<(), String> {
         .count();
     if side > MAX_SIDE_PRIMITIVES {
         return Err(format!(
-            "{side} spheres, height fields, CSG solids, SDF models or Bezier patches: the Embree backends trace triangles in Embree \
+            "{side} spheres, height fields, analytic solids / CSG trees, SDF models or Bezier patches: the Embree backends trace triangles in Embree \
              and test other bounded primitives beside it by every ray, at most \
              {MAX_SIDE_PRIMITIVES}"
         ));

@@ -86,6 +86,12 @@ pub const BUILTIN_SCENES: &[BuiltinScene] = &[
         "CSG trees of spheres, boxes, cylinders, cones and half-spaces: all three operations",
         []
     ),
+    // Issue 10, tori and quadrics.
+    builtin!(
+        "quadrics",
+        "tori, an ellipsoid, a paraboloid, a tilted cylinder and cone, a ring cut by a box",
+        []
+    ),
     builtin!(
         "teapot-bezier",
         "the Utah teapot as 32 bicubic Bezier patches, intersected directly",

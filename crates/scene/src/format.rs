@@ -173,6 +173,12 @@ enum ObjectDesc {
     Generator(GeneratorDesc),
     HeightField(HeightFieldDesc),
     Csg(CsgDesc),
+    // Issue 10, analytic solids as objects: each is a one-leaf CSG primitive.
+    Torus(TorusDesc),
+    Ellipsoid(EllipsoidDesc),
+    Cylinder(RevolvedDesc),
+    Cone(RevolvedDesc),
+    Paraboloid(RevolvedDesc),
     Bezier(BezierDesc),
     Sdf(crate::sdf_format::SdfDesc),
 }
@@ -203,14 +209,148 @@ struct CsgDesc {
 #[derive(Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 enum CsgNodeDesc {
-    Union { operands: Vec<CsgNodeDesc> },
-    Intersection { operands: Vec<CsgNodeDesc> },
-    Difference { operands: Vec<CsgNodeDesc> },
-    Sphere { center: V3, radius: f32 },
-    Box { min: V3, max: V3 },
-    Cylinder { base: V3, radius: f32, height: f32 },
-    Cone { base: V3, radius: f32, height: f32 },
-    HalfSpace { point: V3, normal: V3 },
+    Union {
+        operands: Vec<CsgNodeDesc>,
+    },
+    Intersection {
+        operands: Vec<CsgNodeDesc>,
+    },
+    Difference {
+        operands: Vec<CsgNodeDesc>,
+    },
+    Sphere {
+        center: V3,
+        radius: f32,
+        transform: Option<TransformDesc>,
+    },
+    Box {
+        min: V3,
+        max: V3,
+        transform: Option<TransformDesc>,
+    },
+    Cylinder(RevolvedDesc),
+    Cone(RevolvedDesc),
+    HalfSpace {
+        point: V3,
+        normal: V3,
+        transform: Option<TransformDesc>,
+    },
+    // Issue 10, tori and quadrics.
+    Torus(TorusDesc),
+    Ellipsoid(EllipsoidDesc),
+    Paraboloid(RevolvedDesc),
+}
+
+/// A torus about its local y axis, as a CSG operand or (with a material) an object.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TorusDesc {
+    center: V3,
+    major_radius: f32,
+    minor_radius: f32,
+    material: Option<String>,
+    transform: Option<TransformDesc>,
+}
+
+/// An axis-aligned ellipsoid (before its transform), as a CSG operand or an object.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct EllipsoidDesc {
+    center: V3,
+    radii: V3,
+    material: Option<String>,
+    transform: Option<TransformDesc>,
+}
+
+/// A capped cylinder, cone or paraboloid standing on its local y axis, as a CSG operand
+/// or an object.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RevolvedDesc {
+    base: V3,
+    radius: f32,
+    height: f32,
+    material: Option<String>,
+    transform: Option<TransformDesc>,
+}
+
+impl RevolvedDesc {
+    /// The solid this describes as a cylinder, a cone or a paraboloid (`kind`).
+    fn solid(&self, kind: &str) -> Solid {
+        let (base, radius, height) = (Vec3::from(self.base), self.radius, self.height);
+        match kind {
+            "cylinder" => Solid::Cylinder {
+                base,
+                radius,
+                height,
+            },
+            "cone" => Solid::Cone {
+                base,
+                radius,
+                height,
+            },
+            _ => Solid::Paraboloid {
+                base,
+                radius,
+                height,
+            },
+        }
+    }
+}
+
+/// A solid, placed when it has a transform other than the identity (an identity keeps
+/// the unplaced fast path).
+fn placed(solid: Solid, transform: Option<&TransformDesc>) -> CsgNode {
+    match transform.map(TransformDesc::to_transform) {
+        Some(xf) if !xf.is_identity() => CsgNode::Placed(solid, xf.affine()),
+        _ => CsgNode::Leaf(solid),
+    }
+}
+
+/// A CSG operand's solid: refused when it names a material (the tree's applies).
+fn operand(
+    solid: Solid,
+    transform: Option<&TransformDesc>,
+    material: Option<&String>,
+) -> Result<CsgNode, SceneError> {
+    if let Some(m) = material {
+        return Err(SceneError::Invalid(format!(
+            "a CSG operand cannot have its own material ('{m}'): the tree's `material` applies"
+        )));
+    }
+    Ok(placed(solid, transform))
+}
+
+/// Adds a standalone analytic solid: a one-leaf CSG primitive named `name`.
+fn add_solid(
+    b: &mut SceneBuilder,
+    name: &str,
+    solid: Solid,
+    transform: Option<&TransformDesc>,
+    material: u32,
+) -> Result<(), SceneError> {
+    let csg = Csg::new(&placed(solid, transform))?;
+    b.add_csg(name, Arc::new(csg), material)?;
+    Ok(())
+}
+
+impl TorusDesc {
+    fn solid(&self) -> Solid {
+        Solid::Torus {
+            center: Vec3::from(self.center),
+            major_radius: self.major_radius,
+            minor_radius: self.minor_radius,
+        }
+    }
+}
+
+impl EllipsoidDesc {
+    fn solid(&self) -> Solid {
+        Solid::Ellipsoid {
+            center: Vec3::from(self.center),
+            radii: Vec3::from(self.radii),
+        }
+    }
 }
 
 /// Converts a scene file's tree into the core's, checking the depth before recursing
@@ -233,36 +373,54 @@ fn csg_node(d: &CsgNodeDesc, depth: usize) -> Result<CsgNode, SceneError> {
         CsgNodeDesc::Union { operands } => fold(CsgOp::Union, operands)?,
         CsgNodeDesc::Intersection { operands } => fold(CsgOp::Intersection, operands)?,
         CsgNodeDesc::Difference { operands } => fold(CsgOp::Difference, operands)?,
-        CsgNodeDesc::Sphere { center, radius } => CsgNode::Leaf(Solid::Sphere {
-            center: Vec3::from(*center),
-            radius: *radius,
-        }),
-        CsgNodeDesc::Box { min, max } => CsgNode::Leaf(Solid::Box {
-            min: Vec3::from(*min),
-            max: Vec3::from(*max),
-        }),
-        CsgNodeDesc::Cylinder {
-            base,
+        CsgNodeDesc::Sphere {
+            center,
             radius,
-            height,
-        } => CsgNode::Leaf(Solid::Cylinder {
-            base: Vec3::from(*base),
-            radius: *radius,
-            height: *height,
-        }),
-        CsgNodeDesc::Cone {
-            base,
-            radius,
-            height,
-        } => CsgNode::Leaf(Solid::Cone {
-            base: Vec3::from(*base),
-            radius: *radius,
-            height: *height,
-        }),
-        CsgNodeDesc::HalfSpace { point, normal } => CsgNode::Leaf(Solid::HalfSpace {
-            point: Vec3::from(*point),
-            normal: Vec3::from(*normal),
-        }),
+            transform,
+        } => placed(
+            Solid::Sphere {
+                center: Vec3::from(*center),
+                radius: *radius,
+            },
+            transform.as_ref(),
+        ),
+        CsgNodeDesc::Box {
+            min,
+            max,
+            transform,
+        } => placed(
+            Solid::Box {
+                min: Vec3::from(*min),
+                max: Vec3::from(*max),
+            },
+            transform.as_ref(),
+        ),
+        CsgNodeDesc::HalfSpace {
+            point,
+            normal,
+            transform,
+        } => placed(
+            Solid::HalfSpace {
+                point: Vec3::from(*point),
+                normal: Vec3::from(*normal),
+            },
+            transform.as_ref(),
+        ),
+        CsgNodeDesc::Cylinder(r) => operand(
+            r.solid("cylinder"),
+            r.transform.as_ref(),
+            r.material.as_ref(),
+        )?,
+        CsgNodeDesc::Cone(r) => {
+            operand(r.solid("cone"), r.transform.as_ref(), r.material.as_ref())?
+        }
+        CsgNodeDesc::Paraboloid(r) => operand(
+            r.solid("paraboloid"),
+            r.transform.as_ref(),
+            r.material.as_ref(),
+        )?,
+        CsgNodeDesc::Torus(t) => operand(t.solid(), t.transform.as_ref(), t.material.as_ref())?,
+        CsgNodeDesc::Ellipsoid(e) => operand(e.solid(), e.transform.as_ref(), e.material.as_ref())?,
     })
 }
 
@@ -735,6 +893,23 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
                 let tree = csg_node(&c.tree, 1).map_err(&err)?;
                 let csg = Csg::new(&tree).map_err(&err)?;
                 b.add_csg("csg", Arc::new(csg), m).map_err(err)?;
+            }
+            ObjectDesc::Torus(t) => {
+                let m = material(&t.material)?.unwrap_or(0);
+                add_solid(&mut b, "torus", t.solid(), t.transform.as_ref(), m).map_err(err)?;
+            }
+            ObjectDesc::Ellipsoid(e) => {
+                let m = material(&e.material)?.unwrap_or(0);
+                add_solid(&mut b, "ellipsoid", e.solid(), e.transform.as_ref(), m).map_err(err)?;
+            }
+            ObjectDesc::Cylinder(r) | ObjectDesc::Cone(r) | ObjectDesc::Paraboloid(r) => {
+                let name = match o {
+                    ObjectDesc::Cylinder(_) => "cylinder",
+                    ObjectDesc::Cone(_) => "cone",
+                    _ => "paraboloid",
+                };
+                let m = material(&r.material)?.unwrap_or(0);
+                add_solid(&mut b, name, r.solid(name), r.transform.as_ref(), m).map_err(err)?;
             }
             ObjectDesc::Bezier(bd) => {
                 let m = material(&bd.material)?.unwrap_or(0);

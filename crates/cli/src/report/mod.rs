@@ -61,6 +61,7 @@ pub const QUICK_SCENES: &[&str] = &[
     "heightfield",
     "phantom",
     "csg",
+    "quadrics",
     "teapot-bezier",
     "sdf",
 ];
@@ -78,6 +79,7 @@ pub const FULL_SCENES: &[&str] = &[
     "heightfield",
     "phantom",
     "csg",
+    "quadrics",
     "teapot-bezier",
     "sdf",
 ];
@@ -476,6 +478,7 @@ impl Ctx<'_> {
                 "heightfield",
                 "csg",
                 "sdf",
+                "quadrics",
             ]
             .contains(&name)
         {
