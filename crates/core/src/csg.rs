@@ -635,17 +635,23 @@ fn solid_bounds(s: &Solid) -> Bound {
     }
 }
 
-/// The roots of `a t^2 + 2 b' t + c` in ascending order (Haines et al.'s stable form with
-/// `b = -b'`), or `None` when there are none or `a` is zero.
+/// The roots of `a t^2 - 2 b t + c` in ascending order (Haines et al.'s stable form), or
+/// `None` when there are none or `a` is zero.
+///
+/// The quadric solids compute their coefficients and roots in f64 from the f32 ray: in f32
+/// the discriminant `b^2 - a c` and `c` itself cancel catastrophically when the ray starts
+/// far from a thin solid (a camera 10 units from a cylinder of radius 0.3 put its hits
+/// about 1e-5 off the surface, more than the secondary rays' origin offset: shadow acne),
+/// and in f64 the only error left is the f32 rounding of the inputs and of the roots.
 #[inline]
-fn quadratic(a: f32, b: f32, c: f32) -> Option<(f32, f32)> {
-    // Roots of a t^2 - 2 b t + c.
+fn quadratic(a: f64, b: f64, c: f64) -> Option<(f32, f32)> {
     let disc = b * b - a * c;
     if disc.is_nan() || disc < 0.0 || a == 0.0 {
         return None;
     }
     let q = b + disc.sqrt().copysign(b);
     let (t0, t1) = if q == 0.0 { (0.0, 0.0) } else { (c / q, q / a) };
+    let (t0, t1) = (t0 as f32, t1 as f32);
     Some(if t0 <= t1 { (t0, t1) } else { (t1, t0) })
 }
 
@@ -745,9 +751,12 @@ fn solid_span(s: &Solid, o: Vec3, d: Vec3, leaf: u32) -> Option<Span> {
             let f = o - base;
             let (y0, y1, sign) = slab(f.y, d.y, f32::NEG_INFINITY, height)?;
             let k = height / (radius * radius);
-            let a = k * (d.x * d.x + d.z * d.z);
-            let bh = 0.5 * d.y - k * (f.x * d.x + f.z * d.z);
-            let c = k * (f.x * f.x + f.z * f.z) - f.y;
+            // The quadric's coefficients in f64 (see `quadratic`).
+            let (f6, d6) = (o.as_dvec3() - base.as_dvec3(), d.as_dvec3());
+            let k6 = f64::from(height) / (f64::from(radius) * f64::from(radius));
+            let a = k6 * (d6.x * d6.x + d6.z * d6.z);
+            let bh = 0.5 * d6.y - k6 * (f6.x * d6.x + f6.z * d6.z);
+            let c = k6 * (f6.x * f6.x + f6.z * f6.z) - f6.y;
             let side = if a == 0.0 {
                 // Along the axis: the linear -2 b' t + c <= 0.
                 if bh == 0.0 {
@@ -756,9 +765,9 @@ fn solid_span(s: &Solid, o: Vec3, d: Vec3, leaf: u32) -> Option<Span> {
                     }
                     (f32::NEG_INFINITY, f32::INFINITY)
                 } else if bh > 0.0 {
-                    (c / (2.0 * bh), f32::INFINITY)
+                    ((c / (2.0 * bh)) as f32, f32::INFINITY)
                 } else {
-                    (f32::NEG_INFINITY, c / (2.0 * bh))
+                    (f32::NEG_INFINITY, (c / (2.0 * bh)) as f32)
                 }
             } else {
                 quadratic(a, bh, c)?
@@ -794,16 +803,17 @@ fn solid_span(s: &Solid, o: Vec3, d: Vec3, leaf: u32) -> Option<Span> {
             height,
         } => {
             let (y0, y1, sign) = slab(o.y, d.y, base.y, base.y + height)?;
-            let (fx, fz) = (o.x - base.x, o.z - base.z);
-            let a = d.x * d.x + d.z * d.z;
-            let c = fx * fx + fz * fz - radius * radius;
+            // The quadric's coefficients in f64 (see `quadratic`).
+            let (f, d6) = (o.as_dvec3() - base.as_dvec3(), d.as_dvec3());
+            let a = d6.x * d6.x + d6.z * d6.z;
+            let c = f.x * f.x + f.z * f.z - f64::from(radius) * f64::from(radius);
             let (s0, s1) = if a == 0.0 {
                 if c.is_nan() || c > 0.0 {
                     return None;
                 }
                 (f32::NEG_INFINITY, f32::INFINITY)
             } else {
-                quadratic(a, -(fx * d.x + fz * d.z), c)?
+                quadratic(a, -(f.x * d6.x + f.z * d6.z), c)?
             };
             let side = |t: f32| {
                 let p = o + d * t - base;
@@ -820,10 +830,14 @@ fn solid_span(s: &Solid, o: Vec3, d: Vec3, leaf: u32) -> Option<Span> {
             let (y0, y1, sign) = slab(o.y, d.y, base.y, base.y + height)?;
             let k2 = (radius / height) * (radius / height);
             // Relative to the apex: inside the double cone where x^2 + z^2 <= k^2 y^2.
-            let f = o - (base + Vec3::new(0.0, height, 0.0));
-            let a = d.x * d.x + d.z * d.z - k2 * d.y * d.y;
-            let bh = -(f.x * d.x + f.z * d.z - k2 * f.y * d.y);
-            let c = f.x * f.x + f.z * f.z - k2 * f.y * f.y;
+            let apex = base + Vec3::new(0.0, height, 0.0);
+            let f = o - apex;
+            // The quadric's coefficients in f64 (see `quadratic`).
+            let (f6, d6) = (o.as_dvec3() - apex.as_dvec3(), d.as_dvec3());
+            let k6 = (f64::from(radius) / f64::from(height)).powi(2);
+            let a = d6.x * d6.x + d6.z * d6.z - k6 * d6.y * d6.y;
+            let bh = -(f6.x * d6.x + f6.z * d6.z - k6 * f6.y * d6.y);
+            let c = f6.x * f6.x + f6.z * f6.z - k6 * f6.y * f6.y;
             let normal = |t: f32| {
                 let p = f + d * t;
                 Vec3::new(p.x, -k2 * p.y, p.z).normalize_or(Vec3::Y)
@@ -837,7 +851,7 @@ fn solid_span(s: &Solid, o: Vec3, d: Vec3, leaf: u32) -> Option<Span> {
                     }
                     [(f32::NEG_INFINITY, f32::INFINITY), (f32::NAN, f32::NAN)]
                 } else {
-                    let t = c / (2.0 * bh);
+                    let t = (c / (2.0 * bh)) as f32;
                     if bh > 0.0 {
                         [(t, f32::INFINITY), (f32::NAN, f32::NAN)]
                     } else {
