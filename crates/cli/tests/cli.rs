@@ -620,3 +620,41 @@ fn bezier_patches_render_directly_and_tessellated() {
     );
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// Ctrl-C during a render leaves no partial image under the final name: the previous file
+/// there stays whole (images are written to a temporary name and renamed into place only
+/// when complete), and the process ends by the signal, not a panic.
+#[cfg(unix)]
+#[test]
+fn an_interrupted_render_leaves_the_previous_image_whole() {
+    let dir = tmp_dir("interrupt");
+    let out = write(&dir, "out.png", b"the previous image");
+    // Long enough to be interrupted: path tracing at 1024 spp (minutes).
+    let mut child = Command::new(env!("CARGO_BIN_EXE_raybench"))
+        .args([
+            "render", "spheres", "--mode", "path", "--spp", "1024", "--width", "512", "--height",
+            "512", "--out", &out,
+        ])
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("raybench runs");
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let sent = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(sent.success());
+    let status = child.wait().unwrap();
+    assert!(
+        !status.success(),
+        "the render finished before the interrupt"
+    );
+    assert_ne!(status.code(), Some(101), "panicked");
+    assert_eq!(std::fs::read(&out).unwrap(), b"the previous image");
+    let left: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(left, ["out.png"], "files left behind: {left:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

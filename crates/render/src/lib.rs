@@ -11,7 +11,10 @@
 
 mod output;
 
-pub use output::{OutputError, id_color, srgb8, write_color_png, write_ids_png, write_rgb};
+pub use output::{
+    OutputError, id_color, partial_path, srgb8, write_atomically, write_color_png, write_ids_png,
+    write_rgb,
+};
 
 use raybench_core::integrator::{assemble, render_tile, tiles};
 use raybench_core::{

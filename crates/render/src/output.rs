@@ -53,32 +53,65 @@ pub fn id_color(id: u32) -> [u8; 3] {
     [b[0] | 0x40, b[1] | 0x40, b[2] | 0x40]
 }
 
-/// Writes RGB bytes (`3 * width * height`, row by row) to `path` as a PNG, through a
-/// temporary file renamed into place, so that an interrupted run never leaves a partial
-/// image under the final name.
+/// The temporary name a file is written under before [`write_atomically`] renames it into
+/// place: `.partial` inserted before the extension (`a.png` -> `a.partial.png`), so that
+/// writers that pick the format from the extension (plotters) still see it.
+#[must_use]
+pub fn partial_path(path: &Path) -> PathBuf {
+    let mut name = path.file_stem().unwrap_or_default().to_owned();
+    name.push(".partial");
+    if let Some(ext) = path.extension() {
+        name.push(".");
+        name.push(ext);
+    }
+    path.with_file_name(name)
+}
+
+/// Writes a file through a temporary name: `write` writes [`partial_path`]`(path)`, which is
+/// then renamed to `path` (atomic within one file system). An interrupted or failed write
+/// therefore never leaves a partial file, nor truncates an older one, under the final name;
+/// on failure the temporary file is removed.
+///
+/// # Errors
+/// What `write` returns, or [`OutputError::Rename`] when the rename fails.
+pub fn write_atomically<E: From<OutputError>>(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), E>,
+) -> Result<(), E> {
+    let tmp = partial_path(path);
+    if let Err(e) = write(&tmp) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(e);
+    }
+    std::fs::rename(&tmp, path).map_err(|source| {
+        let _ = std::fs::remove_file(&tmp);
+        E::from(OutputError::Rename {
+            from: tmp,
+            path: path.to_owned(),
+            source,
+        })
+    })
+}
+
+/// Writes RGB bytes (`3 * width * height`, row by row) to `path` as a PNG, through
+/// [`write_atomically`].
 ///
 /// # Errors
 /// When the file cannot be written or renamed.
 pub fn write_rgb(path: &Path, width: u32, height: u32, rgb: Vec<u8>) -> Result<(), OutputError> {
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".partial");
-    let tmp = PathBuf::from(tmp);
-    image::save_buffer_with_format(
-        &tmp,
-        &rgb,
-        width,
-        height,
-        image::ExtendedColorType::Rgb8,
-        image::ImageFormat::Png,
-    )
-    .map_err(|source| OutputError::Write {
-        path: path.to_owned(),
-        source,
-    })?;
-    std::fs::rename(&tmp, path).map_err(|source| OutputError::Rename {
-        from: tmp,
-        path: path.to_owned(),
-        source,
+    write_atomically(path, |tmp| {
+        image::save_buffer_with_format(
+            tmp,
+            &rgb,
+            width,
+            height,
+            image::ExtendedColorType::Rgb8,
+            image::ImageFormat::Png,
+        )
+        .map_err(|source| OutputError::Write {
+            path: path.to_owned(),
+            source,
+        })
     })
 }
 
@@ -129,7 +162,25 @@ mod tests {
         write_ids_png(&frame, &dir.join("b.png")).unwrap();
         let img = image::open(&p).unwrap().to_rgb8();
         assert_eq!(img.get_pixel(0, 0).0, [255, 255, 255]);
-        assert!(!dir.join("a.png.partial").exists());
+        assert!(!dir.join("a.partial.png").exists());
+        assert_eq!(
+            partial_path(Path::new("x/a.png")),
+            Path::new("x/a.partial.png")
+        );
+        assert_eq!(partial_path(Path::new("x/a")), Path::new("x/a.partial"));
+        // A failed write removes its temporary file and leaves an older file whole.
+        std::fs::write(dir.join("c.txt"), "old").unwrap();
+        let failed = write_atomically::<OutputError>(&dir.join("c.txt"), |tmp| {
+            std::fs::write(tmp, "new, half written").unwrap();
+            Err(OutputError::Rename {
+                from: tmp.to_owned(),
+                path: tmp.to_owned(),
+                source: std::io::Error::other("interrupted"),
+            })
+        });
+        assert!(failed.is_err());
+        assert_eq!(std::fs::read_to_string(dir.join("c.txt")).unwrap(), "old");
+        assert!(!dir.join("c.partial.txt").exists());
         assert!(write_color_png(&frame, &dir.join("no/such/dir.png")).is_err());
         std::fs::remove_dir_all(&dir).unwrap();
     }

@@ -74,8 +74,19 @@ fn both(
     font()?;
     let svg = stem.with_extension("svg");
     let png = stem.with_extension("png");
-    draw(SVGBackend::new(&svg, SIZE).into_drawing_area())?;
-    draw_png(BitMapBackend::new(&png, SIZE).into_drawing_area())?;
+    // Through temporary names, like every file of a report.
+    let atomic = |path: &Path, write: &dyn Fn(&Path) -> DrawResult| {
+        raybench_render::write_atomically::<anyhow::Error>(path, |tmp| {
+            write(tmp).map_err(anyhow::Error::msg)
+        })
+        .map_err(|e| format!("{e:#}"))
+    };
+    atomic(&svg, &|tmp| {
+        draw(SVGBackend::new(tmp, SIZE).into_drawing_area())
+    })?;
+    atomic(&png, &|tmp| {
+        draw_png(BitMapBackend::new(tmp, SIZE).into_drawing_area())
+    })?;
     let name = |p: &Path| {
         p.file_name()
             .map(|n| n.to_string_lossy().into_owned())

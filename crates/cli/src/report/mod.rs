@@ -352,11 +352,20 @@ pub fn run(opts: &Options) -> Result<Results> {
 pub fn write(results: &Results, out: &Path) -> Result<()> {
     std::fs::create_dir_all(out.join("charts"))?;
     let json = serde_json::to_string_pretty(results)?;
-    std::fs::write(out.join("results.json"), json + "\n")?;
+    // Every file through a temporary name: an interrupted run leaves the previous report's
+    // files whole, never a truncated one.
+    write_text(&out.join("results.json"), &(json + "\n"))?;
     let charts = markdown::charts(results, &out.join("charts"));
-    std::fs::write(out.join("REPORT.md"), markdown::report(results, &charts))?;
+    write_text(&out.join("REPORT.md"), &markdown::report(results, &charts))?;
     eprintln!("report written to {}", out.join("REPORT.md").display());
     Ok(())
+}
+
+/// Writes `text` to `path` through [`raybench_render::write_atomically`].
+fn write_text(path: &Path, text: &str) -> Result<()> {
+    raybench_render::write_atomically(path, |tmp| {
+        std::fs::write(tmp, text).with_context(|| format!("cannot write {}", path.display()))
+    })
 }
 
 /// Joins the `results.json` of several report folders into one report in `out` (images are
