@@ -354,10 +354,10 @@ fn shadow_rays_leave_cleanly(name: &str) {
                 let shadow = Ray::with_interval(o, position - o, 0.0, 1.0);
                 let e = acne.entry(hit.prim).or_default();
                 e.0 += 1;
-                if let Some(h) = scene.geometry.shape(hit.prim).intersect(&shadow) {
-                    if h.t < 1e-3 {
-                        e.1 += 1;
-                    }
+                if let Some(h) = scene.geometry.shape(hit.prim).intersect(&shadow)
+                    && h.t < 1e-3
+                {
+                    e.1 += 1;
                 }
             }
         }
