@@ -274,8 +274,60 @@ proptest! {
         let (ov, dv) = (d(o), d(dir));
         let exact = slab(ov, dv, d(min), d(max), 0.0);
         let scale = (d(max) - d(min)).length() + ov.length() + d(max).length();
+        check_slab(got, exact, ov, dv, (min, max), scale)?;
+    }
+
+    /// Rays that touch the box only along an edge (exactly, up to the rounding of their
+    /// origin): the line crosses the two faces' planes at the same `t`, where the exact
+    /// entry equals the exact exit. The conservative far scaling must accept every one
+    /// that the exact test accepts.
+    #[test]
+    fn slab_test_accepts_rays_touching_an_edge(
+        a in vec3(-5.0..5.0), b in vec3(-5.0..5.0), axis in 0usize..3, corner in 0u8..4,
+        along in 0.0f32..1.0, slope in 0.1f32..4.0, across in -1.0f32..1.0, back in 0.1f32..20.0,
+    ) {
+        let (min, max) = (a.min(b), a.max(b));
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        // The edge along `axis` at the corner picked for u and v, and the faces' outward
+        // normals there.
+        let (su, sv) = (
+            if corner & 1 == 0 { -1.0f32 } else { 1.0 },
+            if corner & 2 == 0 { -1.0f32 } else { 1.0 },
+        );
+        let mut target = min + (max - min) * along;
+        target[u] = if su > 0.0 { max[u] } else { min[u] };
+        target[v] = if sv > 0.0 { max[v] } else { min[v] };
+        // Leaving the u slab as it enters the v slab: u moves outward, v inward.
+        let mut dir = Vec3::ZERO;
+        dir[u] = su * slope;
+        dir[v] = -sv;
+        dir[axis] = across;
+        let o = target - dir * back;
+        let ray = Ray::new(o, dir);
+        let got = Aabb::new(min, max).intersect(&ray, f32::INFINITY);
+        let (ov, dv) = (d(o), d(dir));
+        let exact = slab(ov, dv, d(min), d(max), 0.0);
+        let scale = (d(max) - d(min)).length() + ov.length() + d(max).length();
+        check_slab(got, exact, ov, dv, (min, max), scale)?;
+    }
+}
+
+/// The slab properties: an exact hit is accepted with an entry at most the exact one (plus
+/// rounding); an accepted ray meets the box grown by the margin.
+fn check_slab(
+    got: Option<f32>,
+    exact: Option<(f64, f64)>,
+    ov: DVec3,
+    dv: DVec3,
+    (min, max): (Vec3, Vec3),
+    scale: f64,
+) -> Result<(), TestCaseError> {
+    {
         if let Some((t0, _)) = exact {
-            prop_assert!(got.is_some(), "a ray meeting the box was rejected: exact entry {t0}");
+            prop_assert!(
+                got.is_some(),
+                "a ray meeting the box was rejected: exact entry {t0}"
+            );
             let err = (f64::from(got.unwrap()) - t0) * dv.length() / scale;
             prop_assert!(err <= SLAB_T_ERROR, "entry {:?} after the exact {t0}", got);
         }
@@ -286,6 +338,7 @@ proptest! {
                 "accepted a ray that misses the box by more than the margin"
             );
         }
+        Ok(())
     }
 }
 
