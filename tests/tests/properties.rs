@@ -25,7 +25,7 @@ use raybench_core::{Aabb, Csg, CsgNode, Plane, Ray, Solid, Sphere, Triangle, Vec
 const MARGIN: f64 = 1.0 / 16384.0;
 
 /// Cases per property.
-const CASES: u32 = 4000;
+const CASES: u32 = 20_000;
 
 fn config(seed: u64) -> Config {
     Config {
@@ -212,9 +212,10 @@ proptest! {
     }
 }
 
-/// Plane `t` error bound (relative to the distance from the origin to the plane's point,
-/// at angles over 1e-3): one dot product and one division.
-const PLANE_T_ERROR: f64 = 1e-5;
+/// Plane `t` error bound (relative to the larger of the hit's distance and the scale),
+/// divided by the cosine of the angle between ray and normal (skipped below 1e-3): one dot
+/// product and one division, about 16 ulps.
+const PLANE_T_ERROR: f64 = 1e-6;
 
 proptest! {
     #![proptest_config(config(13))]
@@ -230,14 +231,15 @@ proptest! {
         let dir = dir * len;
         let got = plane.intersect(&Ray::new(o, dir));
         let (nv, ov, dv) = (d(plane.normal), d(o), d(dir));
-        prop_assume!(nv.dot(dv).abs() > 1e-3 * dv.length());
+        let cos = nv.dot(dv).abs() / dv.length();
+        prop_assume!(cos > 1e-3);
         let t = nv.dot(d(point) - ov) / nv.dot(dv);
         let scale = (d(point) - ov).length() + d(point).length();
         let r = Reference {
             t: (t >= 0.0).then_some(t),
             clear: (t * dv.length()).abs() > MARGIN * scale,
         };
-        agree("plane", got, &r, dv.length(), scale, PLANE_T_ERROR)?;
+        agree("plane", got, &r, dv.length(), scale, PLANE_T_ERROR / cos)?;
     }
 }
 
@@ -254,7 +256,7 @@ proptest! {
     #[test]
     fn slab_test_is_conservative(
         a in vec3(-5.0..5.0), b in vec3(-5.0..5.0), o in vec3(-10.0..10.0),
-        aim in vec3(-0.2..1.2), zero in 0u8..16, len in length(), on_face in any::<bool>(),
+        aim in vec3(-0.2..1.2), zero in 0u8..7, len in length(), on_face in any::<bool>(),
     ) {
         let (min, max) = (a.min(b), a.max(b));
         let mut o = o;
