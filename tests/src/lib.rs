@@ -7,6 +7,21 @@
 use raybench_core::{Frame, Hit, NO_HIT, Ray, RenderSettings, Renderer, Scene, TriangleMesh, Vec3};
 use std::sync::Arc;
 
+/// Every backend bound by the bit-exact contract, naive first (the reference): the suites
+/// that compare backends with naive or with themselves run each of these that this machine
+/// can run ([`available`]). A new exact backend joins by adding its name here.
+pub const EXACT_BACKENDS: &[&str] = &[
+    "naive",
+    "bvh",
+    "obvhs",
+    "grid",
+    "grid2",
+    "packet",
+    "packet-sse4.1",
+    "packet-portable",
+    "packet-avx512",
+];
+
 /// True under `CI=true`, where every asset is installed and skipping is failing.
 #[must_use]
 pub fn in_ci() -> bool {

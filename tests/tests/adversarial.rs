@@ -17,17 +17,8 @@ use raybench_tests::{
 };
 use std::sync::Arc;
 
-/// The exact CPU backends (naive is the reference).
-const BACKENDS: &[&str] = &[
-    "bvh",
-    "obvhs",
-    "grid",
-    "grid2",
-    "packet",
-    "packet-sse4.1",
-    "packet-portable",
-    "packet-avx512",
-];
+/// The exact CPU backends but naive (the reference).
+const BACKENDS: &[&str] = raybench_tests::EXACT_BACKENDS.split_at(1).1;
 
 /// Traces `rays` (in their order and sorted into packets) with naive and every backend and
 /// asserts bit-identical hits and that invalid rays miss. Returns naive's hits in the

@@ -12,17 +12,7 @@ use raybench_core::{Frame, Mode};
 use raybench_tests::{available, load_or_skip, mode_settings, prepared};
 
 /// Every exact CPU backend.
-const BACKENDS: &[&str] = &[
-    "naive",
-    "bvh",
-    "obvhs",
-    "grid",
-    "grid2",
-    "packet",
-    "packet-sse4.1",
-    "packet-portable",
-    "packet-avx512",
-];
+const BACKENDS: &[&str] = raybench_tests::EXACT_BACKENDS;
 
 /// Frame side in pixels.
 const SIZE: u32 = 24;

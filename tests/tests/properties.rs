@@ -74,6 +74,17 @@ fn first(crossings: &[f64]) -> Option<f64> {
     crossings.iter().copied().find(|&t| t >= 0.0)
 }
 
+/// The crossings of the line `f + t e` with the unit ball (sphere and ellipsoid after
+/// scaling), by the exact quadratic in f64; none for a negative or NaN discriminant.
+fn ball(f: DVec3, e: DVec3) -> Vec<f64> {
+    let (a, b, c) = (e.dot(e), f.dot(e), f.dot(f) - 1.0);
+    let disc = b * b - a * c;
+    if disc.is_nan() || disc < 0.0 {
+        return vec![];
+    }
+    vec![(-b - disc.sqrt()) / a, (-b + disc.sqrt()) / a]
+}
+
 /// Reference outcome of a case: the exact first crossing, and whether the primitive grown
 /// and shrunk by the margin gives the same hit/miss and nearly the same distance (else the
 /// case is decided by rounding and skipped).
@@ -196,17 +207,7 @@ proptest! {
         let got = Sphere::new(c, radius).intersect(&ray);
         let (ov, dv, cv, rv) = (d(o), d(dir), d(c), f64::from(radius));
         let scale = (ov - cv).length() + rv;
-        let roots = |delta: f64| {
-            let r = rv + delta;
-            let f = ov - cv;
-            let (a, b, q) = (dv.dot(dv), f.dot(dv), f.dot(f) - r * r);
-            let disc = b * b - a * q;
-            if disc < 0.0 || r <= 0.0 {
-                return vec![];
-            }
-            let s = disc.sqrt();
-            vec![(-b - s) / a, (-b + s) / a]
-        };
+        let roots = |delta: f64| ball((ov - cv) / (rv + delta), dv / (rv + delta));
         let r = reference(roots, scale, dv.length());
         agree("sphere", got, &r, dv.length(), scale, SPHERE_T_ERROR)?;
     }
@@ -395,13 +396,7 @@ proptest! {
         let scale = (ov - d(c)).length() + d(radii).max_element();
         let crossings = |delta: f64| {
             let r = d(radii) + DVec3::splat(delta);
-            let (f, e) = ((ov - d(c)) / r, dv / r);
-            let (qa, qb, qc) = (e.dot(e), f.dot(e), f.dot(f) - 1.0);
-            let disc = qb * qb - qa * qc;
-            if disc < 0.0 || r.min_element() <= 0.0 {
-                return vec![];
-            }
-            vec![(-qb - disc.sqrt()) / qa, (-qb + disc.sqrt()) / qa]
+            ball((ov - d(c)) / r, dv / r)
         };
         let r = reference(crossings, scale, dv.length());
         agree("csg ellipsoid", got, &r, dv.length(), scale, CSG_T_ERROR)?;

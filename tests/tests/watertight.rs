@@ -14,17 +14,7 @@ use raybench_tests::{assert_same_ray_hits, available, cube_mesh, packed, prepare
 use std::sync::Arc;
 
 /// Every exact CPU backend.
-const BACKENDS: &[&str] = &[
-    "naive",
-    "bvh",
-    "obvhs",
-    "grid",
-    "grid2",
-    "packet",
-    "packet-sse4.1",
-    "packet-portable",
-    "packet-avx512",
-];
+const BACKENDS: &[&str] = raybench_tests::EXACT_BACKENDS;
 
 /// Largest `|t - 1|` of a hit at the aimed-at point: rounding of the direction and of the
 /// triangle test, far below the distance to any other part of the mesh.
