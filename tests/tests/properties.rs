@@ -144,8 +144,8 @@ fn agree(
     }
 }
 
-/// Triangle `t` error bound (distance along the ray, relative to the scale: the largest
-/// distance among origin and vertices), at angles of incidence over 1e-3 (grazing rays
+/// Triangle `t` error bound (distance along the ray, relative to the scale, the largest
+/// distance among origin and vertices, or to the hit's distance if larger), at angles of incidence over 1e-3 (grazing rays
 /// are skipped with the edge cases: [`MARGIN`] moves their hit point far).
 const TRIANGLE_T_ERROR: f64 = 1e-5;
 
@@ -189,7 +189,8 @@ proptest! {
     }
 }
 
-/// Sphere `t` error bound (relative to `|o - c| + r`): the stable quadratic loses at most
+/// Sphere `t` error bound (relative to `|o - c| + r` or the hit's distance, the larger, as
+/// every bound here: see [`agree`]): the stable quadratic loses at most
 /// half the bits of the discriminant, and the margin keeps the rays off the silhouette.
 const SPHERE_T_ERROR: f64 = 1e-5;
 
