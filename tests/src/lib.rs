@@ -4,8 +4,23 @@
 //! failing under `CI=true`, when the shared meshes are absent), rendering with a backend by
 //! name, and [`check`], the one data-driven comparison against the naive oracle.
 
-use raybench_core::{Frame, Hit, NO_HIT, RenderSettings, Renderer, Scene};
+use raybench_core::{Frame, Hit, NO_HIT, Ray, RenderSettings, Renderer, Scene, TriangleMesh, Vec3};
 use std::sync::Arc;
+
+/// Every backend bound by the bit-exact contract, naive first (the reference): the suites
+/// that compare backends with naive or with themselves run each of these that this machine
+/// can run ([`available`]). A new exact backend joins by adding its name here.
+pub const EXACT_BACKENDS: &[&str] = &[
+    "naive",
+    "bvh",
+    "obvhs",
+    "grid",
+    "grid2",
+    "packet",
+    "packet-sse4.1",
+    "packet-portable",
+    "packet-avx512",
+];
 
 /// True under `CI=true`, where every asset is installed and skipping is failing.
 #[must_use]
@@ -276,6 +291,82 @@ pub fn check_modes(backends: &[&str], scene: &str, size: u32) {
             }
         }
     }
+}
+
+/// A mesh of separate triangles (no shared vertices), in the given order.
+#[must_use]
+pub fn triangles(tris: &[[Vec3; 3]]) -> TriangleMesh {
+    TriangleMesh {
+        positions: tris.iter().flatten().copied().collect(),
+        indices: (0..tris.len() as u32)
+            .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+            .collect(),
+    }
+}
+
+/// The cube `[-1, 1]^3` with each face split into `n x n` quads of two triangles, the
+/// vertices shared between neighbouring triangles and faces (a closed, watertight mesh).
+#[must_use]
+pub fn cube_mesh(n: u32) -> TriangleMesh {
+    let mut positions = Vec::new();
+    let mut index = std::collections::HashMap::new();
+    let mut vertex = |p: Vec3| -> u32 {
+        let key = p.to_array().map(f32::to_bits);
+        *index.entry(key).or_insert_with(|| {
+            positions.push(p);
+            positions.len() as u32 - 1
+        })
+    };
+    let mut indices = Vec::new();
+    let coordinate = |i: u32| -1.0 + 2.0 * i as f32 / n as f32;
+    for axis in 0..3 {
+        for side in [-1.0f32, 1.0] {
+            let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+            let point = |i: u32, j: u32| {
+                let mut p = Vec3::ZERO;
+                p[axis] = side;
+                p[u] = coordinate(i);
+                p[v] = coordinate(j);
+                p
+            };
+            for i in 0..n {
+                for j in 0..n {
+                    let q = [
+                        vertex(point(i, j)),
+                        vertex(point(i + 1, j)),
+                        vertex(point(i + 1, j + 1)),
+                        vertex(point(i, j + 1)),
+                    ];
+                    // Outward winding on both sides.
+                    if side > 0.0 {
+                        indices.push([q[0], q[1], q[2]]);
+                        indices.push([q[0], q[2], q[3]]);
+                    } else {
+                        indices.push([q[0], q[2], q[1]]);
+                        indices.push([q[0], q[3], q[2]]);
+                    }
+                }
+            }
+        }
+    }
+    TriangleMesh { positions, indices }
+}
+
+/// The octant of a ray's direction as the packet backends group rays (bit `a` set when the
+/// inverse direction along axis `a` is negative).
+#[must_use]
+pub fn octant(r: &Ray) -> u8 {
+    let s = r.inv_dir;
+    u8::from(s.x < 0.0) | u8::from(s.y < 0.0) << 1 | u8::from(s.z < 0.0) << 2
+}
+
+/// `rays` sorted by [`octant`] (stably), so that consecutive rays form full coherent packets
+/// in the packet backends (which trace runs of `packet_size` rays of one octant as packets).
+#[must_use]
+pub fn packed(rays: &[Ray]) -> Vec<Ray> {
+    let mut sorted = rays.to_vec();
+    sorted.sort_by_key(octant);
+    sorted
 }
 
 /// The GPU's tolerances against the naive oracle. The GPU cannot be bit-exact: WGSL's

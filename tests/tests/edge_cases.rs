@@ -3,19 +3,10 @@
 //! boxes, rays starting inside boxes, axis-aligned rays and rays along box faces.
 
 use raybench_core::{Ray, Scene, SceneBuilder, Sphere, TriangleMesh, Vec3};
-use raybench_tests::{assert_same_ray_hits, prepared};
+use raybench_tests::{assert_same_ray_hits, prepared, triangles};
 use std::sync::Arc;
 
 const BACKENDS: &[&str] = &["bvh", "obvhs", "grid", "grid2", "packet", "packet-portable"];
-
-fn mesh(tris: &[[Vec3; 3]]) -> TriangleMesh {
-    TriangleMesh {
-        positions: tris.iter().flatten().copied().collect(),
-        indices: (0..tris.len() as u32)
-            .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
-            .collect(),
-    }
-}
 
 /// Rays that probe a scene of the given bounds from everywhere: incoherent rays from inside
 /// the box, axis-aligned rays through a lattice (some exactly on box faces), and rays from
@@ -83,7 +74,7 @@ fn single_primitive() {
         .unwrap();
     check_scene("one sphere", b.build());
     let mut b = SceneBuilder::new("one");
-    b.add_mesh("t", &mesh(&[[Vec3::ZERO, Vec3::X, Vec3::Y]]), 0)
+    b.add_mesh("t", &triangles(&[[Vec3::ZERO, Vec3::X, Vec3::Y]]), 0)
         .unwrap();
     check_scene("one triangle", b.build());
 }
@@ -119,7 +110,7 @@ fn same_centroid() {
         }
     }
     let mut b = SceneBuilder::new("centroid");
-    b.add_mesh("c", &mesh(&tris), 0).unwrap();
+    b.add_mesh("c", &triangles(&tris), 0).unwrap();
     check_scene("same centroid", b.build());
 }
 
@@ -174,7 +165,7 @@ fn zero_extent_boxes() {
         ]);
     }
     let mut b = SceneBuilder::new("flat");
-    b.add_mesh("f", &mesh(&tris), 0).unwrap();
+    b.add_mesh("f", &triangles(&tris), 0).unwrap();
     check_scene("zero-extent boxes", b.build());
 }
 

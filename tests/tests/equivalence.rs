@@ -1,23 +1,13 @@
 //! Every raybench CPU backend against the naive oracle: bit-identical primitive ids and `t`
 //! on every built-in scene and on rays aimed at shared edges and vertices.
 //!
-//! A new backend joins by adding its name to `BACKENDS`.
+//! A new backend joins by adding its name to `raybench_tests::EXACT_BACKENDS`.
 
 use raybench_core::{Ray, Vec3};
 use raybench_tests::{assert_same_ray_hits, available, check, load_or_skip, prepared};
 
 /// Backends under test (naive itself checks thread-count independence).
-const BACKENDS: &[&str] = &[
-    "naive",
-    "bvh",
-    "obvhs",
-    "grid",
-    "grid2",
-    "packet",
-    "packet-sse4.1",
-    "packet-portable",
-    "packet-avx512",
-];
+const BACKENDS: &[&str] = raybench_tests::EXACT_BACKENDS;
 
 /// 64 x 64 ray casting: about 4k rays, so naive on the 69k-triangle meshes stays near 1 s.
 const SIZE: u32 = 64;

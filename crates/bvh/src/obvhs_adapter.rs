@@ -27,7 +27,10 @@
 //!
 //! The closure obvhs calls for each candidate applies raybench's tie rule and returns
 //! [`cull_bound`] of the best `t` (scaled), so obvhs's own early exit gets the contract's
-//! slack. Rays that are not finite skip obvhs and test every primitive, as naive does.
+//! slack. Rays that are not valid, and rays starting more than [`FAR_ORIGIN`] scene sizes
+//! from the scene (where obvhs's rounding outgrows the padding: an origin at `-1e30` missed
+//! a hit, found by `tests/tests/adversarial.rs`), skip obvhs and test every primitive, as
+//! naive does.
 //!
 //! Remaining limitation (documented in the README): a hit whose padded box the ray leaves
 //! within about `1.5e-9` of the scene's size from its origin can be missed; the padding
@@ -54,6 +57,10 @@ const OBVHS_ENTRY_CLAMP: f32 = 1.0e-4;
 const SCALED_SIZE_LOG2: i32 = 16;
 /// Largest magnitude of an inverse direction component handed to obvhs.
 const INV_LIMIT: f32 = 1.0e30;
+/// Rays whose origin lies farther than this many scene sizes from the scene's centre skip
+/// obvhs and test every primitive: obvhs's slab error (a few ulps of the distance to the
+/// origin) outgrows the box padding (`2^-16` of the size) beyond about 64 sizes.
+const FAR_ORIGIN: f32 = 32.0;
 
 /// obvhs's CWBVH over the bounded primitives; unbounded ones in a side list.
 pub struct ObvhsAccel {
@@ -64,6 +71,10 @@ pub struct ObvhsAccel {
     pad: f32,
     /// The power of two obvhs's copy of the scene is scaled by.
     scale: f32,
+    /// The centre of the scene's box and the distance from it (per axis) beyond which an
+    /// origin is too far for obvhs ([`FAR_ORIGIN`] sizes).
+    center: glam::Vec3,
+    reach: f32,
 }
 
 impl std::fmt::Debug for ObvhsAccel {
@@ -119,13 +130,26 @@ impl ObvhsAccel {
             .iter()
             .map(|&i| geometry.bounded()[i as usize])
             .collect();
+        let (center, reach) = if bounds.is_empty() {
+            (glam::Vec3::ZERO, f32::INFINITY)
+        } else {
+            (bounds.center(), FAR_ORIGIN * scale.max(pad))
+        };
         Self {
             geometry,
             bvh,
             ids,
             pad,
             scale: s,
+            center,
+            reach,
         }
+    }
+
+    /// Whether the ray starts too far from the scene for obvhs's rounding
+    /// ([`FAR_ORIGIN`]).
+    fn too_far(&self, ray: &Ray) -> bool {
+        (ray.origin - self.center).abs().max_element() > self.reach
     }
 
     /// The ray as obvhs sees it, and the factor from raybench's `t` to obvhs's: the origin
@@ -170,7 +194,7 @@ impl Accel for ObvhsAccel {
     }
 
     fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
-        if !ray.is_valid() {
+        if !ray.is_valid() || self.too_far(ray) {
             return self.geometry.closest_brute_force(ray, counters);
         }
         let g = &*self.geometry;
@@ -195,7 +219,7 @@ impl Accel for ObvhsAccel {
     }
 
     fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
-        if !ray.is_valid() {
+        if !ray.is_valid() || self.too_far(ray) {
             return self.geometry.occluded_brute_force(ray, counters);
         }
         let g = &*self.geometry;

@@ -389,8 +389,13 @@ impl Csg {
     }
 
     /// The first boundary of the combined solid inside `[ray.t_min, ray.t_max]`.
+    ///
+    /// Rays that miss the tree's box miss without evaluating it: accelerators never test
+    /// them, and far from the box the leaves' arithmetic overflows (an origin at `x = 1e30`
+    /// made a cone's quadratic report a hit).
     #[must_use]
     pub fn intersect(&self, ray: &Ray) -> Option<CsgHit> {
+        self.bounds.intersect(ray, ray.t_max)?;
         let mut leaf = 0;
         let spans = self.spans(self.nodes.len() - 1, ray, &mut leaf);
         for s in spans.as_slice() {
@@ -1017,6 +1022,20 @@ mod tests {
     }
 
     const FROM_LEFT: Vec3 = Vec3::new(-10.0, 0.0, 0.0);
+
+    /// Regression (tests/tests/adversarial.rs): a ray starting at `x = 1.16e30` and going
+    /// straight down hit the cone of the built-in `csg` scene at `t = 4.3`.
+    #[test]
+    fn rays_far_outside_the_box_miss() {
+        let cone = CsgNode::Leaf(Solid::Cone {
+            base: Vec3::new(1.5, 1.0, -1.2),
+            radius: 0.8,
+            height: 1.2,
+        });
+        let o = Vec3::new(1.160_351_6e30, 6.501_904_5, -0.200_048_86);
+        assert_eq!(hit(&cone, o, -Vec3::Y), None);
+        assert!(hit(&cone, Vec3::new(1.5, 6.5, -1.2), -Vec3::Y).is_some());
+    }
 
     #[test]
     fn leaves_give_analytic_distances() {

@@ -39,10 +39,23 @@ impl Ray {
         Self::with_interval(origin, dir, 0.0, f32::INFINITY)
     }
 
-    /// A ray over `[t_min, t_max]`.
+    /// A ray over `[t_min, t_max]`. A ray that is not valid ([`Ray::is_valid`]), or has a
+    /// NaN bound, gets the empty interval `[inf, -inf]`, so that every primitive's range
+    /// check and every slab test rejects it: without that, an infinite direction component
+    /// shears every triangle to `t = 0` and hits it, a direction whose squared length
+    /// overflows gives spheres a `t = -0` hit, and a NaN `t_min` passed the triangle's
+    /// range check but no slab test. A negative `t_min` is raised to 0: the slab tests'
+    /// conservative far scaling (`far * FAR_SCALE`) holds for distances ahead of the
+    /// origin only, and accelerators culled hits behind it that naive found.
     #[inline]
     #[must_use]
     pub fn with_interval(origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Self {
+        let valid = valid(origin, dir) && !t_min.is_nan() && !t_max.is_nan();
+        let (t_min, t_max) = if valid {
+            (t_min.max(0.0), t_max)
+        } else {
+            (f32::INFINITY, f32::NEG_INFINITY)
+        };
         let abs = dir.abs();
         // Largest component; ties go to the lower axis. NaN compares false and lands on z.
         let kz: usize = if abs.x >= abs.y && abs.x >= abs.z {
@@ -78,12 +91,14 @@ impl Ray {
         self.origin + self.dir * t
     }
 
-    /// True when origin and direction are finite and the direction is not zero: the rays
-    /// that can hit anything. Others (NaN, infinite, zero direction) miss everywhere.
+    /// True when the origin is finite and the direction's squared length is a positive
+    /// finite `f32` (about `1e-22 < |dir| < 1.8e19`, so that quadratic tests neither
+    /// overflow nor divide by zero): the rays that can hit anything. Others (NaN, infinite,
+    /// zero, vanishing or overflowing directions) miss everywhere.
     #[inline]
     #[must_use]
     pub fn is_valid(&self) -> bool {
-        self.origin.is_finite() && self.dir.is_finite() && self.dir != Vec3::ZERO
+        valid(self.origin, self.dir)
     }
 
     /// The same ray with `t_max` replaced.
@@ -92,6 +107,13 @@ impl Ray {
     pub fn clipped(&self, t_max: f32) -> Self {
         Self { t_max, ..*self }
     }
+}
+
+/// [`Ray::is_valid`] of an origin and a direction.
+#[inline]
+fn valid(origin: Vec3, dir: Vec3) -> bool {
+    let length2 = dir.length_squared();
+    origin.is_finite() && length2 > 0.0 && length2.is_finite()
 }
 
 #[cfg(test)]
@@ -114,5 +136,51 @@ mod tests {
         assert!(Ray::new(Vec3::ZERO, Vec3::X).is_valid());
         assert!(!Ray::new(Vec3::ZERO, Vec3::ZERO).is_valid());
         assert!(!Ray::new(Vec3::splat(f32::NAN), Vec3::X).is_valid());
+        assert!(!Ray::new(Vec3::ZERO, Vec3::new(0.0, 1e30, 0.0)).is_valid());
+        assert!(!Ray::new(Vec3::ZERO, Vec3::splat(1e-40)).is_valid());
+        assert!(Ray::new(Vec3::ZERO, Vec3::new(0.0, 1e-40, 1e-3)).is_valid());
+    }
+
+    /// Regression (tests/tests/adversarial.rs): a direction with an infinite component
+    /// made the shear constants 0 and the triangle test returned `t = 0` hits.
+    #[test]
+    fn invalid_rays_hit_nothing() {
+        let t = crate::Triangle::new(
+            Vec3::new(-1.0, -1.0, 2.0),
+            Vec3::new(1.0, -1.0, 2.0),
+            Vec3::new(0.0, 1.0, 2.0),
+        );
+        for dir in [
+            Vec3::new(0.01, 0.02, f32::INFINITY),
+            Vec3::new(f32::NEG_INFINITY, 0.0, 1.0),
+            Vec3::new(0.0, f32::NAN, 1.0),
+            Vec3::ZERO,
+        ] {
+            let r = Ray::new(Vec3::ZERO, dir);
+            assert!(t.intersect(&r).is_none(), "{dir}");
+            let b = crate::Aabb::new(Vec3::splat(-1.0), Vec3::ONE);
+            assert!(b.intersect(&r, r.t_max).is_none(), "{dir}");
+        }
+        // |dir|^2 overflows: the sphere test returned t = -0 from inside.
+        let huge = Ray::new(Vec3::ZERO, Vec3::new(-0.01, 1e30, -1.0));
+        assert!(
+            crate::Sphere::new(Vec3::ZERO, 1.0)
+                .intersect(&huge)
+                .is_none()
+        );
+        // A NaN t_min passed the triangle's range check.
+        let nan = Ray::with_interval(Vec3::ZERO, Vec3::Z, f32::NAN, 10.0);
+        assert!(t.intersect(&nan).is_none());
+        // A negative t_min is raised to 0 (no hit behind the origin).
+        let behind = Ray::with_interval(Vec3::new(0.0, 0.0, 4.0), Vec3::Z, -10.0, 10.0);
+        assert_eq!(behind.t_min, 0.0);
+        assert!(t.intersect(&behind).is_none());
+        let far = Ray::new(Vec3::new(0.0, 0.0, f32::NEG_INFINITY), Vec3::Z);
+        assert!(t.intersect(&far).is_none());
+        assert!(
+            crate::Sphere::new(Vec3::ZERO, 1.0)
+                .intersect(&far)
+                .is_none()
+        );
     }
 }

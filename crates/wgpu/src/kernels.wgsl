@@ -127,6 +127,11 @@ fn is_nan(x: f32) -> bool {
     return (bitcast<u32>(x) & 0x7fffffffu) > 0x7f800000u;
 }
 
+// Neither infinite nor NaN (by the bits: WGSL's comparisons with inf may be folded away).
+fn is_finite(x: f32) -> bool {
+    return (bitcast<u32>(x) & 0x7fffffffu) < 0x7f800000u;
+}
+
 fn copysign(x: f32, s: f32) -> f32 {
     return bitcast<f32>((bitcast<u32>(x) & 0x7fffffffu) | (bitcast<u32>(s) & 0x80000000u));
 }
@@ -328,11 +333,11 @@ fn sphere_hit(r: Ray, center: vec3<f32>, radius: f32, t_max: f32) -> f32 {
 // `Plane::intersect`: t, or -1 on a miss.
 fn plane_hit(r: Ray, point: vec3<f32>, normal: vec3<f32>, t_max: f32) -> f32 {
     let denom = dot(normal, r.d);
-    if denom == 0.0 {
+    if denom == 0.0 || !is_finite(denom) {
         return -1.0;
     }
     let t = dot(normal, point - r.o) / denom;
-    if t >= r.t_min && t <= t_max {
+    if t >= r.t_min && t <= t_max && is_finite(t) {
         return t;
     }
     return -1.0;
@@ -1044,7 +1049,16 @@ fn trace_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let q = rays_in[i];
-    let h = closest(make_ray(q.o.xyz, q.d.xyz, q.o.w, q.d.w));
+    // `Ray::is_valid`: rays with a NaN or infinite component, a direction whose squared
+    // length is 0 or overflows, or a NaN bound, miss
+    // (tested by the bits: the shader compiler may assume finite arithmetic).
+    let length2 = dot(q.d.xyz, q.d.xyz);
+    let valid = is_finite(q.o.x) && is_finite(q.o.y) && is_finite(q.o.z)
+        && is_finite(length2) && length2 > 0.0 && !is_nan(q.o.w) && !is_nan(q.d.w);
+    var h = Hit(params.inf, NO_HIT, 0.0, 0.0, 0u);
+    if valid {
+        h = closest(make_ray(q.o.xyz, q.d.xyz, q.o.w, q.d.w));
+    }
     n_rays += 1u;
     out[i].v = vec4<f32>(select(h.t, params.inf, h.id == NO_HIT), h.u, h.v, 0.0);
     out[i].id = h.id;
