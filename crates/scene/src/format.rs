@@ -568,14 +568,34 @@ pub(crate) fn read_text(path: &Path, limit: u64, what: &str) -> Result<String, L
         path: path.to_owned(),
         source,
     };
-    let len = std::fs::metadata(path).map_err(io)?.len();
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if !meta.is_file() {
+        // A device or pipe reports no length and may never end.
+        return Err(LoadError::Parse {
+            path: path.to_owned(),
+            message: format!("{what} is not a regular file"),
+        });
+    }
+    let len = meta.len();
     if len > limit {
         return Err(LoadError::Parse {
             path: path.to_owned(),
             message: format!("{what} of {len} bytes exceeds the limit of {limit}"),
         });
     }
-    let bytes = std::fs::read(path).map_err(io)?;
+    // At most `limit + 1` bytes, should the file grow meanwhile.
+    let mut bytes = Vec::new();
+    std::io::Read::read_to_end(
+        &mut std::io::Read::take(std::fs::File::open(path).map_err(io)?, limit + 1),
+        &mut bytes,
+    )
+    .map_err(io)?;
+    if bytes.len() as u64 > limit {
+        return Err(LoadError::Parse {
+            path: path.to_owned(),
+            message: format!("{what} exceeds the limit of {limit} bytes"),
+        });
+    }
     String::from_utf8(bytes).map_err(|_| LoadError::Parse {
         path: path.to_owned(),
         message: "not UTF-8 text".into(),

@@ -97,7 +97,18 @@ pub fn load_gltf_file(path: &Path) -> Result<MeshData, LoadError> {
         path: path.to_owned(),
         source,
     })?;
-    let gltf = gltf::Gltf::from_slice(&bytes)
+    load_gltf_bytes(&bytes, path)
+}
+
+/// Loads a `.gltf` (JSON) or `.glb` (binary) file held in memory, as [`load_gltf_file`]
+/// does: `path` names it in errors and its folder is where external buffers are looked up.
+/// The fuzz targets and property tests use it.
+///
+/// # Errors
+/// As [`load_gltf_file`], less the error of reading `path` itself.
+#[doc(hidden)]
+pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<MeshData, LoadError> {
+    let gltf = gltf::Gltf::from_slice(bytes)
         .map_err(|e| parse_err(path, format!("malformed glTF: {e}")))?;
     let buffers = load_buffers(path, &gltf.document, gltf.blob.clone())?;
     let doc = &gltf.document;
@@ -111,14 +122,7 @@ pub fn load_gltf_file(path: &Path) -> Result<MeshData, LoadError> {
         Some(scene) => {
             let mut visited = vec![false; doc.nodes().len()];
             for node in scene.nodes() {
-                add_node(
-                    path,
-                    &node,
-                    Mat4::IDENTITY,
-                    &buffers,
-                    &mut data,
-                    &mut visited,
-                )?;
+                add_node(path, &node, &buffers, &mut data, &mut visited)?;
             }
         }
         None => {
@@ -130,41 +134,45 @@ pub fn load_gltf_file(path: &Path) -> Result<MeshData, LoadError> {
     Ok(data)
 }
 
+/// Adds the meshes of `root` and its descendants, depth first in node order. The walk keeps
+/// its own stack: a chain of many nested nodes must not overflow the thread's.
 fn add_node(
     path: &Path,
-    node: &gltf::Node,
-    parent: Mat4,
+    root: &gltf::Node,
     buffers: &[Vec<u8>],
     data: &mut MeshData,
     visited: &mut [bool],
 ) -> Result<(), LoadError> {
-    // glTF node hierarchies are strict trees: a node reached twice is a cycle or a shared
-    // child, which could multiply the geometry exponentially.
-    let seen = visited
-        .get_mut(node.index())
-        .ok_or_else(|| parse_err(path, "node index out of range"))?;
-    if std::mem::replace(seen, true) {
-        return Err(parse_err(
-            path,
-            format!(
-                "node {} is reached twice (node hierarchies must be trees)",
-                node.index()
-            ),
-        ));
-    }
-    let local = Mat4::from_cols_array_2d(&node.transform().matrix());
-    let world = parent * local;
-    if !world.is_finite() {
-        return Err(parse_err(
-            path,
-            format!("node {} has a non-finite transform", node.index()),
-        ));
-    }
-    if let Some(mesh) = node.mesh() {
-        add_mesh(path, &mesh, world, buffers, data)?;
-    }
-    for child in node.children() {
-        add_node(path, &child, world, buffers, data, visited)?;
+    let mut stack = vec![(root.clone(), Mat4::IDENTITY)];
+    while let Some((node, parent)) = stack.pop() {
+        // glTF node hierarchies are strict trees: a node reached twice is a cycle or a
+        // shared child, which could multiply the geometry exponentially.
+        let seen = visited
+            .get_mut(node.index())
+            .ok_or_else(|| parse_err(path, "node index out of range"))?;
+        if std::mem::replace(seen, true) {
+            return Err(parse_err(
+                path,
+                format!(
+                    "node {} is reached twice (node hierarchies must be trees)",
+                    node.index()
+                ),
+            ));
+        }
+        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+        let world = parent * local;
+        if !world.is_finite() {
+            return Err(parse_err(
+                path,
+                format!("node {} has a non-finite transform", node.index()),
+            ));
+        }
+        if let Some(mesh) = node.mesh() {
+            add_mesh(path, &mesh, world, buffers, data)?;
+        }
+        // Reversed, so that the first child is visited next (node order, as before).
+        let children: Vec<gltf::Node> = node.children().collect();
+        stack.extend(children.into_iter().rev().map(|c| (c, world)));
     }
     Ok(())
 }

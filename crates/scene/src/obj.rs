@@ -56,6 +56,15 @@ pub fn material_from_mtl(m: &tobj::Material) -> Material {
     }
 }
 
+/// The options raybench loads OBJ files with: polygons triangulated as fans, points and
+/// lines ignored, one index per attribute.
+const OBJ_OPTIONS: tobj::LoadOptions = tobj::LoadOptions {
+    single_index: false,
+    triangulate: true,
+    ignore_points: true,
+    ignore_lines: true,
+};
+
 /// Loads an OBJ file (and its MTL, if readable) into triangles in file order: `tobj`
 /// triangulates polygons as fans, so a quad splits along its first diagonal. A missing or
 /// unreadable MTL file means "no materials" (default material), as SOURCES.md asks.
@@ -63,21 +72,68 @@ pub fn material_from_mtl(m: &tobj::Material) -> Material {
 /// # Errors
 /// When the file is missing, malformed, has out-of-range indices or non-finite coordinates.
 pub fn load_obj_file(path: &Path) -> Result<MeshData, LoadError> {
-    let opts = tobj::LoadOptions {
-        single_index: false,
-        triangulate: true,
-        ignore_points: true,
-        ignore_lines: true,
-    };
     if !path.is_file() {
         return Err(LoadError::NotFound {
             path: path.to_owned(),
         });
     }
-    let (models, materials) = tobj::load_obj(path, &opts).map_err(|e| LoadError::Parse {
+    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
         path: path.to_owned(),
-        message: format!("malformed OBJ: {e}"),
+        source,
     })?;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    parse_obj(&bytes, path, |mtl| tobj::load_mtl(dir.join(mtl)))
+}
+
+/// Parses OBJ text from memory (`path` names it in errors); `mtllib` statements load no
+/// materials. The fuzz targets and property tests use it; [`load_obj_file`] shares its code.
+///
+/// # Errors
+/// As [`load_obj_file`], less the file errors.
+#[doc(hidden)]
+pub fn load_obj_bytes(bytes: &[u8], path: &Path) -> Result<MeshData, LoadError> {
+    parse_obj(bytes, path, |_| Err(tobj::LoadError::OpenFileFailed))
+}
+
+/// Refuses face, line and point elements with an index beyond `u32` in magnitude: no mesh
+/// has that many vertices, and `tobj` multiplies texture and normal indices unchecked
+/// (an index near `isize::MAX` overflows, a panic in debug builds).
+fn check_index_magnitudes(bytes: &[u8], path: &Path) -> Result<(), LoadError> {
+    for (n, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        // Lines that are not UTF-8 are refused by `tobj` itself.
+        let Ok(line) = std::str::from_utf8(line) else {
+            continue;
+        };
+        let mut words = line.split_whitespace();
+        if !matches!(words.next(), Some("f" | "l" | "p")) {
+            continue;
+        }
+        let huge = words
+            .flat_map(|w| w.split('/'))
+            .filter_map(|i| i.parse::<i64>().ok())
+            .any(|i| i.unsigned_abs() > u64::from(u32::MAX));
+        if huge {
+            return Err(LoadError::Parse {
+                path: path.to_owned(),
+                message: format!("line {}: a vertex index is out of range", n + 1),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Parses OBJ text, with `mtl` loading the material libraries it names.
+fn parse_obj(
+    bytes: &[u8],
+    path: &Path,
+    mtl: impl Fn(&Path) -> tobj::MTLLoadResult,
+) -> Result<MeshData, LoadError> {
+    check_index_magnitudes(bytes, path)?;
+    let (models, materials) =
+        tobj::load_obj_buf(&mut { bytes }, &OBJ_OPTIONS, mtl).map_err(|e| LoadError::Parse {
+            path: path.to_owned(),
+            message: format!("malformed OBJ: {e}"),
+        })?;
     let materials: Vec<Material> = materials
         .map(|ms| ms.iter().map(material_from_mtl).collect())
         .unwrap_or_default();
