@@ -95,28 +95,40 @@ pub fn load_obj_bytes(bytes: &[u8], path: &Path) -> Result<MeshData, LoadError> 
     parse_obj(bytes, path, |_| Err(tobj::LoadError::OpenFileFailed))
 }
 
-/// Refuses face, line and point elements with an index beyond `u32` in magnitude: no mesh
-/// has that many vertices, and `tobj` multiplies texture and normal indices unchecked
-/// (an index near `isize::MAX` overflows, a panic in debug builds).
+/// Refuses face, line and point elements with an index beyond `u32` in magnitude or a
+/// relative (negative) index reaching before the first element: `tobj` turns the latter
+/// into huge indices and multiplies texture and normal indices unchecked (an overflow, a
+/// panic in debug builds). No mesh has more than `u32::MAX` vertices.
 fn check_index_magnitudes(bytes: &[u8], path: &Path) -> Result<(), LoadError> {
+    // Positions, texture coordinates and normals seen so far.
+    let mut counts = [0u64; 3];
     for (n, line) in bytes.split(|&b| b == b'\n').enumerate() {
         // Lines that are not UTF-8 are refused by `tobj` itself.
         let Ok(line) = std::str::from_utf8(line) else {
             continue;
         };
         let mut words = line.split_whitespace();
-        if !matches!(words.next(), Some("f" | "l" | "p")) {
-            continue;
-        }
-        let huge = words
-            .flat_map(|w| w.split('/'))
-            .filter_map(|i| i.parse::<i64>().ok())
-            .any(|i| i.unsigned_abs() > u64::from(u32::MAX));
-        if huge {
-            return Err(LoadError::Parse {
-                path: path.to_owned(),
-                message: format!("line {}: a vertex index is out of range", n + 1),
-            });
+        match words.next() {
+            Some("v") => counts[0] += 1,
+            Some("vt") => counts[1] += 1,
+            Some("vn") => counts[2] += 1,
+            Some("f" | "l" | "p") => {
+                let bad = words.any(|w| {
+                    w.split('/').zip(counts).any(|(i, count)| {
+                        i.parse::<i64>().is_ok_and(|i| {
+                            i.unsigned_abs() > u64::from(u32::MAX)
+                                || (i < 0 && i.unsigned_abs() > count)
+                        })
+                    })
+                });
+                if bad {
+                    return Err(LoadError::Parse {
+                        path: path.to_owned(),
+                        message: format!("line {}: a vertex index is out of range", n + 1),
+                    });
+                }
+            }
+            _ => {}
         }
     }
     Ok(())
@@ -184,5 +196,10 @@ fn parse_obj(
             data.triangle_material.push(material);
         }
     }
+    // Finite coordinates can still exceed the coordinate limit (`1e30`).
+    data.mesh.validate().map_err(|e| LoadError::Parse {
+        path: path.to_owned(),
+        message: e.to_string(),
+    })?;
     Ok(data)
 }

@@ -115,3 +115,103 @@ fn bezier_file_on_an_endless_device_is_refused() {
     let e = raybench_scene::load_bpt_file(dev).unwrap_err().to_string();
     assert!(e.contains("not a regular file"), "{e}");
 }
+
+/// Volume dims multiplied in u64: `[2^22; 3]` wrapped to 0 voxels and passed the limit,
+/// `[u32::MAX; 3]` overflowed (a panic in debug builds). Found by the property tests (and
+/// the `raw_volume` fuzz target).
+#[test]
+fn volume_dims_product_does_not_wrap() {
+    use raybench_core::SceneError;
+    use raybench_core::volume::check_volume_dims;
+    for dims in [[1 << 22; 3], [u32::MAX; 3], [1 << 21, 1 << 21, 1 << 22]] {
+        let e = check_volume_dims(dims).unwrap_err();
+        assert!(matches!(e, SceneError::TooLarge(_)), "{dims:?}: {e}");
+    }
+    let text = "[[volume]]\nraw = \"absent.raw\"\ndims = [4194304, 4194304, 4194304]\n";
+    let e = load_scene_str(text, "t", None, Path::new("/nonexistent-assets"))
+        .map(drop)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("exceeds the limit"), "{e}");
+    assert_eq!(check_volume_dims([2, 3, 4]).unwrap(), 24);
+}
+
+/// A relative texture or normal index reaching before the first element (`vt` count 1,
+/// index -5) became a huge index in `tobj`, whose `vt * 2` overflowed (found by the
+/// property tests). Such indices are refused before `tobj` sees them.
+#[test]
+fn obj_relative_index_before_the_first_element_is_refused() {
+    for f in ["f 1/-5 2/1 3/1", "f 1//-2 2//1 3//1", "f -4 1 2"] {
+        let text = format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n{f}\n");
+        let e = load_obj_bytes(text.as_bytes(), Path::new("t.obj"))
+            .map(drop)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("line 6: a vertex index is out of range"),
+            "{f}: {e}"
+        );
+    }
+    let ok = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/-1 2/1 -1/-1\n";
+    assert_eq!(
+        load_obj_bytes(ok.as_bytes(), Path::new("t.obj"))
+            .unwrap()
+            .mesh
+            .indices
+            .len(),
+        1
+    );
+}
+
+/// An OBJ vertex at `1e30` (finite, beyond `MAX_COORDINATE`) was returned by the OBJ loader
+/// as it was (found by the property tests); the loader now validates its mesh as the glTF
+/// loader does.
+#[test]
+fn obj_coordinate_beyond_the_limit_is_refused() {
+    let text = "v 0 0 0\nv 1 0 0\nv 0 0 1e30\nf 1 2 3\n";
+    let e = load_obj_bytes(text.as_bytes(), Path::new("t.obj"))
+        .map(drop)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("exceeds the coordinate limit"), "{e}");
+}
+
+/// The seed inputs of the fuzz targets (`fuzz/seeds/<target>/`) are well-formed: each
+/// loads, so fuzzing starts from the loaders' success paths.
+#[test]
+fn fuzz_seeds_load() {
+    let seeds = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/seeds");
+    let mut n = 0;
+    for target in ["scene_toml", "obj", "gltf", "bpt", "raw_volume"] {
+        for entry in std::fs::read_dir(seeds.join(target)).unwrap() {
+            let path = entry.unwrap().path();
+            let bytes = std::fs::read(&path).unwrap();
+            let text = || String::from_utf8(bytes.clone()).unwrap();
+            let loaded = match target {
+                "scene_toml" => load_scene_str(&text(), "seed", None, Path::new("/nonexistent"))
+                    .map(|s| assert!(!s.geometry.is_empty() || !s.volumes.is_empty())),
+                "obj" => load_obj_bytes(&bytes, &path).map(|m| assert!(!m.mesh.indices.is_empty())),
+                "gltf" => {
+                    load_gltf_bytes(&bytes, &path).map(|m| assert!(!m.mesh.indices.is_empty()))
+                }
+                "bpt" => parse_bpt(&text(), &path).map(drop),
+                _ => {
+                    // The raw_volume target's layout: three u32 dims, a format byte, samples.
+                    use raybench_scene::grids::{SampleFormat, decode_raw};
+                    let dim =
+                        |i: usize| u32::from_le_bytes(bytes[4 * i..4 * i + 4].try_into().unwrap());
+                    let dims = [dim(0), dim(1), dim(2)];
+                    let format = [SampleFormat::U8, SampleFormat::U16, SampleFormat::F32]
+                        [usize::from(bytes[12] % 3)];
+                    let count = raybench_core::volume::check_volume_dims(dims).unwrap();
+                    decode_raw(&bytes[13..], count, format, count, &path).map(drop)
+                }
+            };
+            if let Err(e) = loaded {
+                panic!("{}: {e}", path.display());
+            }
+            n += 1;
+        }
+    }
+    assert!(n >= 10, "only {n} seeds");
+}
