@@ -25,22 +25,9 @@ fn assert_err_contains<T>(r: Result<T, LoadError>, needle: &str) {
 /// A glTF document of one triangle primitive whose accessors, views and buffer are as
 /// given; the buffer is a data URI holding `data` (which may be shorter than declared).
 fn gltf(accessor_count: u64, view_length: u64, buffer_length: u64, data: &[u8]) -> String {
+    use base64::Engine as _;
     use std::fmt::Write as _;
-    let mut b64 = String::new();
-    // Base64 by hand: the test needs no dependency for twelve bytes.
-    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    for c in data.chunks(3) {
-        let n = (u32::from(c[0]) << 16)
-            | (u32::from(*c.get(1).unwrap_or(&0)) << 8)
-            | u32::from(*c.get(2).unwrap_or(&0));
-        for k in 0..4 {
-            if k <= c.len() {
-                b64.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
-            } else {
-                b64.push('=');
-            }
-        }
-    }
+    let b64 = base64::engine::general_purpose::STANDARD.encode(data);
     let mut s = String::new();
     write!(
         s,
@@ -192,5 +179,4 @@ fn resolution_of_10_9_squared_is_refused() {
     };
     let e = s.validate().unwrap_err().to_string();
     assert!(e.contains("exceeds the limit"), "{e}");
-    assert!(limits::MAX_DIMENSION < 1_000_000_000);
 }

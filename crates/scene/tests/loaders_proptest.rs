@@ -521,6 +521,11 @@ fn sample(level: u8) -> BoxedStrategy<f32> {
         .boxed()
 }
 
+/// Replacements for a buffer view's offset, length and stride.
+type ViewOverride = (Option<u64>, Option<u64>, Option<u32>);
+/// Replacements for an accessor's component type, element type, count and offset.
+type AccessorOverride = (Option<u32>, Option<&'static str>, Option<u64>, Option<u64>);
+
 /// The fields of a glTF file that the generator varies; well-formed values first, each
 /// replaced by a malformed one at levels 1 and 2.
 #[derive(Clone, Debug)]
@@ -532,9 +537,9 @@ struct GltfParts {
     indexed: bool,
     buffer_length: Option<u64>,
     /// Offset, length and stride of the positions' and the indices' views.
-    views: [(Option<u64>, Option<u64>, Option<u32>); 2],
+    views: [ViewOverride; 2],
     /// Component type, element type, count and offset of the two accessors.
-    accessors: [(Option<u32>, Option<&'static str>, Option<u64>, Option<u64>); 2],
+    accessors: [AccessorOverride; 2],
     mode: Option<u32>,
     translation: Option<&'static str>,
     cut: Option<usize>,
