@@ -108,6 +108,17 @@ pub fn load_gltf_file(path: &Path) -> Result<MeshData, LoadError> {
 /// As [`load_gltf_file`], less the error of reading `path` itself.
 #[doc(hidden)]
 pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<MeshData, LoadError> {
+    // The `gltf` crate subtracts the 12-byte header from the GLB's declared length
+    // unchecked (an overflow, a panic in debug builds, when it declares less).
+    if let Some(header) = bytes.strip_prefix(b"glTF")
+        && let Some(length) = header.get(4..8)
+        && u32::from_le_bytes([length[0], length[1], length[2], length[3]]) < 12
+    {
+        return Err(parse_err(
+            path,
+            "malformed glTF: the GLB header declares a length shorter than the header",
+        ));
+    }
     let gltf = gltf::Gltf::from_slice(bytes)
         .map_err(|e| parse_err(path, format!("malformed glTF: {e}")))?;
     let buffers = load_buffers(path, &gltf.document, gltf.blob.clone())?;

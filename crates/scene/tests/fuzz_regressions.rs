@@ -215,3 +215,21 @@ fn fuzz_seeds_load() {
     }
     assert!(n >= 10, "only {n} seeds");
 }
+
+/// A GLB header declaring a total length below its own 12 bytes made the `gltf` crate
+/// subtract with overflow (found by the `gltf` fuzz target; the input is
+/// `fuzz-regressions/glb-header-length-underflow.glb`). It is refused first.
+#[test]
+fn glb_header_length_shorter_than_the_header_is_refused() {
+    for length in [0u32, 11] {
+        let mut glb = b"glTF".to_vec();
+        glb.extend_from_slice(&2u32.to_le_bytes());
+        glb.extend_from_slice(&length.to_le_bytes());
+        glb.extend_from_slice(&[0; 16]);
+        let e = load_gltf_bytes(&glb, Path::new("t.glb"))
+            .map(drop)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("shorter than the header"), "{e}");
+    }
+}
