@@ -5,7 +5,7 @@
 
 use libfuzzer_sys::fuzz_target;
 use raybench_core::{Affine3A, TransferFunction, Vec3, Volume, VolumeData, VolumeParams};
-use raybench_scene::grids::{RawSamples, SampleFormat, decode_raw};
+use raybench_scene::grids::{SampleFormat, decode_raw};
 use std::path::Path;
 
 fuzz_target!(|data: &[u8]| {
@@ -27,15 +27,10 @@ fuzz_target!(|data: &[u8]| {
     let Ok(raw) = decode_raw(samples, count, format, max, path) else {
         return;
     };
-    let data = match raw {
-        RawSamples::U8(d) => VolumeData::U8(d),
-        RawSamples::U16(d) => VolumeData::U16(d),
-        RawSamples::F32(d) => VolumeData::F32(d),
-    };
     let volume = Volume::new(
         dims,
         Vec3::ONE,
-        data,
+        VolumeData::from(raw),
         Affine3A::IDENTITY,
         TransferFunction::ramp(10.0),
         VolumeParams::default(),

@@ -4,7 +4,7 @@ use crate::bpt::load_bpt_file;
 use crate::error::LoadError;
 use crate::generators::{self, Generated};
 use crate::gltf_loader::load_gltf_file;
-use crate::grids::{RawSamples, SampleFormat, read_png_gray, read_raw};
+use crate::grids::{SampleFormat, read_png_gray, read_raw};
 use crate::obj::{MeshData, load_obj_file};
 use crate::transform::Transform;
 use crate::volumes;
@@ -1040,12 +1040,7 @@ fn volume(v: &VolumeDesc, ctx: &Context, what: &str) -> Result<Volume, LoadError
                 v.format.unwrap_or(SampleFormat::U16),
                 MAX_VOLUME_VOXELS,
             )?;
-            let data = match samples {
-                RawSamples::U8(d) => VolumeData::U8(d),
-                RawSamples::U16(d) => VolumeData::U16(d),
-                RawSamples::F32(d) => VolumeData::F32(d),
-            };
-            (dims, data, Vec3::ONE)
+            (dims, VolumeData::from(samples), Vec3::ONE)
         }
         _ => {
             return Err(parse("a volume needs exactly one of source and raw".into()));

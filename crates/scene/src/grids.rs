@@ -42,6 +42,17 @@ pub enum RawSamples {
     F32(Vec<f32>),
 }
 
+impl From<RawSamples> for raybench_core::VolumeData {
+    /// Volume data in the samples' stored type.
+    fn from(samples: RawSamples) -> Self {
+        match samples {
+            RawSamples::U8(d) => Self::U8(d),
+            RawSamples::U16(d) => Self::U16(d),
+            RawSamples::F32(d) => Self::F32(d),
+        }
+    }
+}
+
 impl RawSamples {
     /// The samples as floats: integers normalised to `[0, 1]` (divided by 255 or 65535),
     /// floats as they are.

@@ -40,6 +40,20 @@ fn regression_files_load_or_fail_cleanly() {
     assert!(n > 0, "no regression inputs in {}", dir.display());
 }
 
+/// Asserts that the face line `f`, after three vertices, a texture coordinate and a normal,
+/// is refused as out of range.
+fn assert_obj_index_refused(f: &str) {
+    let text = format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n{f}\n");
+    let e = load_obj_bytes(text.as_bytes(), Path::new("t.obj"))
+        .map(drop)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("line 6: a vertex index is out of range"),
+        "{f}: {e}"
+    );
+}
+
 /// `tobj` multiplies texture and normal indices unchecked: `f 1//9223372036854775807`
 /// overflowed (a panic in debug builds, the test profile). Indices beyond `u32` are now
 /// refused before `tobj` sees them.
@@ -50,15 +64,7 @@ fn obj_huge_normal_and_texture_indices_do_not_overflow() {
         "f 1/9223372036854775807 2/1 3/1",
         "f 1/1/4611686018427387904 2/1/1 3/1/1",
     ] {
-        let text = format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n{f}\n");
-        let e = load_obj_bytes(text.as_bytes(), Path::new("t.obj"))
-            .map(drop)
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains("line 6: a vertex index is out of range"),
-            "{f}: {e}"
-        );
+        assert_obj_index_refused(f);
     }
     // Ordinary relative and absolute indices still load.
     let ok = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 -1//-1\n";
@@ -142,15 +148,7 @@ fn volume_dims_product_does_not_wrap() {
 #[test]
 fn obj_relative_index_before_the_first_element_is_refused() {
     for f in ["f 1/-5 2/1 3/1", "f 1//-2 2//1 3//1", "f -4 1 2"] {
-        let text = format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n{f}\n");
-        let e = load_obj_bytes(text.as_bytes(), Path::new("t.obj"))
-            .map(drop)
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains("line 6: a vertex index is out of range"),
-            "{f}: {e}"
-        );
+        assert_obj_index_refused(f);
     }
     let ok = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/-1 2/1 -1/-1\n";
     assert_eq!(

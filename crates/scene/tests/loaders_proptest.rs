@@ -13,7 +13,9 @@ use proptest::test_runner::{RngAlgorithm, RngSeed};
 use raybench_core::limits::{MAX_BEZIER_PATCHES, MAX_PRIMITIVES, MAX_VOLUME_VOXELS};
 use raybench_core::{Affine3A, TransferFunction, Vec3, Volume, VolumeData, VolumeParams};
 use raybench_scene::grids::{RawSamples, SampleFormat, decode_raw};
-use raybench_scene::{MeshData, load_gltf_bytes, load_obj_bytes, load_scene_str, parse_bpt};
+use raybench_scene::{
+    LoadError, MeshData, load_gltf_bytes, load_obj_bytes, load_scene_str, parse_bpt,
+};
 use std::path::Path;
 
 /// Generated inputs per loader.
@@ -182,8 +184,11 @@ fn obj_text() -> impl Strategy<Value = String> {
     })
 }
 
-/// What every loaded mesh must satisfy.
-fn check_mesh(m: &MeshData) -> Result<(), TestCaseError> {
+/// What every loaded mesh must satisfy; whether `loaded` holds a mesh with triangles.
+fn check_mesh(loaded: Result<MeshData, LoadError>) -> Result<bool, TestCaseError> {
+    let Ok(m) = loaded else {
+        return Ok(false);
+    };
     prop_assert!(m.mesh.validate().is_ok(), "{:?}", m.mesh.validate());
     prop_assert!(m.mesh.positions.iter().all(|p| p.is_finite()));
     prop_assert!(m.mesh.indices.len() <= MAX_PRIMITIVES);
@@ -191,17 +196,13 @@ fn check_mesh(m: &MeshData) -> Result<(), TestCaseError> {
     for id in m.triangle_material.iter().flatten() {
         prop_assert!((*id as usize) < m.materials.len());
     }
-    Ok(())
+    Ok(!m.mesh.indices.is_empty())
 }
 
 #[test]
 fn obj_lines() {
     let loaded = run_cases(CASES, obj_text(), |text| {
-        let Ok(m) = load_obj_bytes(text.as_bytes(), Path::new("p.obj")) else {
-            return Ok(false);
-        };
-        check_mesh(&m)?;
-        Ok(!m.mesh.indices.is_empty())
+        check_mesh(load_obj_bytes(text.as_bytes(), Path::new("p.obj")))
     });
     assert!(
         loaded >= CASES / 10,
@@ -736,11 +737,10 @@ fn gltf_file() -> impl Strategy<Value = Vec<u8>> {
 fn gltf_files() {
     let loaded = run_cases(CASES, gltf_file(), |bytes| {
         // External URIs (none here) would resolve against a folder that does not exist.
-        let Ok(m) = load_gltf_bytes(&bytes, Path::new("/nonexistent-dir/p.gltf")) else {
-            return Ok(false);
-        };
-        check_mesh(&m)?;
-        Ok(!m.mesh.indices.is_empty())
+        check_mesh(load_gltf_bytes(
+            &bytes,
+            Path::new("/nonexistent-dir/p.gltf"),
+        ))
     });
     assert!(
         loaded >= CASES / 20,
@@ -790,18 +790,13 @@ fn raw_volumes() {
             return Ok(false);
         };
         prop_assert_eq!(bytes.len() as u64, count * format.bytes());
-        let data = match samples {
-            RawSamples::U8(d) => VolumeData::U8(d),
-            RawSamples::U16(d) => VolumeData::U16(d),
-            RawSamples::F32(d) => {
-                prop_assert!(d.iter().all(|x| x.is_finite()));
-                VolumeData::F32(d)
-            }
-        };
+        if let RawSamples::F32(d) = &samples {
+            prop_assert!(d.iter().all(|x| x.is_finite()));
+        }
         let v = Volume::new(
             dims,
             Vec3::ONE,
-            data,
+            VolumeData::from(samples),
             Affine3A::IDENTITY,
             TransferFunction::ramp(10.0),
             VolumeParams::default(),
