@@ -124,7 +124,7 @@ fn check_index_magnitudes(bytes: &[u8], path: &Path) -> Result<(), LoadError> {
                 if bad {
                     return Err(LoadError::Parse {
                         path: path.to_owned(),
-                        message: format!("line {}: a vertex index is out of range", n + 1),
+                        message: format!("line {}: a vertex index is out of bounds", n + 1),
                     });
                 }
             }

@@ -49,7 +49,7 @@ fn assert_obj_index_refused(f: &str) {
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("line 6: a vertex index is out of range"),
+        e.contains("line 6: a vertex index is out of bounds"),
         "{f}: {e}"
     );
 }
