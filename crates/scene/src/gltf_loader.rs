@@ -76,6 +76,34 @@ fn load_buffers(
     Ok(out)
 }
 
+/// The `gltf` crate's validation, after the one check it relies on without making: its
+/// hook on primitives indexes the accessors with the POSITION attribute's index unchecked
+/// (a panic when that accessor does not exist).
+fn validate(path: &Path, root: &gltf::json::Root) -> Result<(), LoadError> {
+    use gltf::json::validation::{Checked, Validate as _};
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for prim in &mesh.primitives {
+            let position = prim
+                .attributes
+                .get(&Checked::Valid(gltf::Semantic::Positions));
+            if position.is_some_and(|a| a.value() >= root.accessors.len()) {
+                return Err(parse_err(
+                    path,
+                    format!("mesh {m}: the POSITION accessor does not exist"),
+                ));
+            }
+        }
+    }
+    let mut errors = Vec::new();
+    root.validate(root, gltf::json::Path::new, &mut |at, e| {
+        errors.push(format!("{}: {e}", at()));
+    });
+    match errors.first() {
+        None => Ok(()),
+        Some(first) => Err(parse_err(path, format!("invalid glTF: {first}"))),
+    }
+}
+
 fn material_of(m: &gltf::Material) -> Material {
     let pbr = m.pbr_metallic_roughness();
     let [r, g, b, _] = pbr.base_color_factor();
@@ -119,8 +147,9 @@ pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<MeshData, LoadError>
             "malformed glTF: the GLB header declares a length shorter than the header",
         ));
     }
-    let gltf = gltf::Gltf::from_slice(bytes)
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|e| parse_err(path, format!("malformed glTF: {e}")))?;
+    validate(path, gltf.document.as_json())?;
     let buffers = load_buffers(path, &gltf.document, gltf.blob.clone())?;
     let doc = &gltf.document;
 

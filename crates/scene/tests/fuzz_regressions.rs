@@ -231,3 +231,18 @@ fn glb_header_length_shorter_than_the_header_is_refused() {
         assert!(e.contains("shorter than the header"), "{e}");
     }
 }
+
+/// A primitive whose POSITION names an accessor that does not exist made the `gltf` crate's
+/// validation index out of bounds, a panic in every build (found by the `gltf` fuzz
+/// target; the input is `fuzz-regressions/gltf-position-accessor-missing.gltf`). The loader
+/// checks that index before validating.
+#[test]
+fn gltf_position_accessor_that_does_not_exist_is_refused() {
+    let text = r#"{"asset": {"version": "2.0"},
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 5}}]}]}"#;
+    let e = load_gltf_bytes(text.as_bytes(), Path::new("t.gltf"))
+        .map(drop)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("POSITION accessor does not exist"), "{e}");
+}
