@@ -258,14 +258,16 @@ pub fn check_volume_dims(dims: [u32; 3]) -> Result<u64, SceneError> {
             dims[0], dims[1], dims[2]
         )));
     }
-    let n = dims.iter().map(|&d| u64::from(d)).product::<u64>();
-    if n > MAX_VOLUME_VOXELS {
+    // In u128: three u32 sides multiply to at most 2^96, which u64 would wrap (a wrapped
+    // product could pass the limit).
+    let n = dims.iter().map(|&d| u128::from(d)).product::<u128>();
+    if n > u128::from(MAX_VOLUME_VOXELS) {
         return Err(SceneError::TooLarge(format!(
             "volume of {} x {} x {} = {n} voxels exceeds the limit of {MAX_VOLUME_VOXELS}",
             dims[0], dims[1], dims[2]
         )));
     }
-    Ok(n)
+    Ok(n as u64)
 }
 
 impl Volume {

@@ -4,7 +4,7 @@ use crate::bpt::load_bpt_file;
 use crate::error::LoadError;
 use crate::generators::{self, Generated};
 use crate::gltf_loader::load_gltf_file;
-use crate::grids::{RawSamples, SampleFormat, read_png_gray, read_raw};
+use crate::grids::{SampleFormat, read_png_gray, read_raw};
 use crate::obj::{MeshData, load_obj_file};
 use crate::transform::Transform;
 use crate::volumes;
@@ -568,14 +568,34 @@ pub(crate) fn read_text(path: &Path, limit: u64, what: &str) -> Result<String, L
         path: path.to_owned(),
         source,
     };
-    let len = std::fs::metadata(path).map_err(io)?.len();
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if !meta.is_file() {
+        // A device or pipe reports no length and may never end.
+        return Err(LoadError::Parse {
+            path: path.to_owned(),
+            message: format!("{what} is not a regular file"),
+        });
+    }
+    let len = meta.len();
     if len > limit {
         return Err(LoadError::Parse {
             path: path.to_owned(),
             message: format!("{what} of {len} bytes exceeds the limit of {limit}"),
         });
     }
-    let bytes = std::fs::read(path).map_err(io)?;
+    // At most `limit + 1` bytes, should the file grow meanwhile.
+    let mut bytes = Vec::new();
+    std::io::Read::read_to_end(
+        &mut std::io::Read::take(std::fs::File::open(path).map_err(io)?, limit + 1),
+        &mut bytes,
+    )
+    .map_err(io)?;
+    if bytes.len() as u64 > limit {
+        return Err(LoadError::Parse {
+            path: path.to_owned(),
+            message: format!("{what} exceeds the limit of {limit} bytes"),
+        });
+    }
     String::from_utf8(bytes).map_err(|_| LoadError::Parse {
         path: path.to_owned(),
         message: "not UTF-8 text".into(),
@@ -1020,12 +1040,7 @@ fn volume(v: &VolumeDesc, ctx: &Context, what: &str) -> Result<Volume, LoadError
                 v.format.unwrap_or(SampleFormat::U16),
                 MAX_VOLUME_VOXELS,
             )?;
-            let data = match samples {
-                RawSamples::U8(d) => VolumeData::U8(d),
-                RawSamples::U16(d) => VolumeData::U16(d),
-                RawSamples::F32(d) => VolumeData::F32(d),
-            };
-            (dims, data, Vec3::ONE)
+            (dims, VolumeData::from(samples), Vec3::ONE)
         }
         _ => {
             return Err(parse("a volume needs exactly one of source and raw".into()));

@@ -76,6 +76,34 @@ fn load_buffers(
     Ok(out)
 }
 
+/// The `gltf` crate's validation, after the one check it relies on without making: its
+/// hook on primitives indexes the accessors with the POSITION attribute's index unchecked
+/// (a panic when that accessor does not exist).
+fn validate(path: &Path, root: &gltf::json::Root) -> Result<(), LoadError> {
+    use gltf::json::validation::{Checked, Validate as _};
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for prim in &mesh.primitives {
+            let position = prim
+                .attributes
+                .get(&Checked::Valid(gltf::Semantic::Positions));
+            if position.is_some_and(|a| a.value() >= root.accessors.len()) {
+                return Err(parse_err(
+                    path,
+                    format!("mesh {m}: the POSITION accessor does not exist"),
+                ));
+            }
+        }
+    }
+    let mut errors = Vec::new();
+    root.validate(root, gltf::json::Path::new, &mut |at, e| {
+        errors.push(format!("{}: {e}", at()));
+    });
+    match errors.first() {
+        None => Ok(()),
+        Some(first) => Err(parse_err(path, format!("invalid glTF: {first}"))),
+    }
+}
+
 fn material_of(m: &gltf::Material) -> Material {
     let pbr = m.pbr_metallic_roughness();
     let [r, g, b, _] = pbr.base_color_factor();
@@ -97,8 +125,31 @@ pub fn load_gltf_file(path: &Path) -> Result<MeshData, LoadError> {
         path: path.to_owned(),
         source,
     })?;
-    let gltf = gltf::Gltf::from_slice(&bytes)
+    load_gltf_bytes(&bytes, path)
+}
+
+/// Loads a `.gltf` (JSON) or `.glb` (binary) file held in memory, as [`load_gltf_file`]
+/// does: `path` names it in errors and its folder is where external buffers are looked up.
+/// The fuzz targets and property tests use it.
+///
+/// # Errors
+/// As [`load_gltf_file`], less the error of reading `path` itself.
+#[doc(hidden)]
+pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<MeshData, LoadError> {
+    // The `gltf` crate subtracts the 12-byte header from the GLB's declared length
+    // unchecked (an overflow, a panic in debug builds, when it declares less).
+    if let Some(header) = bytes.strip_prefix(b"glTF")
+        && let Some(length) = header.get(4..8)
+        && u32::from_le_bytes([length[0], length[1], length[2], length[3]]) < 12
+    {
+        return Err(parse_err(
+            path,
+            "malformed glTF: the GLB header declares a length shorter than the header",
+        ));
+    }
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|e| parse_err(path, format!("malformed glTF: {e}")))?;
+    validate(path, gltf.document.as_json())?;
     let buffers = load_buffers(path, &gltf.document, gltf.blob.clone())?;
     let doc = &gltf.document;
 
@@ -111,14 +162,7 @@ pub fn load_gltf_file(path: &Path) -> Result<MeshData, LoadError> {
         Some(scene) => {
             let mut visited = vec![false; doc.nodes().len()];
             for node in scene.nodes() {
-                add_node(
-                    path,
-                    &node,
-                    Mat4::IDENTITY,
-                    &buffers,
-                    &mut data,
-                    &mut visited,
-                )?;
+                add_node(path, &node, &buffers, &mut data, &mut visited)?;
             }
         }
         None => {
@@ -130,41 +174,45 @@ pub fn load_gltf_file(path: &Path) -> Result<MeshData, LoadError> {
     Ok(data)
 }
 
+/// Adds the meshes of `root` and its descendants, depth first in node order. The walk keeps
+/// its own stack: a chain of many nested nodes must not overflow the thread's.
 fn add_node(
     path: &Path,
-    node: &gltf::Node,
-    parent: Mat4,
+    root: &gltf::Node,
     buffers: &[Vec<u8>],
     data: &mut MeshData,
     visited: &mut [bool],
 ) -> Result<(), LoadError> {
-    // glTF node hierarchies are strict trees: a node reached twice is a cycle or a shared
-    // child, which could multiply the geometry exponentially.
-    let seen = visited
-        .get_mut(node.index())
-        .ok_or_else(|| parse_err(path, "node index out of range"))?;
-    if std::mem::replace(seen, true) {
-        return Err(parse_err(
-            path,
-            format!(
-                "node {} is reached twice (node hierarchies must be trees)",
-                node.index()
-            ),
-        ));
-    }
-    let local = Mat4::from_cols_array_2d(&node.transform().matrix());
-    let world = parent * local;
-    if !world.is_finite() {
-        return Err(parse_err(
-            path,
-            format!("node {} has a non-finite transform", node.index()),
-        ));
-    }
-    if let Some(mesh) = node.mesh() {
-        add_mesh(path, &mesh, world, buffers, data)?;
-    }
-    for child in node.children() {
-        add_node(path, &child, world, buffers, data, visited)?;
+    let mut stack = vec![(root.clone(), Mat4::IDENTITY)];
+    while let Some((node, parent)) = stack.pop() {
+        // glTF node hierarchies are strict trees: a node reached twice is a cycle or a
+        // shared child, which could multiply the geometry exponentially.
+        let seen = visited
+            .get_mut(node.index())
+            .ok_or_else(|| parse_err(path, "node index out of range"))?;
+        if std::mem::replace(seen, true) {
+            return Err(parse_err(
+                path,
+                format!(
+                    "node {} is reached twice (node hierarchies must be trees)",
+                    node.index()
+                ),
+            ));
+        }
+        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+        let world = parent * local;
+        if !world.is_finite() {
+            return Err(parse_err(
+                path,
+                format!("node {} has a non-finite transform", node.index()),
+            ));
+        }
+        if let Some(mesh) = node.mesh() {
+            add_mesh(path, &mesh, world, buffers, data)?;
+        }
+        // Reversed, so that the first child is visited next (node order, as before).
+        let children: Vec<gltf::Node> = node.children().collect();
+        stack.extend(children.into_iter().rev().map(|c| (c, world)));
     }
     Ok(())
 }

@@ -42,6 +42,17 @@ pub enum RawSamples {
     F32(Vec<f32>),
 }
 
+impl From<RawSamples> for raybench_core::VolumeData {
+    /// Volume data in the samples' stored type.
+    fn from(samples: RawSamples) -> Self {
+        match samples {
+            RawSamples::U8(d) => Self::U8(d),
+            RawSamples::U16(d) => Self::U16(d),
+            RawSamples::F32(d) => Self::F32(d),
+        }
+    }
+}
+
 impl RawSamples {
     /// The samples as floats: integers normalised to `[0, 1]` (divided by 255 or 65535),
     /// floats as they are.
@@ -55,44 +66,67 @@ impl RawSamples {
     }
 }
 
-/// Reads `count` samples of `format` from the raw file `path`, which must hold exactly
-/// that many bytes (`count` is checked against `max_count` first).
+/// Reads `count` samples of `format` from the raw file `path`, which must be a regular file
+/// holding exactly that many bytes (`count` is checked against `max_count` first).
 ///
 /// # Errors
-/// [`LoadError::Io`] when unreadable, [`LoadError::Parse`] for a size that does not match
-/// or a count above the limit, and for NaN or infinite float samples.
+/// [`LoadError::Io`] when unreadable, [`LoadError::Parse`] for something other than a
+/// regular file, a size that does not match or a count above the limit, and for NaN or
+/// infinite float samples.
 pub fn read_raw(
     path: &Path,
     count: u64,
     format: SampleFormat,
     max_count: u64,
 ) -> Result<RawSamples, LoadError> {
-    let parse = |message: String| LoadError::Parse {
-        path: path.to_owned(),
-        message,
-    };
-    if count > max_count {
-        return Err(parse(format!(
-            "{count} samples exceed the limit of {max_count}"
-        )));
-    }
+    use std::io::Read as _;
+    let expected = check_raw_count(path, count, format, max_count)?;
     let io = |source| LoadError::Io {
         path: path.to_owned(),
         source,
     };
-    let expected = count * format.bytes();
-    let len = std::fs::metadata(path).map_err(io)?.len();
-    if len != expected {
-        return Err(parse(format!(
-            "raw file holds {len} bytes; {count} {format:?} samples need {expected}"
-        )));
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if !meta.is_file() {
+        // A device such as /dev/zero reports no length and never ends.
+        return Err(raw_err(path, "not a regular file".into()));
     }
-    let bytes = std::fs::read(path).map_err(io)?;
+    if meta.len() != expected {
+        return Err(size_mismatch(path, meta.len(), count, format));
+    }
+    // At most one byte more than expected: a file that grew meanwhile is caught below
+    // without reading all of it.
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .map_err(io)?
+        .take(expected + 1)
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
     if bytes.len() as u64 != expected {
-        return Err(parse("the file changed while it was read".into()));
+        return Err(raw_err(path, "the file changed while it was read".into()));
+    }
+    decode_raw(&bytes, count, format, max_count, path)
+}
+
+/// Decodes `count` little-endian samples of `format` from `bytes`, which must hold exactly
+/// that many (`count` is checked against `max_count` first; `path` names the data in
+/// errors). [`read_raw`] uses it; so do the fuzz targets and property tests.
+///
+/// # Errors
+/// [`LoadError::Parse`] for a count above the limit, a length that does not match, and NaN
+/// or infinite float samples.
+pub fn decode_raw(
+    bytes: &[u8],
+    count: u64,
+    format: SampleFormat,
+    max_count: u64,
+    path: &Path,
+) -> Result<RawSamples, LoadError> {
+    let expected = check_raw_count(path, count, format, max_count)?;
+    if bytes.len() as u64 != expected {
+        return Err(size_mismatch(path, bytes.len() as u64, count, format));
     }
     Ok(match format {
-        SampleFormat::U8 => RawSamples::U8(bytes),
+        SampleFormat::U8 => RawSamples::U8(bytes.to_vec()),
         SampleFormat::U16 => RawSamples::U16(
             bytes
                 .chunks_exact(2)
@@ -105,11 +139,42 @@ pub fn read_raw(
                 .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
                 .collect();
             if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-                return Err(parse(format!("sample {} is not finite", i + 1)));
+                return Err(raw_err(path, format!("sample {} is not finite", i + 1)));
             }
             RawSamples::F32(v)
         }
     })
+}
+
+fn raw_err(path: &Path, message: String) -> LoadError {
+    LoadError::Parse {
+        path: path.to_owned(),
+        message,
+    }
+}
+
+/// The byte size of `count` samples, once `count` is known to be within `max_count`.
+fn check_raw_count(
+    path: &Path,
+    count: u64,
+    format: SampleFormat,
+    max_count: u64,
+) -> Result<u64, LoadError> {
+    if count > max_count {
+        return Err(raw_err(
+            path,
+            format!("{count} samples exceed the limit of {max_count}"),
+        ));
+    }
+    Ok(count * format.bytes())
+}
+
+fn size_mismatch(path: &Path, len: u64, count: u64, format: SampleFormat) -> LoadError {
+    let expected = count * format.bytes();
+    raw_err(
+        path,
+        format!("raw file holds {len} bytes; {count} {format:?} samples need {expected}"),
+    )
 }
 
 /// Reads a greyscale (or colour: its luma) 8- or 16-bit PNG as `(width, height, samples)`
@@ -189,6 +254,12 @@ mod tests {
         let nan = temp("nan.raw", &f32::NAN.to_le_bytes());
         assert!(read_raw(&nan, 1, SampleFormat::F32, 10).is_err());
         assert!(read_raw(Path::new("/nonexistent.raw"), 1, SampleFormat::U8, 10).is_err());
+        // A device reports length 0 and never ends: refused, not read (a zero count would
+        // otherwise match its length and read forever).
+        if Path::new("/dev/zero").exists() {
+            let e = read_raw(Path::new("/dev/zero"), 0, SampleFormat::U8, 10).unwrap_err();
+            assert!(e.to_string().contains("not a regular file"), "{e}");
+        }
     }
 
     #[test]

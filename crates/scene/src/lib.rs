@@ -28,8 +28,8 @@ pub use bpt::{BptPatch, load_bpt_file, parse_bpt};
 pub use builtin::{BUILTIN_SCENES, BuiltinScene};
 pub use error::LoadError;
 pub use format::{load_scene_str, load_toml_file};
-pub use gltf_loader::load_gltf_file;
-pub use obj::load_obj_file;
+pub use gltf_loader::{load_gltf_bytes, load_gltf_file};
+pub use obj::{MeshData, load_obj_bytes, load_obj_file};
 pub use transform::Transform;
 
 use raybench_core::Scene;

@@ -56,6 +56,15 @@ pub fn material_from_mtl(m: &tobj::Material) -> Material {
     }
 }
 
+/// The options raybench loads OBJ files with: polygons triangulated as fans, points and
+/// lines ignored, one index per attribute.
+const OBJ_OPTIONS: tobj::LoadOptions = tobj::LoadOptions {
+    single_index: false,
+    triangulate: true,
+    ignore_points: true,
+    ignore_lines: true,
+};
+
 /// Loads an OBJ file (and its MTL, if readable) into triangles in file order: `tobj`
 /// triangulates polygons as fans, so a quad splits along its first diagonal. A missing or
 /// unreadable MTL file means "no materials" (default material), as SOURCES.md asks.
@@ -63,21 +72,80 @@ pub fn material_from_mtl(m: &tobj::Material) -> Material {
 /// # Errors
 /// When the file is missing, malformed, has out-of-range indices or non-finite coordinates.
 pub fn load_obj_file(path: &Path) -> Result<MeshData, LoadError> {
-    let opts = tobj::LoadOptions {
-        single_index: false,
-        triangulate: true,
-        ignore_points: true,
-        ignore_lines: true,
-    };
     if !path.is_file() {
         return Err(LoadError::NotFound {
             path: path.to_owned(),
         });
     }
-    let (models, materials) = tobj::load_obj(path, &opts).map_err(|e| LoadError::Parse {
+    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
         path: path.to_owned(),
-        message: format!("malformed OBJ: {e}"),
+        source,
     })?;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    parse_obj(&bytes, path, |mtl| tobj::load_mtl(dir.join(mtl)))
+}
+
+/// Parses OBJ text from memory (`path` names it in errors); `mtllib` statements load no
+/// materials. The fuzz targets and property tests use it; [`load_obj_file`] shares its code.
+///
+/// # Errors
+/// As [`load_obj_file`], less the file errors.
+#[doc(hidden)]
+pub fn load_obj_bytes(bytes: &[u8], path: &Path) -> Result<MeshData, LoadError> {
+    parse_obj(bytes, path, |_| Err(tobj::LoadError::OpenFileFailed))
+}
+
+/// Refuses face, line and point elements with an index beyond `u32` in magnitude or a
+/// relative (negative) index reaching before the first element: `tobj` turns the latter
+/// into huge indices and multiplies texture and normal indices unchecked (an overflow, a
+/// panic in debug builds). No mesh has more than `u32::MAX` vertices.
+fn check_index_magnitudes(bytes: &[u8], path: &Path) -> Result<(), LoadError> {
+    // Positions, texture coordinates and normals seen so far.
+    let mut counts = [0u64; 3];
+    for (n, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        // Lines that are not UTF-8 are refused by `tobj` itself.
+        let Ok(line) = std::str::from_utf8(line) else {
+            continue;
+        };
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => counts[0] += 1,
+            Some("vt") => counts[1] += 1,
+            Some("vn") => counts[2] += 1,
+            Some("f" | "l" | "p") => {
+                let bad = words.any(|w| {
+                    w.split('/').zip(counts).any(|(i, count)| {
+                        i.parse::<i64>().is_ok_and(|i| {
+                            i.unsigned_abs() > u64::from(u32::MAX)
+                                || (i < 0 && i.unsigned_abs() > count)
+                        })
+                    })
+                });
+                if bad {
+                    return Err(LoadError::Parse {
+                        path: path.to_owned(),
+                        message: format!("line {}: a vertex index is out of bounds", n + 1),
+                    });
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// Parses OBJ text, with `mtl` loading the material libraries it names.
+fn parse_obj(
+    bytes: &[u8],
+    path: &Path,
+    mtl: impl Fn(&Path) -> tobj::MTLLoadResult,
+) -> Result<MeshData, LoadError> {
+    check_index_magnitudes(bytes, path)?;
+    let (models, materials) =
+        tobj::load_obj_buf(&mut { bytes }, &OBJ_OPTIONS, mtl).map_err(|e| LoadError::Parse {
+            path: path.to_owned(),
+            message: format!("malformed OBJ: {e}"),
+        })?;
     let materials: Vec<Material> = materials
         .map(|ms| ms.iter().map(material_from_mtl).collect())
         .unwrap_or_default();
@@ -128,5 +196,10 @@ pub fn load_obj_file(path: &Path) -> Result<MeshData, LoadError> {
             data.triangle_material.push(material);
         }
     }
+    // Finite coordinates can still exceed the coordinate limit (`1e30`).
+    data.mesh.validate().map_err(|e| LoadError::Parse {
+        path: path.to_owned(),
+        message: e.to_string(),
+    })?;
     Ok(data)
 }
