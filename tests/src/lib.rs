@@ -531,3 +531,51 @@ pub mod gpu {
         );
     }
 }
+
+/// Rays lying in `grid`'s cell-boundary planes and faces, and starting on its box (shared by
+/// `grid_cases.rs` and `adversarial.rs`).
+#[must_use]
+pub fn grid_boundary_rays(grid: &raybench_grid::Grid) -> Vec<Ray> {
+    let b = grid.bounds();
+    let cell = grid.cell_size();
+    let res = grid.resolution();
+    let mut rays = Vec::new();
+    for a in 0..3 {
+        let (u, v) = ((a + 1) % 3, (a + 2) % 3);
+        for i in 0..=res[u] {
+            for j in (0..=res[v]).step_by(((res[v] / 6).max(1)) as usize) {
+                let mut o = b.min;
+                o[u] = b.min[u] + i as f32 * cell[u];
+                o[v] = b.min[v] + j as f32 * cell[v];
+                // Along axis a, exactly on the boundary lines of u and v, from outside, from the
+                // box face, and from the middle.
+                let mut d = Vec3::ZERO;
+                d[a] = 1.0;
+                let mut outside = o;
+                outside[a] = b.min[a] - 1.0;
+                rays.push(Ray::new(outside, d));
+                rays.push(Ray::new(o, d));
+                let mut far = o;
+                far[a] = b.max[a];
+                rays.push(Ray::new(far, -d));
+                // Diagonal inside the boundary plane of u.
+                let mut dd = Vec3::ZERO;
+                dd[a] = 1.0;
+                dd[v] = 0.37;
+                rays.push(Ray::new(outside, dd));
+            }
+        }
+    }
+    // From the box's corners towards the centre and along its edges.
+    let c = b.center();
+    for k in 0..8 {
+        let corner = Vec3::new(
+            if k & 1 == 0 { b.min.x } else { b.max.x },
+            if k & 2 == 0 { b.min.y } else { b.max.y },
+            if k & 4 == 0 { b.min.z } else { b.max.z },
+        );
+        rays.push(Ray::new(corner, c - corner));
+        rays.push(Ray::new(corner, Vec3::new(c.x - corner.x, 0.0, 0.0)));
+    }
+    rays
+}

@@ -384,26 +384,7 @@ fn rays_along_grid_cell_planes() {
         Arc::clone(&scene.geometry),
         raybench_grid::GridParams::default(),
     );
-    let b = grid.bounds();
-    let cell = grid.cell_size();
-    let res = grid.resolution();
-    let mut rays = Vec::new();
-    for a in 0..3 {
-        let (u, v) = ((a + 1) % 3, (a + 2) % 3);
-        for i in 0..=res[u] {
-            for j in (0..=res[v]).step_by((res[v] / 5).max(1) as usize) {
-                let mut o = b.min;
-                o[u] = b.min[u] + i as f32 * cell[u];
-                o[v] = b.min[v] + j as f32 * cell[v];
-                o[a] = b.min[a] - 1.0;
-                let mut d = Vec3::ZERO;
-                d[a] = 1.0;
-                rays.push(Ray::new(o, d));
-                d[u] = 0.25;
-                rays.push(Ray::new(o, d));
-            }
-        }
-    }
+    let rays = raybench_tests::grid_boundary_rays(&grid);
     check("grid cell planes", &scene, &rays);
 }
 
