@@ -150,10 +150,7 @@ pub struct PacketParams {
     pub isa: Isa,
     /// Trace coherent runs of a batch as packets (else every ray goes through the BVH8).
     pub packets: bool,
-    /// Before the per-lane box tests of a node, test the packet's interval bounds once and
-    /// skip the node when no lane can enter it (measured: see the README).
-    pub interval_cull: bool,
-    /// The BVH2 the packets walk and the BVH8 is collapsed from.
+    /// The BVH2 the BVH8 is collapsed from.
     pub bvh: BvhParams,
 }
 
@@ -162,13 +159,12 @@ impl Default for PacketParams {
         Self {
             isa: Isa::detect(),
             packets: true,
-            interval_cull: false,
             bvh: BvhParams::default(),
         }
     }
 }
 
-/// The packet backend: a BVH2 for packets and the BVH8 collapsed from it for single rays.
+/// The packet backend: a BVH8 collapsed from a BVH2, walked by packets and single rays.
 #[derive(Debug)]
 pub struct PacketAccel {
     geometry: Arc<Geometry>,
@@ -185,7 +181,7 @@ impl PacketAccel {
             params.isa = Isa::Portable;
         }
         let bvh = Bvh::build_with(Arc::clone(&geometry), params.bvh);
-        let layout = Layout::new(bvh, &geometry);
+        let layout = Layout::new(&bvh, &geometry);
         Self {
             geometry,
             layout,
@@ -222,6 +218,8 @@ fn batch_closest<L: Lanes, C: Counters>(
     let size = PACKET_VECTORS * L::W;
     let mut best = [None::<(u32, PrimHit)>; 32];
     let mut stack = [(0, 0.0); single::STACK];
+    let mut packet_stack: packet::PacketStack<PACKET_VECTORS> =
+        [(0, 0.0, [0; PACKET_VECTORS]); single::STACK];
     for (rays, hits) in rays.chunks(size).zip(hits.chunks_mut(size)) {
         let best = &mut best[..rays.len()];
         for (ray, b) in rays.iter().zip(best.iter_mut()) {
@@ -235,20 +233,14 @@ fn batch_closest<L: Lanes, C: Counters>(
                 rays,
                 oct,
                 best,
-                accel.params.interval_cull,
+                &mut packet_stack,
                 &mut stack,
                 counters,
             ),
             None => {
                 for (ray, b) in rays.iter().zip(best.iter_mut()) {
-                    *b = single::closest::<L::Single, C>(
-                        &accel.layout,
-                        g,
-                        ray,
-                        *b,
-                        &mut stack,
-                        counters,
-                    );
+                    *b =
+                        single::closest::<L, C>(&accel.layout, g, ray, 0, *b, &mut stack, counters);
                 }
             }
         }
@@ -282,10 +274,11 @@ fn batch_occluded<L: Lanes, C: Counters>(
             None => {
                 for (ray, o) in rays.iter().zip(out.iter_mut()) {
                     if !*o {
-                        *o = single::occluded::<L::Single, C>(
+                        *o = single::occluded::<L, C>(
                             &accel.layout,
                             g,
                             ray,
+                            0,
                             &mut stack,
                             counters,
                         );
@@ -306,10 +299,11 @@ fn one_closest<L: Lanes, C: Counters>(
     let g = &*accel.geometry;
     let mut best = None;
     counters.add_tests(g.closest_unbounded(ray, &mut best));
-    let best = single::closest::<L::Single, C>(
+    let best = single::closest::<L, C>(
         &accel.layout,
         g,
         ray,
+        0,
         best,
         &mut [(0, 0.0); single::STACK],
         counters,
@@ -323,10 +317,11 @@ fn one_occluded<L: Lanes, C: Counters>(accel: &PacketAccel, ray: &Ray, counters:
     let g = &*accel.geometry;
     let (hit, tests) = g.occluded_unbounded(ray);
     counters.add_tests(tests);
-    hit || single::occluded::<L::Single, C>(
+    hit || single::occluded::<L, C>(
         &accel.layout,
         g,
         ray,
+        0,
         &mut [(0, 0.0); single::STACK],
         counters,
     )
@@ -432,9 +427,11 @@ impl Accel for PacketAccel {
         AccelStats {
             memory_bytes: self.layout.memory_bytes(),
             counts: vec![
-                ("bvh2 nodes", self.layout.bvh.nodes().len() as u64),
+                ("bvh2 nodes", self.layout.bvh2_nodes as u64),
                 ("bvh8 nodes", self.layout.wide.len() as u64),
-                ("leaves", self.layout.leaves.len() as u64),
+                ("leaves", self.layout.leaves as u64),
+                ("child slots filled %", self.layout.fill_percent()),
+                ("triangles per leaf x100", self.layout.leaf_prims_x100()),
                 ("lanes", self.params.isa.lanes() as u64),
                 ("packet rays", self.packet_size() as u64),
             ],
