@@ -32,6 +32,7 @@ mod layout;
 mod packet;
 mod simd;
 mod single;
+mod stream;
 mod tri;
 
 use layout::Layout;
@@ -216,37 +217,43 @@ fn batch_closest<L: Lanes, C: Counters>(
 ) {
     let g = &*accel.geometry;
     let size = PACKET_VECTORS * L::W;
-    let mut best = [None::<(u32, PrimHit)>; 32];
+    let mut best = vec![None::<(u32, PrimHit)>; rays.len()];
+    for (ray, b) in rays.iter().zip(best.iter_mut()) {
+        counters.add_tests(g.closest_unbounded(ray, b));
+    }
     let mut stack = [(0, 0.0); single::STACK];
     let mut packet_stack: packet::PacketStack<PACKET_VECTORS> =
         [(0, 0.0, [0; PACKET_VECTORS]); single::STACK];
-    for (rays, hits) in rays.chunks(size).zip(hits.chunks_mut(size)) {
-        let best = &mut best[..rays.len()];
-        for (ray, b) in rays.iter().zip(best.iter_mut()) {
-            *b = None;
-            counters.add_tests(g.closest_unbounded(ray, b));
-        }
-        match packet::octant(rays).filter(|_| accel.params.packets) {
+    // Rays that do not form coherent packets, traced interleaved afterwards.
+    let mut pending = Vec::new();
+    for (start, chunk) in (0..).step_by(size).zip(rays.chunks(size)) {
+        let end = start + chunk.len();
+        match packet::octant(chunk).filter(|_| accel.params.packets) {
             Some(oct) => packet::closest::<L, PACKET_VECTORS, C>(
                 &accel.layout,
                 g,
-                rays,
+                chunk,
                 oct,
-                best,
+                &mut best[start..end],
                 &mut packet_stack,
                 &mut stack,
                 counters,
             ),
-            None => {
-                for (ray, b) in rays.iter().zip(best.iter_mut()) {
-                    *b =
-                        single::closest::<L, C>(&accel.layout, g, ray, 0, *b, &mut stack, counters);
-                }
-            }
+            None => pending.extend(start..end),
         }
-        for ((ray, b), hit) in rays.iter().zip(best.iter()).zip(hits) {
-            *hit = g.complete(ray, *b);
-        }
+    }
+    let mut stacks = [[(0, 0.0); single::STACK]; stream::STREAMS];
+    stream::closest::<L, C>(
+        &accel.layout,
+        g,
+        rays,
+        &pending,
+        &mut best,
+        &mut stacks,
+        counters,
+    );
+    for ((ray, b), hit) in rays.iter().zip(best).zip(hits) {
+        *hit = g.complete(ray, b);
     }
 }
 
@@ -260,33 +267,44 @@ fn batch_occluded<L: Lanes, C: Counters>(
 ) {
     let g = &*accel.geometry;
     let size = PACKET_VECTORS * L::W;
-    let mut stack = [(0, 0.0); single::STACK];
-    for (rays, out) in rays.chunks(size).zip(occluded.chunks_mut(size)) {
-        for (ray, o) in rays.iter().zip(out.iter_mut()) {
+    // Rays that do not form coherent packets, traced interleaved afterwards.
+    let mut pending = Vec::new();
+    for (start, (chunk, out)) in (0..)
+        .step_by(size)
+        .zip(rays.chunks(size).zip(occluded.chunks_mut(size)))
+    {
+        for (ray, o) in chunk.iter().zip(out.iter_mut()) {
             let (hit, tests) = g.occluded_unbounded(ray);
             counters.add_tests(tests);
             *o = hit;
         }
-        match packet::octant(rays).filter(|_| accel.params.packets) {
-            Some(oct) => {
-                packet::occluded::<L, PACKET_VECTORS, C>(&accel.layout, g, rays, oct, out, counters)
-            }
-            None => {
-                for (ray, o) in rays.iter().zip(out.iter_mut()) {
-                    if !*o {
-                        *o = single::occluded::<L, C>(
-                            &accel.layout,
-                            g,
-                            ray,
-                            0,
-                            &mut stack,
-                            counters,
-                        );
-                    }
-                }
-            }
+        match packet::octant(chunk).filter(|_| accel.params.packets) {
+            Some(oct) => packet::occluded::<L, PACKET_VECTORS, C>(
+                &accel.layout,
+                g,
+                chunk,
+                oct,
+                out,
+                counters,
+            ),
+            None => pending.extend(
+                out.iter()
+                    .enumerate()
+                    .filter(|(_, o)| !**o)
+                    .map(|(i, _)| start + i),
+            ),
         }
     }
+    let mut stacks = [[(0, 0.0); single::STACK]; stream::STREAMS];
+    stream::occluded::<L, C>(
+        &accel.layout,
+        g,
+        rays,
+        &pending,
+        occluded,
+        &mut stacks,
+        counters,
+    );
 }
 
 /// One ray's closest hit through the BVH8.

@@ -150,15 +150,13 @@ impl<L: Lanes> SlabLanes<L> {
     }
 }
 
-/// The `K` vectors of a packet of at most `K * W` rays: triangle-test lanes, slab-test
-/// lanes, `t_max` and the mask of lanes holding a ray. Missing rays repeat the last one.
+/// The `K` vectors of a packet of at most `K * W` rays for box tests: slab-test lanes,
+/// `t_max` and the mask of lanes holding a ray. Missing rays repeat the last one.
 #[inline(always)]
-#[allow(clippy::type_complexity)]
-fn split<L: Lanes, const K: usize>(rays: &[Ray]) -> [(RayLanes<L>, SlabLanes<L>, L::V, u32); K] {
+fn split<L: Lanes, const K: usize>(rays: &[Ray]) -> [(SlabLanes<L>, L::V, u32); K] {
     let n = rays.len();
-    let mut buf = [[0.0f32; 16]; 7];
+    let mut buf = [[0.0f32; 16]; 8];
     let mut out = [(
-        RayLanes::new(&rays[..1]),
         SlabLanes {
             origin: [L::splat(0.0); 3],
             inv: [L::splat(0.0); 3],
@@ -180,18 +178,17 @@ fn split<L: Lanes, const K: usize>(rays: &[Ray]) -> [(RayLanes<L>, SlabLanes<L>,
                 r.inv_dir.y,
                 r.inv_dir.z,
                 r.t_max,
+                r.t_min,
             ];
             for (b, v) in buf.iter_mut().zip(vals) {
                 b[lane] = v;
             }
         }
-        let lanes = RayLanes::new(part);
         *chunk = (
-            lanes,
             SlabLanes {
                 origin: [L::load(&buf[0]), L::load(&buf[1]), L::load(&buf[2])],
                 inv: [L::load(&buf[3]), L::load(&buf[4]), L::load(&buf[5])],
-                t_min: lanes.t_min,
+                t_min: L::load(&buf[7]),
             },
             L::load(&buf[6]),
             if k * L::W < n {
@@ -200,6 +197,22 @@ fn split<L: Lanes, const K: usize>(rays: &[Ray]) -> [(RayLanes<L>, SlabLanes<L>,
                 0
             },
         );
+    }
+    out
+}
+
+/// The `K` vectors of a packet for triangle tests (made only when the packet reaches a
+/// leaf: rays that end before any leaf never need them).
+#[inline(always)]
+fn triangle_lanes<L: Lanes, const K: usize>(rays: &[Ray]) -> [RayLanes<L>; K] {
+    let n = rays.len();
+    let mut out = [RayLanes::new(&rays[..1]); K];
+    for (k, lanes) in out.iter_mut().enumerate().skip(1) {
+        let lo = (k * L::W).min(n - 1);
+        *lanes = RayLanes::new(&rays[lo..n.min(lo + L::W).max(lo + 1)]);
+    }
+    if n > 1 {
+        out[0] = RayLanes::new(&rays[..n.min(L::W)]);
     }
     out
 }
@@ -269,7 +282,8 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
     let chunks = split::<L, K>(rays);
     let negative = [oct & 1 != 0, oct & 2 != 0, oct & 4 != 0];
     let frustum = Frustum::<L::Single>::new(rays, negative);
-    stack[0] = (0, f32::NEG_INFINITY, std::array::from_fn(|k| chunks[k].3));
+    stack[0] = (0, f32::NEG_INFINITY, std::array::from_fn(|k| chunks[k].2));
+    let mut tri_lanes: Option<[RayLanes<L>; K]> = None;
     let mut sp = 1;
     while sp > 0 {
         sp -= 1;
@@ -288,11 +302,15 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
         }
         counters.add_visits(u64::from(active));
         if index & LEAF_BIT != 0 {
+            if tri_lanes.is_none() {
+                tri_lanes = Some(triangle_lanes::<L, K>(rays));
+            }
+            let Some(lanes) = &tri_lanes else { continue };
             packet_leaf::<L, K, C>(
                 layout,
                 g,
                 rays,
-                &chunks,
+                lanes,
                 LeafRef::decode(index),
                 &masks,
                 best,
@@ -339,7 +357,7 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
                     let mut any = 0;
                     for k in 0..K {
                         if masks[k] != 0 {
-                            lanes[k] = chunks[k].1.enters(
+                            lanes[k] = chunks[k].0.enters(
                                 node,
                                 first + slot,
                                 &negative,
@@ -378,7 +396,7 @@ fn packet_leaf<L: Lanes, const K: usize, C: Counters>(
     layout: &Layout,
     g: &Geometry,
     rays: &[Ray],
-    chunks: &[(RayLanes<L>, SlabLanes<L>, L::V, u32); K],
+    tri_lanes: &[RayLanes<L>; K],
     leaf: LeafRef,
     masks: &[u32; K],
     best: &mut [Option<(u32, PrimHit)>],
@@ -424,7 +442,7 @@ fn packet_leaf<L: Lanes, const K: usize, C: Counters>(
                 continue;
             }
             let tri = block.triangle(j);
-            for (k, (lanes, _, _, _)) in chunks.iter().enumerate() {
+            for (k, lanes) in tri_lanes.iter().enumerate() {
                 if masks[k] == 0 {
                     continue;
                 }
@@ -474,6 +492,7 @@ pub(crate) fn occluded<L: Lanes, const K: usize, C: Counters>(
         }
     }
     let chunks = split::<L, K>(rays);
+    let mut tri_lanes: Option<[RayLanes<L>; K]> = None;
     let negative = [oct & 1 != 0, oct & 2 != 0, oct & 4 != 0];
     let frustum = Frustum::<L::Single>::new(rays, negative);
     let packet_limit = rays.iter().fold(f32::NEG_INFINITY, |a, r| a.max(r.t_max));
@@ -491,6 +510,12 @@ pub(crate) fn occluded<L: Lanes, const K: usize, C: Counters>(
         }
         counters.add_visits(u64::from(active));
         if index & LEAF_BIT != 0 {
+            if tri_lanes.is_none() {
+                tri_lanes = Some(triangle_lanes::<L, K>(rays));
+            }
+            let Some(tri_lanes) = &tri_lanes else {
+                continue;
+            };
             let leaf = LeafRef::decode(index);
             for block in &layout.blocks[leaf.first..leaf.first + leaf.blocks] {
                 let occupied = block.occupied();
@@ -505,7 +530,7 @@ pub(crate) fn occluded<L: Lanes, const K: usize, C: Counters>(
                 for j in BitIter(occupied) {
                     let tri = block.triangle(j);
                     let shape = g.shape(block.id[j]);
-                    for (k, (lanes, _, t_max, _)) in chunks.iter().enumerate() {
+                    for (k, (lanes, (_, t_max, _))) in tri_lanes.iter().zip(&chunks).enumerate() {
                         let m = masks[k] & open[k];
                         if m == 0 {
                             continue;
@@ -543,8 +568,8 @@ pub(crate) fn occluded<L: Lanes, const K: usize, C: Counters>(
                 for k in 0..K {
                     if masks[k] != 0 {
                         lanes[k] = chunks[k]
-                            .1
-                            .enters(node, first + slot, &negative, chunks[k].2)
+                            .0
+                            .enters(node, first + slot, &negative, chunks[k].1)
                             & masks[k];
                         any |= lanes[k];
                     }

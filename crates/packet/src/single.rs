@@ -2,7 +2,7 @@
 //! children hit are visited nearest first, and a leaf tests its blocks of four triangles
 //! one SIMD test each.
 
-use crate::layout::{EMPTY_CHILD, LEAF_BIT, Layout, LeafRef, TriBlock, WIDE};
+use crate::layout::{BLOCK, EMPTY_CHILD, LEAF_BIT, Layout, LeafRef, TriBlock, WIDE};
 use crate::simd::{Lanes, prefetch};
 use crate::tri::{SplatRay, TriLanes, ray_vs_block};
 use raybench_core::{Counters, Geometry, Hit, NodeStack, PrimHit, Ray, Shape, cull_bound};
@@ -99,7 +99,9 @@ pub(crate) fn block_closest<L: Lanes>(
     best: &mut Option<(u32, PrimHit)>,
 ) {
     let t_max = best.map_or(ray.t_max, |(_, h)| h.t);
-    let r = ray_vs_block(block, splat, t_max, block.occupied());
+    // Unused lanes hold NaN coordinates, which neither hit nor need the scalar routine:
+    // the ids are read only for hits.
+    let r = ray_vs_block(block, splat, t_max, ALL_LANES);
     take_hits(block, &r, best);
     for lane in BitIter(r.zero) {
         g.test_closest(block.id[lane], ray, best);
@@ -110,6 +112,9 @@ pub(crate) fn block_closest<L: Lanes>(
         }
     }
 }
+
+/// Every lane of a block.
+const ALL_LANES: u32 = (1 << BLOCK) - 1;
 
 /// The lanes of `block` whose primitives are not triangles (the core's scalar routine tests
 /// them).
@@ -170,7 +175,7 @@ pub(crate) fn leaf_occluded<L: Lanes>(
     splat: &SplatRay<L>,
 ) -> bool {
     for block in &layout.blocks[leaf.first..leaf.first + leaf.blocks] {
-        let r = ray_vs_block(block, splat, ray.t_max, block.occupied());
+        let r = ray_vs_block(block, splat, ray.t_max, ALL_LANES);
         if r.hit != 0 {
             return true;
         }
@@ -228,9 +233,9 @@ pub(crate) const STACK: usize = 7 * 64 + 8;
 pub(crate) type Stack = [(u32, f32); STACK];
 
 /// The children of wide node `index` that `ray` enters at or before `limit`, pushed onto
-/// `stack` far to near (so that the nearest is popped first).
+/// `stack` far to near (so that the nearest is popped first), each prefetched.
 #[inline(always)]
-fn push_children<L: Lanes>(
+pub(crate) fn push_children<L: Lanes>(
     layout: &Layout,
     wray: &WideRay<L>,
     index: u32,
@@ -324,6 +329,31 @@ pub(crate) fn closest<L: Lanes, C: Counters>(
     best
 }
 
+/// The children of wide node `index` that `ray` enters at or before `t_max`, pushed onto
+/// `stack` in slot order (any-hit queries need no order), each prefetched.
+#[inline(always)]
+pub(crate) fn push_children_any<L: Lanes>(
+    layout: &Layout,
+    wray: &WideRay<L>,
+    index: u32,
+    t_max: L::V,
+    stack: &mut NodeStack<'_>,
+) {
+    let node = &layout.wide[index as usize];
+    let mut first = 0;
+    while first < WIDE {
+        let (_, bits) = wray.entries(&node.min, &node.max, first, t_max);
+        for lane in BitIter(bits) {
+            let child = node.child[first + lane];
+            if child != EMPTY_CHILD {
+                prefetch_child(layout, child);
+                stack.push(child, f32::NEG_INFINITY);
+            }
+        }
+        first += L::W;
+    }
+}
+
 /// Whether anything in the subtree under the child reference `root` blocks `ray`.
 #[inline(always)]
 pub(crate) fn occluded<L: Lanes, C: Counters>(
@@ -339,36 +369,42 @@ pub(crate) fn occluded<L: Lanes, C: Counters>(
     }
     let wray = WideRay::<L::Single>::new(ray);
     let splat = SplatRay::<L::Narrow>::new(ray);
-    let limit = <L::Single as Lanes>::splat(ray.t_max);
-    stack[0].0 = root;
-    let mut sp = 1;
-    while sp > 0 {
-        sp -= 1;
-        let index = stack[sp].0;
-        counters.add_visits(1);
-        if index & LEAF_BIT != 0 {
-            let leaf = LeafRef::decode(index);
-            if C::ENABLED {
-                counters.add_tests(leaf_prims(layout, leaf));
-            }
-            if leaf_occluded(layout, g, leaf, ray, &splat) {
-                return true;
-            }
-            continue;
-        }
-        let node = &layout.wide[index as usize];
-        let mut first = 0;
-        while first < WIDE {
-            let (_, bits) = wray.entries(&node.min, &node.max, first, limit);
-            for lane in BitIter(bits) {
-                let child = node.child[first + lane];
-                if child != EMPTY_CHILD {
-                    stack[sp].0 = child;
-                    sp += 1;
-                }
-            }
-            first += <L::Single as Lanes>::W;
+    let t_max = <L::Single as Lanes>::splat(ray.t_max);
+    let mut stack = NodeStack::new(stack);
+    stack.push(root, f32::NEG_INFINITY);
+    while let Some((index, _)) = stack.pop_within(f32::INFINITY) {
+        if leaf_or_push::<L, C>(
+            layout, g, ray, &wray, &splat, t_max, index, &mut stack, counters,
+        ) {
+            return true;
         }
     }
+    false
+}
+
+/// One step of an any-hit traversal: tests the leaf `index` (true when it blocks `ray`) or
+/// pushes the children of the wide node `index`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn leaf_or_push<L: Lanes, C: Counters>(
+    layout: &Layout,
+    g: &Geometry,
+    ray: &Ray,
+    wray: &WideRay<L::Single>,
+    splat: &SplatRay<L::Narrow>,
+    t_max: <L::Single as Lanes>::V,
+    index: u32,
+    stack: &mut NodeStack<'_>,
+    counters: &mut C,
+) -> bool {
+    counters.add_visits(1);
+    if index & LEAF_BIT != 0 {
+        let leaf = LeafRef::decode(index);
+        if C::ENABLED {
+            counters.add_tests(leaf_prims(layout, leaf));
+        }
+        return leaf_occluded(layout, g, leaf, ray, splat);
+    }
+    push_children_any(layout, wray, index, t_max, stack);
     false
 }
