@@ -193,13 +193,10 @@ fn every_bvh2_collapses_exactly() {
         ..BvhParams::medium()
     };
     for bvh in [BvhParams::fast(), BvhParams::quality(), fine, coarse] {
-        for isa in [Isa::Portable, Isa::detect()] {
-            check(PacketParams {
-                isa,
-                bvh,
-                ..PacketParams::default()
-            });
-        }
+        check(PacketParams {
+            bvh,
+            ..PacketParams::default()
+        });
     }
 }
 
