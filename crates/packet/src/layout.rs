@@ -284,10 +284,10 @@ fn plan(nodes: &[Node]) -> Vec<Plan> {
             p.cost[0] = as_node;
             p.choice[0] = 1;
         }
-        for i in 2..=WIDE {
-            if dist[i].0 < p.cost[i - 2] {
-                p.cost[i - 1] = dist[i].0;
-                p.choice[i - 1] = dist[i].1;
+        for (i, &(cost, k)) in dist.iter().enumerate().skip(2) {
+            if cost < p.cost[i - 2] {
+                p.cost[i - 1] = cost;
+                p.choice[i - 1] = k;
             } else {
                 p.cost[i - 1] = p.cost[i - 2];
             }

@@ -258,6 +258,9 @@ impl Lanestate {
 /// arrives holding ray `i`'s hit with the unbounded primitives and leaves with its closest
 /// hit.
 #[inline(always)]
+// The kernel's inputs are separate borrows on purpose: bundling them would only move the
+// same names into a struct built for one call.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
     layout: &Layout,
     g: &Geometry,
