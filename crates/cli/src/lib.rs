@@ -44,7 +44,7 @@ const BVH: &str =
 const OBVHS: &str = "obvhs crate: PLOC + reinsertion, compressed wide CWBVH8, obvhs traversal";
 const GRID: &str = "uniform grid walked by 3D-DDA (ray marching), mailboxing";
 const GRID2: &str = "two-level grid: crowded cells hold their own grid";
-const PACKET: &str = "SIMD: 16-ray packets over the BVH2, single rays over a BVH8 (AVX2, SSE4.1 or portable, picked at run time; RAYBENCH_ISA overrides)";
+const PACKET: &str = "SIMD over a BVH8 collapsed by SAH, leaves of 4-triangle blocks: 16-ray packets for coherent rays, interleaved single rays otherwise (AVX2, SSE4.1 or portable, picked at run time; RAYBENCH_ISA overrides)";
 
 /// Every backend, the reference (naive) first.
 pub const BACKENDS: &[Backend] = &[

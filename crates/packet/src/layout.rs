@@ -1,5 +1,24 @@
-//! The data the kernels read: triangles as structure of arrays, the BVH2's per-node
-//! traversal order for packets, and the BVH8 collapsed from the BVH2.
+//! The data the kernels read: a BVH8 collapsed from the `raybench-bvh` BVH2 by an SAH-optimal
+//! dynamic program, its children's boxes as structure of arrays, and leaves stored as
+//! contiguous blocks of four triangles.
+//!
+//! **The collapse** (the dynamic program of Ylitie, Karras and Laine, "Efficient Incoherent
+//! Ray Traversal on GPUs Through Compressed Wide BVHs", HPG 2017, with a CPU cost model):
+//! for every BVH2 node `n` and every `i` in `1..=8`, `cost[n][i]` is the cheapest SAH cost of
+//! representing `n`'s subtree by at most `i` children of a wide node. One child is either a
+//! leaf of all the subtree's primitives (`A(n) C_block ceil(P(n) / 4)`, allowed up to
+//! [`MAX_LEAF_PRIMS`]) or a wide node (`A(n) C_node` plus the best distribution of its two
+//! BVH2 children over eight slots); `i` children are the best split of the slots between the
+//! two BVH2 children, or fewer. A greedy collapse (open the widest child until there are
+//! eight) filled 43-47% of the slots on the PEERS.md meshes with leaves of one or two
+//! triangles; this one decides leaves and node widths by cost.
+//!
+//! **A leaf** is one or more [`TriBlock`]s: four triangles' nine coordinates each as four
+//! lanes, then their primitive ids (160 bytes, Embree's `Triangle4` idea), so a leaf is one
+//! run of cache lines and the ids needed to report a hit come with it. Lanes beyond the
+//! leaf's primitives and lanes holding primitives that are not triangles have NaN
+//! coordinates (never hit by the SIMD test); leaves with such primitives carry
+//! [`MIXED_BIT`] and test them with the core's scalar routine.
 
 use raybench_bvh::{Bvh, Node};
 use raybench_core::{Aabb, Geometry, Shape};
@@ -7,14 +26,37 @@ use raybench_core::{Aabb, Geometry, Shape};
 /// Children per wide node.
 pub(crate) const WIDE: usize = 8;
 
-/// Marks a wide child (and a stack entry) as a leaf: the low bits index [`Layout::leaves`].
+/// Triangles per leaf block.
+pub(crate) const BLOCK: usize = 4;
+
+/// Marks a child reference as a leaf.
 pub(crate) const LEAF_BIT: u32 = 1 << 31;
+
+/// In a leaf reference: some primitive of the leaf is not a triangle.
+pub(crate) const MIXED_BIT: u32 = 1 << 30;
+
+/// In a leaf reference: the number of blocks minus one sits at this bit (three bits).
+const BLOCKS_SHIFT: u32 = 27;
+
+/// Largest number of blocks a leaf reference can name.
+const MAX_REF_BLOCKS: usize = 8;
+
+/// In a leaf reference: the mask of the first block's index.
+const FIRST_MASK: u32 = (1 << BLOCKS_SHIFT) - 1;
 
 /// An unused child slot (its box is empty, so no ray enters it).
 pub(crate) const EMPTY_CHILD: u32 = u32::MAX;
 
-/// Padding after the last triangle so that a leaf's `W`-lane loads never leave the arrays.
-const PAD: usize = 16;
+/// Largest leaf the collapse makes by choice (two blocks). A BVH2 leaf with more primitives
+/// (only the depth limit makes one) becomes a leaf as it is, or a small tree of leaves.
+pub(crate) const MAX_LEAF_PRIMS: u32 = 8;
+
+/// The collapse's cost of visiting a wide node (one SIMD test of eight boxes and the sort
+/// of the children hit), relative to [`C_BLOCK`].
+const C_NODE: f32 = 1.0;
+
+/// The collapse's cost of testing one block of four triangles.
+const C_BLOCK: f32 = 1.0;
 
 /// A BVH8 node: the eight children's boxes in structure-of-arrays form, so that one SIMD
 /// slab test checks all of them against one ray (Embree's and tinybvh's layout).
@@ -25,7 +67,8 @@ pub(crate) struct WideNode {
     pub min: [[f32; WIDE]; 3],
     /// `max[axis][child]`.
     pub max: [[f32; WIDE]; 3],
-    /// A wide node index, `LEAF_BIT | leaf index`, or [`EMPTY_CHILD`].
+    /// A wide node index, a leaf reference (`LEAF_BIT`, see [`LeafRef`]), or
+    /// [`EMPTY_CHILD`]. Occupied slots come first.
     pub child: [u32; WIDE],
 }
 
@@ -39,156 +82,336 @@ impl WideNode {
     };
 }
 
-/// A leaf: a range of the leaf-ordered primitive arrays.
+/// Four triangles: `v[3 * vertex + axis][lane]`, then the primitive id of each lane
+/// (`u32::MAX` for an unused lane).
+#[repr(C, align(32))]
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Leaf {
-    /// First position in [`Layout::ids`] and the triangle arrays.
-    pub first: u32,
-    /// Number of primitives (at least 1).
-    pub count: u32,
-    /// Whether every primitive of the leaf is a triangle (else the leaf is tested with the
-    /// core's scalar routine, primitive by primitive).
-    pub all_triangles: bool,
+pub(crate) struct TriBlock {
+    /// Vertex coordinates by vertex and axis, one lane per triangle; NaN in unused lanes and
+    /// in lanes whose primitive is not a triangle.
+    pub v: [[f32; BLOCK]; 9],
+    /// Primitive ids; `u32::MAX` in unused lanes.
+    pub id: [u32; BLOCK],
 }
 
-/// Everything the packet backend traverses.
-#[derive(Debug)]
+const _: () = assert!(std::mem::size_of::<TriBlock>() == 160);
+
+impl TriBlock {
+    const EMPTY: Self = Self {
+        v: [[f32::NAN; BLOCK]; 9],
+        id: [u32::MAX; BLOCK],
+    };
+
+    /// The mask of lanes holding a primitive.
+    #[inline(always)]
+    pub fn occupied(&self) -> u32 {
+        let mut m = 0;
+        for (lane, &id) in self.id.iter().enumerate() {
+            m |= u32::from(id != u32::MAX) << lane;
+        }
+        m
+    }
+
+    /// The nine coordinates of lane `lane`'s triangle.
+    #[inline(always)]
+    pub fn triangle(&self, lane: usize) -> [f32; 9] {
+        std::array::from_fn(|c| self.v[c][lane])
+    }
+}
+
+/// A decoded leaf reference.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LeafRef {
+    /// First block in [`Layout::blocks`].
+    pub first: usize,
+    /// Number of blocks (at least 1).
+    pub blocks: usize,
+    /// Whether some primitive of the leaf is not a triangle.
+    pub mixed: bool,
+}
+
+impl LeafRef {
+    /// Decodes a child reference with `LEAF_BIT` set.
+    #[inline(always)]
+    pub fn decode(child: u32) -> Self {
+        Self {
+            first: (child & FIRST_MASK) as usize,
+            blocks: ((child >> BLOCKS_SHIFT) & 7) as usize + 1,
+            mixed: child & MIXED_BIT != 0,
+        }
+    }
+
+    fn encode(self) -> u32 {
+        debug_assert!(self.blocks >= 1 && self.blocks <= MAX_REF_BLOCKS);
+        LEAF_BIT
+            | if self.mixed { MIXED_BIT } else { 0 }
+            | ((self.blocks as u32 - 1) << BLOCKS_SHIFT)
+            | self.first as u32
+    }
+}
+
+/// Everything the kernels traverse.
+#[derive(Debug, Default)]
 pub(crate) struct Layout {
-    /// The BVH2 the packets walk (and the BVH8 was collapsed from).
-    pub bvh: Bvh,
-    /// Per BVH2 interior node: the split axis (bits 0-1), and bit 2 set when the second
-    /// child lies before the first along it (so the far-to-near order flips).
-    pub order: Vec<u8>,
-    /// Per BVH2 node: whether its primitives are all triangles (leaves only).
-    pub node_all_triangles: Vec<bool>,
     /// The BVH8; node 0 is the root. Empty when there are no bounded primitives.
     pub wide: Vec<WideNode>,
-    /// The BVH8's leaves (the BVH2's leaves).
-    pub leaves: Vec<Leaf>,
-    /// Primitive ids in leaf order (the BVH2's), padded.
-    pub ids: Vec<u32>,
-    /// Triangle vertex coordinates in leaf order: `tri[3 * vertex + axis][position]`; NaN
-    /// for primitives that are not triangles (a NaN triangle is never hit) and for the
-    /// padding.
-    pub tri: [Vec<f32>; 9],
-    /// Whether the primitive at each leaf position is a triangle.
-    pub is_triangle: Vec<bool>,
+    /// The leaves' triangle blocks.
+    pub blocks: Vec<TriBlock>,
+    /// Number of leaves.
+    pub leaves: usize,
+    /// Nodes of the BVH2 the tree was collapsed from.
+    pub bvh2_nodes: usize,
+    /// Occupied child slots over all wide nodes.
+    pub slots: usize,
+    /// Primitives over all leaves.
+    pub leaf_prims: usize,
+}
+
+/// Per BVH2 node, what the dynamic program knows.
+#[derive(Clone, Copy)]
+struct Plan {
+    /// `cost[i - 1]`: the cheapest cost with at most `i` slots.
+    cost: [f32; WIDE],
+    /// `choice[0]`: 1 when one slot holds a wide node, 0 when a leaf. `choice[i - 1]` for
+    /// `i >= 2`: 0 when `i - 1` slots do as well, else the slots given to the first child.
+    choice: [u8; WIDE],
+    /// Slots given to the first child when the node becomes a wide node (eight in all).
+    expand: u8,
+    /// First leaf-order position and number of primitives below.
+    first: u32,
+    count: u32,
 }
 
 impl Layout {
-    /// Lays out `bvh` (built over `geometry`).
-    pub fn new(bvh: Bvh, geometry: &Geometry) -> Self {
-        let ids = bvh.prim_ids().to_vec();
-        let n = ids.len();
-        let mut tri: [Vec<f32>; 9] = std::array::from_fn(|_| vec![f32::NAN; n + PAD]);
-        let mut is_triangle = vec![false; n];
-        for (pos, &id) in ids.iter().enumerate() {
-            if let Shape::Triangle(t) = geometry.shape(id) {
-                is_triangle[pos] = true;
-                for (k, v) in t.v.iter().enumerate() {
-                    tri[3 * k][pos] = v.x;
-                    tri[3 * k + 1][pos] = v.y;
-                    tri[3 * k + 2][pos] = v.z;
-                }
-            }
-        }
+    /// Collapses `bvh` (built over `geometry`) into the BVH8 and lays out its leaves.
+    pub fn new(bvh: &Bvh, geometry: &Geometry) -> Self {
         let nodes = bvh.nodes();
-        let all_tris = |first: u32, count: u32| {
-            is_triangle[first as usize..(first + count) as usize]
-                .iter()
-                .all(|&t| t)
-        };
-        let node_all_triangles = nodes
-            .iter()
-            .map(|n| n.is_leaf() && all_tris(n.first_or_right, n.count))
-            .collect();
-        let order = (0..nodes.len())
-            .map(|i| {
-                let n = &nodes[i];
-                if n.is_leaf() {
-                    return 0;
-                }
-                let (l, r) = (nodes[i + 1].aabb(), nodes[n.first_or_right as usize].aabb());
-                let d = r.center() - l.center();
-                let axis = d.abs().max_position();
-                axis as u8 | if d[axis] < 0.0 { 4 } else { 0 }
-            })
-            .collect();
-
         let mut layout = Self {
-            bvh,
-            order,
-            node_all_triangles,
-            wide: Vec::new(),
-            leaves: Vec::new(),
-            ids,
-            tri,
-            is_triangle,
+            bvh2_nodes: nodes.len(),
+            ..Self::default()
         };
-        layout.ids.resize(n + PAD, u32::MAX);
-        if !layout.bvh.nodes().is_empty() {
-            layout.collapse(0);
+        if nodes.is_empty() {
+            return layout;
         }
+        let plans = plan(nodes);
+        let mut builder = Builder {
+            nodes,
+            plans: &plans,
+            ids: bvh.prim_ids(),
+            geometry,
+            layout: &mut layout,
+        };
+        builder.wide_node(0);
         layout
     }
 
-    /// Appends the wide node standing for BVH2 node `root` and its subtree; returns its
-    /// index. Children are gathered by opening the interior child with the largest surface
-    /// area until there are eight (the usual greedy collapse, Embree's BVH8 builder).
-    fn collapse(&mut self, root: usize) -> u32 {
-        let nodes = self.bvh.nodes();
-        let mut kids: Vec<usize> = if nodes[root].is_leaf() {
-            vec![root]
-        } else {
-            vec![root + 1, nodes[root].first_or_right as usize]
-        };
-        while kids.len() < WIDE {
-            let widest = kids
-                .iter()
-                .enumerate()
-                .filter(|&(_, &k)| !nodes[k].is_leaf())
-                .max_by(|a, b| {
-                    let area = |k: usize| nodes[k].aabb().surface_area();
-                    area(*a.1).total_cmp(&area(*b.1))
-                });
-            let Some((slot, &k)) = widest else { break };
-            kids[slot] = k + 1;
-            kids.push(nodes[k].first_or_right as usize);
-        }
-        let index = self.wide.len();
-        self.wide.push(WideNode::EMPTY);
-        let mut node = WideNode::EMPTY;
-        for (slot, &k) in kids.iter().enumerate() {
-            let n: Node = self.bvh.nodes()[k];
-            let b: Aabb = n.aabb();
-            for axis in 0..3 {
-                node.min[axis][slot] = b.min[axis];
-                node.max[axis][slot] = b.max[axis];
-            }
-            node.child[slot] = if n.is_leaf() {
-                let leaf = self.leaves.len() as u32;
-                self.leaves.push(Leaf {
-                    first: n.first_or_right,
-                    count: n.count,
-                    all_triangles: self.node_all_triangles[k],
-                });
-                LEAF_BIT | leaf
-            } else {
-                self.collapse(k)
-            };
-        }
-        self.wide[index] = node;
-        index as u32
+    /// Percentage of the wide nodes' child slots that are occupied.
+    pub fn fill_percent(&self) -> u64 {
+        (100 * self.slots)
+            .checked_div(WIDE * self.wide.len())
+            .unwrap_or(0) as u64
+    }
+
+    /// Mean primitives per leaf, times 100.
+    pub fn leaf_prims_x100(&self) -> u64 {
+        (100 * self.leaf_prims)
+            .checked_div(self.leaves)
+            .unwrap_or(0) as u64
     }
 
     /// Bytes held (not counting the shared geometry).
     pub fn memory_bytes(&self) -> usize {
-        use std::mem::size_of;
-        self.bvh.nodes().len() * (size_of::<Node>() + 2)
-            + self.wide.len() * size_of::<WideNode>()
-            + self.leaves.len() * size_of::<Leaf>()
-            + self.ids.len() * size_of::<u32>()
-            + self.tri.iter().map(Vec::len).sum::<usize>() * size_of::<f32>()
-            + self.is_triangle.len()
+        self.wide.len() * std::mem::size_of::<WideNode>()
+            + self.blocks.len() * std::mem::size_of::<TriBlock>()
+    }
+}
+
+/// The dynamic program, bottom up (a depth-first layout puts children after parents).
+fn plan(nodes: &[Node]) -> Vec<Plan> {
+    let mut plans = vec![
+        Plan {
+            cost: [0.0; WIDE],
+            choice: [0; WIDE],
+            expand: 0,
+            first: 0,
+            count: 0,
+        };
+        nodes.len()
+    ];
+    for n in (0..nodes.len()).rev() {
+        let node = &nodes[n];
+        let area = node.aabb().surface_area();
+        if node.is_leaf() {
+            let cost = area * C_BLOCK * node.count.div_ceil(BLOCK as u32) as f32;
+            plans[n] = Plan {
+                cost: [cost; WIDE],
+                choice: [0; WIDE],
+                expand: 0,
+                first: node.first_or_right,
+                count: node.count,
+            };
+            continue;
+        }
+        let (l, r) = (&plans[n + 1], &plans[node.first_or_right as usize]);
+        let count = l.count + r.count;
+        // dist[i]: the best split of `i` slots between the children.
+        let mut dist = [(f32::INFINITY, 0u8); WIDE + 1];
+        for (i, d) in dist.iter_mut().enumerate().skip(2) {
+            for k in 1..i {
+                let c = l.cost[k - 1] + r.cost[i - k - 1];
+                if c < d.0 {
+                    *d = (c, k as u8);
+                }
+            }
+        }
+        let as_node = area * C_NODE + dist[WIDE].0;
+        let as_leaf = if count <= MAX_LEAF_PRIMS {
+            area * C_BLOCK * count.div_ceil(BLOCK as u32) as f32
+        } else {
+            f32::INFINITY
+        };
+        let mut p = Plan {
+            cost: [0.0; WIDE],
+            choice: [0; WIDE],
+            expand: dist[WIDE].1,
+            first: l.first,
+            count,
+        };
+        // `<=`: between equal costs, the leaf (fewer nodes to visit).
+        if as_leaf <= as_node {
+            p.cost[0] = as_leaf;
+        } else {
+            p.cost[0] = as_node;
+            p.choice[0] = 1;
+        }
+        for (i, &(cost, k)) in dist.iter().enumerate().skip(2) {
+            if cost < p.cost[i - 2] {
+                p.cost[i - 1] = cost;
+                p.choice[i - 1] = k;
+            } else {
+                p.cost[i - 1] = p.cost[i - 2];
+            }
+        }
+        plans[n] = p;
+    }
+    plans
+}
+
+/// Writes the wide nodes and blocks the plan describes.
+struct Builder<'a> {
+    nodes: &'a [Node],
+    plans: &'a [Plan],
+    ids: &'a [u32],
+    geometry: &'a Geometry,
+    layout: &'a mut Layout,
+}
+
+impl Builder<'_> {
+    /// The BVH2 nodes that fill at most `slots` slots for node `n`'s subtree.
+    fn gather(&self, n: usize, slots: usize, out: &mut Vec<usize>) {
+        let node = &self.nodes[n];
+        if node.is_leaf() || slots == 1 {
+            out.push(n);
+            return;
+        }
+        match self.plans[n].choice[slots - 1] {
+            0 => self.gather(n, slots - 1, out),
+            k => {
+                let k = usize::from(k);
+                self.gather(n + 1, k, out);
+                self.gather(node.first_or_right as usize, slots - k, out);
+            }
+        }
+    }
+
+    /// Appends the wide node standing for BVH2 node `n` and its subtree; returns its index.
+    fn wide_node(&mut self, n: usize) -> u32 {
+        let node = self.nodes[n];
+        let mut slots = Vec::with_capacity(WIDE);
+        if node.is_leaf() {
+            slots.push(n);
+        } else {
+            let k = usize::from(self.plans[n].expand);
+            self.gather(n + 1, k, &mut slots);
+            self.gather(node.first_or_right as usize, WIDE - k, &mut slots);
+        }
+        let index = self.layout.wide.len();
+        self.layout.wide.push(WideNode::EMPTY);
+        self.layout.slots += slots.len();
+        let mut wide = WideNode::EMPTY;
+        for (slot, &s) in slots.iter().enumerate() {
+            let child = self.nodes[s];
+            let b: Aabb = child.aabb();
+            for axis in 0..3 {
+                wide.min[axis][slot] = b.min[axis];
+                wide.max[axis][slot] = b.max[axis];
+            }
+            let plan = self.plans[s];
+            wide.child[slot] = if child.is_leaf() || plan.choice[0] == 0 {
+                self.leaf(plan.first as usize, plan.count as usize, b)
+            } else {
+                self.wide_node(s)
+            };
+        }
+        self.layout.wide[index] = wide;
+        index as u32
+    }
+
+    /// A reference to a leaf of the primitives at leaf-order positions `first..first +
+    /// count`, all inside `bounds`; more than eight blocks' worth become a wide node of
+    /// leaves with the same box.
+    fn leaf(&mut self, first: usize, count: usize, bounds: Aabb) -> u32 {
+        if count > MAX_REF_BLOCKS * BLOCK {
+            let index = self.layout.wide.len();
+            self.layout.wide.push(WideNode::EMPTY);
+            let per = count.div_ceil(WIDE);
+            let mut wide = WideNode::EMPTY;
+            let mut slot = 0;
+            let mut start = first;
+            while start < first + count {
+                let n = per.min(first + count - start);
+                for axis in 0..3 {
+                    wide.min[axis][slot] = bounds.min[axis];
+                    wide.max[axis][slot] = bounds.max[axis];
+                }
+                wide.child[slot] = self.leaf(start, n, bounds);
+                slot += 1;
+                start += n;
+            }
+            self.layout.slots += slot;
+            self.layout.wide[index] = wide;
+            return index as u32;
+        }
+        let first_block = self.layout.blocks.len();
+        let mut mixed = false;
+        for chunk in self.ids[first..first + count].chunks(BLOCK) {
+            let mut block = TriBlock::EMPTY;
+            for (lane, &id) in chunk.iter().enumerate() {
+                block.id[lane] = id;
+                match self.geometry.shape(id) {
+                    Shape::Triangle(t) => {
+                        for (k, v) in t.v.iter().enumerate() {
+                            block.v[3 * k][lane] = v.x;
+                            block.v[3 * k + 1][lane] = v.y;
+                            block.v[3 * k + 2][lane] = v.z;
+                        }
+                    }
+                    _ => mixed = true,
+                }
+            }
+            self.layout.blocks.push(block);
+        }
+        assert!(
+            self.layout.blocks.len() <= FIRST_MASK as usize + 1,
+            "more than 2^27 leaf blocks"
+        );
+        self.layout.leaves += 1;
+        self.layout.leaf_prims += count;
+        LeafRef {
+            first: first_block,
+            blocks: count.div_ceil(BLOCK),
+            mixed,
+        }
+        .encode()
     }
 }

@@ -32,6 +32,7 @@ mod layout;
 mod packet;
 mod simd;
 mod single;
+mod stream;
 mod tri;
 
 use layout::Layout;
@@ -150,10 +151,7 @@ pub struct PacketParams {
     pub isa: Isa,
     /// Trace coherent runs of a batch as packets (else every ray goes through the BVH8).
     pub packets: bool,
-    /// Before the per-lane box tests of a node, test the packet's interval bounds once and
-    /// skip the node when no lane can enter it (measured: see the README).
-    pub interval_cull: bool,
-    /// The BVH2 the packets walk and the BVH8 is collapsed from.
+    /// The BVH2 the BVH8 is collapsed from.
     pub bvh: BvhParams,
 }
 
@@ -162,13 +160,12 @@ impl Default for PacketParams {
         Self {
             isa: Isa::detect(),
             packets: true,
-            interval_cull: false,
             bvh: BvhParams::default(),
         }
     }
 }
 
-/// The packet backend: a BVH2 for packets and the BVH8 collapsed from it for single rays.
+/// The packet backend: a BVH8 collapsed from a BVH2, walked by packets and single rays.
 #[derive(Debug)]
 pub struct PacketAccel {
     geometry: Arc<Geometry>,
@@ -185,7 +182,7 @@ impl PacketAccel {
             params.isa = Isa::Portable;
         }
         let bvh = Bvh::build_with(Arc::clone(&geometry), params.bvh);
-        let layout = Layout::new(bvh, &geometry);
+        let layout = Layout::new(&bvh, &geometry);
         Self {
             geometry,
             layout,
@@ -220,41 +217,43 @@ fn batch_closest<L: Lanes, C: Counters>(
 ) {
     let g = &*accel.geometry;
     let size = PACKET_VECTORS * L::W;
-    let mut best = [None::<(u32, PrimHit)>; 32];
+    let mut best = vec![None::<(u32, PrimHit)>; rays.len()];
+    for (ray, b) in rays.iter().zip(best.iter_mut()) {
+        counters.add_tests(g.closest_unbounded(ray, b));
+    }
     let mut stack = [(0, 0.0); single::STACK];
-    for (rays, hits) in rays.chunks(size).zip(hits.chunks_mut(size)) {
-        let best = &mut best[..rays.len()];
-        for (ray, b) in rays.iter().zip(best.iter_mut()) {
-            *b = None;
-            counters.add_tests(g.closest_unbounded(ray, b));
-        }
-        match packet::octant(rays).filter(|_| accel.params.packets) {
+    let mut packet_stack: packet::PacketStack<PACKET_VECTORS> =
+        [(0, 0.0, [0; PACKET_VECTORS]); single::STACK];
+    // Rays that do not form coherent packets, traced interleaved afterwards.
+    let mut pending = Vec::new();
+    for (start, chunk) in (0..).step_by(size).zip(rays.chunks(size)) {
+        let end = start + chunk.len();
+        match packet::octant(chunk).filter(|_| accel.params.packets) {
             Some(oct) => packet::closest::<L, PACKET_VECTORS, C>(
                 &accel.layout,
                 g,
-                rays,
+                chunk,
                 oct,
-                best,
-                accel.params.interval_cull,
+                &mut best[start..end],
+                &mut packet_stack,
                 &mut stack,
                 counters,
             ),
-            None => {
-                for (ray, b) in rays.iter().zip(best.iter_mut()) {
-                    *b = single::closest::<L::Single, C>(
-                        &accel.layout,
-                        g,
-                        ray,
-                        *b,
-                        &mut stack,
-                        counters,
-                    );
-                }
-            }
+            None => pending.extend(start..end),
         }
-        for ((ray, b), hit) in rays.iter().zip(best.iter()).zip(hits) {
-            *hit = g.complete(ray, *b);
-        }
+    }
+    let mut stacks = [[(0, 0.0); single::STACK]; stream::STREAMS];
+    stream::closest::<L, C>(
+        &accel.layout,
+        g,
+        rays,
+        &pending,
+        &mut best,
+        &mut stacks,
+        counters,
+    );
+    for ((ray, b), hit) in rays.iter().zip(best).zip(hits) {
+        *hit = g.complete(ray, b);
     }
 }
 
@@ -268,32 +267,44 @@ fn batch_occluded<L: Lanes, C: Counters>(
 ) {
     let g = &*accel.geometry;
     let size = PACKET_VECTORS * L::W;
-    let mut stack = [(0, 0.0); single::STACK];
-    for (rays, out) in rays.chunks(size).zip(occluded.chunks_mut(size)) {
-        for (ray, o) in rays.iter().zip(out.iter_mut()) {
+    // Rays that do not form coherent packets, traced interleaved afterwards.
+    let mut pending = Vec::new();
+    for (start, (chunk, out)) in (0..)
+        .step_by(size)
+        .zip(rays.chunks(size).zip(occluded.chunks_mut(size)))
+    {
+        for (ray, o) in chunk.iter().zip(out.iter_mut()) {
             let (hit, tests) = g.occluded_unbounded(ray);
             counters.add_tests(tests);
             *o = hit;
         }
-        match packet::octant(rays).filter(|_| accel.params.packets) {
-            Some(oct) => {
-                packet::occluded::<L, PACKET_VECTORS, C>(&accel.layout, g, rays, oct, out, counters)
-            }
-            None => {
-                for (ray, o) in rays.iter().zip(out.iter_mut()) {
-                    if !*o {
-                        *o = single::occluded::<L::Single, C>(
-                            &accel.layout,
-                            g,
-                            ray,
-                            &mut stack,
-                            counters,
-                        );
-                    }
-                }
-            }
+        match packet::octant(chunk).filter(|_| accel.params.packets) {
+            Some(oct) => packet::occluded::<L, PACKET_VECTORS, C>(
+                &accel.layout,
+                g,
+                chunk,
+                oct,
+                out,
+                counters,
+            ),
+            None => pending.extend(
+                out.iter()
+                    .enumerate()
+                    .filter(|(_, o)| !**o)
+                    .map(|(i, _)| start + i),
+            ),
         }
     }
+    let mut stacks = [[(0, 0.0); single::STACK]; stream::STREAMS];
+    stream::occluded::<L, C>(
+        &accel.layout,
+        g,
+        rays,
+        &pending,
+        occluded,
+        &mut stacks,
+        counters,
+    );
 }
 
 /// One ray's closest hit through the BVH8.
@@ -306,10 +317,11 @@ fn one_closest<L: Lanes, C: Counters>(
     let g = &*accel.geometry;
     let mut best = None;
     counters.add_tests(g.closest_unbounded(ray, &mut best));
-    let best = single::closest::<L::Single, C>(
+    let best = single::closest::<L, C>(
         &accel.layout,
         g,
         ray,
+        0,
         best,
         &mut [(0, 0.0); single::STACK],
         counters,
@@ -323,10 +335,11 @@ fn one_occluded<L: Lanes, C: Counters>(accel: &PacketAccel, ray: &Ray, counters:
     let g = &*accel.geometry;
     let (hit, tests) = g.occluded_unbounded(ray);
     counters.add_tests(tests);
-    hit || single::occluded::<L::Single, C>(
+    hit || single::occluded::<L, C>(
         &accel.layout,
         g,
         ray,
+        0,
         &mut [(0, 0.0); single::STACK],
         counters,
     )
@@ -432,9 +445,11 @@ impl Accel for PacketAccel {
         AccelStats {
             memory_bytes: self.layout.memory_bytes(),
             counts: vec![
-                ("bvh2 nodes", self.layout.bvh.nodes().len() as u64),
+                ("bvh2 nodes", self.layout.bvh2_nodes as u64),
                 ("bvh8 nodes", self.layout.wide.len() as u64),
-                ("leaves", self.layout.leaves.len() as u64),
+                ("leaves", self.layout.leaves as u64),
+                ("child slots filled %", self.layout.fill_percent()),
+                ("triangles per leaf x100", self.layout.leaf_prims_x100()),
                 ("lanes", self.params.isa.lanes() as u64),
                 ("packet rays", self.packet_size() as u64),
             ],

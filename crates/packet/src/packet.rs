@@ -1,18 +1,26 @@
-//! Coherent packets through the BVH2: `K` vectors of `W` rays (8 or 16 rays with AVX2)
-//! share one traversal. Each node's box is tested against every active lane in SIMD, the
-//! packet descends while any lane enters, children are visited in the order the packet's
-//! common direction signs give along the node's split axis, and each lane clips to its own
-//! best `t`. Leaves test one triangle against all lanes at once.
+//! Coherent packets through the BVH8: `K` vectors of `W` rays (16 rays with AVX2) share
+//! one traversal of the same wide tree the single rays walk.
+//!
+//! At each node, one interval-arithmetic slab test of the whole packet against all eight
+//! children at once (the packet's frustum: the ranges of its origins and inverse
+//! directions) rejects the children no ray can enter; only the children it keeps get the
+//! per-lane SIMD slab tests, which give each child the mask of lanes entering it. Children
+//! are visited nearest first by the frustum's entry bound, each lane clips to its own best
+//! `t`, and leaves test one triangle against all active lanes at once (or, when few lanes
+//! are left, each lane against a block of four triangles). A packet whose active lanes drop
+//! to [`SPLIT_LANES`] at an interior node finishes that subtree ray by ray.
 //!
 //! A packet needs one octant (the same direction signs in every lane, so each axis has one
 //! near plane) and finite rays; batches are cut into packets and any packet that is not
-//! coherent in that sense takes the single-ray BVH8 path lane by lane.
+//! coherent in that sense takes the single-ray path lane by lane.
 
-use crate::layout::{Layout, Leaf};
+use crate::layout::{EMPTY_CHILD, LEAF_BIT, Layout, LeafRef, WIDE, WideNode};
 use crate::simd::Lanes;
-use crate::single::{BitIter, FAR_SCALE, Stack, lanes_below, leaf_closest, prim_hit};
+use crate::single::{
+    self, BitIter, FAR_SCALE, STACK, Stack, block_closest, lanes_below, prim_hit, scalar_lanes,
+};
 use crate::tri::{RayLanes, SplatRay, rays_vs_triangle};
-use raybench_core::{Counters, Geometry, Hit, NodeStack, PrimHit, Ray, SlabRay, cull_bound};
+use raybench_core::{Counters, Geometry, Hit, PrimHit, Ray, cull_bound};
 
 /// Lanes at or below this count leave the packet at an interior node and finish its
 /// subtree one ray at a time (the hybrid of Benthin, Boulos, Lacewell and Wald, "Combining
@@ -21,118 +29,95 @@ use raybench_core::{Counters, Geometry, Hit, NodeStack, PrimHit, Ray, SlabRay, c
 /// test every node against lanes that mostly miss it.
 const SPLIT_LANES: u32 = 2;
 
-/// The closest hit of one ray in the BVH2 subtree under `root`, merged into `best`: the
-/// scalar slab test for boxes, the SIMD leaf test over triangles.
-#[inline(always)]
-fn subtree_closest<L: Lanes, C: Counters>(
-    layout: &Layout,
-    g: &Geometry,
-    ray: &Ray,
-    root: usize,
-    best: &mut Option<(u32, PrimHit)>,
-    stack: &mut Stack,
-    counters: &mut C,
-) {
-    let nodes = layout.bvh.nodes();
-    let slab = SlabRay::new(ray);
-    let splat = SplatRay::<L::Single>::new(ray);
-    let mut limit = cull_bound(best.map_or(ray.t_max, |(_, h)| h.t));
-    let mut stack = NodeStack::new(stack);
-    stack.push(root as u32, f32::NEG_INFINITY);
-    while let Some((index, _)) = stack.pop_within(limit) {
-        counters.add_visits(1);
-        let node = &nodes[index as usize];
-        if node.is_leaf() {
-            let leaf = Leaf {
-                first: node.first_or_right,
-                count: node.count,
-                all_triangles: layout.node_all_triangles[index as usize],
-            };
-            leaf_closest(layout, g, leaf, ray, &splat, best, counters);
-            limit = cull_bound(best.map_or(ray.t_max, |(_, h)| h.t));
-            continue;
-        }
-        let (l, r) = (index + 1, node.first_or_right);
-        let (nl, nr) = (&nodes[l as usize], &nodes[r as usize]);
-        let tl = slab.entry(nl.min.into(), nl.max.into(), limit);
-        let tr = slab.entry(nr.min.into(), nr.max.into(), limit);
-        match (tl, tr) {
-            (Some(a), Some(b)) if a <= b => {
-                stack.push(r, b);
-                stack.push(l, a);
-            }
-            (Some(a), Some(b)) => {
-                stack.push(l, a);
-                stack.push(r, b);
-            }
-            (Some(a), None) => stack.push(l, a),
-            (None, Some(b)) => stack.push(r, b),
-            (None, None) => {}
-        }
-    }
-}
-
-/// The whole packet as intervals: per axis the range of origins and of inverse directions,
-/// and the smallest `t_min`. One scalar interval-arithmetic slab test with these bounds
-/// every lane's box test (Boulos et al., "Adaptive Ray Packet Reordering", 2008, and the
-/// interval culling of Wald's packet tracers): when it says the box is missed, every lane
-/// would have missed it, so the per-lane SIMD tests are skipped.
+/// The whole packet as intervals, splatted over the eight children of a node: per axis the
+/// range of origins and of inverse directions, and the smallest `t_min`. One
+/// interval-arithmetic slab test with these bounds every lane's box test (the interval
+/// culling of Boulos et al., "Adaptive Ray Packet Reordering", 2008, and of Wald's packet
+/// tracers): a child it rejects is entered by no lane.
 ///
 /// It is conservative without widening: IEEE rounding is monotonic, so the corner products
 /// of the intervals, computed with the lanes' own operations, bound every lane's computed
-/// distance; a NaN corner (`0 * inf`) leaves the axis unconstrained, as in the lanes.
-#[derive(Clone, Copy, Debug)]
-struct PacketInterval {
-    origin: [(f32, f32); 3],
-    inv: [(f32, f32); 3],
-    t_min: f32,
+/// distance. A NaN corner (`0 * inf`) leaves the axis unconstrained, as a NaN does in the
+/// lanes.
+struct Frustum<S: Lanes> {
+    origin: [(S::V, S::V); 3],
+    inv: [(S::V, S::V); 3],
+    negative: [bool; 3],
+    t_min: S::V,
 }
 
-impl PacketInterval {
-    fn new(rays: &[Ray]) -> Self {
-        let mut s = Self {
-            origin: [(f32::INFINITY, f32::NEG_INFINITY); 3],
-            inv: [(f32::INFINITY, f32::NEG_INFINITY); 3],
-            t_min: f32::INFINITY,
-        };
+impl<S: Lanes> Frustum<S> {
+    #[inline(always)]
+    fn new(rays: &[Ray], negative: [bool; 3]) -> Self {
+        let mut origin = [(f32::INFINITY, f32::NEG_INFINITY); 3];
+        let mut inv = [(f32::INFINITY, f32::NEG_INFINITY); 3];
+        let mut t_min = f32::INFINITY;
         for r in rays {
             for axis in 0..3 {
                 let (o, i) = (r.origin[axis], r.inv_dir[axis]);
-                s.origin[axis] = (s.origin[axis].0.min(o), s.origin[axis].1.max(o));
-                s.inv[axis] = (s.inv[axis].0.min(i), s.inv[axis].1.max(i));
+                origin[axis] = (origin[axis].0.min(o), origin[axis].1.max(o));
+                inv[axis] = (inv[axis].0.min(i), inv[axis].1.max(i));
             }
-            s.t_min = s.t_min.min(r.t_min);
+            t_min = t_min.min(r.t_min);
         }
-        s
+        let splat2 = |(a, b): (f32, f32)| (S::splat(a), S::splat(b));
+        Self {
+            origin: origin.map(splat2),
+            inv: inv.map(splat2),
+            negative,
+            t_min: S::splat(t_min),
+        }
     }
 
-    /// False only when no ray of the packet can enter `node` at or before `limit` (the
+    /// Lower bounds of the lanes' entry distances into children `first..first + W` of
+    /// `node`, and the mask of the children some lane may enter at or before `limit` (the
     /// largest lane limit).
     #[inline(always)]
-    fn may_enter(&self, node: &raybench_bvh::Node, negative: &[bool; 3], limit: f32) -> bool {
+    fn entries(&self, node: &WideNode, first: usize, limit: S::V) -> (S::V, u32) {
         let mut t0 = self.t_min;
         let mut t1 = limit;
-        for (axis, &neg) in negative.iter().enumerate() {
-            let (near, far) = if neg {
-                (node.max[axis], node.min[axis])
+        let scale = S::splat(FAR_SCALE);
+        for axis in 0..3 {
+            let (lo, hi) = (
+                S::load(&node.min[axis][first..]),
+                S::load(&node.max[axis][first..]),
+            );
+            let (near, far) = if self.negative[axis] {
+                (hi, lo)
             } else {
-                (node.min[axis], node.max[axis])
+                (lo, hi)
             };
             let (o_lo, o_hi) = self.origin[axis];
             let (i_lo, i_hi) = self.inv[axis];
-            let corners = |plane: f32| {
-                let (d_lo, d_hi) = (plane - o_hi, plane - o_lo);
-                [d_lo * i_lo, d_lo * i_hi, d_hi * i_lo, d_hi * i_hi]
+            let (n_lo, n_hi) = (S::sub(near, o_hi), S::sub(near, o_lo));
+            let (f_lo, f_hi) = (S::sub(far, o_hi), S::sub(far, o_lo));
+            let n = [
+                S::mul(n_lo, i_lo),
+                S::mul(n_lo, i_hi),
+                S::mul(n_hi, i_lo),
+                S::mul(n_hi, i_hi),
+            ];
+            let f = [
+                S::mul(f_lo, i_lo),
+                S::mul(f_lo, i_hi),
+                S::mul(f_hi, i_lo),
+                S::mul(f_hi, i_hi),
+            ];
+            let ordered = |c: &[S::V; 4]| {
+                S::and(
+                    S::and(S::eq(c[0], c[0]), S::eq(c[1], c[1])),
+                    S::and(S::eq(c[2], c[2]), S::eq(c[3], c[3])),
+                )
             };
-            let n = corners(near);
-            let f = corners(far);
-            if n.iter().chain(&f).any(|x| x.is_nan()) {
-                continue;
-            }
-            t0 = t0.max(n.into_iter().fold(f32::INFINITY, f32::min));
-            t1 = t1.min(f.into_iter().fold(f32::NEG_INFINITY, f32::max) * FAR_SCALE);
+            let near_lo = S::min(S::min(n[0], n[1]), S::min(n[2], n[3]));
+            let far_hi = S::max(S::max(f[0], f[1]), S::max(f[2], f[3]));
+            // Any NaN corner: the axis constrains nothing for that child.
+            let near_lo = S::select(ordered(&n), near_lo, S::splat(f32::NEG_INFINITY));
+            let far_hi = S::select(ordered(&f), far_hi, S::splat(f32::INFINITY));
+            t0 = S::max(near_lo, t0);
+            t1 = S::min(S::mul(far_hi, scale), t1);
         }
-        t0 <= t1
+        (t0, S::bits(S::le(t0, t1)))
     }
 }
 
@@ -145,19 +130,16 @@ struct SlabLanes<L: Lanes> {
 }
 
 impl<L: Lanes> SlabLanes<L> {
-    /// The lanes that enter `node` no later than their lane of `limit`: the core's
+    /// The lanes that enter child `slot` of `node` no later than their lane of `limit`: the core's
     /// conservative slab test, with the near plane of each axis given by the packet's
     /// common direction signs.
     #[inline(always)]
-    fn enters(&self, node: &raybench_bvh::Node, negative: &[bool; 3], limit: L::V) -> u32 {
+    fn enters(&self, node: &WideNode, slot: usize, negative: &[bool; 3], limit: L::V) -> u32 {
         let mut t0 = self.t_min;
         let mut t1 = limit;
         for (axis, &neg) in negative.iter().enumerate() {
-            let (near, far) = if neg {
-                (node.max[axis], node.min[axis])
-            } else {
-                (node.min[axis], node.max[axis])
-            };
+            let (lo, hi) = (node.min[axis][slot], node.max[axis][slot]);
+            let (near, far) = if neg { (hi, lo) } else { (lo, hi) };
             let tn = L::mul(L::sub(L::splat(near), self.origin[axis]), self.inv[axis]);
             let tf = L::mul(L::sub(L::splat(far), self.origin[axis]), self.inv[axis]);
             // NaN (0 * inf) first: the x86 min/max then return the accumulated bound.
@@ -168,15 +150,13 @@ impl<L: Lanes> SlabLanes<L> {
     }
 }
 
-/// The `K` vectors of a packet of at most `K * W` rays: triangle-test lanes, slab-test
-/// lanes, `t_max` and the mask of lanes holding a ray. Missing rays repeat the last one.
+/// The `K` vectors of a packet of at most `K * W` rays for box tests: slab-test lanes,
+/// `t_max` and the mask of lanes holding a ray. Missing rays repeat the last one.
 #[inline(always)]
-#[allow(clippy::type_complexity)]
-fn split<L: Lanes, const K: usize>(rays: &[Ray]) -> [(RayLanes<L>, SlabLanes<L>, L::V, u32); K] {
+fn split<L: Lanes, const K: usize>(rays: &[Ray]) -> [(SlabLanes<L>, L::V, u32); K] {
     let n = rays.len();
-    let mut buf = [[0.0f32; 16]; 7];
+    let mut buf = [[0.0f32; 16]; 8];
     let mut out = [(
-        RayLanes::new(&rays[..1]),
         SlabLanes {
             origin: [L::splat(0.0); 3],
             inv: [L::splat(0.0); 3],
@@ -198,18 +178,17 @@ fn split<L: Lanes, const K: usize>(rays: &[Ray]) -> [(RayLanes<L>, SlabLanes<L>,
                 r.inv_dir.y,
                 r.inv_dir.z,
                 r.t_max,
+                r.t_min,
             ];
             for (b, v) in buf.iter_mut().zip(vals) {
                 b[lane] = v;
             }
         }
-        let lanes = RayLanes::new(part);
         *chunk = (
-            lanes,
             SlabLanes {
                 origin: [L::load(&buf[0]), L::load(&buf[1]), L::load(&buf[2])],
                 inv: [L::load(&buf[3]), L::load(&buf[4]), L::load(&buf[5])],
-                t_min: lanes.t_min,
+                t_min: L::load(&buf[7]),
             },
             L::load(&buf[6]),
             if k * L::W < n {
@@ -218,6 +197,22 @@ fn split<L: Lanes, const K: usize>(rays: &[Ray]) -> [(RayLanes<L>, SlabLanes<L>,
                 0
             },
         );
+    }
+    out
+}
+
+/// The `K` vectors of a packet for triangle tests (made only when the packet reaches a
+/// leaf: rays that end before any leaf never need them).
+#[inline(always)]
+fn triangle_lanes<L: Lanes, const K: usize>(rays: &[Ray]) -> [RayLanes<L>; K] {
+    let n = rays.len();
+    let mut out = [RayLanes::new(&rays[..1]); K];
+    for (k, lanes) in out.iter_mut().enumerate().skip(1) {
+        let lo = (k * L::W).min(n - 1);
+        *lanes = RayLanes::new(&rays[lo..n.min(lo + L::W).max(lo + 1)]);
+    }
+    if n > 1 {
+        out[0] = RayLanes::new(&rays[..n.min(L::W)]);
     }
     out
 }
@@ -238,12 +233,33 @@ pub(crate) fn octant(rays: &[Ray]) -> Option<u8> {
         .then_some(first)
 }
 
+/// A packet traversal stack entry: a child reference, the frustum's entry bound, and the
+/// lanes (per vector) that entered it.
+pub(crate) type Entry<const K: usize> = (u32, f32, [u32; K]);
+
+/// A packet traversal stack (allocated once per batch).
+pub(crate) type PacketStack<const K: usize> = [Entry<K>; STACK];
+
+/// Per-lane state of a closest-hit packet (`32` covers `K * W` for every instruction set).
+struct Lanestate {
+    t_best: [f32; 32],
+    limit: [f32; 32],
+}
+
+impl Lanestate {
+    #[inline(always)]
+    fn update(&mut self, i: usize, ray: &Ray, best: &Option<(u32, PrimHit)>) {
+        self.t_best[i] = best.map_or(ray.t_max, |(_, h)| h.t);
+        self.limit[i] = cull_bound(self.t_best[i]);
+    }
+}
+
 /// Closest hits of a coherent packet of at most `K * W` rays with octant `oct`: `best[i]`
 /// arrives holding ray `i`'s hit with the unbounded primitives and leaves with its closest
 /// hit.
 #[inline(always)]
 // The kernel's inputs are separate borrows on purpose: bundling them would only move the
-// same eight names into a struct built for one call.
+// same names into a struct built for one call.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
     layout: &Layout,
@@ -251,123 +267,190 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
     rays: &[Ray],
     oct: u8,
     best: &mut [Option<(u32, PrimHit)>],
-    interval_cull: bool,
+    stack: &mut PacketStack<K>,
     scratch: &mut Stack,
     counters: &mut C,
 ) {
-    let nodes = layout.bvh.nodes();
-    if nodes.is_empty() {
+    if layout.wide.is_empty() {
         return;
     }
     let n = rays.len();
-    // Per-lane state in plain arrays (`16` covers K * W for every instruction set).
-    let mut t_best = [0.0f32; 32];
-    let mut limit = [0.0f32; 32];
+    let mut st = Lanestate {
+        t_best: [0.0; 32],
+        limit: [0.0; 32],
+    };
     for i in 0..n {
-        t_best[i] = best[i].map_or(rays[i].t_max, |(_, h)| h.t);
-        limit[i] = cull_bound(t_best[i]);
+        st.update(i, &rays[i], &best[i]);
     }
     let chunks = split::<L, K>(rays);
     let negative = [oct & 1 != 0, oct & 2 != 0, oct & 4 != 0];
-    let interval = interval_cull.then(|| PacketInterval::new(rays));
-
-    let mut stack = [0u32; 2 * 64 + 4];
+    let frustum = Frustum::<L::Single>::new(rays, negative);
+    stack[0] = (0, f32::NEG_INFINITY, std::array::from_fn(|k| chunks[k].2));
+    let mut tri_lanes: Option<[RayLanes<L>; K]> = None;
     let mut sp = 1;
     while sp > 0 {
         sp -= 1;
-        let index = stack[sp] as usize;
-        let node = &nodes[index];
-        if let Some(iv) = &interval {
-            let packet_limit = limit[..n].iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b));
-            if !iv.may_enter(node, &negative, packet_limit) {
-                continue;
-            }
-        }
-        // Lanes entering the node before their own limit.
+        let (index, entry, pushed) = stack[sp];
+        // Lanes still interested: entered the child, and not yet clipped before it.
         let mut masks = [0u32; K];
-        for (k, (_, slab, _, valid)) in chunks.iter().enumerate() {
-            if *valid == 0 {
-                continue;
+        let entry_v = L::splat(entry);
+        for k in 0..K {
+            if pushed[k] != 0 {
+                masks[k] = pushed[k] & L::bits(L::le(entry_v, L::load(&st.limit[k * L::W..])));
             }
-            masks[k] = slab.enters(node, &negative, L::load(&limit[k * L::W..])) & valid;
         }
         let active: u32 = masks.iter().map(|m| m.count_ones()).sum();
         if active == 0 {
             continue;
         }
         counters.add_visits(u64::from(active));
-        if !node.is_leaf() && active <= SPLIT_LANES {
+        if index & LEAF_BIT != 0 {
+            if tri_lanes.is_none() {
+                tri_lanes = Some(triangle_lanes::<L, K>(rays));
+            }
+            let Some(lanes) = &tri_lanes else { continue };
+            packet_leaf::<L, K, C>(
+                layout,
+                g,
+                rays,
+                lanes,
+                LeafRef::decode(index),
+                &masks,
+                best,
+                &mut st,
+                counters,
+            );
+            continue;
+        }
+        if active <= SPLIT_LANES {
             // The packet has diverged: its last lanes finish this subtree one by one.
             for (k, m) in masks.iter().enumerate() {
                 for lane in BitIter(*m) {
                     let i = k * L::W + lane;
-                    subtree_closest::<L, C>(
-                        layout,
-                        g,
-                        &rays[i],
-                        index,
-                        &mut best[i],
-                        scratch,
-                        counters,
+                    best[i] = single::closest::<L, C>(
+                        layout, g, &rays[i], index, best[i], scratch, counters,
                     );
-                    t_best[i] = best[i].map_or(rays[i].t_max, |(_, h)| h.t);
-                    limit[i] = cull_bound(t_best[i]);
+                    st.update(i, &rays[i], &best[i]);
                 }
             }
             continue;
         }
-        if !node.is_leaf() {
-            let order = layout.order[index];
-            let axis = usize::from(order & 3);
-            // The child whose centre comes first along the axis, in the packet's direction.
-            let second_first = (order & 4 != 0) != negative[axis];
-            let (l, r) = (index as u32 + 1, node.first_or_right);
-            let (near, far) = if second_first { (r, l) } else { (l, r) };
-            stack[sp] = far;
-            stack[sp + 1] = near;
-            sp += 2;
-            continue;
+        let node = &layout.wide[index as usize];
+        let packet_limit = masks
+            .iter()
+            .enumerate()
+            .flat_map(|(k, m)| BitIter(*m).map(move |lane| k * L::W + lane))
+            .fold(f32::NEG_INFINITY, |a, i| a.max(st.limit[i]));
+        // Children hit by some lane, sorted far to near by the frustum's entry bound.
+        let mut found: [Entry<K>; WIDE] = [(0, 0.0, [0; K]); WIDE];
+        let mut count = 0;
+        let mut first = 0;
+        while first < WIDE {
+            let (t0, bits) =
+                frustum.entries(node, first, <L::Single as Lanes>::splat(packet_limit));
+            if bits != 0 {
+                let mut t = [0.0f32; 16];
+                <L::Single as Lanes>::store(t0, &mut t);
+                for slot in BitIter(bits) {
+                    let child = node.child[first + slot];
+                    if child == EMPTY_CHILD {
+                        continue;
+                    }
+                    let mut lanes = [0u32; K];
+                    let mut any = 0;
+                    for k in 0..K {
+                        if masks[k] != 0 {
+                            lanes[k] = chunks[k].0.enters(
+                                node,
+                                first + slot,
+                                &negative,
+                                L::load(&st.limit[k * L::W..]),
+                            ) & masks[k];
+                            any |= lanes[k];
+                        }
+                    }
+                    if any == 0 {
+                        continue;
+                    }
+                    let e = t[slot];
+                    let mut j = count;
+                    while j > 0 && found[j - 1].1 < e {
+                        found[j] = found[j - 1];
+                        j -= 1;
+                    }
+                    found[j] = (child, e, lanes);
+                    count += 1;
+                }
+            }
+            first += <L::Single as Lanes>::W;
         }
-        let (first, count) = (node.first_or_right as usize, node.count as usize);
-        let all_triangles = layout.node_all_triangles[index];
-        // Few lanes left in a leaf (the packet has diverged): one SIMD test of up to `W`
-        // triangles per lane is cheaper than one SIMD test of the lanes per triangle.
-        let vectors = masks.iter().filter(|&&m| m != 0).count();
-        if all_triangles
-            && (active as usize) * count.div_ceil(<L::Single as Lanes>::W) < vectors * count
-        {
-            let leaf = Leaf {
-                first: first as u32,
-                count: count as u32,
-                all_triangles,
-            };
+        for &(child, _, _) in &found[..count] {
+            single::prefetch_child(layout, child);
+        }
+        stack[sp..sp + count].copy_from_slice(&found[..count]);
+        sp += count;
+    }
+}
+
+/// Tests the leaf `leaf` against the lanes `masks` of a packet.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn packet_leaf<L: Lanes, const K: usize, C: Counters>(
+    layout: &Layout,
+    g: &Geometry,
+    rays: &[Ray],
+    tri_lanes: &[RayLanes<L>; K],
+    leaf: LeafRef,
+    masks: &[u32; K],
+    best: &mut [Option<(u32, PrimHit)>],
+    st: &mut Lanestate,
+    counters: &mut C,
+) {
+    let active: u32 = masks.iter().map(|m| m.count_ones()).sum();
+    let vectors = masks.iter().filter(|&&m| m != 0).count() as u32;
+    for block in &layout.blocks[leaf.first..leaf.first + leaf.blocks] {
+        let occupied = block.occupied();
+        let tris = occupied.count_ones();
+        if C::ENABLED {
+            counters.add_tests(u64::from(active * tris));
+        }
+        // Few lanes left (the packet has diverged): one SIMD test of the block per lane is
+        // cheaper than one SIMD test of the lanes per triangle.
+        if active < vectors * tris {
             for (k, m) in masks.iter().enumerate() {
                 for lane in BitIter(*m) {
                     let i = k * L::W + lane;
-                    let splat = SplatRay::<L::Single>::new(&rays[i]);
-                    leaf_closest(layout, g, leaf, &rays[i], &splat, &mut best[i], counters);
-                    t_best[i] = best[i].map_or(rays[i].t_max, |(_, h)| h.t);
-                    limit[i] = cull_bound(t_best[i]);
+                    let splat = SplatRay::<L::Narrow>::new(&rays[i]);
+                    block_closest(g, block, leaf.mixed, &rays[i], &splat, &mut best[i]);
+                    st.update(i, &rays[i], &best[i]);
                 }
             }
             continue;
         }
-        counters.add_tests(u64::from(active) * count as u64);
-        for pos in first..first + count {
-            let id = layout.ids[pos];
-            for (k, (lanes, _, _, _)) in chunks.iter().enumerate() {
+        let scalar = if leaf.mixed {
+            scalar_lanes(g, block)
+        } else {
+            0
+        };
+        for j in BitIter(occupied) {
+            let id = block.id[j];
+            if scalar & (1 << j) != 0 {
+                for (k, m) in masks.iter().enumerate() {
+                    for lane in BitIter(*m) {
+                        let i = k * L::W + lane;
+                        g.test_closest(id, &rays[i], &mut best[i]);
+                        st.update(i, &rays[i], &best[i]);
+                    }
+                }
+                continue;
+            }
+            let tri = block.triangle(j);
+            for (k, lanes) in tri_lanes.iter().enumerate() {
                 if masks[k] == 0 {
                     continue;
                 }
                 let base = k * L::W;
-                if !all_triangles && !layout.is_triangle[pos] {
-                    for lane in BitIter(masks[k]) {
-                        let i = base + lane;
-                        g.test_closest(id, &rays[i], &mut best[i]);
-                    }
-                    continue;
-                }
-                let r = rays_vs_triangle(layout, lanes, pos, L::load(&t_best[base..]), masks[k]);
+                let r = rays_vs_triangle(&tri, lanes, L::load(&st.t_best[base..]), masks[k]);
                 if r.hit != 0 {
                     let mut t = [0.0f32; 16];
                     L::store(r.t, &mut t);
@@ -381,22 +464,10 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
                     }
                 }
                 for lane in BitIter(r.zero) {
-                    let i = base + lane;
-                    g.test_closest(id, &rays[i], &mut best[i]);
+                    g.test_closest(id, &rays[base + lane], &mut best[base + lane]);
                 }
                 for lane in BitIter(r.hit | r.zero) {
-                    let i = base + lane;
-                    t_best[i] = best[i].map_or(rays[i].t_max, |(_, h)| h.t);
-                    limit[i] = cull_bound(t_best[i]);
-                }
-            }
-        }
-        if !all_triangles {
-            for (k, m) in masks.iter().enumerate() {
-                for lane in BitIter(*m) {
-                    let i = k * L::W + lane;
-                    t_best[i] = best[i].map_or(rays[i].t_max, |(_, h)| h.t);
-                    limit[i] = cull_bound(t_best[i]);
+                    st.update(base + lane, &rays[base + lane], &best[base + lane]);
                 }
             }
         }
@@ -414,8 +485,7 @@ pub(crate) fn occluded<L: Lanes, const K: usize, C: Counters>(
     blocked: &mut [bool],
     counters: &mut C,
 ) {
-    let nodes = layout.bvh.nodes();
-    if nodes.is_empty() {
+    if layout.wide.is_empty() {
         return;
     }
     let mut open = [0u32; K];
@@ -425,57 +495,95 @@ pub(crate) fn occluded<L: Lanes, const K: usize, C: Counters>(
         }
     }
     let chunks = split::<L, K>(rays);
+    let mut tri_lanes: Option<[RayLanes<L>; K]> = None;
     let negative = [oct & 1 != 0, oct & 2 != 0, oct & 4 != 0];
-    let mut stack = [0u32; 2 * 64 + 4];
+    let frustum = Frustum::<L::Single>::new(rays, negative);
+    let packet_limit = rays.iter().fold(f32::NEG_INFINITY, |a, r| a.max(r.t_max));
+    let packet_limit = <L::Single as Lanes>::splat(packet_limit);
+    let mut stack = [(0u32, [0u32; K]); STACK];
+    stack[0] = (0, open);
     let mut sp = 1;
     while sp > 0 && open.iter().any(|&m| m != 0) {
         sp -= 1;
-        let index = stack[sp] as usize;
-        let node = &nodes[index];
-        let mut masks = [0u32; K];
-        for (k, (_, slab, t_max, _)) in chunks.iter().enumerate() {
-            if open[k] == 0 {
-                continue;
-            }
-            masks[k] = slab.enters(node, &negative, *t_max) & open[k];
-        }
+        let (index, pushed) = stack[sp];
+        let masks: [u32; K] = std::array::from_fn(|k| pushed[k] & open[k]);
         let active: u32 = masks.iter().map(|m| m.count_ones()).sum();
         if active == 0 {
             continue;
         }
         counters.add_visits(u64::from(active));
-        if !node.is_leaf() {
-            stack[sp] = node.first_or_right;
-            stack[sp + 1] = index as u32 + 1;
-            sp += 2;
-            continue;
-        }
-        let (first, count) = (node.first_or_right as usize, node.count as usize);
-        counters.add_tests(u64::from(active) * count as u64);
-        for pos in first..first + count {
-            let id = layout.ids[pos];
-            for (k, (lanes, _, t_max, _)) in chunks.iter().enumerate() {
-                let m = masks[k] & open[k];
-                if m == 0 {
-                    continue;
+        if index & LEAF_BIT != 0 {
+            if tri_lanes.is_none() {
+                tri_lanes = Some(triangle_lanes::<L, K>(rays));
+            }
+            let Some(tri_lanes) = &tri_lanes else {
+                continue;
+            };
+            let leaf = LeafRef::decode(index);
+            for block in &layout.blocks[leaf.first..leaf.first + leaf.blocks] {
+                let occupied = block.occupied();
+                if C::ENABLED {
+                    counters.add_tests(u64::from(active * occupied.count_ones()));
                 }
-                let mut hit = 0;
-                let mut scalar = m;
-                if layout.is_triangle[pos] {
-                    let r = rays_vs_triangle(layout, lanes, pos, *t_max, m);
-                    hit = r.hit;
-                    scalar = r.zero;
-                }
-                for lane in BitIter(scalar) {
-                    if g.shape(id).intersect(&rays[k * L::W + lane]).is_some() {
-                        hit |= 1 << lane;
+                let scalar = if leaf.mixed {
+                    scalar_lanes(g, block)
+                } else {
+                    0
+                };
+                for j in BitIter(occupied) {
+                    let tri = block.triangle(j);
+                    let shape = g.shape(block.id[j]);
+                    for (k, (lanes, (_, t_max, _))) in tri_lanes.iter().zip(&chunks).enumerate() {
+                        let m = masks[k] & open[k];
+                        if m == 0 {
+                            continue;
+                        }
+                        let (mut hit, mut test) = (0, m);
+                        if scalar & (1 << j) == 0 {
+                            let r = rays_vs_triangle(&tri, lanes, *t_max, m);
+                            (hit, test) = (r.hit, r.zero);
+                        }
+                        for lane in BitIter(test) {
+                            if shape.intersect(&rays[k * L::W + lane]).is_some() {
+                                hit |= 1 << lane;
+                            }
+                        }
+                        for lane in BitIter(hit) {
+                            blocked[k * L::W + lane] = true;
+                        }
+                        open[k] &= !hit;
                     }
                 }
-                for lane in BitIter(hit) {
-                    blocked[k * L::W + lane] = true;
-                }
-                open[k] &= !hit;
             }
+            continue;
+        }
+        let node = &layout.wide[index as usize];
+        let mut first = 0;
+        while first < WIDE {
+            let (_, bits) = frustum.entries(node, first, packet_limit);
+            for slot in BitIter(bits) {
+                let child = node.child[first + slot];
+                if child == EMPTY_CHILD {
+                    continue;
+                }
+                let mut lanes = [0u32; K];
+                let mut any = 0;
+                for k in 0..K {
+                    if masks[k] != 0 {
+                        lanes[k] = chunks[k]
+                            .0
+                            .enters(node, first + slot, &negative, chunks[k].1)
+                            & masks[k];
+                        any |= lanes[k];
+                    }
+                }
+                if any != 0 {
+                    single::prefetch_child(layout, child);
+                    stack[sp] = (child, lanes);
+                    sp += 1;
+                }
+            }
+            first += <L::Single as Lanes>::W;
         }
     }
 }

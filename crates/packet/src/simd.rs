@@ -18,6 +18,9 @@ pub(crate) trait Lanes: Copy + Send + Sync + 'static {
     /// to 8 leaf triangles at once (itself, except for 16-lane AVX-512, which uses AVX2
     /// there).
     type Single: Lanes;
+    /// Four lanes, for the leaf blocks of four triangles (itself for four-lane sets, SSE4.1
+    /// under AVX2 and AVX-512).
+    type Narrow: Lanes;
     /// `W` floats.
     type V: Copy;
     /// `W` lane flags.
@@ -60,6 +63,7 @@ pub(crate) struct Portable;
 impl Lanes for Portable {
     const W: usize = 4;
     type Single = Self;
+    type Narrow = Self;
     type V = [f32; 4];
     type M = [bool; 4];
 
@@ -144,7 +148,13 @@ impl Lanes for Portable {
 }
 
 #[cfg(target_arch = "x86_64")]
-pub(crate) use x86::{Avx2, Avx512, Sse41};
+pub(crate) use x86::{Avx2, Avx512, Sse41, prefetch};
+
+/// Asks the CPU to start loading the cache lines of `value` (a no-op off x86-64): the
+/// traversals prefetch the children they will visit next, so that their loads overlap.
+#[cfg(not(target_arch = "x86_64"))]
+#[inline(always)]
+pub(crate) fn prefetch<T>(_value: &T) {}
 
 #[cfg(target_arch = "x86_64")]
 #[allow(unsafe_code)]
@@ -167,6 +177,19 @@ mod x86 {
         };
     }
 
+    /// Asks the CPU to start loading the cache lines of `value` into every cache level.
+    #[inline(always)]
+    pub(crate) fn prefetch<T>(value: &T) {
+        let p = std::ptr::from_ref(value).cast::<i8>();
+        let lines = std::mem::size_of::<T>().div_ceil(64);
+        for line in 0..lines {
+            // SAFETY: a prefetch is a hint: it never faults and changes no memory, and
+            // SSE (which has it) is part of the x86-64 baseline. The address stays inside
+            // (or one line past the start of the last line of) `value`.
+            intrinsic!(_mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(64 * line)));
+        }
+    }
+
     /// SSE4.1: four lanes in `__m128`.
     #[derive(Clone, Copy, Debug)]
     pub(crate) struct Sse41;
@@ -174,6 +197,7 @@ mod x86 {
     impl Lanes for Sse41 {
         const W: usize = 4;
         type Single = Self;
+        type Narrow = Self;
         type V = __m128;
         type M = __m128;
 
@@ -267,6 +291,7 @@ mod x86 {
     impl Lanes for Avx2 {
         const W: usize = 8;
         type Single = Self;
+        type Narrow = Sse41;
         type V = __m256;
         type M = __m256;
 
@@ -361,6 +386,7 @@ mod x86 {
     impl Lanes for Avx512 {
         const W: usize = 16;
         type Single = Avx2;
+        type Narrow = Sse41;
         type V = __m512;
         type M = __mmask16;
 

@@ -1,10 +1,11 @@
 //! Single rays through the BVH8: one SIMD slab test checks a node's eight children, the
-//! children hit are visited nearest first, and leaves test `W` triangles at a time.
+//! children hit are visited nearest first, and a leaf tests its blocks of four triangles
+//! one SIMD test each.
 
-use crate::layout::{EMPTY_CHILD, LEAF_BIT, Layout, Leaf, WIDE};
-use crate::simd::Lanes;
-use crate::tri::{SplatRay, ray_vs_triangles};
-use raybench_core::{Counters, Geometry, Hit, NodeStack, PrimHit, Ray, cull_bound};
+use crate::layout::{BLOCK, EMPTY_CHILD, LEAF_BIT, Layout, LeafRef, TriBlock, WIDE};
+use crate::simd::{Lanes, prefetch};
+use crate::tri::{SplatRay, TriLanes, ray_vs_block};
+use raybench_core::{Counters, Geometry, Hit, NodeStack, PrimHit, Ray, Shape, cull_bound};
 
 /// `1 + 2 gamma(3)`: the far-distance scale of the conservative slab test (the core's).
 pub(crate) const FAR_SCALE: f32 =
@@ -67,45 +68,72 @@ impl<L: Lanes> WideRay<L> {
     }
 }
 
-/// Tests `leaf` against `ray`, keeping the closest hit in `best`.
+/// Tests the leaf `leaf` against `ray`, keeping the closest hit in `best`.
 #[inline(always)]
 pub(crate) fn leaf_closest<L: Lanes, C: Counters>(
     layout: &Layout,
     g: &Geometry,
-    leaf: Leaf,
+    leaf: LeafRef,
     ray: &Ray,
     splat: &SplatRay<L>,
     best: &mut Option<(u32, PrimHit)>,
     counters: &mut C,
 ) {
-    let (first, count) = (leaf.first as usize, leaf.count as usize);
-    counters.add_tests(count as u64);
-    if !leaf.all_triangles {
-        for &id in &layout.ids[first..first + count] {
-            g.test_closest(id, ray, best);
+    for block in &layout.blocks[leaf.first..leaf.first + leaf.blocks] {
+        if C::ENABLED {
+            counters.add_tests(u64::from(block.occupied().count_ones()));
         }
-        return;
-    }
-    let mut start = first;
-    while start < first + count {
-        let valid = lanes_below::<L>(first + count - start);
-        let t_max = best.map_or(ray.t_max, |(_, h)| h.t);
-        let r = ray_vs_triangles(layout, splat, start, t_max, valid);
-        take_hits(layout, &r, start, best);
-        for lane in BitIter(r.zero) {
-            g.test_closest(layout.ids[start + lane], ray, best);
-        }
-        start += L::W;
+        block_closest(g, block, leaf.mixed, ray, splat, best);
     }
 }
 
-/// Merges the hit lanes of a triangle test at positions `start..` into `best` by the tie
-/// rule.
+/// Tests the triangles of `block` against `ray` (and, when `mixed`, its other primitives
+/// with the core's routine), keeping the closest hit in `best`.
+#[inline(always)]
+pub(crate) fn block_closest<L: Lanes>(
+    g: &Geometry,
+    block: &TriBlock,
+    mixed: bool,
+    ray: &Ray,
+    splat: &SplatRay<L>,
+    best: &mut Option<(u32, PrimHit)>,
+) {
+    let t_max = best.map_or(ray.t_max, |(_, h)| h.t);
+    // Unused lanes hold NaN coordinates, which neither hit nor need the scalar routine:
+    // the ids are read only for hits.
+    let r = ray_vs_block(block, splat, t_max, ALL_LANES);
+    take_hits(block, &r, best);
+    for lane in BitIter(r.zero) {
+        g.test_closest(block.id[lane], ray, best);
+    }
+    if mixed {
+        for lane in BitIter(scalar_lanes(g, block)) {
+            g.test_closest(block.id[lane], ray, best);
+        }
+    }
+}
+
+/// Every lane of a block.
+const ALL_LANES: u32 = (1 << BLOCK) - 1;
+
+/// The lanes of `block` whose primitives are not triangles (the core's scalar routine tests
+/// them).
+#[inline(always)]
+pub(crate) fn scalar_lanes(g: &Geometry, block: &TriBlock) -> u32 {
+    let mut m = 0;
+    for lane in BitIter(block.occupied()) {
+        if !matches!(g.shape(block.id[lane]), Shape::Triangle(_)) {
+            m |= 1 << lane;
+        }
+    }
+    m
+}
+
+/// Merges the hit lanes of a block test into `best` by the tie rule.
 #[inline(always)]
 pub(crate) fn take_hits<L: Lanes>(
-    layout: &Layout,
-    r: &crate::tri::TriLanes<L>,
-    start: usize,
+    block: &TriBlock,
+    r: &TriLanes<L>,
     best: &mut Option<(u32, PrimHit)>,
 ) {
     if r.hit == 0 {
@@ -114,7 +142,7 @@ pub(crate) fn take_hits<L: Lanes>(
     let mut t = [0.0f32; 16];
     L::store(r.t, &mut t);
     for lane in BitIter(r.hit) {
-        let id = layout.ids[start + lane];
+        let id = block.id[lane];
         let better = best.is_none_or(|(bid, bh)| Hit::closer(t[lane], id, bh.t, bid));
         if better {
             *best = Some((id, prim_hit::<L>(r, lane, t[lane])));
@@ -124,7 +152,7 @@ pub(crate) fn take_hits<L: Lanes>(
 
 /// The scalar routine's `PrimHit` from lane `lane`: `u = V / det`, `v = W / det`.
 #[inline(always)]
-pub(crate) fn prim_hit<L: Lanes>(r: &crate::tri::TriLanes<L>, lane: usize, t: f32) -> PrimHit {
+pub(crate) fn prim_hit<L: Lanes>(r: &TriLanes<L>, lane: usize, t: f32) -> PrimHit {
     let (mut v, mut w, mut det) = ([0.0f32; 16], [0.0f32; 16], [0.0f32; 16]);
     L::store(r.v, &mut v);
     L::store(r.w, &mut w);
@@ -139,33 +167,36 @@ pub(crate) fn prim_hit<L: Lanes>(r: &crate::tri::TriLanes<L>, lane: usize, t: f3
 
 /// Whether the leaf `leaf` blocks `ray`.
 #[inline(always)]
-fn leaf_occluded<L: Lanes>(
+pub(crate) fn leaf_occluded<L: Lanes>(
     layout: &Layout,
     g: &Geometry,
-    leaf: usize,
+    leaf: LeafRef,
     ray: &Ray,
     splat: &SplatRay<L>,
 ) -> bool {
-    let leaf = layout.leaves[leaf];
-    let (first, count) = (leaf.first as usize, leaf.count as usize);
-    if !leaf.all_triangles {
-        return layout.ids[first..first + count]
-            .iter()
-            .any(|&id| g.shape(id).intersect(ray).is_some());
-    }
-    let mut start = first;
-    while start < first + count {
-        let valid = lanes_below::<L>(first + count - start);
-        let r = ray_vs_triangles(layout, splat, start, ray.t_max, valid);
-        if r.hit != 0
-            || BitIter(r.zero)
-                .any(|lane| g.shape(layout.ids[start + lane]).intersect(ray).is_some())
-        {
+    for block in &layout.blocks[leaf.first..leaf.first + leaf.blocks] {
+        let r = ray_vs_block(block, splat, ray.t_max, ALL_LANES);
+        if r.hit != 0 {
             return true;
         }
-        start += L::W;
+        let mut scalar = r.zero;
+        if leaf.mixed {
+            scalar |= scalar_lanes(g, block);
+        }
+        if BitIter(scalar).any(|lane| g.shape(block.id[lane]).intersect(ray).is_some()) {
+            return true;
+        }
     }
     false
+}
+
+/// Primitives in a leaf, for counting tests.
+#[inline(always)]
+pub(crate) fn leaf_prims(layout: &Layout, leaf: LeafRef) -> u64 {
+    layout.blocks[leaf.first..leaf.first + leaf.blocks]
+        .iter()
+        .map(|b| u64::from(b.occupied().count_ones()))
+        .sum()
 }
 
 /// The mask of the first `n` lanes (all when `n >= W`).
@@ -201,12 +232,70 @@ pub(crate) const STACK: usize = 7 * 64 + 8;
 /// incoherent ray).
 pub(crate) type Stack = [(u32, f32); STACK];
 
-/// The closest hit of one ray (the BVH part; `best` arrives holding the planes' hit).
+/// The children of wide node `index` that `ray` enters at or before `limit`, pushed onto
+/// `stack` far to near (so that the nearest is popped first), each prefetched.
+#[inline(always)]
+pub(crate) fn push_children<L: Lanes>(
+    layout: &Layout,
+    wray: &WideRay<L>,
+    index: u32,
+    limit: f32,
+    stack: &mut NodeStack<'_>,
+) {
+    let node = &layout.wide[index as usize];
+    let mut found = [(0u32, 0.0f32); WIDE];
+    let mut n = 0;
+    let mut first = 0;
+    while first < WIDE {
+        let (t0, bits) = wray.entries(&node.min, &node.max, first, L::splat(limit));
+        if bits != 0 {
+            let mut t = [0.0f32; 16];
+            L::store(t0, &mut t);
+            for lane in BitIter(bits) {
+                let child = node.child[first + lane];
+                if child == EMPTY_CHILD {
+                    continue;
+                }
+                // Insertion sort, descending by entry.
+                let mut j = n;
+                while j > 0 && found[j - 1].1 < t[lane] {
+                    found[j] = found[j - 1];
+                    j -= 1;
+                }
+                found[j] = (child, t[lane]);
+                n += 1;
+            }
+        }
+        first += L::W;
+    }
+    for &(child, entry) in &found[..n] {
+        prefetch_child(layout, child);
+        stack.push(child, entry);
+    }
+}
+
+/// Prefetches the memory of the child reference `child` (a wide node or a leaf's blocks).
+#[inline(always)]
+pub(crate) fn prefetch_child(layout: &Layout, child: u32) {
+    if child & LEAF_BIT == 0 {
+        prefetch(&layout.wide[child as usize]);
+    } else {
+        let leaf = LeafRef::decode(child);
+        prefetch(&layout.blocks[leaf.first]);
+        if leaf.blocks > 1 {
+            prefetch(&layout.blocks[leaf.first + 1]);
+        }
+    }
+}
+
+/// The closest hit of one ray in the subtree under the child reference `root` (the BVH
+/// part; `best` arrives holding the hit found so far, such as the planes').
 #[inline(always)]
 pub(crate) fn closest<L: Lanes, C: Counters>(
     layout: &Layout,
     g: &Geometry,
     ray: &Ray,
+    root: u32,
     mut best: Option<(u32, PrimHit)>,
     stack: &mut Stack,
     counters: &mut C,
@@ -214,96 +303,108 @@ pub(crate) fn closest<L: Lanes, C: Counters>(
     if layout.wide.is_empty() {
         return best;
     }
-    let wray = WideRay::<L>::new(ray);
-    let splat = SplatRay::<L>::new(ray);
+    let wray = WideRay::<L::Single>::new(ray);
+    let splat = SplatRay::<L::Narrow>::new(ray);
     let bound = |best: &Option<(u32, PrimHit)>| cull_bound(best.map_or(ray.t_max, |(_, h)| h.t));
     let mut limit = bound(&best);
     let mut stack = NodeStack::new(stack);
-    stack.push(0, f32::NEG_INFINITY);
+    stack.push(root, f32::NEG_INFINITY);
     while let Some((index, _)) = stack.pop_within(limit) {
         counters.add_visits(1);
         if index & LEAF_BIT != 0 {
-            let leaf = layout.leaves[(index & !LEAF_BIT) as usize];
-            leaf_closest(layout, g, leaf, ray, &splat, &mut best, counters);
+            leaf_closest(
+                layout,
+                g,
+                LeafRef::decode(index),
+                ray,
+                &splat,
+                &mut best,
+                counters,
+            );
             limit = bound(&best);
             continue;
         }
-        let node = &layout.wide[index as usize];
-        // Children entered, sorted far to near so that the nearest is popped first.
-        let mut found = [(0u32, 0.0f32); WIDE];
-        let mut n = 0;
-        let mut first = 0;
-        while first < WIDE {
-            let (t0, bits) = wray.entries(&node.min, &node.max, first, L::splat(limit));
-            if bits != 0 {
-                let mut t = [0.0f32; 16];
-                L::store(t0, &mut t);
-                for lane in BitIter(bits) {
-                    let child = node.child[first + lane];
-                    if child == EMPTY_CHILD {
-                        continue;
-                    }
-                    // Insertion sort, descending by entry.
-                    let mut j = n;
-                    while j > 0 && found[j - 1].1 < t[lane] {
-                        found[j] = found[j - 1];
-                        j -= 1;
-                    }
-                    found[j] = (child, t[lane]);
-                    n += 1;
-                }
-            }
-            first += L::W;
-        }
-        for &(child, entry) in &found[..n] {
-            stack.push(child, entry);
-        }
+        push_children(layout, &wray, index, limit, &mut stack);
     }
     best
 }
 
-/// Whether anything in the BVH8 blocks `ray`.
+/// The children of wide node `index` that `ray` enters at or before `t_max`, pushed onto
+/// `stack` in slot order (any-hit queries need no order), each prefetched.
+#[inline(always)]
+pub(crate) fn push_children_any<L: Lanes>(
+    layout: &Layout,
+    wray: &WideRay<L>,
+    index: u32,
+    t_max: L::V,
+    stack: &mut NodeStack<'_>,
+) {
+    let node = &layout.wide[index as usize];
+    let mut first = 0;
+    while first < WIDE {
+        let (_, bits) = wray.entries(&node.min, &node.max, first, t_max);
+        for lane in BitIter(bits) {
+            let child = node.child[first + lane];
+            if child != EMPTY_CHILD {
+                prefetch_child(layout, child);
+                stack.push(child, f32::NEG_INFINITY);
+            }
+        }
+        first += L::W;
+    }
+}
+
+/// Whether anything in the subtree under the child reference `root` blocks `ray`.
 #[inline(always)]
 pub(crate) fn occluded<L: Lanes, C: Counters>(
     layout: &Layout,
     g: &Geometry,
     ray: &Ray,
+    root: u32,
     stack: &mut Stack,
     counters: &mut C,
 ) -> bool {
     if layout.wide.is_empty() {
         return false;
     }
-    let wray = WideRay::<L>::new(ray);
-    let splat = SplatRay::<L>::new(ray);
-    let limit = L::splat(ray.t_max);
-    stack[0].0 = 0;
-    let mut sp = 1;
-    while sp > 0 {
-        sp -= 1;
-        let index = stack[sp].0;
-        counters.add_visits(1);
-        if index & LEAF_BIT != 0 {
-            let leaf = (index & !LEAF_BIT) as usize;
-            counters.add_tests(u64::from(layout.leaves[leaf].count));
-            if leaf_occluded(layout, g, leaf, ray, &splat) {
-                return true;
-            }
-            continue;
-        }
-        let node = &layout.wide[index as usize];
-        let mut first = 0;
-        while first < WIDE {
-            let (_, bits) = wray.entries(&node.min, &node.max, first, limit);
-            for lane in BitIter(bits) {
-                let child = node.child[first + lane];
-                if child != EMPTY_CHILD {
-                    stack[sp].0 = child;
-                    sp += 1;
-                }
-            }
-            first += L::W;
+    let wray = WideRay::<L::Single>::new(ray);
+    let splat = SplatRay::<L::Narrow>::new(ray);
+    let t_max = <L::Single as Lanes>::splat(ray.t_max);
+    let mut stack = NodeStack::new(stack);
+    stack.push(root, f32::NEG_INFINITY);
+    while let Some((index, _)) = stack.pop_within(f32::INFINITY) {
+        if leaf_or_push::<L, C>(
+            layout, g, ray, &wray, &splat, t_max, index, &mut stack, counters,
+        ) {
+            return true;
         }
     }
+    false
+}
+
+/// One step of an any-hit traversal: tests the leaf `index` (true when it blocks `ray`) or
+/// pushes the children of the wide node `index`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn leaf_or_push<L: Lanes, C: Counters>(
+    layout: &Layout,
+    g: &Geometry,
+    ray: &Ray,
+    wray: &WideRay<L::Single>,
+    splat: &SplatRay<L::Narrow>,
+    t_max: <L::Single as Lanes>::V,
+    index: u32,
+    stack: &mut NodeStack<'_>,
+    counters: &mut C,
+) -> bool {
+    counters.add_visits(1);
+    if index & LEAF_BIT != 0 {
+        let leaf = LeafRef::decode(index);
+        if C::ENABLED {
+            counters.add_tests(leaf_prims(layout, leaf));
+        }
+        return leaf_occluded(layout, g, leaf, ray, splat);
+    }
+    push_children_any(layout, wray, index, t_max, stack);
     false
 }

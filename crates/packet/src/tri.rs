@@ -7,7 +7,7 @@
 //! functions in f64 when one is exactly 0; lanes where that happens are reported in
 //! `zero` and the caller hands them to the scalar routine itself.
 
-use crate::layout::Layout;
+use crate::layout::{BLOCK, TriBlock};
 use crate::simd::Lanes;
 use crate::single::lanes_below;
 
@@ -171,16 +171,16 @@ fn finish<L: Lanes>(
     }
 }
 
-/// Tests one ray against the `W` triangles at leaf positions `first..first + W`; lanes
-/// outside `valid` are ignored.
+/// Tests one ray against the four triangles of `block` (`L::W` must be 4); lanes outside
+/// `valid` are ignored.
 #[inline(always)]
-pub(crate) fn ray_vs_triangles<L: Lanes>(
-    layout: &Layout,
+pub(crate) fn ray_vs_block<L: Lanes>(
+    block: &TriBlock,
     ray: &SplatRay<L>,
-    first: usize,
     t_max: f32,
     valid: u32,
 ) -> TriLanes<L> {
+    debug_assert_eq!(L::W, BLOCK);
     // No closures in kernels: a closure is a function of its own, compiled without the
     // caller's target features, so its intrinsics would not be inlined.
     let mut p = [[L::splat(0.0); 2]; 3];
@@ -188,11 +188,11 @@ pub(crate) fn ray_vs_triangles<L: Lanes>(
     let [kx, ky, kz] = ray.k;
     let [sx, sy, sz] = ray.shear;
     for vertex in 0..3 {
-        let coord = &layout.tri[3 * vertex..3 * vertex + 3];
+        let coord = &block.v[3 * vertex..3 * vertex + 3];
         let v = [
-            L::sub(L::load(&coord[0][first..]), ray.origin[0]),
-            L::sub(L::load(&coord[1][first..]), ray.origin[1]),
-            L::sub(L::load(&coord[2][first..]), ray.origin[2]),
+            L::sub(L::load(&coord[0]), ray.origin[0]),
+            L::sub(L::load(&coord[1]), ray.origin[1]),
+            L::sub(L::load(&coord[2]), ray.origin[2]),
         ];
         p[vertex] = [
             L::sub(v[kx], L::mul(sx, v[kz])),
@@ -204,12 +204,11 @@ pub(crate) fn ray_vs_triangles<L: Lanes>(
 }
 
 /// Tests the `W` rays of `rays` (each clipped to its lane of `t_max`) against the triangle
-/// at leaf position `pos`; lanes outside `valid` are ignored.
+/// `tri` (nine coordinates, [`TriBlock::triangle`]); lanes outside `valid` are ignored.
 #[inline(always)]
 pub(crate) fn rays_vs_triangle<L: Lanes>(
-    layout: &Layout,
+    tri: &[f32; 9],
     rays: &RayLanes<L>,
-    pos: usize,
     t_max: L::V,
     valid: u32,
 ) -> TriLanes<L> {
@@ -217,11 +216,10 @@ pub(crate) fn rays_vs_triangle<L: Lanes>(
     let mut z = [L::splat(0.0); 3];
     let [sx, sy, sz] = rays.shear;
     for vertex in 0..3 {
-        let coord = &layout.tri[3 * vertex..3 * vertex + 3];
         let v = [
-            L::sub(L::splat(coord[0][pos]), rays.origin[0]),
-            L::sub(L::splat(coord[1][pos]), rays.origin[1]),
-            L::sub(L::splat(coord[2][pos]), rays.origin[2]),
+            L::sub(L::splat(tri[3 * vertex]), rays.origin[0]),
+            L::sub(L::splat(tri[3 * vertex + 1]), rays.origin[1]),
+            L::sub(L::splat(tri[3 * vertex + 2]), rays.origin[2]),
         ];
         let (x, y, vz) = match rays.uniform {
             Some([kx, ky, kz]) => (v[kx], v[ky], v[kz]),

@@ -2,6 +2,7 @@
 //! for bit, for packets (coherent rays), single rays (incoherent rays) and any-hit queries,
 //! on generated geometry and on packets built to be awkward.
 
+use raybench_bvh::BvhParams;
 use raybench_core::{
     Accel, Camera, Geometry, Hit, NoCounters, Plane, Ray, Shape, Sphere, Vec3, rays,
 };
@@ -19,6 +20,10 @@ fn geometries() -> Vec<(&'static str, Arc<Geometry>)> {
     let mut coincident = twins.clone();
     coincident.extend(twins.iter().rev().cloned());
     all.push(("coincident", Arc::new(Geometry::new(coincident))));
+    // A pile of identical triangles beside a mesh: no split separates them.
+    let mut pile = tris(generators::icosphere(1));
+    pile.extend(std::iter::repeat_n(twins[5].clone(), 100));
+    all.push(("pile", Arc::new(Geometry::new(pile))));
     all.push((
         "one sphere",
         Arc::new(Geometry::new(vec![Shape::Sphere(Sphere::new(
@@ -174,12 +179,22 @@ fn avx512_matches_naive() {
     }
 }
 
+/// The BVH8 is collapsed from whatever BVH2 it is given: other presets, a BVH2 split down
+/// to single primitives, and one whose leaves hold more than a leaf reference can name
+/// (100 coincident triangles in one leaf, laid out as a small tree of leaves).
 #[test]
-fn interval_culling_changes_nothing() {
-    for isa in [Isa::Portable, Isa::detect()] {
+fn every_bvh2_collapses_exactly() {
+    let coarse = BvhParams {
+        max_leaf_size: 100,
+        ..BvhParams::fast()
+    };
+    let fine = BvhParams {
+        max_leaf_size: 1,
+        ..BvhParams::medium()
+    };
+    for bvh in [BvhParams::fast(), BvhParams::quality(), fine, coarse] {
         check(PacketParams {
-            isa,
-            interval_cull: true,
+            bvh,
             ..PacketParams::default()
         });
     }
