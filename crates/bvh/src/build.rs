@@ -233,14 +233,33 @@ impl Binner {
         (b.clamp(0, self.bins as i32 - 1) as usize).min(MAX_BINS - 1)
     }
 
-    /// The bins of a centroid on the three axes.
+    /// The bins of a centroid on the three axes, as [`Binner::bin`] computes them: the
+    /// clamp happens before the truncation, in all lanes at once (the same bins, since the
+    /// bounds are whole numbers; NaN goes to bin 0 either way).
     #[inline]
     fn bins_of(&self, c: V4) -> [usize; 3] {
+        let last = (self.bins - 1) as f32;
+        let f = c
+            .lanes(self.cmin, |c, m| c - m)
+            .lanes(self.scale, |d, s| d * s)
+            .lanes(V4([last; 4]), |f, last| {
+                let f = if f > 0.0 { f } else { 0.0 };
+                if f < last { f } else { last }
+            });
+        let b = f.0.map(|x| x as i32 as usize);
         [
-            self.bin(c.0[0], 0),
-            self.bin(c.0[1], 1),
-            self.bin(c.0[2], 2),
+            b[0] & (MAX_BINS - 1),
+            b[1] & (MAX_BINS - 1),
+            b[2] & (MAX_BINS - 1),
         ]
+    }
+
+    /// Whether coordinate `x` on `axis` falls in a bin below `bin` (at least 1): the
+    /// comparison [`Binner::bin`]`(x, axis) < bin` without the conversion, exact because
+    /// `bin` is a whole number and the scaled coordinate is not negative.
+    #[inline]
+    fn below(&self, x: f32, axis: usize, bin: usize) -> bool {
+        (x - self.cmin.0[axis]) * self.scale.0[axis] < bin as f32
     }
 }
 
@@ -298,6 +317,9 @@ struct Split {
     bin: usize,
     /// SAH cost relative to a leaf's (`C_i` = 1 per primitive).
     cost: f32,
+    /// The boxes of the two sides.
+    left: Box4,
+    right: Box4,
 }
 
 /// The cheapest SAH split over the valid axes and bin boundaries of `bins`.
@@ -333,11 +355,25 @@ fn best_split(
                 + (left.surface_area() * left_count as f32 + right_area[i] * right_count[i] as f32)
                     / area;
             if cost.is_finite() && best.is_none_or(|b| cost < b.cost) {
-                best = Some(Split { axis, bin: i, cost });
+                best = Some(Split {
+                    axis,
+                    bin: i,
+                    cost,
+                    left: Box4::EMPTY,
+                    right: Box4::EMPTY,
+                });
             }
         }
     }
-    best
+    best.map(|b| {
+        let boxes = &bins.boxes[b.axis][..n];
+        let union = |side: &[Box4]| side.iter().fold(Box4::EMPTY, |a, &b| a.union(b));
+        Split {
+            left: union(&boxes[..b.bin]),
+            right: union(&boxes[b.bin..]),
+            ..b
+        }
+    })
 }
 
 /// Nodes of at most this many items find their split without bins (see
@@ -373,10 +409,12 @@ fn best_split_small(
             keys[k] = key;
         }
         let keys = &keys[..n];
+        let mut right = [Box4::EMPTY; SMALL];
         let mut right_area = [0.0f32; SMALL];
         let mut acc = Box4::EMPTY;
         for k in (1..n).rev() {
             acc = acc.union(items[keys[k].1].bounds());
+            right[k] = acc;
             right_area[k] = acc.surface_area();
         }
         let mut left = Box4::EMPTY;
@@ -392,6 +430,8 @@ fn best_split_small(
                     axis,
                     bin: keys[k].0,
                     cost,
+                    left,
+                    right: right[k],
                 });
             }
         }
@@ -400,23 +440,25 @@ fn best_split_small(
 }
 
 /// In-place partition by the split's side; returns the number of items now at the front
-/// (those going left) and the extents of both sides.
-fn partition(items: &mut [Item], binner: &Binner, split: Split) -> (usize, Extent, Extent) {
-    let (mut left, mut right) = (Extent::EMPTY, Extent::EMPTY);
+/// (those going left) and the extents of both sides (boxes from the split, centroid bounds
+/// gathered here).
+fn partition(items: &mut [Item], binner: &Binner, split: &Split) -> (usize, Extent, Extent) {
+    let (mut left, mut right) = (Box4::EMPTY, Box4::EMPTY);
     let mut i = 0;
     let mut j = items.len();
     while i < j {
         let it = items[i];
-        if binner.bin(it.centroid_on(split.axis), split.axis) < split.bin {
-            left = left.add(&it);
+        if binner.below(it.centroid_on(split.axis), split.axis, split.bin) {
+            left = left.grow(it.centroid());
             i += 1;
         } else {
-            right = right.add(&it);
+            right = right.grow(it.centroid());
             j -= 1;
             items.swap(i, j);
         }
     }
-    (i, left, right)
+    let extent = |bounds, centroids| Extent { bounds, centroids };
+    (i, extent(split.left, left), extent(split.right, right))
 }
 
 /// A node to build: its items (at `first` in the whole item array), their extent and its
@@ -483,7 +525,7 @@ impl<'a> Task<'a> {
         };
         match split {
             Some((split, binner)) if split.cost < n as f32 || n > params.max_leaf_size => {
-                let (mid, left, right) = partition(self.items, &binner, split);
+                let (mid, left, right) = partition(self.items, &binner, &split);
                 Decision::Split { mid, left, right }
             }
             Some(_) => Decision::Leaf,

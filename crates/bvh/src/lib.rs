@@ -88,14 +88,14 @@ impl Bvh {
     /// parameters) times the probability that such a ray hits its box (its surface area over
     /// the root's), every leaf its primitive count times that probability.
     /// Lower is better; compare trees over the same primitives. 0 when the tree is empty or
-    /// its root box has no area.
+    /// its root box has no (or an infinite) area.
     #[must_use]
     pub fn sah_cost(&self) -> f64 {
         let Some(root) = self.nodes.first() else {
             return 0.0;
         };
         let root_area = f64::from(root.aabb().surface_area());
-        if !(root_area > 0.0) {
+        if root_area <= 0.0 || !root_area.is_finite() {
             return 0.0;
         }
         let traversal = f64::from(self.params.traversal_cost);
