@@ -114,6 +114,14 @@ impl Box4 {
     fn surface_area(self) -> f32 {
         self.aabb().surface_area()
     }
+
+    /// [`Box4::surface_area`] of a box known to be non-empty: the same arithmetic without
+    /// the emptiness test.
+    #[inline]
+    fn area_non_empty(self) -> f32 {
+        let e = self.hi.lanes(self.lo, |a, b| a - b).0;
+        2.0 * (e[0] * e[1] + e[1] * e[2] + e[2] * e[0])
+    }
 }
 
 /// One bounded primitive while building: 32 bytes, its box with the primitive id stored in
@@ -289,13 +297,19 @@ impl Bins {
     /// Adds `items` into the bins `binner` assigns them.
     fn add(&mut self, binner: &Binner, items: &[Item]) {
         for it in items {
-            let b = binner.bins_of(it.centroid());
-            let bounds = it.bounds();
-            for (axis, &k) in b.iter().enumerate() {
-                let bin = &mut self.boxes[axis][k];
-                *bin = bin.union(bounds);
-                self.counts[axis][k] += 1;
-            }
+            self.put(binner, it);
+        }
+    }
+
+    /// Adds one item.
+    #[inline]
+    fn put(&mut self, binner: &Binner, it: &Item) {
+        let b = binner.bins_of(it.centroid());
+        let bounds = it.bounds();
+        for (axis, &k) in b.iter().enumerate() {
+            let bin = &mut self.boxes[axis][k];
+            *bin = bin.union(bounds);
+            self.counts[axis][k] += 1;
         }
     }
 
@@ -334,25 +348,35 @@ fn best_split(
     let mut best: Option<Split> = None;
     for axis in (0..3).filter(|&a| valid[a]) {
         let (boxes, counts) = (&bins.boxes[axis], &bins.counts[axis]);
-        // Sweep from the right for the right-hand areas and counts, then from the left.
+        // Sweep from the right for the right-hand areas and counts, then from the left. An
+        // empty bin changes neither side: its right-hand area is its neighbour's, and the
+        // boundary after it splits like the one before it at the same cost, which is never
+        // strictly cheaper, so it is skipped.
         let mut right_area = [0.0f32; MAX_BINS];
         let mut right_count = [0u32; MAX_BINS];
-        let (mut acc, mut count) = (Box4::EMPTY, 0);
+        let (mut acc, mut count, mut acc_area) = (Box4::EMPTY, 0, 0.0);
         for i in (1..n).rev() {
-            acc = acc.union(boxes[i]);
-            count += counts[i];
-            right_area[i] = acc.surface_area();
+            if counts[i] > 0 {
+                acc = acc.union(boxes[i]);
+                count += counts[i];
+                acc_area = acc.area_non_empty();
+            }
+            right_area[i] = acc_area;
             right_count[i] = count;
         }
         let (mut left, mut left_count) = (Box4::EMPTY, 0);
         for i in 1..n {
-            left = left.union(boxes[i - 1]);
-            left_count += counts[i - 1];
-            if left_count == 0 || right_count[i] == 0 {
+            if counts[i - 1] == 0 {
                 continue;
             }
+            left = left.union(boxes[i - 1]);
+            left_count += counts[i - 1];
+            if right_count[i] == 0 {
+                break;
+            }
             let cost = params.traversal_cost
-                + (left.surface_area() * left_count as f32 + right_area[i] * right_count[i] as f32)
+                + (left.area_non_empty() * left_count as f32
+                    + right_area[i] * right_count[i] as f32)
                     / area;
             if cost.is_finite() && best.is_none_or(|b| cost < b.cost) {
                 best = Some(Split {
