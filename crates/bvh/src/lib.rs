@@ -82,6 +82,38 @@ impl Bvh {
         }
     }
 
+    /// The tree's cost by the surface area heuristic, the figure the builder minimises
+    /// greedily: the expected work of a ray that hits the root box, in primitive tests
+    /// (`C_i` = 1). Every interior node adds `traversal_cost` (the `C_t` of the build
+    /// parameters) times the probability that such a ray hits its box (its surface area over
+    /// the root's), every leaf its primitive count times that probability.
+    /// Lower is better; compare trees over the same primitives. 0 when the tree is empty or
+    /// its root box has no (or an infinite) area.
+    #[must_use]
+    pub fn sah_cost(&self) -> f64 {
+        let Some(root) = self.nodes.first() else {
+            return 0.0;
+        };
+        let root_area = f64::from(root.aabb().surface_area());
+        if root_area <= 0.0 || !root_area.is_finite() {
+            return 0.0;
+        }
+        let traversal = f64::from(self.params.traversal_cost);
+        let sum: f64 = self
+            .nodes
+            .iter()
+            .map(|n| {
+                let weight = if n.is_leaf() {
+                    f64::from(n.count)
+                } else {
+                    traversal
+                };
+                weight * f64::from(n.aabb().surface_area())
+            })
+            .sum();
+        sum / root_area
+    }
+
     /// Checks the structure's invariants: every bounded primitive in exactly one leaf and no
     /// unbounded one in any; every leaf non-empty and holding its primitives' boxes; every
     /// interior node with two children inside it; the depth-first layout (first child
@@ -213,6 +245,95 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn leaves_of_one_when_max_leaf_size_is_one() {
+        // The packet crate's wide collapse relies on it: every node splits down to single
+        // primitives, coincident ones included.
+        for (name, g) in geometries() {
+            let params = BvhParams {
+                max_leaf_size: 1,
+                ..BvhParams::medium()
+            };
+            let bvh = Bvh::build_with(Arc::clone(&g), params);
+            bvh.validate().unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert!(
+                bvh.nodes()
+                    .iter()
+                    .filter(|n| n.is_leaf())
+                    .all(|n| n.count == 1),
+                "{name}"
+            );
+        }
+    }
+
+    #[test]
+    fn same_tree_on_any_thread_count_and_parallel_threshold() {
+        // Large enough for the parallel binning of the top nodes.
+        let big = Arc::new(Geometry::new(
+            generators::soup(150_000, 4)
+                .triangles()
+                .map(Shape::Triangle)
+                .collect(),
+        ));
+        let mut all = geometries();
+        all.push(("big soup", big));
+        let build_on = |threads: usize, g: &Arc<Geometry>, params: BvhParams| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| Bvh::build_with(Arc::clone(g), params))
+        };
+        for (name, g) in &all {
+            let reference = build_on(1, g, BvhParams::medium());
+            reference.validate().unwrap();
+            for (threads, parallel_threshold) in [(2, 4096), (2, 2), (3, 100), (1, usize::MAX)] {
+                let params = BvhParams {
+                    parallel_threshold,
+                    ..BvhParams::medium()
+                };
+                let other = build_on(threads, g, params);
+                assert_eq!(other.nodes(), reference.nodes(), "{name} {threads} threads");
+                assert_eq!(
+                    other.prim_ids(),
+                    reference.prim_ids(),
+                    "{name} {threads} threads"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn sah_cost_of_known_trees() {
+        let one = Arc::new(Geometry::new(vec![Shape::Sphere(Sphere::new(
+            Vec3::ZERO,
+            1.0,
+        ))]));
+        // One leaf of one primitive, hit by every ray that hits the root.
+        assert_eq!(Bvh::build_with(one, BvhParams::default()).sah_cost(), 1.0);
+        assert_eq!(
+            Bvh::build_with(Arc::new(Geometry::default()), BvhParams::default()).sah_cost(),
+            0.0
+        );
+        // Two far-apart spheres: a root (C_t = 1) and two leaves each hit with probability
+        // a / A, the leaves' boxes being cubes of side s (a sphere's box is padded by
+        // 1/2048 of its radius) and the root's (10 + s) x s x s.
+        let two = Arc::new(Geometry::new(vec![
+            Shape::Sphere(Sphere::new(Vec3::ZERO, 0.5)),
+            Shape::Sphere(Sphere::new(Vec3::new(10.0, 0.0, 0.0), 0.5)),
+        ]));
+        let bvh = Bvh::build_with(two, BvhParams::default());
+        assert_eq!(bvh.nodes().len(), 3);
+        let side = 1.0 + 1.0 / 2048.0;
+        let root_area = 2.0 * (2.0 * (10.0 + side) * side + side * side);
+        let expected = 1.0 + 2.0 * 6.0 * side * side / root_area;
+        assert!(
+            (bvh.sah_cost() - expected).abs() < 1e-5,
+            "{}",
+            bvh.sah_cost()
+        );
     }
 
     #[test]
