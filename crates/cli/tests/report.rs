@@ -159,7 +159,41 @@ fn shards_split_by_scene_and_merge_back() {
             .unwrap()
             .contains("Shard 2/2")
     );
-    for d in [a, b, m] {
+    // A shard given twice, as the same folder or inside a merged report, is refused: it
+    // would double its rows.
+    let again = tmp_dir("merged-again");
+    for pair in [[&a, &a], [&m, &b]] {
+        let out = raybench(&[
+            "merge",
+            pair[0].to_str().unwrap(),
+            pair[1].to_str().unwrap(),
+            "--out",
+            again.to_str().unwrap(),
+        ]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{pair:?} merged: {stderr}");
+        assert_ne!(out.status.code(), Some(101), "{stderr}");
+        let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
+        assert_eq!(errors.len(), 1, "{stderr}");
+        assert!(errors[0].contains("same shard"), "{stderr}");
+        assert!(!again.join("results.json").exists());
+    }
+    // A copy of a shard (another run of the same part) measures the same runs.
+    let rerun = tmp_dir("shard1-rerun");
+    assert!(small_report(&rerun, &["--shard", "1/2"]).status.success());
+    let out = raybench(&[
+        "merge",
+        a.to_str().unwrap(),
+        rerun.to_str().unwrap(),
+        "--out",
+        again.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("both measure spheres"),
+        "{stderr}"
+    );
+    for d in [a, b, m, again, rerun] {
         let _ = std::fs::remove_dir_all(d);
     }
 }

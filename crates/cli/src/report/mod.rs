@@ -372,7 +372,8 @@ fn write_text(path: &Path, text: &str) -> Result<()> {
 /// copied; charts and `REPORT.md` are drawn anew).
 ///
 /// # Errors
-/// A folder without a readable `results.json`, or an unwritable `out`.
+/// A folder without a readable `results.json`, two folders holding the same shard or the
+/// same measurement, or an unwritable `out`.
 pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Results> {
     if dirs.is_empty() {
         bail!("merge needs at least one report folder");
@@ -382,10 +383,25 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Results> {
         raybench_version: env!("CARGO_PKG_VERSION").into(),
         ..Results::default()
     };
-    std::fs::create_dir_all(out.join("images"))
-        .with_context(|| format!("cannot create {}", out.display()))?;
+    // Every input first: a shard given twice (the same folder twice, a copy of it, or a
+    // merged report with one of its parts) would double its rows.
+    let mut inputs: Vec<(&PathBuf, Results)> = Vec::new();
     for dir in dirs {
         let r = Results::read(&dir.join("results.json"))?;
+        for (first, earlier) in &inputs {
+            if let Some(why) = earlier.overlap(&r) {
+                bail!(
+                    "{} and {} hold the same shard ({why}); give each shard once",
+                    first.display(),
+                    dir.display()
+                );
+            }
+        }
+        inputs.push((dir, r));
+    }
+    std::fs::create_dir_all(out.join("images"))
+        .with_context(|| format!("cannot create {}", out.display()))?;
+    for (dir, r) in inputs {
         for run in &r.runs {
             for name in [&run.images.color, &run.images.ids_diff, &run.images.flip]
                 .into_iter()

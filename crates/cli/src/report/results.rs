@@ -44,6 +44,26 @@ pub struct Shard {
     pub quick: bool,
 }
 
+impl Shard {
+    /// Whether `other` records the same run of the same shard.
+    #[must_use]
+    pub fn same_run(&self, other: &Shard) -> bool {
+        (
+            self.index,
+            self.count,
+            &self.started,
+            &self.command,
+            &self.machine,
+        ) == (
+            other.index,
+            other.count,
+            &other.started,
+            &other.command,
+            &other.machine,
+        )
+    }
+}
+
 /// The machine a shard ran on.
 #[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
 pub struct Machine {
@@ -185,6 +205,18 @@ pub struct Run {
     pub phases: BTreeMap<String, f64>,
 }
 
+impl Run {
+    /// What the run measured: scene, workload and backend (`spheres cast-primary 256x256
+    /// 1 spp, backend bvh`); unique within a report.
+    #[must_use]
+    pub fn key(&self) -> String {
+        format!(
+            "{} {}-{} {}x{} {} spp, backend {}",
+            self.scene, self.mode, self.ray_set, self.width, self.height, self.spp, self.backend
+        )
+    }
+}
+
 /// One point of a scaling experiment.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct ScalingPoint {
@@ -219,6 +251,18 @@ pub struct ScalingPoint {
     /// The image against the direct rendering (experiment `bezier`, tessellated points).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub difference: Option<ImageDifference>,
+}
+
+impl ScalingPoint {
+    /// What the point measured (`scaling primitives soup x=1000, backend bvh`); unique
+    /// within a report.
+    #[must_use]
+    pub fn key(&self) -> String {
+        format!(
+            "scaling {} {} x={}, backend {}",
+            self.experiment, self.series, self.x, self.backend
+        )
+    }
 }
 
 /// How far a rendering is from a reference rendering of the same view.
@@ -344,6 +388,34 @@ impl Results {
         }
         serde_json::from_value(value)
             .with_context(|| format!("{} is not a valid {SCHEMA} file", path.display()))
+    }
+
+    /// Why `other` cannot be merged with `self` because they share data: the same shard
+    /// (same number, start time, command and machine), or a run or scaling point measured
+    /// in both; `None` when they are disjoint.
+    #[must_use]
+    pub fn overlap(&self, other: &Results) -> Option<String> {
+        if let Some(s) = self
+            .shards
+            .iter()
+            .find(|s| other.shards.iter().any(|o| s.same_run(o)))
+        {
+            return Some(format!(
+                "shard {}/{} started {}",
+                s.index, s.count, s.started
+            ));
+        }
+        if let Some(r) = self
+            .runs
+            .iter()
+            .find(|r| other.runs.iter().any(|o| r.key() == o.key()))
+        {
+            return Some(format!("both measure {}", r.key()));
+        }
+        self.scaling
+            .iter()
+            .find(|p| other.scaling.iter().any(|o| p.key() == o.key()))
+            .map(|p| format!("both measure {}", p.key()))
     }
 
     /// Appends another result set, renumbering its shard references.
