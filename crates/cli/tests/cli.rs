@@ -658,3 +658,47 @@ fn an_interrupted_render_leaves_the_previous_image_whole() {
     assert_eq!(left, ["out.png"], "files left behind: {left:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn docs_state_the_modes_and_the_defaults() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let read = |p: &str| std::fs::read_to_string(root.join(p)).unwrap();
+    // Every mode a result can hold.
+    let results = read("docs/results.md");
+    let row = results
+        .lines()
+        .find(|l| l.starts_with("| `mode` |"))
+        .expect("a mode row");
+    for m in raybench_core::Mode::ALL {
+        assert!(row.contains(&format!("`{}`", m.name())), "{row}");
+    }
+    // The background of a scene file that sets none, which lights `path` renders.
+    let scene = raybench_scene::load_scene_str(
+        "[[object]]\nkind = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n",
+        "one-sphere",
+        None,
+        Path::new("."),
+    )
+    .unwrap();
+    let bg = scene.background;
+    let stated = format!("default `[{}, {}, {}]`", bg.x, bg.y, bg.z);
+    assert!(read("docs/scene-format.md").contains(&stated), "{stated}");
+    assert!(read("README.md").contains(&stated), "{stated}");
+    // The default `--max-depth` of every command that has one.
+    for cmd in ["render", "compare", "info"] {
+        let o = raybench(&[cmd, "--help"]);
+        let help = String::from_utf8_lossy(&o.stdout);
+        let option = &help[help.find("--max-depth").expect("a --max-depth option")..];
+        let option = &option[..option[2..].find("--").map_or(option.len(), |i| i + 2)];
+        let default = option
+            .split("[default: ")
+            .nth(1)
+            .and_then(|d| d.split(']').next())
+            .unwrap_or_else(|| panic!("{cmd}: no default in {option}"));
+        assert!(
+            read("docs/scene-format.md").contains(&format!("**default {default}**")),
+            "{cmd}: {default}"
+        );
+        assert!(read("README.md").contains(&format!("`--max-depth {default}`")));
+    }
+}

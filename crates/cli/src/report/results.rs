@@ -157,7 +157,7 @@ pub struct Run {
     pub scene: String,
     /// Primitives in the scene.
     pub primitives: u64,
-    /// Integrator (`cast`, `whitted`, `path`).
+    /// Integrator (`cast`, `whitted`, `path`, `mip`, `composite`).
     pub mode: String,
     /// `primary` (frames) or `incoherent` (explicit random rays).
     pub ray_set: String,
