@@ -232,3 +232,103 @@ fn bad_report_options_are_refused_cleanly() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("schema"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn skipped_scenes_and_experiments_are_listed_once() {
+    // No shared meshes: bunny and the Cornell box are skipped, and so is the `pixels`
+    // experiment (the bunny at growing sizes). CI=true makes a missing asset an error.
+    let (dir, assets) = (tmp_dir("skips"), tmp_dir("no-assets"));
+    std::fs::create_dir_all(&assets).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_raybench"))
+        .args([
+            "report",
+            "--scenes",
+            "spheres,bunny,cornell-box",
+            "--backends",
+            "bvh,packet",
+            "--size",
+            "16",
+            "--repeat",
+            "1",
+            "--experiments",
+            "pixels",
+            "--out",
+            dir.to_str().unwrap(),
+        ])
+        .env("RAYBENCH_ASSETS", &assets)
+        .env_remove("CI")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let r = results(&dir);
+    let skipped: Vec<(String, String, String)> = r["skipped"]
+        .as_array()
+        .expect("a skipped list")
+        .iter()
+        .map(|s| {
+            let file = if s["name"] == "cornell-box" {
+                "CornellBox-Original.obj"
+            } else {
+                "stanford-bunny.obj"
+            };
+            assert!(s["reason"].as_str().unwrap().contains(file), "{s}");
+            assert_eq!(s["shard"], 0);
+            (
+                s["kind"].as_str().unwrap().to_string(),
+                s["name"].as_str().unwrap().to_string(),
+                s["status"].as_str().unwrap().to_string(),
+            )
+        })
+        .collect();
+    let expected = [
+        ("scene", "bunny"),
+        ("scene", "cornell-box"),
+        ("experiment", "pixels"),
+    ];
+    assert_eq!(
+        skipped,
+        expected.map(|(k, n)| (k.to_string(), n.to_string(), "skipped".to_string()))
+    );
+    let md = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
+    assert!(md.contains("## Skipped"), "{md}");
+    for (kind, name) in expected {
+        assert!(
+            md.contains(&format!("| 1/1 | {kind} `{name}` | skipped |")),
+            "{md}"
+        );
+        // Said once on stderr, not once per backend or per point.
+        let lines = stderr
+            .lines()
+            .filter(|l| l.starts_with(&format!("skipped {kind} {name}: ")))
+            .count();
+        assert_eq!(lines, 1, "{kind} {name}: {stderr}");
+    }
+    assert_eq!(
+        stderr.lines().filter(|l| l.contains("bunny")).count(),
+        2,
+        "{stderr}"
+    );
+    // A merge carries the skips through.
+    let merged = tmp_dir("skips-merged");
+    let out = raybench(&[
+        "merge",
+        dir.to_str().unwrap(),
+        "--out",
+        merged.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(results(&merged)["skipped"], r["skipped"]);
+    assert!(
+        std::fs::read_to_string(merged.join("REPORT.md"))
+            .unwrap()
+            .contains("| 1/1 | experiment `pixels` | skipped |")
+    );
+    for d in [dir, assets, merged] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}

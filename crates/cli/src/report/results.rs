@@ -23,6 +23,25 @@ pub struct Results {
     pub scaling: Vec<ScalingPoint>,
     /// Straight-line fits of the scaling points on log-log axes.
     pub fits: Vec<Fit>,
+    /// The scenes and experiments of the matrix that did not run (or ran in part), and why.
+    /// Absent from files written before it was added: read as empty.
+    #[serde(default)]
+    pub skipped: Vec<Skipped>,
+}
+
+/// A scene or scaling experiment of the matrix that did not run, or ran in part.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Skipped {
+    /// Index into [`Results::shards`].
+    pub shard: usize,
+    /// `scene` or `experiment`.
+    pub kind: String,
+    /// The scene or experiment name.
+    pub name: String,
+    /// `skipped` (nothing of it ran) or `partial` (some points of an experiment ran).
+    pub status: String,
+    /// Why (a missing asset: which file, and where it was looked for).
+    pub reason: String,
 }
 
 /// One shard of the matrix: where and how it ran.
@@ -429,6 +448,10 @@ impl Results {
         self.scaling.extend(other.scaling.into_iter().map(|mut p| {
             p.shard += offset;
             p
+        }));
+        self.skipped.extend(other.skipped.into_iter().map(|mut s| {
+            s.shard += offset;
+            s
         }));
         self.fit();
     }
