@@ -720,14 +720,14 @@ fn listings_name_unbuilt_backends_the_assets_folder_and_the_revision() {
     }
 
     // The assets folder as an absolute path without `..`, and whether it exists.
+    let first_line = |o: &Output| {
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        stdout.lines().next().unwrap_or_default().to_string()
+    };
     let dir = tmp_dir("assets-listing");
     let missing = dir.join("sub").join("..").join("nowhere");
     let o = raybench(&["--assets", missing.to_str().unwrap(), "scenes"]);
-    let first = String::from_utf8_lossy(&o.stdout)
-        .lines()
-        .next()
-        .unwrap()
-        .to_string();
+    let first = first_line(&o);
     assert_eq!(
         first,
         format!(
@@ -742,11 +742,7 @@ fn listings_name_unbuilt_backends_the_assets_folder_and_the_revision() {
         .env("RAYBENCH_ASSETS", dir.join("sub").join(".."))
         .output()
         .unwrap();
-    let first = String::from_utf8_lossy(&o.stdout)
-        .lines()
-        .next()
-        .unwrap()
-        .to_string();
+    let first = first_line(&o);
     assert_eq!(
         first,
         format!(
