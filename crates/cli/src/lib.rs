@@ -5,10 +5,21 @@
 //! in `main.rs`.
 
 pub mod measure;
+pub mod progress;
 pub mod report;
 
+/// The version and the source revision it was built from (`0.1.0 (3f2a9c1)`; `unknown`
+/// outside a git checkout, see `build.rs`): what `raybench --version` prints and every
+/// report records.
+pub const VERSION: &str = concat!(
+    env!("CARGO_PKG_VERSION"),
+    " (",
+    env!("RAYBENCH_REVISION"),
+    ")"
+);
+
 use raybench_bvh::{Bvh, ObvhsAccel};
-use raybench_core::{Frame, NO_HIT, Renderer};
+use raybench_core::{Frame, Mode, NO_HIT, RaySet, RenderSettings, Renderer};
 use raybench_grid::{Grid, TwoLevelGrid};
 use raybench_naive::NaiveAccel;
 use raybench_packet::{Isa, PacketAccel, PacketParams};
@@ -197,10 +208,8 @@ pub const BACKENDS: &[Backend] = &[
 const WGPU: &str = "GPU: WGSL compute kernels over the CPU-built BVH2 (wgpu; WGPU_BACKEND and WGPU_ADAPTER_NAME pick the adapter; within tolerance, not exact)";
 
 const BVH_CRATE: &str = "peer: svenstaro's bvh crate's tree, own stack traversal, raybench's primitive tests (not exact)";
-#[cfg(feature = "embree")]
 const EMBREE: &str =
     "peer: Intel Embree 3, rtcIntersect1 per ray, Embree's own triangle test (not exact)";
-#[cfg(feature = "embree")]
 const EMBREE_PACKET: &str = "peer: Intel Embree 3, rtcIntersect16 on 16-ray packets, Embree's own triangle test (not exact)";
 
 const PACKET_SSE41: &str = "packet forced to SSE4.1 (4 lanes, 8-ray packets)";
@@ -242,6 +251,54 @@ fn packet_with(isa: Isa, name: &'static str, description: &'static str) -> Box<d
     )
 }
 
+/// A backend that exists only with a cargo feature this build was compiled without.
+#[derive(Clone, Copy, Debug)]
+pub struct NotBuilt {
+    /// The name it has when built.
+    pub name: &'static str,
+    /// One line of description.
+    pub description: &'static str,
+    /// The cargo feature of the `raybench` package that builds it.
+    pub feature: &'static str,
+    /// What the feature needs on the system.
+    pub needs: &'static str,
+}
+
+impl NotBuilt {
+    /// Why it is unavailable, and how to build it.
+    #[must_use]
+    pub fn reason(&self) -> String {
+        format!(
+            "not compiled in: build with the cargo feature `{}` (cargo build --release -p \
+             raybench --features {}; needs {})",
+            self.feature, self.feature, self.needs
+        )
+    }
+}
+
+/// The backends of [`BACKENDS`] that this build lacks, with the feature that adds them
+/// (`raybench backends` lists them as unavailable).
+pub const NOT_BUILT: &[NotBuilt] = &[
+    #[cfg(not(feature = "embree"))]
+    NotBuilt {
+        name: "embree",
+        description: EMBREE,
+        feature: "embree",
+        needs: EMBREE_NEEDS,
+    },
+    #[cfg(not(feature = "embree"))]
+    NotBuilt {
+        name: "embree-packet",
+        description: EMBREE_PACKET,
+        feature: "embree",
+        needs: EMBREE_NEEDS,
+    },
+];
+
+/// The system library the Embree backends link.
+#[cfg(not(feature = "embree"))]
+const EMBREE_NEEDS: &str = "the system library libembree3; Debian: apt install libembree-dev";
+
 /// Backends in order of preference for `render` without `--backend` (fastest first).
 pub const PREFERENCE: &[&str] = &["packet", "bvh", "obvhs", "grid2", "grid", "naive"];
 
@@ -251,9 +308,76 @@ pub const PREFERENCE: &[&str] = &["packet", "bvh", "obvhs", "grid2", "grid", "na
 /// A message listing the known backends.
 pub fn backend(name: &str) -> Result<&'static Backend, String> {
     BACKENDS.iter().find(|b| b.name == name).ok_or_else(|| {
+        if let Some(n) = NOT_BUILT.iter().find(|n| n.name == name) {
+            return format!("backend '{name}' is {}", n.reason());
+        }
         let names: Vec<_> = BACKENDS.iter().map(|b| b.name).collect();
         format!("unknown backend '{name}' (known: {})", names.join(", "))
     })
+}
+
+/// Rough rays per sample of a mode (camera, secondary and shadow rays), for the
+/// brute-force budgets.
+#[must_use]
+pub fn rays_per_sample(mode: Mode) -> f64 {
+    match mode {
+        Mode::Cast | Mode::Mip | Mode::Composite => 1.0,
+        Mode::Whitted => 3.0,
+        Mode::Path => 4.0,
+    }
+}
+
+/// Estimated ray/primitive tests of a brute-force backend (every ray tests every one of
+/// `prims` primitives) over `frames` frames of `settings` (primary rays) or `frames`
+/// passes over `width x height` explicit rays (incoherent).
+#[must_use]
+pub fn brute_force_tests(
+    settings: &RenderSettings,
+    rays: RaySet,
+    prims: usize,
+    frames: u32,
+) -> f64 {
+    let pixels = f64::from(settings.width) * f64::from(settings.height);
+    let per_frame = match rays {
+        RaySet::Primary => pixels * f64::from(settings.spp) * rays_per_sample(settings.mode),
+        RaySet::Incoherent => pixels,
+    };
+    per_frame * prims as f64 * f64::from(frames)
+}
+
+/// Estimated tests ([`brute_force_tests`]) above which `compare` and `info` leave a
+/// brute-force backend out of their default lists.
+pub const BRUTE_FORCE_BUDGET_TESTS: f64 = 2.0e9;
+
+/// The backends named (a comma list from the command line), or by default every backend
+/// but the pinned variants, leaving brute-force ones out (with a message on stderr) when
+/// `work` estimated tests exceed [`BRUTE_FORCE_BUDGET_TESTS`]: what `compare` and `info`
+/// run.
+///
+/// # Errors
+/// An unknown name.
+pub fn chosen_backends(
+    names: Option<&[String]>,
+    work: f64,
+) -> Result<Vec<&'static Backend>, String> {
+    if let Some(names) = names {
+        return names.iter().map(|n| backend(n.trim())).collect();
+    }
+    Ok(BACKENDS
+        .iter()
+        .filter(|b| !b.variant)
+        .filter(|b| {
+            let keep = !b.brute_force || work <= BRUTE_FORCE_BUDGET_TESTS;
+            if !keep {
+                eprintln!(
+                    "leaving {} out: about {work:.1e} ray/primitive tests (pass --backends {} \
+                     to force)",
+                    b.name, b.name
+                );
+            }
+            keep
+        })
+        .collect())
 }
 
 /// The fastest available backend.
@@ -352,5 +476,58 @@ pub fn compare_hits(ref_ids: &[u32], ref_t: &[f32], ids: &[u32], t: &[f32]) -> C
         t_mismatch,
         tie_mismatch,
         max_rel_dt,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn names(list: &[&Backend]) -> Vec<&'static str> {
+        list.iter().map(|b| b.name).collect()
+    }
+
+    #[test]
+    fn brute_force_backends_leave_large_default_lists() {
+        // `info terrain:708 --rays incoherent --width 64 --height 64`: 4096 rays against a
+        // million triangles, minutes of naive.
+        let s = RenderSettings {
+            width: 64,
+            height: 64,
+            ..RenderSettings::default()
+        };
+        let terrain = brute_force_tests(&s, RaySet::Incoherent, 2 * 707 * 707, 1);
+        assert!(!names(&chosen_backends(None, terrain).unwrap()).contains(&"naive"));
+        // Named, it runs anyway.
+        let forced = chosen_backends(Some(&["naive".to_string()]), terrain).unwrap();
+        assert_eq!(names(&forced), ["naive"]);
+        // A small scene keeps it, and it comes first (the reference).
+        let small = brute_force_tests(&s, RaySet::Primary, 100, 4);
+        assert_eq!(names(&chosen_backends(None, small).unwrap())[0], "naive");
+        // Secondary rays count: path tracing estimates four rays per sample.
+        let path = RenderSettings {
+            mode: Mode::Path,
+            ..s
+        };
+        assert_eq!(
+            brute_force_tests(&path, RaySet::Primary, 10, 1),
+            4.0 * brute_force_tests(&s, RaySet::Primary, 10, 1)
+        );
+    }
+
+    #[test]
+    fn backends_missing_from_the_build_name_their_feature() {
+        for n in NOT_BUILT {
+            assert!(BACKENDS.iter().all(|b| b.name != n.name));
+            let e = backend(n.name).unwrap_err();
+            assert!(
+                e.contains("not compiled in") && e.contains(n.feature),
+                "{e}"
+            );
+        }
+        assert_eq!(
+            NOT_BUILT.iter().any(|n| n.name == "embree"),
+            !cfg!(feature = "embree")
+        );
     }
 }

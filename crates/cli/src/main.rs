@@ -4,9 +4,13 @@
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
 use raybench::measure::{
-    Measured, Prepared, explicit_rays, measure, median, median_phases, prepare, timed_seconds,
+    Measured, Prepared, explicit_rays, measure, median, median_phases, prepare, prepare_for_mode,
+    timed_seconds,
 };
-use raybench::{BACKENDS, Backend, backend, compare_hits, default_backend};
+use raybench::progress::Progress;
+use raybench::{
+    BACKENDS, NOT_BUILT, backend, brute_force_tests, chosen_backends, compare_hits, default_backend,
+};
 use raybench_core::{Mode, RaySet, RenderSettings, Scene, Timings};
 use raybench_scene::{BUILTIN_SCENES, assets_dir, generators::GENERATORS};
 use serde::Serialize;
@@ -17,7 +21,7 @@ use std::sync::Arc;
 
 /// Renders scenes with interchangeable acceleration strategies and compares them.
 #[derive(Parser)]
-#[command(name = "raybench", version, about, long_about = None)]
+#[command(name = "raybench", version = raybench::VERSION, about, long_about = None)]
 struct Cli {
     /// Folder holding the shared meshes (default: $RAYBENCH_ASSETS, else assets/ at the
     /// workspace root).
@@ -226,9 +230,13 @@ struct InfoCmd {
     /// Maximum bounces of the probe.
     #[arg(long, default_value_t = 5)]
     max_depth: u32,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
 }
 
 fn main() -> ExitCode {
+    quiet_wayland_probe();
     let cli = Cli::parse();
     match run(cli) {
         Ok(code) => code,
@@ -239,6 +247,44 @@ fn main() -> ExitCode {
     }
 }
 
+/// Gives the process a private, empty `XDG_RUNTIME_DIR` when it has none (or a relative
+/// one): `raybench-runtime-UID` in the temporary folder, made once per user with mode 0700
+/// and kept (so that nothing is left behind per run); not used if someone else owns it.
+///
+/// Mesa's Vulkan device-selection layer (`VK_LAYER_MESA_device_select`) asks Wayland for
+/// the compositor's GPU whenever wgpu lists the adapters, and libwayland-client then prints
+/// `error: XDG_RUNTIME_DIR is invalid or not set in the environment.`, twice per command,
+/// on servers, in containers and over ssh, where the variable is unset. In an empty folder
+/// the layer finds no compositor, as it would not have anyway, and nothing is printed; the
+/// adapters and their order are unchanged. wgpu offers no switch for this: the layer reads
+/// only the environment.
+#[cfg(target_os = "linux")]
+#[allow(unsafe_code)]
+fn quiet_wayland_probe() {
+    use std::os::unix::fs::{DirBuilderExt, MetadataExt};
+    let set = std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| Path::new(&d).is_absolute());
+    if set {
+        return;
+    }
+    // The process's user owns its /proc entry.
+    let Ok(uid) = std::fs::metadata("/proc/self").map(|m| m.uid()) else {
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("raybench-runtime-{uid}"));
+    let _ = std::fs::DirBuilder::new().mode(0o700).create(&dir);
+    let private = std::fs::symlink_metadata(&dir)
+        .is_ok_and(|m| m.is_dir() && m.uid() == uid && m.mode() & 0o777 == 0o700);
+    if private {
+        // SAFETY: this runs first in `main`, before any other thread exists, so no thread
+        // can read the environment while it changes (the condition of `set_var`).
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
+    }
+}
+
+/// Elsewhere there is no Wayland probe to quiet.
+#[cfg(not(target_os = "linux"))]
+fn quiet_wayland_probe() {}
+
 fn run(cli: Cli) -> Result<ExitCode> {
     let assets = assets_dir(cli.assets.as_deref());
     match cli.command {
@@ -246,7 +292,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Compare(cmd) => with_threads(cmd.frame.threads, || compare(&cmd, &assets)),
         Command::Scenes => scenes(&assets),
         Command::Backends { json } => backends(json),
-        Command::Info(cmd) => info(&cmd, &assets),
+        Command::Info(cmd) => with_threads(cmd.threads, || info(&cmd, &assets)),
         Command::Report(cmd) => with_threads(cmd.threads, || report(&cmd, &assets)),
         Command::Merge(cmd) => {
             raybench::report::merge(&cmd.dirs, &cmd.out)?;
@@ -297,8 +343,20 @@ fn render(cmd: &RenderCmd, assets: &Path) -> Result<ExitCode> {
             scene.volumes.len()
         );
     }
+    let progress = Progress::new(1);
+    progress.begin(format!("{}: build", b.name));
     let p = prepare(b, &scene).map_err(|e| anyhow::anyhow!("backend '{}': {e}", b.name))?;
+    progress.begin(format!(
+        "{}: render {} {}x{}, {} spp",
+        b.name,
+        settings.mode.name(),
+        settings.width,
+        settings.height,
+        settings.spp
+    ));
     let frame = p.renderer.render(&settings)?;
+    progress.done();
+    drop(progress);
     let secs = timed_seconds(&frame.timings);
     eprintln!(
         "{}: build {:.3} s, {} {:.3} s, {} rays, {:.2} Mrays/s",
@@ -372,35 +430,6 @@ fn phase_line(prepare: &Timings, frame: &Timings) -> Option<String> {
         .then(|| format!("prepare: {}; frame: {}", join(prepare), join(frame)))
 }
 
-/// The backends named on the command line, or by default every backend, leaving
-/// brute-force ones out (with a message) when `work` ray/primitive tests would take minutes.
-fn chosen_backends(names: Option<&[String]>, work: f64) -> Result<Vec<&'static Backend>> {
-    if let Some(names) = names {
-        return names
-            .iter()
-            .map(|n| backend(n.trim()))
-            .collect::<Result<_, _>>()
-            .map_err(anyhow::Error::msg);
-    }
-    Ok(BACKENDS
-        .iter()
-        .filter(|b| !b.variant)
-        .filter(|b| {
-            let keep = !b.brute_force || work <= NAIVE_DEFAULT_BUDGET_TESTS || BACKENDS.len() == 1;
-            if !keep {
-                eprintln!(
-                    "leaving {} out: about {work:.1e} ray/primitive tests (pass --backends {} to force)",
-                    b.name, b.name
-                );
-            }
-            keep
-        })
-        .collect())
-}
-
-/// Naive-backend work above which `compare` leaves naive out of its default list.
-const NAIVE_DEFAULT_BUDGET_TESTS: f64 = 2.0e10;
-
 fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
     let settings = cmd.frame.settings(false);
     settings.validate()?;
@@ -408,9 +437,8 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
         bail!("--repeat must be in 1..=10000");
     }
     let scene = load_scene(&cmd.scene, assets)?;
-    let samples = f64::from(settings.width) * f64::from(settings.height) * f64::from(settings.spp);
-    let work = samples * scene.geometry.len() as f64 * (f64::from(cmd.repeat) + 1.0);
-    let chosen = chosen_backends(cmd.backends.as_deref(), work)?;
+    let work = brute_force_tests(&settings, cmd.rays, scene.geometry.len(), cmd.repeat + 1);
+    let chosen = chosen_backends(cmd.backends.as_deref(), work).map_err(anyhow::Error::msg)?;
     if chosen.is_empty() {
         bail!("no backend to compare");
     }
@@ -419,6 +447,8 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
     let mut rows = Vec::new();
     let mut reference: Option<Measured> = None;
     let mut disagree = false;
+    let frames = cmd.repeat as usize + 1;
+    let progress = Progress::new(chosen.len() * frames);
     for (i, b) in chosen.iter().enumerate() {
         let mut row = CompareRow {
             backend: b.name.into(),
@@ -441,41 +471,43 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
             max_abs_dt: None,
             phases: BTreeMap::new(),
         };
+        progress.begin(format!("{}: build", b.name));
         let Prepared {
             renderer: r,
             build,
             phases: prepare_phases,
-        } = match prepare(b, &scene).and_then(|p| {
-            p.renderer.supports_mode(settings.mode)?;
-            Ok(p)
-        }) {
+        } = match prepare_for_mode(b, &scene, settings.mode) {
             Ok(x) => x,
             Err(reason) => {
-                eprintln!("skipping {}: {reason}", b.name);
+                progress.remove(frames);
+                progress.note(&format!("skipping {}: {reason}", b.name));
                 row.available = false;
                 row.reason = Some(reason);
                 rows.push(row);
                 continue;
             }
         };
-        eprintln!(
-            "{}: built in {build:.3} s, tracing {} times",
-            b.name,
-            u64::from(cmd.repeat) + 1
-        );
+        progress.note(&format!(
+            "{}: built in {build:.3} s, tracing {frames} times",
+            b.name
+        ));
         // The warm-up is counted and is what gets compared; timed runs count nothing.
+        progress.begin(format!("{}: counted warm-up", b.name));
         let warm = measure(r.as_ref(), &settings, rays.as_deref(), true)?;
+        progress.done();
         let mut times = Vec::new();
         let mut phases = Vec::new();
-        for _ in 0..cmd.repeat {
+        for k in 1..=cmd.repeat {
+            progress.begin(format!("{}: timed run {k}/{}", b.name, cmd.repeat));
             let m = measure(r.as_ref(), &settings, rays.as_deref(), false)?;
+            progress.done();
             times.push(m.seconds);
             phases.push(m.phases);
         }
         let secs = median(times);
         let frame_phases = median_phases(&phases);
         if let Some(line) = phase_line(&prepare_phases, &frame_phases) {
-            eprintln!("{}: {line}", b.name);
+            progress.note(&format!("{}: {line}", b.name));
         }
         row.phases = prepare_phases
             .0
@@ -512,6 +544,7 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
         rows.push(row);
     }
 
+    drop(progress);
     if cmd.json {
         println!("{}", serde_json::to_string_pretty(&rows)?);
     } else {
@@ -569,8 +602,37 @@ fn print_table(rows: &[CompareRow]) {
     }
 }
 
+/// `assets` as an absolute path without `.` or `..` (symbolic links resolved when it
+/// exists), and whether it exists.
+fn resolved_dir(assets: &Path) -> (PathBuf, bool) {
+    if let Ok(p) = assets.canonicalize() {
+        return (p, true);
+    }
+    let absolute = std::path::absolute(assets).unwrap_or_else(|_| assets.to_owned());
+    let mut clean = PathBuf::new();
+    for c in absolute.components() {
+        match c {
+            std::path::Component::CurDir => {}
+            std::path::Component::ParentDir => {
+                clean.pop();
+            }
+            c => clean.push(c),
+        }
+    }
+    (clean, false)
+}
+
 fn scenes(assets: &Path) -> Result<ExitCode> {
-    println!("# built-in scenes (assets: {})", assets.display());
+    let (dir, exists) = resolved_dir(assets);
+    println!(
+        "# built-in scenes (assets: {}{})",
+        dir.display(),
+        if exists {
+            ""
+        } else {
+            ", which does not exist: set --assets or RAYBENCH_ASSETS"
+        }
+    );
     for b in BUILTIN_SCENES {
         let missing: Vec<_> = b
             .assets
@@ -610,21 +672,27 @@ struct BackendRow {
 }
 
 fn backends(json: bool) -> Result<ExitCode> {
-    let rows: Vec<BackendRow> = BACKENDS
-        .iter()
-        .map(|b| {
-            let r = (b.make)();
-            let avail = r.availability();
-            BackendRow {
-                name: b.name,
-                available: avail.is_ok(),
-                reason: avail.err(),
-                exact: b.exact,
-                description: b.description,
-                device: r.device(),
-            }
-        })
-        .collect();
+    let built = BACKENDS.iter().map(|b| {
+        let r = (b.make)();
+        let avail = r.availability();
+        BackendRow {
+            name: b.name,
+            available: avail.is_ok(),
+            reason: avail.err(),
+            exact: b.exact,
+            description: b.description,
+            device: r.device(),
+        }
+    });
+    let not_built = NOT_BUILT.iter().map(|n| BackendRow {
+        name: n.name,
+        available: false,
+        reason: Some(n.reason()),
+        exact: false,
+        description: n.description,
+        device: None,
+    });
+    let rows: Vec<BackendRow> = built.chain(not_built).collect();
     if json {
         println!("{}", serde_json::to_string_pretty(&rows)?);
     } else {
@@ -716,14 +784,14 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
         cmd.spp,
         cmd.max_depth
     );
-    let work = f64::from(cmd.width) * f64::from(cmd.height) * f64::from(cmd.spp) * g.len() as f64;
-    let chosen = chosen_backends(cmd.backends.as_deref(), work)?;
+    let work = brute_force_tests(&settings, cmd.rays, g.len(), 1);
+    let chosen = chosen_backends(cmd.backends.as_deref(), work).map_err(anyhow::Error::msg)?;
     println!(
         "{:<16} {:>10} {:>14} {:>9} {:>10} {:>10}  structure",
         "backend", "build s", "memory bytes", "rays/px", "tests/ray", "visits/ray"
     );
     for b in chosen {
-        match prepare(b, &scene) {
+        match prepare_for_mode(b, &scene, settings.mode) {
             Err(reason) => println!("{:<16} unavailable: {reason}", b.name),
             Ok(Prepared {
                 renderer: r, build, ..

@@ -135,6 +135,21 @@ pub fn prepare(b: &Backend, scene: &Arc<Scene>) -> Result<Prepared, String> {
     })
 }
 
+/// [`prepare`], and a check that the prepared renderer can render `mode` (a GPU may lack
+/// one): what `compare` and `info` run before measuring.
+///
+/// # Errors
+/// Why the backend cannot run, cannot render the scene, or lacks the mode.
+pub fn prepare_for_mode(
+    b: &Backend,
+    scene: &Arc<Scene>,
+    mode: raybench_core::Mode,
+) -> Result<Prepared, String> {
+    let p = prepare(b, scene)?;
+    p.renderer.supports_mode(mode)?;
+    Ok(p)
+}
+
 /// The median of each phase over several measurements, in the order of the first.
 #[must_use]
 pub fn median_phases(runs: &[Timings]) -> Timings {

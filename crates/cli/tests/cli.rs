@@ -658,3 +658,235 @@ fn an_interrupted_render_leaves_the_previous_image_whole() {
     assert_eq!(left, ["out.png"], "files left behind: {left:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn info_marks_missing_modes_unavailable_as_compare_does() {
+    // The GPU kernels have no volume modes: `info` says so on the backend's line instead
+    // of failing (where there is no GPU, wgpu is unavailable for that reason instead).
+    let o = raybench(&[
+        "info",
+        "phantom",
+        "--mode",
+        "mip",
+        "--backends",
+        "bvh,wgpu",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--threads",
+        "1",
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let line = |name: &str| {
+        stdout
+            .lines()
+            .find(|l| l.split_whitespace().next() == Some(name))
+            .unwrap_or_else(|| panic!("no {name} line: {stdout}"))
+            .to_string()
+    };
+    assert!(!line("bvh").contains("unavailable"), "{stdout}");
+    assert!(line("wgpu").contains("unavailable"), "{stdout}");
+}
+
+#[test]
+fn listings_name_unbuilt_backends_the_assets_folder_and_the_revision() {
+    // Every registered backend, built or not; the unbuilt ones with their cargo feature.
+    let o = raybench(&["backends", "--json"]);
+    let rows: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    for name in ["embree", "embree-packet"] {
+        let row = rows
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["name"] == name)
+            .unwrap_or_else(|| panic!("{name} not listed: {rows}"));
+        if !cfg!(feature = "embree") {
+            assert_eq!(row["available"], false);
+            assert!(row["reason"].as_str().unwrap().contains("feature `embree`"));
+        }
+    }
+    if !cfg!(feature = "embree") {
+        let o = raybench(&["backends"]);
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            text.lines()
+                .any(|l| l.starts_with("embree-packet") && l.contains("not compiled in")),
+            "{text}"
+        );
+        let o = raybench(&["compare", "spheres", "--backends", "embree"]);
+        assert_clean_error(&o, "not compiled in");
+    }
+
+    // The assets folder as an absolute path without `..`, and whether it exists.
+    let first_line = |o: &Output| {
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        stdout.lines().next().unwrap_or_default().to_string()
+    };
+    let dir = tmp_dir("assets-listing");
+    let missing = dir.join("sub").join("..").join("nowhere");
+    let o = raybench(&["--assets", missing.to_str().unwrap(), "scenes"]);
+    let first = first_line(&o);
+    assert_eq!(
+        first,
+        format!(
+            "# built-in scenes (assets: {}, which does not exist: set --assets or \
+             RAYBENCH_ASSETS)",
+            dir.canonicalize().unwrap().join("nowhere").display()
+        )
+    );
+    std::fs::create_dir_all(dir.join("sub")).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_raybench"))
+        .arg("scenes")
+        .env("RAYBENCH_ASSETS", dir.join("sub").join(".."))
+        .output()
+        .unwrap();
+    let first = first_line(&o);
+    assert_eq!(
+        first,
+        format!(
+            "# built-in scenes (assets: {})",
+            dir.canonicalize().unwrap().display()
+        )
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+
+    // `--version` names the revision the report records: the checkout's, or `unknown`.
+    let o = raybench(&["--version"]);
+    let revision = env!("RAYBENCH_REVISION");
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout),
+        format!("raybench {} ({revision})\n", env!("CARGO_PKG_VERSION"))
+    );
+    let git = Command::new("git")
+        .args(["rev-parse", "--short", "HEAD"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output();
+    if let Some(g) = git.ok().filter(|g| g.status.success()) {
+        assert_eq!(revision, String::from_utf8_lossy(&g.stdout).trim());
+    }
+}
+
+#[test]
+fn gpu_commands_print_no_wayland_noise() {
+    // Mesa's device-selection layer probes Wayland while wgpu lists adapters; without
+    // XDG_RUNTIME_DIR, libwayland printed an `error:` line about it, twice.
+    let o = Command::new(env!("CARGO_BIN_EXE_raybench"))
+        .args(["backends"])
+        .env_remove("XDG_RUNTIME_DIR")
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!stderr.contains("XDG_RUNTIME_DIR"), "{stderr}");
+}
+
+#[test]
+fn long_work_shows_progress_on_a_terminal_only() {
+    let run = |args: &[&str], progress: Option<&str>| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_raybench"));
+        c.args(args).env_remove("RAYBENCH_PROGRESS");
+        if let Some(p) = progress {
+            c.env("RAYBENCH_PROGRESS", p);
+        }
+        let o = c.output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let dir = tmp_dir("progress");
+    let out = dir.join("p.png");
+    let render = [
+        "render",
+        "spheres",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let compare = [
+        "compare",
+        "spheres",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--repeat",
+        "2",
+        "--backends",
+        "bvh,grid",
+    ];
+    // Stderr is a pipe here: no live line (a terminal would get one after 2 s of work).
+    for args in [&render[..], &compare[..]] {
+        let stderr = run(args, None);
+        assert!(
+            !stderr.contains("elapsed") && !stderr.contains('\r'),
+            "{stderr}"
+        );
+    }
+    // Forced, every step shows one (here at once, one line each).
+    let stderr = run(&render, Some("always"));
+    assert!(
+        stderr
+            .lines()
+            .any(|l| l.starts_with("[........................] 0/1")
+                && l.ends_with("render cast 16x16, 1 spp")),
+        "{stderr}"
+    );
+    let stderr = run(&compare, Some("always"));
+    for what in ["bvh: build", "bvh: counted warm-up", "grid: timed run 2/2"] {
+        assert!(
+            stderr
+                .lines()
+                .any(|l| l.starts_with('[') && l.contains("/6  ") && l.ends_with(what)),
+            "{what}: {stderr}"
+        );
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn docs_state_the_modes_and_the_defaults() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let read = |p: &str| std::fs::read_to_string(root.join(p)).unwrap();
+    // Every mode a result can hold.
+    let results = read("docs/results.md");
+    let row = results
+        .lines()
+        .find(|l| l.starts_with("| `mode` |"))
+        .expect("a mode row");
+    for m in raybench_core::Mode::ALL {
+        assert!(row.contains(&format!("`{}`", m.name())), "{row}");
+    }
+    // The background of a scene file that sets none, which lights `path` renders.
+    let scene = raybench_scene::load_scene_str(
+        "[[object]]\nkind = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n",
+        "one-sphere",
+        None,
+        Path::new("."),
+    )
+    .unwrap();
+    let bg = scene.background;
+    let stated = format!("default `[{}, {}, {}]`", bg.x, bg.y, bg.z);
+    assert!(read("docs/scene-format.md").contains(&stated), "{stated}");
+    assert!(read("README.md").contains(&stated), "{stated}");
+    // The default `--max-depth` of every command that has one.
+    for cmd in ["render", "compare", "info"] {
+        let o = raybench(&[cmd, "--help"]);
+        let help = String::from_utf8_lossy(&o.stdout);
+        let option = &help[help.find("--max-depth").expect("a --max-depth option")..];
+        let option = &option[..option[2..].find("--").map_or(option.len(), |i| i + 2)];
+        let default = option
+            .split("[default: ")
+            .nth(1)
+            .and_then(|d| d.split(']').next())
+            .unwrap_or_else(|| panic!("{cmd}: no default in {option}"));
+        assert!(
+            read("docs/scene-format.md").contains(&format!("**default {default}**")),
+            "{cmd}: {default}"
+        );
+        assert!(read("README.md").contains(&format!("`--max-depth {default}`")));
+    }
+}

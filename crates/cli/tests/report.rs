@@ -159,7 +159,41 @@ fn shards_split_by_scene_and_merge_back() {
             .unwrap()
             .contains("Shard 2/2")
     );
-    for d in [a, b, m] {
+    // A shard given twice, as the same folder or inside a merged report, is refused: it
+    // would double its rows.
+    let again = tmp_dir("merged-again");
+    for pair in [[&a, &a], [&m, &b]] {
+        let out = raybench(&[
+            "merge",
+            pair[0].to_str().unwrap(),
+            pair[1].to_str().unwrap(),
+            "--out",
+            again.to_str().unwrap(),
+        ]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{pair:?} merged: {stderr}");
+        assert_ne!(out.status.code(), Some(101), "{stderr}");
+        let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
+        assert_eq!(errors.len(), 1, "{stderr}");
+        assert!(errors[0].contains("same shard"), "{stderr}");
+        assert!(!again.join("results.json").exists());
+    }
+    // A copy of a shard (another run of the same part) measures the same runs.
+    let rerun = tmp_dir("shard1-rerun");
+    assert!(small_report(&rerun, &["--shard", "1/2"]).status.success());
+    let out = raybench(&[
+        "merge",
+        a.to_str().unwrap(),
+        rerun.to_str().unwrap(),
+        "--out",
+        again.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("both measure spheres"),
+        "{stderr}"
+    );
+    for d in [a, b, m, again, rerun] {
         let _ = std::fs::remove_dir_all(d);
     }
 }
@@ -197,4 +231,104 @@ fn bad_report_options_are_refused_cleanly() {
     let out = raybench(&["merge", d, "--out", &format!("{d}-out")]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("schema"));
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn skipped_scenes_and_experiments_are_listed_once() {
+    // No shared meshes: bunny and the Cornell box are skipped, and so is the `pixels`
+    // experiment (the bunny at growing sizes). CI=true makes a missing asset an error.
+    let (dir, assets) = (tmp_dir("skips"), tmp_dir("no-assets"));
+    std::fs::create_dir_all(&assets).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_raybench"))
+        .args([
+            "report",
+            "--scenes",
+            "spheres,bunny,cornell-box",
+            "--backends",
+            "bvh,packet",
+            "--size",
+            "16",
+            "--repeat",
+            "1",
+            "--experiments",
+            "pixels",
+            "--out",
+            dir.to_str().unwrap(),
+        ])
+        .env("RAYBENCH_ASSETS", &assets)
+        .env_remove("CI")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let r = results(&dir);
+    let skipped: Vec<(String, String, String)> = r["skipped"]
+        .as_array()
+        .expect("a skipped list")
+        .iter()
+        .map(|s| {
+            let file = if s["name"] == "cornell-box" {
+                "CornellBox-Original.obj"
+            } else {
+                "stanford-bunny.obj"
+            };
+            assert!(s["reason"].as_str().unwrap().contains(file), "{s}");
+            assert_eq!(s["shard"], 0);
+            (
+                s["kind"].as_str().unwrap().to_string(),
+                s["name"].as_str().unwrap().to_string(),
+                s["status"].as_str().unwrap().to_string(),
+            )
+        })
+        .collect();
+    let expected = [
+        ("scene", "bunny"),
+        ("scene", "cornell-box"),
+        ("experiment", "pixels"),
+    ];
+    assert_eq!(
+        skipped,
+        expected.map(|(k, n)| (k.to_string(), n.to_string(), "skipped".to_string()))
+    );
+    let md = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
+    assert!(md.contains("## Skipped"), "{md}");
+    for (kind, name) in expected {
+        assert!(
+            md.contains(&format!("| 1/1 | {kind} `{name}` | skipped |")),
+            "{md}"
+        );
+        // Said once on stderr, not once per backend or per point.
+        let lines = stderr
+            .lines()
+            .filter(|l| l.starts_with(&format!("skipped {kind} {name}: ")))
+            .count();
+        assert_eq!(lines, 1, "{kind} {name}: {stderr}");
+    }
+    assert_eq!(
+        stderr.lines().filter(|l| l.contains("bunny")).count(),
+        2,
+        "{stderr}"
+    );
+    // A merge carries the skips through.
+    let merged = tmp_dir("skips-merged");
+    let out = raybench(&[
+        "merge",
+        dir.to_str().unwrap(),
+        "--out",
+        merged.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(results(&merged)["skipped"], r["skipped"]);
+    assert!(
+        std::fs::read_to_string(merged.join("REPORT.md"))
+            .unwrap()
+            .contains("| 1/1 | experiment `pixels` | skipped |")
+    );
+    for d in [dir, assets, merged] {
+        let _ = std::fs::remove_dir_all(d);
+    }
 }

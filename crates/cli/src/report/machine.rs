@@ -83,17 +83,10 @@ fn os() -> String {
     }
 }
 
+/// `raybench VERSION (REVISION)`: the revision recorded at build time, so that the report
+/// names the code that measured, whatever the current directory is.
 fn version() -> String {
-    let revision = std::process::Command::new("git")
-        .args(["rev-parse", "--short", "HEAD"])
-        .output()
-        .ok()
-        .filter(|o| o.status.success())
-        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string());
-    match revision {
-        Some(r) if !r.is_empty() => format!("raybench {} ({r})", env!("CARGO_PKG_VERSION")),
-        _ => format!("raybench {}", env!("CARGO_PKG_VERSION")),
-    }
+    format!("raybench {}", crate::VERSION)
 }
 
 /// The current UTC time as RFC 3339 (`2026-11-23T02:44:30Z`), from the system clock.

@@ -352,6 +352,32 @@ pub fn report(results: &Results, charts: &Charts) -> String {
         let _ = writeln!(s, "> Charts: {p}\n");
     }
 
+    if !results.skipped.is_empty() {
+        let _ = writeln!(s, "## Skipped\n");
+        let _ = writeln!(
+            s,
+            "Parts of the matrix that did not run (or ran in part), so the tables below lack \
+             them.\n"
+        );
+        let _ = writeln!(s, "| shard | what | status | reason |");
+        let _ = writeln!(s, "|---|---|---|---|");
+        for k in &results.skipped {
+            let shard = results
+                .shards
+                .get(k.shard)
+                .map_or_else(|| "?".into(), |sh| format!("{}/{}", sh.index, sh.count));
+            let _ = writeln!(
+                s,
+                "| {shard} | {} `{}` | {} | {} |",
+                k.kind,
+                k.name,
+                k.status,
+                k.reason.replace('|', "\\|")
+            );
+        }
+        let _ = writeln!(s);
+    }
+
     // Summary table: Mrays/s of every backend on every scene, camera rays, ray casting.
     let summary: Vec<&Run> = results
         .runs

@@ -10,11 +10,14 @@ mod markdown;
 pub mod results;
 
 use crate::measure::{Measured, explicit_rays, measure, prepare};
+use crate::progress::Progress;
 use crate::{BACKENDS, Backend, backend, compare_hits};
 use anyhow::{Context, Result, bail};
 use images::Rgb8;
 use raybench_core::{Mode, NO_HIT, RaySet, RenderSettings, Renderer, Scene};
-use results::{Equality, ImageDifference, Images, Results, Run, ScalingPoint, Shard, Timing};
+use results::{
+    Equality, ImageDifference, Images, Results, Run, ScalingPoint, Shard, Skipped, Timing,
+};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -118,15 +121,6 @@ impl Workload {
         }
     }
 
-    /// Rough rays per sample, for naive's budget.
-    fn rays_per_sample(&self) -> f64 {
-        match self.mode {
-            Mode::Cast | Mode::Mip | Mode::Composite => 1.0,
-            Mode::Whitted => 3.0,
-            Mode::Path => 4.0,
-        }
-    }
-
     fn key(&self) -> String {
         format!("{}-{}", self.mode.name(), self.rays.name())
     }
@@ -139,13 +133,10 @@ enum Unit {
     Scaling(&'static str),
 }
 
-impl Unit {
-    fn name(&self) -> String {
-        match self {
-            Self::Scene(s) => s.clone(),
-            Self::Scaling(e) => format!("scaling:{e}"),
-        }
-    }
+/// A unit of this shard, ready to run: a loaded scene or an experiment.
+enum Planned {
+    Scene(Arc<Scene>),
+    Scaling(&'static str),
 }
 
 /// The scaling experiments. `heightfield` is the direct height field against the same
@@ -171,37 +162,6 @@ fn experiment_backends(experiment: &str, chosen: &[&'static Backend]) -> Vec<&'s
     } else {
         chosen.to_vec()
     }
-}
-
-/// Progress on stderr: a bar, the position and the time left.
-struct Progress {
-    total: usize,
-    done: usize,
-    start: Instant,
-}
-
-impl Progress {
-    fn step(&mut self, what: &str) {
-        self.done += 1;
-        let elapsed = self.start.elapsed().as_secs_f64();
-        let left = elapsed / self.done as f64 * (self.total.saturating_sub(self.done)) as f64;
-        let width = 24;
-        let filled = (self.done * width / self.total.max(1)).min(width);
-        eprintln!(
-            "[{}{}] {}/{} {:>6} elapsed, ~{} left  {what}",
-            "#".repeat(filled),
-            ".".repeat(width - filled),
-            self.done,
-            self.total,
-            clock(elapsed),
-            clock(left)
-        );
-    }
-}
-
-fn clock(s: f64) -> String {
-    let s = s.round() as u64;
-    format!("{}m{:02}s", s / 60, s % 60)
 }
 
 /// Runs the report and writes it; returns the results.
@@ -309,34 +269,49 @@ pub fn run(opts: &Options) -> Result<Results> {
         },
     };
     // Load the scenes first, so that the progress bar knows the whole matrix.
-    let mut plan: Vec<(Unit, Option<Arc<Scene>>, usize)> = Vec::new();
+    let mut plan: Vec<(Planned, usize)> = Vec::new();
     for unit in mine {
-        match &unit {
-            Unit::Scene(name) => match ctx.load(name)? {
-                Some(scene) => {
+        match unit {
+            Unit::Scene(name) => match ctx.load(&name)? {
+                Ok(scene) => {
                     let n = ctx.workloads(&scene).len() * chosen.len();
-                    plan.push((unit, Some(scene), n));
+                    plan.push((Planned::Scene(scene), n));
                 }
-                None => plan.push((unit, None, 0)),
+                Err(reason) => skip(&mut results, "scene", &name, "skipped", reason),
             },
             Unit::Scaling(e) => {
                 let n = ctx.scaling_plan(e).len() * experiment_backends(e, &chosen).len();
-                plan.push((unit, None, n));
+                plan.push((Planned::Scaling(e), n));
             }
         }
     }
-    let mut progress = Progress {
-        total: plan.iter().map(|p| p.2).sum(),
-        done: 0,
-        start: Instant::now(),
-    };
-    for (unit, scene, _) in plan {
-        match (unit, scene) {
-            (Unit::Scene(_), Some(scene)) => {
-                results.runs.extend(ctx.run_scene(&scene, &mut progress)?);
+    let progress = Progress::new(plan.iter().map(|p| p.1).sum());
+    for (unit, _) in plan {
+        match unit {
+            Planned::Scene(scene) => {
+                results.runs.extend(ctx.run_scene(&scene, &progress)?);
             }
-            (unit @ Unit::Scene(_), None) => eprintln!("skipped {}: assets missing", unit.name()),
-            (Unit::Scaling(e), _) => results.scaling.extend(ctx.run_scaling(e, &mut progress)?),
+            Planned::Scaling(e) => {
+                let (points, skipped) = ctx.run_scaling(e, &progress)?;
+                if !skipped.is_empty() {
+                    let status = if points.is_empty() {
+                        "skipped"
+                    } else {
+                        "partial"
+                    };
+                    // Each reason once (the loader's error names the scene and the file;
+                    // the tessellations of the Bezier teapot share one).
+                    let mut reasons: Vec<&str> = Vec::new();
+                    for (_, why) in &skipped {
+                        if !reasons.contains(&why.as_str()) {
+                            reasons.push(why);
+                        }
+                    }
+                    let reason = reasons.join("; ");
+                    skip(&mut results, "experiment", e, status, reason);
+                }
+                results.scaling.extend(points);
+            }
         }
     }
     results.shards[0].wall_seconds = wall.elapsed().as_secs_f64();
@@ -372,7 +347,8 @@ fn write_text(path: &Path, text: &str) -> Result<()> {
 /// copied; charts and `REPORT.md` are drawn anew).
 ///
 /// # Errors
-/// A folder without a readable `results.json`, or an unwritable `out`.
+/// A folder without a readable `results.json`, two folders holding the same shard or the
+/// same measurement, or an unwritable `out`.
 pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Results> {
     if dirs.is_empty() {
         bail!("merge needs at least one report folder");
@@ -382,10 +358,25 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Results> {
         raybench_version: env!("CARGO_PKG_VERSION").into(),
         ..Results::default()
     };
-    std::fs::create_dir_all(out.join("images"))
-        .with_context(|| format!("cannot create {}", out.display()))?;
+    // Every input first: a shard given twice (the same folder twice, a copy of it, or a
+    // merged report with one of its parts) would double its rows.
+    let mut inputs: Vec<(&PathBuf, Results)> = Vec::new();
     for dir in dirs {
         let r = Results::read(&dir.join("results.json"))?;
+        for (first, earlier) in &inputs {
+            if let Some(why) = earlier.overlap(&r) {
+                bail!(
+                    "{} and {} hold the same shard ({why}); give each shard once",
+                    first.display(),
+                    dir.display()
+                );
+            }
+        }
+        inputs.push((dir, r));
+    }
+    std::fs::create_dir_all(out.join("images"))
+        .with_context(|| format!("cannot create {}", out.display()))?;
+    for (dir, r) in inputs {
         for run in &r.runs {
             for name in [&run.images.color, &run.images.ids_diff, &run.images.flip]
                 .into_iter()
@@ -402,6 +393,40 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Results> {
     }
     write(&merged, out)?;
     Ok(merged)
+}
+
+/// A scene spec that could not be loaded, and why.
+type SkippedScene = (String, String);
+
+/// A loaded scene, or why it is skipped.
+type Loaded = Result<Arc<Scene>, String>;
+
+/// The outcome of loading `spec`: the scene; why it is skipped (a missing asset); or, for
+/// any other failure and for a missing asset under `CI=true` (where every asset is
+/// installed), an error.
+fn skip_missing_asset(
+    spec: &str,
+    loaded: Result<Scene, raybench_scene::LoadError>,
+) -> Result<Loaded> {
+    match loaded {
+        Ok(s) => Ok(Ok(Arc::new(s))),
+        Err(e) if e.is_missing_asset() && std::env::var("CI").as_deref() != Ok("true") => {
+            Ok(Err(e.to_string()))
+        }
+        Err(e) => Err(anyhow::Error::new(e).context(format!("cannot load scene {spec}"))),
+    }
+}
+
+/// Records a skipped scene or experiment in `results` and says so once on stderr.
+fn skip(results: &mut Results, kind: &str, name: &str, status: &str, reason: String) {
+    eprintln!("skipped {kind} {name}: {reason}");
+    results.skipped.push(Skipped {
+        shard: 0,
+        kind: kind.into(),
+        name: name.into(),
+        status: status.into(),
+        reason,
+    });
 }
 
 struct Ctx<'a> {
@@ -422,20 +447,15 @@ struct Measurement {
 }
 
 impl Ctx<'_> {
-    fn load(&self, name: &str) -> Result<Option<Arc<Scene>>> {
-        match raybench_scene::load(name, &self.opts.assets) {
-            Ok(s) => Ok(Some(Arc::new(s))),
-            Err(e) if e.is_missing_asset() && std::env::var("CI").as_deref() != Ok("true") => {
-                eprintln!("skipping {name}: {e}");
-                Ok(None)
-            }
-            Err(e) => Err(anyhow::Error::new(e).context(format!("cannot load scene {name}"))),
-        }
+    /// The scene `name`, or (inner `Err`) why it is skipped: a missing asset, except under
+    /// `CI=true`, where that is an error too.
+    fn load(&self, name: &str) -> Result<Loaded> {
+        skip_missing_asset(name, raybench_scene::load(name, &self.opts.assets))
     }
 
     /// [`Self::load`], and `teapot-bezier:tessellate=N` (experiment `bezier`): the built-in
     /// scene with its patches tessellated into `N x N` quads each.
-    fn load_scaling(&self, spec: &str) -> Result<Option<Arc<Scene>>> {
+    fn load_scaling(&self, spec: &str) -> Result<Loaded> {
         let Some(n) = spec
             .strip_prefix(BEZIER_SCENE)
             .and_then(|r| r.strip_prefix(":tessellate="))
@@ -451,14 +471,10 @@ impl Ctx<'_> {
                 "kind = \"bezier\"",
                 &format!("kind = \"bezier\"\ntessellate = {n}"),
             );
-        match raybench_scene::load_scene_str(&source, BEZIER_SCENE, None, &self.opts.assets) {
-            Ok(s) => Ok(Some(Arc::new(s))),
-            Err(e) if e.is_missing_asset() && std::env::var("CI").as_deref() != Ok("true") => {
-                eprintln!("skipping {spec}: {e}");
-                Ok(None)
-            }
-            Err(e) => Err(anyhow::Error::new(e).context(format!("cannot load scene {spec}"))),
-        }
+        skip_missing_asset(
+            spec,
+            raybench_scene::load_scene_str(&source, BEZIER_SCENE, None, &self.opts.assets),
+        )
     }
 
     /// The workloads of a scene: ray casting (camera and incoherent rays) everywhere,
@@ -527,13 +543,7 @@ impl Ctx<'_> {
 
     /// Whether naive stays within its budget on `w` over a scene of `prims` primitives.
     fn naive_fits(&self, w: &Workload, prims: usize) -> bool {
-        let tests = f64::from(w.width)
-            * f64::from(w.height)
-            * f64::from(w.spp)
-            * w.rays_per_sample()
-            * prims as f64
-            * f64::from(self.repeat + 1);
-        tests <= self.budget
+        crate::brute_force_tests(&w.settings(), w.rays, prims, self.repeat + 1) <= self.budget
     }
 
     /// Warm-up (counted, kept for the comparison) and timed repetitions.
@@ -559,7 +569,7 @@ impl Ctx<'_> {
         })
     }
 
-    fn run_scene(&self, scene: &Arc<Scene>, progress: &mut Progress) -> Result<Vec<Run>> {
+    fn run_scene(&self, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<Run>> {
         let workloads = self.workloads(scene);
         let prims = scene.geometry.len();
         // The reference: naive where it fits every workload's budget, else bvh.
@@ -584,7 +594,7 @@ impl Ctx<'_> {
                 "{}: naive left out (over its time budget); bvh is the reference",
                 scene.name
             );
-            progress.total -= workloads.len();
+            progress.remove(workloads.len());
         }
 
         let explicit: Vec<Option<Vec<raybench_core::Ray>>> = workloads
@@ -595,6 +605,7 @@ impl Ctx<'_> {
             workloads.iter().map(|_| None).collect();
         let mut runs = Vec::new();
         for b in order {
+            progress.begin(format!("{} {}: build", scene.name, b.name));
             let prepared = prepare(b, scene);
             for (wi, w) in workloads.iter().enumerate() {
                 let mut run = Run {
@@ -643,6 +654,7 @@ impl Ctx<'_> {
                         continue;
                     }
                 };
+                progress.begin(format!("{} {} {}", scene.name, w.key(), b.name));
                 let m = self.measure(r.as_ref(), w, explicit[wi].as_deref())?;
                 run.build_seconds = Some(build);
                 // Phases only for backends that have more than build and render (a GPU).
@@ -885,8 +897,14 @@ impl Ctx<'_> {
         plan
     }
 
-    fn run_scaling(&self, experiment: &str, progress: &mut Progress) -> Result<Vec<ScalingPoint>> {
+    /// The points of an experiment, and the scenes skipped (each once, with the reason).
+    fn run_scaling(
+        &self,
+        experiment: &str,
+        progress: &Progress,
+    ) -> Result<(Vec<ScalingPoint>, Vec<SkippedScene>)> {
         let mut points = Vec::new();
+        let mut skipped: Vec<SkippedScene> = Vec::new();
         let mut loaded: Option<(String, Arc<Scene>, f64)> = None;
         // Experiment `bezier`: the direct rendering the tessellations are compared with.
         let mut reference: Option<BezierReference> = None;
@@ -897,15 +915,21 @@ impl Ctx<'_> {
                 _ => {
                     // Free the previous scene first: the largest terrains take gigabytes.
                     loaded = None;
+                    if skipped.iter().any(|(s, _)| *s == spec) {
+                        progress.remove(backends.len());
+                        continue;
+                    }
                     let start = Instant::now();
+                    progress.begin(format!("scaling {experiment}: load {spec}"));
                     match self.load_scaling(&spec)? {
-                        Some(scene) => {
+                        Ok(scene) => {
                             let secs = start.elapsed().as_secs_f64();
                             loaded = Some((spec.clone(), Arc::clone(&scene), secs));
                             (scene, secs)
                         }
-                        None => {
-                            progress.total -= backends.len();
+                        Err(reason) => {
+                            skipped.push((spec, reason));
+                            progress.remove(backends.len());
                             continue;
                         }
                     }
@@ -915,9 +939,10 @@ impl Ctx<'_> {
             let bezier = experiment == "bezier";
             for b in &backends {
                 if b.name == "naive" && !self.naive_fits(&w, scene.geometry.len()) {
-                    progress.total -= 1;
+                    progress.remove(1);
                     continue;
                 }
+                progress.begin(format!("scaling {experiment} {spec} {}: build", b.name));
                 let Ok(crate::measure::Prepared {
                     renderer: r, build, ..
                 }) = prepare(b, &scene)
@@ -932,6 +957,7 @@ impl Ctx<'_> {
                     progress.step(&format!("scaling {experiment} {spec} {}: {why}", b.name));
                     continue;
                 }
+                progress.begin(format!("scaling {experiment} {spec} x={x} {}", b.name));
                 let m = self.measure(r.as_ref(), &w, None)?;
                 let rays = m.warm.rays.max(1);
                 let difference = if bezier {
@@ -967,7 +993,7 @@ impl Ctx<'_> {
                 ));
             }
         }
-        Ok(points)
+        Ok((points, skipped))
     }
 }
 

@@ -23,6 +23,25 @@ pub struct Results {
     pub scaling: Vec<ScalingPoint>,
     /// Straight-line fits of the scaling points on log-log axes.
     pub fits: Vec<Fit>,
+    /// The scenes and experiments of the matrix that did not run (or ran in part), and why.
+    /// Absent from files written before it was added: read as empty.
+    #[serde(default)]
+    pub skipped: Vec<Skipped>,
+}
+
+/// A scene or scaling experiment of the matrix that did not run, or ran in part.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Skipped {
+    /// Index into [`Results::shards`].
+    pub shard: usize,
+    /// `scene` or `experiment`.
+    pub kind: String,
+    /// The scene or experiment name.
+    pub name: String,
+    /// `skipped` (nothing of it ran) or `partial` (some points of an experiment ran).
+    pub status: String,
+    /// Why (a missing asset: which file, and where it was looked for).
+    pub reason: String,
 }
 
 /// One shard of the matrix: where and how it ran.
@@ -42,6 +61,26 @@ pub struct Shard {
     pub command: String,
     /// Whether it was a `--quick` run.
     pub quick: bool,
+}
+
+impl Shard {
+    /// Whether `other` records the same run of the same shard.
+    #[must_use]
+    pub fn same_run(&self, other: &Shard) -> bool {
+        (
+            self.index,
+            self.count,
+            &self.started,
+            &self.command,
+            &self.machine,
+        ) == (
+            other.index,
+            other.count,
+            &other.started,
+            &other.command,
+            &other.machine,
+        )
+    }
 }
 
 /// The machine a shard ran on.
@@ -137,7 +176,7 @@ pub struct Run {
     pub scene: String,
     /// Primitives in the scene.
     pub primitives: u64,
-    /// Integrator (`cast`, `whitted`, `path`).
+    /// Integrator (`cast`, `whitted`, `path`, `mip`, `composite`).
     pub mode: String,
     /// `primary` (frames) or `incoherent` (explicit random rays).
     pub ray_set: String,
@@ -185,6 +224,18 @@ pub struct Run {
     pub phases: BTreeMap<String, f64>,
 }
 
+impl Run {
+    /// What the run measured: scene, workload and backend (`spheres cast-primary 256x256
+    /// 1 spp, backend bvh`); unique within a report.
+    #[must_use]
+    pub fn key(&self) -> String {
+        format!(
+            "{} {}-{} {}x{} {} spp, backend {}",
+            self.scene, self.mode, self.ray_set, self.width, self.height, self.spp, self.backend
+        )
+    }
+}
+
 /// One point of a scaling experiment.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct ScalingPoint {
@@ -219,6 +270,18 @@ pub struct ScalingPoint {
     /// The image against the direct rendering (experiment `bezier`, tessellated points).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub difference: Option<ImageDifference>,
+}
+
+impl ScalingPoint {
+    /// What the point measured (`scaling primitives soup x=1000, backend bvh`); unique
+    /// within a report.
+    #[must_use]
+    pub fn key(&self) -> String {
+        format!(
+            "scaling {} {} x={}, backend {}",
+            self.experiment, self.series, self.x, self.backend
+        )
+    }
 }
 
 /// How far a rendering is from a reference rendering of the same view.
@@ -346,6 +409,34 @@ impl Results {
             .with_context(|| format!("{} is not a valid {SCHEMA} file", path.display()))
     }
 
+    /// Why `other` cannot be merged with `self` because they share data: the same shard
+    /// (same number, start time, command and machine), or a run or scaling point measured
+    /// in both; `None` when they are disjoint.
+    #[must_use]
+    pub fn overlap(&self, other: &Results) -> Option<String> {
+        if let Some(s) = self
+            .shards
+            .iter()
+            .find(|s| other.shards.iter().any(|o| s.same_run(o)))
+        {
+            return Some(format!(
+                "shard {}/{} started {}",
+                s.index, s.count, s.started
+            ));
+        }
+        if let Some(r) = self
+            .runs
+            .iter()
+            .find(|r| other.runs.iter().any(|o| r.key() == o.key()))
+        {
+            return Some(format!("both measure {}", r.key()));
+        }
+        self.scaling
+            .iter()
+            .find(|p| other.scaling.iter().any(|o| p.key() == o.key()))
+            .map(|p| format!("both measure {}", p.key()))
+    }
+
     /// Appends another result set, renumbering its shard references.
     pub fn absorb(&mut self, other: Results) {
         let offset = self.shards.len();
@@ -357,6 +448,10 @@ impl Results {
         self.scaling.extend(other.scaling.into_iter().map(|mut p| {
             p.shard += offset;
             p
+        }));
+        self.skipped.extend(other.skipped.into_iter().map(|mut s| {
+            s.shard += offset;
+            s
         }));
         self.fit();
     }

@@ -1,0 +1,55 @@
+//! Records the source revision the binary is built from, for `raybench --version` and the
+//! machine description of every report: the environment variable `RAYBENCH_REVISION` at
+//! build time when set (for packagers), else the short commit hash of the git checkout the
+//! workspace is, else `unknown` (a source tarball, or a workspace inside another project's
+//! repository).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn main() {
+    println!("cargo:rerun-if-changed=build.rs");
+    println!("cargo:rerun-if-env-changed=RAYBENCH_REVISION");
+    let manifest = PathBuf::from(std::env::var_os("CARGO_MANIFEST_DIR").unwrap_or_default());
+    let revision = std::env::var("RAYBENCH_REVISION")
+        .ok()
+        .map(|r| r.trim().to_string())
+        .filter(|r| !r.is_empty())
+        .or_else(|| git_revision(&manifest))
+        .unwrap_or_else(|| "unknown".into());
+    println!("cargo:rustc-env=RAYBENCH_REVISION={revision}");
+}
+
+/// The output of `git ARGS` run in `dir`, trimmed; `None` when git is missing or fails.
+fn git(dir: &Path, args: &[&str]) -> Option<String> {
+    let out = Command::new("git")
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .ok()?;
+    let text = String::from_utf8_lossy(&out.stdout).trim().to_string();
+    (out.status.success() && !text.is_empty()).then_some(text)
+}
+
+/// The short hash of `HEAD` when the workspace (two levels above this crate) is the top of
+/// a git checkout; asks Cargo to run this again when `HEAD` moves.
+fn git_revision(manifest: &Path) -> Option<String> {
+    let workspace = manifest.join("../..").canonicalize().ok()?;
+    let top = PathBuf::from(git(manifest, &["rev-parse", "--show-toplevel"])?);
+    if top.canonicalize().ok()? != workspace {
+        return None;
+    }
+    // HEAD, the branch it names and the packed refs (a worktree keeps them apart).
+    let mut watched = vec!["HEAD".to_string(), "packed-refs".to_string()];
+    watched.extend(git(manifest, &["symbolic-ref", "-q", "HEAD"]));
+    for name in watched {
+        if let Some(path) = git(manifest, &["rev-parse", "--git-path", &name]) {
+            let path = manifest.join(path);
+            // A missing file would make Cargo run this script on every build.
+            if path.exists() {
+                println!("cargo:rerun-if-changed={}", path.display());
+            }
+        }
+    }
+    git(manifest, &["rev-parse", "--short", "HEAD"])
+}

@@ -1,0 +1,274 @@
+//! Progress on stderr for work that takes a while, shared by `render`, `compare` and
+//! `report`: a live line (a bar, the steps done, the time elapsed and left, what runs now)
+//! redrawn in place once a step has run for [`DELAY`], on a terminal only, so that logs and
+//! pipes stay clean. `RAYBENCH_PROGRESS` overrides the choice: `never`, or `always` (the
+//! line at once and on any stderr, one line per redraw).
+
+use std::io::{IsTerminal, Write};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, PoisonError};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+/// How long a step runs before the live line appears.
+pub const DELAY: Duration = Duration::from_secs(2);
+
+/// How often the live line is redrawn.
+const TICK: Duration = Duration::from_millis(250);
+
+/// When the live line is shown.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Display {
+    /// Never (stderr is not a terminal, or `RAYBENCH_PROGRESS=never`).
+    Never,
+    /// On a terminal, redrawn in place once a step has run for [`DELAY`].
+    Terminal,
+    /// At the start of every step and at every tick, one line each, on any stderr
+    /// (`RAYBENCH_PROGRESS=always`).
+    Always,
+}
+
+impl Display {
+    /// The choice for this process: `RAYBENCH_PROGRESS` (`never`, `always`), else
+    /// [`Display::Terminal`] when stderr is a terminal, else [`Display::Never`].
+    #[must_use]
+    pub fn from_env() -> Self {
+        match std::env::var("RAYBENCH_PROGRESS").as_deref() {
+            Ok("never") => Self::Never,
+            Ok("always") => Self::Always,
+            _ if std::io::stderr().is_terminal() => Self::Terminal,
+            _ => Self::Never,
+        }
+    }
+}
+
+/// The state the ticker thread reads.
+struct State {
+    total: usize,
+    done: usize,
+    start: Instant,
+    /// What runs now, and since when (`None` between steps).
+    current: Option<(String, Instant)>,
+    /// Whether a live line is on the terminal (to be cleared before other output).
+    drawn: bool,
+}
+
+impl State {
+    /// The live line now, or `None` while no step has run for `delay`.
+    fn line(&self, now: Instant, delay: Duration) -> Option<String> {
+        let (what, since) = self.current.as_ref()?;
+        let step = now.duration_since(*since);
+        (step >= delay).then(|| {
+            status_line(
+                self.done,
+                self.total,
+                now.duration_since(self.start).as_secs_f64(),
+                what,
+            )
+        })
+    }
+}
+
+/// `[######..................] 3/12  0m41s elapsed, ~2m03s left  what`; the time left is
+/// extrapolated from the steps done (omitted before the first).
+#[must_use]
+pub fn status_line(done: usize, total: usize, elapsed: f64, what: &str) -> String {
+    const WIDTH: usize = 24;
+    let filled = (done * WIDTH / total.max(1)).min(WIDTH);
+    let left = if done == 0 {
+        String::new()
+    } else {
+        let left = elapsed / done as f64 * total.saturating_sub(done) as f64;
+        format!(", ~{} left", clock(left))
+    };
+    format!(
+        "[{}{}] {done}/{total}  {} elapsed{left}  {what}",
+        "#".repeat(filled),
+        ".".repeat(WIDTH - filled),
+        clock(elapsed),
+    )
+}
+
+/// `2m05s`.
+#[must_use]
+pub fn clock(seconds: f64) -> String {
+    let s = seconds.max(0.0).round() as u64;
+    format!("{}m{:02}s", s / 60, s % 60)
+}
+
+/// Progress through `total` steps. Dropping it stops the ticker and clears the live line.
+pub struct Progress {
+    state: Arc<Mutex<State>>,
+    display: Display,
+    stop: Arc<AtomicBool>,
+    ticker: Option<JoinHandle<()>>,
+}
+
+impl Progress {
+    /// Progress through `total` steps, shown as [`Display::from_env`] says.
+    #[must_use]
+    pub fn new(total: usize) -> Self {
+        Self::with_display(total, Display::from_env())
+    }
+
+    /// Progress through `total` steps, shown as `display` says.
+    #[must_use]
+    pub fn with_display(total: usize, display: Display) -> Self {
+        let state = Arc::new(Mutex::new(State {
+            total,
+            done: 0,
+            start: Instant::now(),
+            current: None,
+            drawn: false,
+        }));
+        let stop = Arc::new(AtomicBool::new(false));
+        let ticker = (display != Display::Never).then(|| {
+            let (state, stop) = (Arc::clone(&state), Arc::clone(&stop));
+            std::thread::spawn(move || {
+                while !stop.load(Ordering::Relaxed) {
+                    std::thread::park_timeout(TICK);
+                    if !stop.load(Ordering::Relaxed) {
+                        draw(&state, display);
+                    }
+                }
+            })
+        });
+        Self {
+            state,
+            display,
+            stop,
+            ticker,
+        }
+    }
+
+    fn state(&self) -> std::sync::MutexGuard<'_, State> {
+        self.state.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// Says what runs from now on (until the next call, [`Self::done`] or [`Self::step`]).
+    pub fn begin(&self, what: impl Into<String>) {
+        self.state().current = Some((what.into(), Instant::now()));
+        if self.display == Display::Always {
+            draw(&self.state, self.display);
+        }
+    }
+
+    /// One step done, quietly (the caller prints its own result lines).
+    pub fn done(&self) {
+        let mut s = self.state();
+        s.done += 1;
+        s.current = None;
+        clear(&mut s);
+    }
+
+    /// One step done, with a line for the log: the bar, the times and `what` (the report's
+    /// record of every measurement, printed whatever the display).
+    pub fn step(&self, what: &str) {
+        let mut s = self.state();
+        s.done += 1;
+        s.current = None;
+        clear(&mut s);
+        let elapsed = s.start.elapsed().as_secs_f64();
+        eprintln!("{}", status_line(s.done, s.total, elapsed, what));
+    }
+
+    /// Takes `n` steps out of the total (work found unnecessary after all).
+    pub fn remove(&self, n: usize) {
+        let mut s = self.state();
+        s.total = s.total.saturating_sub(n);
+    }
+
+    /// Prints a line of the caller's on stderr, above the live line.
+    pub fn note(&self, line: &str) {
+        let mut s = self.state();
+        clear(&mut s);
+        eprintln!("{line}");
+    }
+}
+
+impl Drop for Progress {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.ticker.take() {
+            t.thread().unpark();
+            let _ = t.join();
+        }
+        clear(&mut self.state());
+    }
+}
+
+/// Draws the live line if it is due.
+fn draw(state: &Mutex<State>, display: Display) {
+    let mut s = state.lock().unwrap_or_else(PoisonError::into_inner);
+    let delay = if display == Display::Always {
+        Duration::ZERO
+    } else {
+        DELAY
+    };
+    let Some(line) = s.line(Instant::now(), delay) else {
+        return;
+    };
+    let mut err = std::io::stderr().lock();
+    let _ = if display == Display::Terminal {
+        s.drawn = true;
+        // Carriage return, the line, erase to the end of the line.
+        write!(err, "\r{line}\x1b[K")
+    } else {
+        writeln!(err, "{line}")
+    };
+    let _ = err.flush();
+}
+
+/// Erases a live line drawn on the terminal.
+fn clear(s: &mut State) {
+    if s.drawn {
+        s.drawn = false;
+        let mut err = std::io::stderr().lock();
+        let _ = write!(err, "\r\x1b[K");
+        let _ = err.flush();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn status_lines() {
+        assert_eq!(
+            status_line(0, 4, 3.2, "render spheres"),
+            "[........................] 0/4  0m03s elapsed  render spheres"
+        );
+        assert_eq!(
+            status_line(1, 4, 30.0, "x"),
+            "[######..................] 1/4  0m30s elapsed, ~1m30s left  x"
+        );
+        assert_eq!(clock(125.4), "2m05s");
+        // An empty plan draws an empty bar, never a division by zero.
+        assert!(status_line(0, 0, 0.0, "").starts_with("[........................] 0/0"));
+    }
+
+    #[test]
+    fn the_live_line_waits_for_the_delay() {
+        let t0 = Instant::now();
+        let mut s = State {
+            total: 2,
+            done: 0,
+            start: t0,
+            current: None,
+            drawn: false,
+        };
+        assert_eq!(s.line(t0 + DELAY, DELAY), None, "no step runs");
+        s.current = Some(("bvh: warm-up".into(), t0));
+        assert_eq!(
+            s.line(t0 + DELAY / 2, DELAY),
+            None,
+            "a short step shows nothing"
+        );
+        let line = s.line(t0 + DELAY, DELAY).expect("a long step shows a line");
+        assert!(
+            line.ends_with("bvh: warm-up") && line.contains("0/2"),
+            "{line}"
+        );
+    }
+}
