@@ -7,6 +7,7 @@ use raybench::measure::{
     Measured, Prepared, explicit_rays, measure, median, median_phases, prepare, timed_seconds,
 };
 use raybench::{BACKENDS, Backend, backend, compare_hits, default_backend};
+use raybench_core::limits::MAX_THREADS;
 use raybench_core::{Mode, RaySet, RenderSettings, Scene, Timings};
 use raybench_scene::{BUILTIN_SCENES, assets_dir, generators::GENERATORS};
 use serde::Serialize;
@@ -83,7 +84,7 @@ struct ReportCmd {
     /// Run only these scaling experiments (primitives, pixels, spp, heightfield, bezier).
     #[arg(long, value_delimiter = ',', value_name = "A,B")]
     experiments: Option<Vec<String>>,
-    /// Worker threads (default: all cores).
+    /// Worker threads (default: all cores; at most 1024).
     #[arg(long)]
     threads: Option<usize>,
 }
@@ -131,7 +132,7 @@ struct FrameArgs {
     /// Maximum number of bounces (whitted, path).
     #[arg(long, default_value_t = 5)]
     max_depth: u32,
-    /// Worker threads (default: all cores).
+    /// Worker threads (default: all cores; at most 1024).
     #[arg(long)]
     threads: Option<usize>,
 }
@@ -261,7 +262,9 @@ fn with_threads<T: Send>(
 ) -> Result<T> {
     match threads {
         None => f(),
-        Some(0) => bail!("--threads must be at least 1"),
+        Some(n) if !(1..=MAX_THREADS).contains(&n) => {
+            bail!("--threads {n}: between 1 and {MAX_THREADS} worker threads are accepted")
+        }
         Some(n) => rayon::ThreadPoolBuilder::new()
             .num_threads(n)
             .build()

@@ -531,6 +531,18 @@ fn bad_options_give_one_line_errors() {
 
 #[test]
 fn empty_scene_file_renders_background() {
+        (
+            &["render", "spheres", "--threads", "100000"],
+            "--threads 100000: between 1 and 1024",
+        ),
+        (
+            &["compare", "spheres", "--threads", "5000"],
+            "--threads 5000: between 1 and 1024",
+        ),
+        (
+            &["report", "--quick", "--threads", "1025"],
+            "--threads 1025: between 1 and 1024",
+        ),
     let dir = tmp_dir("empty");
     let scene = write(&dir, "empty.toml", b"background = [1.0, 0.0, 0.0]\n");
     let out = dir.join("e.png");

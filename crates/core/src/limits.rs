@@ -62,3 +62,8 @@ pub const MIN_SDF_TOLERANCE: f32 = 1.0e-6;
 
 /// Largest accepted SDF hit tolerance, relative to the model's box diagonal.
 pub const MAX_SDF_TOLERANCE: f32 = 1.0e-2;
+
+/// Largest accepted number of worker threads (`--threads`). More threads than this only
+/// slow rendering down (every tile is small; 5,000 threads took 35 s to render 64 x 64
+/// pixels on 2 cores), and rayon starts each thread eagerly.
+pub const MAX_THREADS: usize = 1024;
