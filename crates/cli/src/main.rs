@@ -11,6 +11,7 @@ use raybench::progress::Progress;
 use raybench::{
     BACKENDS, NOT_BUILT, backend, brute_force_tests, chosen_backends, compare_hits, default_backend,
 };
+use raybench_core::limits::MAX_THREADS;
 use raybench_core::{Mode, RaySet, RenderSettings, Scene, Timings};
 use raybench_scene::{BUILTIN_SCENES, assets_dir, generators::GENERATORS};
 use serde::Serialize;
@@ -27,8 +28,21 @@ struct Cli {
     /// workspace root).
     #[arg(long, global = true, value_name = "DIR")]
     assets: Option<PathBuf>,
+    /// Largest memory a scene may take, estimated from its declared sizes before loading
+    /// (8G, 512M, or none; default: $RAYBENCH_MEMORY_LIMIT, else half the available
+    /// memory).
+    #[arg(long, global = true, value_name = "SIZE", value_parser = parse_memory_limit)]
+    memory_limit: Option<MemoryLimit>,
     #[command(subcommand)]
     command: Command,
+}
+
+/// `--memory-limit`: bytes, or `None` for no limit.
+#[derive(Clone, Copy)]
+struct MemoryLimit(Option<u64>);
+
+fn parse_memory_limit(s: &str) -> Result<MemoryLimit, String> {
+    raybench_scene::parse_size(s).map(MemoryLimit)
 }
 
 #[derive(Subcommand)]
@@ -87,7 +101,7 @@ struct ReportCmd {
     /// Run only these scaling experiments (primitives, pixels, spp, heightfield, bezier).
     #[arg(long, value_delimiter = ',', value_name = "A,B")]
     experiments: Option<Vec<String>>,
-    /// Worker threads (default: all cores).
+    /// Worker threads (default: all cores; at most 1024).
     #[arg(long)]
     threads: Option<usize>,
 }
@@ -135,7 +149,7 @@ struct FrameArgs {
     /// Maximum number of bounces (whitted, path).
     #[arg(long, default_value_t = 5)]
     max_depth: u32,
-    /// Worker threads (default: all cores).
+    /// Worker threads (default: all cores; at most 1024).
     #[arg(long)]
     threads: Option<usize>,
 }
@@ -287,6 +301,9 @@ fn quiet_wayland_probe() {}
 
 fn run(cli: Cli) -> Result<ExitCode> {
     let assets = assets_dir(cli.assets.as_deref());
+    if let Some(MemoryLimit(limit)) = cli.memory_limit {
+        raybench_scene::set_memory_limit(limit);
+    }
     match cli.command {
         Command::Render(cmd) => with_threads(cmd.frame.threads, || render(&cmd, &assets)),
         Command::Compare(cmd) => with_threads(cmd.frame.threads, || compare(&cmd, &assets)),
@@ -307,7 +324,9 @@ fn with_threads<T: Send>(
 ) -> Result<T> {
     match threads {
         None => f(),
-        Some(0) => bail!("--threads must be at least 1"),
+        Some(n) if !(1..=MAX_THREADS).contains(&n) => {
+            bail!("--threads {n}: between 1 and {MAX_THREADS} worker threads are accepted")
+        }
         Some(n) => rayon::ThreadPoolBuilder::new()
             .num_threads(n)
             .build()
@@ -325,7 +344,23 @@ fn load_scene(spec: &str, assets: &Path) -> Result<Arc<Scene>> {
         scene.geometry.len(),
         start.elapsed().as_secs_f64()
     );
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
     Ok(Arc::new(scene))
+}
+
+/// Refuses a volume mode (`mip`, `composite`) on a scene without volumes: it would render
+/// the surfaces' colours as if nothing were wrong.
+fn check_mode_fits(scene: &Scene, mode: Mode) -> Result<()> {
+    if matches!(mode, Mode::Mip | Mode::Composite) && scene.volumes.is_empty() {
+        bail!(
+            "--mode {} shows volumes, and scene '{}' has none (use cast, whitted or path)",
+            mode.name(),
+            scene.name
+        );
+    }
+    Ok(())
 }
 
 /// Makes and prepares a renderer, or says why it cannot run this scene.
@@ -336,7 +371,21 @@ fn render(cmd: &RenderCmd, assets: &Path) -> Result<ExitCode> {
         Some(name) => backend(name).map_err(anyhow::Error::msg)?,
         None => default_backend(),
     };
+    let out = cmd.out.clone().unwrap_or_else(|| {
+        let stem = Path::new(&cmd.scene)
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or("scene")
+            .replace(':', "-");
+        PathBuf::from(format!("{stem}.png"))
+    });
+    // Before loading and rendering: a long render must not be lost to a bad path.
+    raybench_render::check_png_path(&out)?;
+    if let Some(ids) = &cmd.ids {
+        raybench_render::check_png_path(ids)?;
+    }
     let scene = load_scene(&cmd.scene, assets)?;
+    check_mode_fits(&scene, settings.mode)?;
     if !scene.volumes.is_empty() && !matches!(settings.mode, Mode::Mip | Mode::Composite) {
         eprintln!(
             "note: the scene's {} volume(s) show only with --mode mip or --mode composite",
@@ -374,14 +423,6 @@ fn render(cmd: &RenderCmd, assets: &Path) -> Result<ExitCode> {
     if let Some(line) = phase_line(&p.phases, &frame.timings) {
         eprintln!("{}: {line}", b.name);
     }
-    let out = cmd.out.clone().unwrap_or_else(|| {
-        let stem = Path::new(&cmd.scene)
-            .file_stem()
-            .and_then(|s| s.to_str())
-            .unwrap_or("scene")
-            .replace(':', "-");
-        PathBuf::from(format!("{stem}.png"))
-    });
     raybench_render::write_color_png(&frame, &out)?;
     eprintln!("wrote {}", out.display());
     if let Some(ids) = &cmd.ids {
@@ -437,6 +478,7 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
         bail!("--repeat must be in 1..=10000");
     }
     let scene = load_scene(&cmd.scene, assets)?;
+    check_mode_fits(&scene, settings.mode)?;
     let work = brute_force_tests(&settings, cmd.rays, scene.geometry.len(), cmd.repeat + 1);
     let chosen = chosen_backends(cmd.backends.as_deref(), work).map_err(anyhow::Error::msg)?;
     if chosen.is_empty() {
@@ -746,6 +788,7 @@ fn report(cmd: &ReportCmd, assets: &Path) -> Result<ExitCode> {
 
 fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
     let scene = load_scene(&cmd.scene, assets)?;
+    check_mode_fits(&scene, cmd.mode)?;
     let g = &scene.geometry;
     println!("scene       {}", scene.name);
     println!("primitives  {}", g.len());

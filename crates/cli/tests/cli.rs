@@ -36,6 +36,22 @@ fn assert_clean_error(out: &Output, needle: &str) {
         "error line {:?} lacks {needle:?}",
         errors[0]
     );
+    assert_no_repeated_cause(errors[0]);
+}
+
+/// Fails when an error line states a cause twice in a row (`X: msg: msg`), as a chain of
+/// errors that each print their source would.
+fn assert_no_repeated_cause(line: &str) {
+    let parts: Vec<&str> = line.split(": ").collect();
+    for w in parts.windows(2) {
+        assert_ne!(w[0], w[1], "repeated cause in {line:?}");
+    }
+    for (i, p) in parts.iter().enumerate() {
+        assert!(
+            p.len() < 8 || !parts[i + 1..].iter().any(|q| q.ends_with(p)),
+            "repeated cause {p:?} in {line:?}"
+        );
+    }
 }
 
 #[test]
@@ -245,7 +261,11 @@ fn listing_commands() {
 #[test]
 fn bad_files_give_one_line_errors() {
     let dir = tmp_dir("bad");
-    let cases: Vec<(String, &str)> = vec![
+    let missing_buffer = format!(
+        "missing-buffer.gltf: buffer 0: {}: No such file or directory",
+        dir.join("missing.bin").display()
+    );
+    let mut cases: Vec<(String, &str)> = vec![
         (
             write(&dir, "oob.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n"),
             "out of bounds",
@@ -332,7 +352,7 @@ fn bad_files_give_one_line_errors() {
                 "cam.toml",
                 b"[camera]\nposition = [0,0,0]\nlook_at = [0,0,0]\n",
             ),
-            "camera",
+            "cam.toml: camera: position and look_at are the same point [0, 0, 0]",
         ),
         (
             write(&dir, "scene.txt", b"hello"),
@@ -343,10 +363,41 @@ fn bad_files_give_one_line_errors() {
             "file not found",
         ),
         ("no-such-scene".to_owned(), "unknown scene"),
+        (
+            dir.to_str().unwrap().to_owned(),
+            "is a folder, not a regular file",
+        ),
+        ("/dev/zero".to_owned(), "/dev/zero: is a device, not a regular file"),
+        (
+            write(
+                &dir,
+                "missing-buffer.gltf",
+                br#"{"asset": {"version": "2.0"}, "buffers": [{"uri": "missing.bin", "byteLength": 12}]}"#,
+            ),
+            &missing_buffer,
+        ),
+        (
+            write(
+                &dir,
+                "cam-up.toml",
+                b"[camera]\nposition = [0,0,5]\nlook_at = [0,0,0]\nup = [0,0,1]\n",
+            ),
+            "cam-up.toml: camera: up [0, 0, 1] is zero or parallel to the view direction",
+        ),
         ("soup:0".to_owned(), "soup:0"),
         ("terrain:99999".to_owned(), "terrain:99999"),
         ("heightfield:0".to_owned(), "heightfield:0"),
     ];
+    #[cfg(unix)]
+    {
+        let fifo = dir.join("fifo.toml");
+        let made = Command::new("mkfifo").arg(&fifo).status().unwrap();
+        assert!(made.success());
+        cases.push((
+            fifo.to_str().unwrap().to_owned(),
+            "fifo.toml: is a FIFO (named pipe), not a regular file",
+        ));
+    }
     // Height fields and volumes from broken or absurd files.
     write(&dir, "bad.png", b"\x89PNG\r\n\x1a\nnot really a png");
     write(&dir, "short.raw", &[0u8; 10]);
@@ -481,6 +532,18 @@ fn bad_options_give_one_line_errors() {
             "threads",
         ),
         (
+            &["render", "spheres", "--threads", "100000"],
+            "--threads 100000: between 1 and 1024",
+        ),
+        (
+            &["compare", "spheres", "--threads", "5000"],
+            "--threads 5000: between 1 and 1024",
+        ),
+        (
+            &["report", "--quick", "--threads", "1025"],
+            "--threads 1025: between 1 and 1024",
+        ),
+        (
             &["compare", "spheres", "--backends", "naive,bogus"],
             "unknown backend",
         ),
@@ -529,14 +592,134 @@ fn bad_options_give_one_line_errors() {
     }
 }
 
+/// `--out` and `--ids` are checked before the scene is even loaded: only `.png` is written,
+/// and the folder must exist.
 #[test]
-fn empty_scene_file_renders_background() {
-    let dir = tmp_dir("empty");
-    let scene = write(&dir, "empty.toml", b"background = [1.0, 0.0, 0.0]\n");
-    let out = dir.join("e.png");
+fn output_paths_are_checked_before_rendering() {
+    let dir = tmp_dir("outpaths");
+    let missing = dir.join("no-such-dir/x.png");
+    let ok = dir.join("ok.png");
+    let cases: [(&[&str], &str); 4] = [
+        (&["--out", "x.exr"], "x.exr: images are written as PNG only"),
+        (&["--out", "x.jpg"], "x.jpg: images are written as PNG only"),
+        (
+            &["--out", missing.to_str().unwrap()],
+            "no-such-dir does not exist",
+        ),
+        (
+            &["--out", ok.to_str().unwrap(), "--ids", "ids.jpeg"],
+            "ids.jpeg: images are written as PNG only",
+        ),
+    ];
+    for (extra, needle) in cases {
+        // A scene that would take minutes to render: refused at once.
+        let mut args = vec![
+            "render",
+            "terrain:4096",
+            "--mode",
+            "path",
+            "--spp",
+            "1024",
+            "--width",
+            "4096",
+            "--height",
+            "4096",
+        ];
+        args.extend_from_slice(extra);
+        let o = raybench(&args);
+        assert_clean_error(&o, needle);
+        assert!(
+            !String::from_utf8_lossy(&o.stderr).contains("loaded"),
+            "the scene was loaded before the path was checked"
+        );
+    }
+    assert!(!Path::new("x.exr").exists() && !Path::new("x.jpg").exists());
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// Issue 18: what renders as silent garbage is refused (an empty scene, negative colours,
+/// a sphere too small for f32, `--mode mip` without volumes) or warned about (a mesh whose
+/// triangles all have zero area).
+#[test]
+fn silent_garbage_is_refused_or_warned() {
+    let dir = tmp_dir("garbage");
+    let sphere = "[[object]]\nkind = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n";
+    let cases: Vec<(&[&str], String, &str)> = vec![
+        (
+            &[],
+            write(&dir, "empty.toml", b"background = [1.0, 0.0, 0.0]\n"),
+            "empty.toml: the scene has no [[object]] and no [[volume]]: nothing to render",
+        ),
+        (
+            &[],
+            write(
+                &dir,
+                "neg.toml",
+                format!(
+                    "[[material]]\nname = \"m\"\ncolor = [-1, 5, 0.5]\n{sphere}material = \"m\"\n"
+                )
+                .as_bytes(),
+            ),
+            "neg.toml: line 1: material 1: material 'm': color [-1, 5, 0.5] has a negative component",
+        ),
+        (
+            &[],
+            write(
+                &dir,
+                "emit.toml",
+                format!("[[material]]\nname = \"m\"\nemission = [0, -2, 0]\n{sphere}").as_bytes(),
+            ),
+            "material 'm': emission [0, -2, 0] has a negative component",
+        ),
+        (
+            &[],
+            {
+                write(&dir, "neg.mtl", b"newmtl bad\nKd -1 5 0.5\n");
+                write(
+                    &dir,
+                    "neg.obj",
+                    b"mtllib neg.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl bad\nf 1 2 3\n",
+                )
+            },
+            "neg.obj: material 'bad': color [-1, 5, 0.5] has a negative component",
+        ),
+        (
+            &[],
+            write(
+                &dir,
+                "tiny.toml",
+                b"[[object]]\nkind = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1e-40\n",
+            ),
+            "tiny.toml: line 1: object 1 (sphere): sphere radius 1e-40 is below 1e-18",
+        ),
+        (
+            &["--mode", "mip"],
+            "spheres".to_owned(),
+            "--mode mip shows volumes, and scene 'spheres' has none",
+        ),
+        (
+            &["--mode", "composite"],
+            "spheres".to_owned(),
+            "--mode composite shows volumes, and scene 'spheres' has none",
+        ),
+    ];
+    for (extra, scene, needle) in &cases {
+        let mut args = vec!["render", scene, "--width", "4", "--height", "4", "--out"];
+        let out = dir.join("o.png");
+        args.push(out.to_str().unwrap());
+        args.extend_from_slice(extra);
+        assert_clean_error(&raybench(&args), needle);
+    }
+    let o = raybench(&[
+        "compare", "spheres", "--mode", "mip", "--width", "4", "--height", "4",
+    ]);
+    assert_clean_error(&o, "--mode mip shows volumes");
+    // Legal but surely unintended: one warning line, and the image is written.
+    let flat = write(&dir, "flat.obj", b"v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+    let out = dir.join("flat.png");
     let o = raybench(&[
         "render",
-        &scene,
+        &flat,
         "--width",
         "4",
         "--height",
@@ -544,9 +727,15 @@ fn empty_scene_file_renders_background() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let bytes = std::fs::read(&out).unwrap();
-    assert_eq!(&bytes[1..4], b"PNG");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    let warnings: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("warning:"))
+        .collect();
+    assert_eq!(warnings.len(), 1, "{stderr}");
+    assert!(warnings[0].contains("has zero area"), "{stderr}");
+    assert!(out.exists());
     std::fs::remove_dir_all(dir).unwrap();
 }
 
@@ -888,5 +1077,89 @@ fn docs_state_the_modes_and_the_defaults() {
             "{cmd}: {default}"
         );
         assert!(read("README.md").contains(&format!("`--max-depth {default}`")));
+    }
+}
+
+/// The README's table of refused inputs stays true: every row's command is run from the
+/// workspace root and must fail cleanly with one `error:` line containing the row's
+/// message, and every fixture in `crates/cli/tests/bad-input/` is used by a row (or by a
+/// fixture a row uses), so that the table and the files cannot drift apart.
+#[test]
+fn readme_bad_input_table_is_true() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let table = readme
+        .split_once("<!-- bad-input-table -->")
+        .and_then(|(_, rest)| rest.split_once("<!-- /bad-input-table -->"))
+        .map(|(table, _)| table)
+        .expect("README.md has the bad-input table between its markers");
+    // A code span: `text`, or `` text `` when the text holds backticks.
+    let code = |cell: &str| {
+        let cell = cell.trim();
+        let inner = cell
+            .strip_prefix("``")
+            .and_then(|c| c.strip_suffix("``"))
+            .or_else(|| cell.strip_prefix('`').and_then(|c| c.strip_suffix('`')));
+        inner
+            .unwrap_or_else(|| panic!("cell {cell:?} is not `code`"))
+            .trim()
+            .to_owned()
+    };
+    let mut rows = 0;
+    for line in table.lines().filter(|l| l.starts_with("| ")) {
+        let cells: Vec<&str> = line.trim_matches('|').split(" | ").collect();
+        if cells.len() != 3 || cells[0].trim() == "input" || cells[0].starts_with('-') {
+            continue;
+        }
+        let (command, message) = (code(cells[1]), code(cells[2]));
+        let mut words = command.split_whitespace().peekable();
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_raybench"));
+        cmd.current_dir(&root);
+        while let Some((k, v)) = words.peek().and_then(|w| w.split_once('=')) {
+            cmd.env(k, v);
+            words.next();
+        }
+        assert_eq!(words.next(), Some("raybench"), "{command}");
+        let out = cmd.args(words).output().expect("raybench runs");
+        // `...` stands for text that varies (an absolute path): the pieces must appear in
+        // order.
+        let expected = message.strip_prefix("error: ").unwrap_or(&message);
+        let mut pieces = expected.split("...");
+        let first = pieces.next().unwrap_or_default();
+        assert_clean_error(&out, first);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let line = stderr
+            .lines()
+            .find(|l| l.starts_with("error"))
+            .unwrap_or_default();
+        let mut at = line.find(first).unwrap_or_default() + first.len();
+        for piece in pieces {
+            let found = line[at..].find(piece);
+            assert!(
+                found.is_some(),
+                "{command}: {line:?} lacks {piece:?} (in order)"
+            );
+            at += found.unwrap_or_default() + piece.len();
+        }
+        rows += 1;
+    }
+    assert!(
+        rows >= 30,
+        "only {rows} rows in the README's bad-input table"
+    );
+    let fixtures = root.join("crates/cli/tests/bad-input");
+    let used: String = std::fs::read_dir(&fixtures)
+        .unwrap()
+        .map(|e| std::fs::read_to_string(e.unwrap().path()).unwrap_or_default())
+        .chain([table.to_owned()])
+        .collect();
+    for e in std::fs::read_dir(&fixtures).unwrap() {
+        let name = e.unwrap().file_name().into_string().unwrap();
+        assert!(
+            table.contains(&format!("bad-input/{name}"))
+                || used.contains(&format!("\"{name}\""))
+                || used.contains(&format!(" {name}\n")),
+            "fixture {name} is used by no row of the README's table"
+        );
     }
 }

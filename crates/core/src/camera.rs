@@ -54,14 +54,43 @@ impl Camera {
     /// vector not parallel to the view direction, and a field of view in `(0, 180)`.
     #[must_use]
     pub fn is_valid(&self) -> bool {
+        self.check().is_ok()
+    }
+
+    /// Checks that the camera can produce rays, as [`Camera::is_valid`].
+    ///
+    /// # Errors
+    /// The first condition that fails, in words, with the values involved.
+    pub fn check(&self) -> Result<(), String> {
+        for (name, v) in [
+            ("position", self.position),
+            ("look_at", self.look_at),
+            ("up", self.up),
+        ] {
+            if !v.is_finite() {
+                return Err(format!("{name} {v} is not finite"));
+            }
+        }
         let forward = self.look_at - self.position;
-        self.position.is_finite()
-            && self.look_at.is_finite()
-            && self.up.is_finite()
-            && forward.length_squared() > 0.0
-            && forward.cross(self.up).length_squared() > 0.0
-            && self.vfov_degrees > 0.0
-            && self.vfov_degrees < 180.0
+        if forward.length_squared() <= 0.0 {
+            return Err(format!(
+                "position and look_at are the same point {}",
+                self.position
+            ));
+        }
+        if forward.cross(self.up).length_squared() <= 0.0 {
+            return Err(format!(
+                "up {} is zero or parallel to the view direction {forward}",
+                self.up
+            ));
+        }
+        if !(self.vfov_degrees > 0.0 && self.vfov_degrees < 180.0) {
+            return Err(format!(
+                "fov {} is outside (0, 180) degrees",
+                self.vfov_degrees
+            ));
+        }
+        Ok(())
     }
 
     /// The ray generator for a `width x height` image.

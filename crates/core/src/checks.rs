@@ -2,8 +2,8 @@
 //! SDF models).
 
 use crate::error::SceneError;
-use crate::limits::MAX_COORDINATE;
-use glam::Vec3;
+use crate::limits::{MAX_COORDINATE, MAX_TRANSFORM_CONDITION};
+use glam::{Affine3A, Mat3A, Vec3};
 
 /// A point parameter: finite and within [`MAX_COORDINATE`]. `what` names it in the error
 /// ("CSG sphere centre").
@@ -67,4 +67,51 @@ pub(crate) fn fold<T>(
         return join(first, balanced(operands, union));
     }
     balanced(operands, join)
+}
+
+/// Checks an object's placement `to_world` (`what` names it: "CSG transform", "transform"):
+/// finite, its scale and translation within [`MAX_COORDINATE`], and its linear part
+/// invertible with a condition number (`|M|max * |M^-1|max`) at most
+/// [`MAX_TRANSFORM_CONDITION`]: a zero scale flattens an object into nothing (a mesh then
+/// renders as an empty image), and a tiny one overflows the inverse. Returns the inverse
+/// of the linear part.
+///
+/// # Errors
+/// [`SceneError::NonFinite`] or [`SceneError::Invalid`] saying which condition fails.
+pub fn check_transform(to_world: Affine3A, what: &str) -> Result<Mat3A, SceneError> {
+    let m = to_world.matrix3;
+    if !(m.is_finite() && to_world.translation.is_finite()) {
+        return Err(SceneError::NonFinite(what.into()));
+    }
+    let norm = |a: Mat3A| {
+        [a.x_axis, a.y_axis, a.z_axis]
+            .iter()
+            .map(|c| c.abs().max_element())
+            .fold(0.0f32, f32::max)
+    };
+    if norm(m) > MAX_COORDINATE {
+        return Err(SceneError::Invalid(format!(
+            "{what}'s scale exceeds {MAX_COORDINATE:e}"
+        )));
+    }
+    point(
+        to_world.translation.into(),
+        &format!("{what}'s translation"),
+    )?;
+    let inv = m.inverse();
+    let cond = norm(m) * norm(inv);
+    // NaN (from an overflowing inverse) fails the last comparison too.
+    let conditioned = cond <= MAX_TRANSFORM_CONDITION;
+    if m.determinant() == 0.0 || !inv.is_finite() || cond.is_nan() {
+        return Err(SceneError::Invalid(format!(
+            "{what} is singular (a zero scale?)"
+        )));
+    }
+    if !conditioned {
+        return Err(SceneError::Invalid(format!(
+            "{what} is nearly singular (a tiny scale?): condition number {cond:e} above \
+             {MAX_TRANSFORM_CONDITION:e}"
+        )));
+    }
+    Ok(inv)
 }

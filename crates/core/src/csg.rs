@@ -27,7 +27,7 @@
 use crate::aabb::Aabb;
 use crate::checks;
 use crate::error::SceneError;
-use crate::limits::{MAX_COORDINATE, MAX_CSG_DEPTH, MAX_CSG_LEAVES, MAX_TRANSFORM_CONDITION};
+use crate::limits::{MAX_CSG_DEPTH, MAX_CSG_LEAVES};
 use crate::ray::Ray;
 use glam::{Affine3A, Mat3A, Vec3};
 
@@ -206,34 +206,9 @@ struct Placement {
 
 impl Placement {
     /// Checks `to_world` (finite, not singular, condition number at most
-    /// [`MAX_TRANSFORM_CONDITION`]) and inverts it.
+    /// [`crate::limits::MAX_TRANSFORM_CONDITION`]) and inverts it.
     fn new(to_world: Affine3A) -> Result<Self, SceneError> {
-        let m = to_world.matrix3;
-        if !(m.is_finite() && to_world.translation.is_finite()) {
-            return Err(SceneError::NonFinite("CSG transform".into()));
-        }
-        let norm = |a: Mat3A| {
-            [a.x_axis, a.y_axis, a.z_axis]
-                .iter()
-                .map(|c| c.abs().max_element())
-                .fold(0.0f32, f32::max)
-        };
-        if norm(m) > MAX_COORDINATE {
-            return Err(SceneError::Invalid(format!(
-                "CSG transform's scale exceeds {MAX_COORDINATE:e}"
-            )));
-        }
-        finite_point(to_world.translation.into(), "transform's translation")?;
-        let inv = m.inverse();
-        let cond = norm(m) * norm(inv);
-        // NaN (from an overflowing inverse) fails the last comparison too.
-        let conditioned = cond <= MAX_TRANSFORM_CONDITION;
-        if m.determinant() == 0.0 || !inv.is_finite() || !conditioned {
-            return Err(SceneError::Invalid(format!(
-                "CSG transform is singular or nearly so (a zero or tiny scale?): condition \
-                 number {cond:e} above {MAX_TRANSFORM_CONDITION:e}"
-            )));
-        }
+        let inv = checks::check_transform(to_world, "CSG transform")?;
         Ok(Self {
             to_local: to_world.inverse(),
             normal: inv.transpose(),
@@ -522,7 +497,7 @@ fn leaf_spans(s: &Solid, place: Option<&Placement>, ray: &Ray, leaf: u32) -> Lea
     out
 }
 
-/// Checks that a point is finite and within [`MAX_COORDINATE`].
+/// Checks that a point is finite and within [`crate::limits::MAX_COORDINATE`].
 fn finite_point(v: Vec3, what: &str) -> Result<(), SceneError> {
     checks::point(v, &format!("CSG {what}"))
 }

@@ -49,6 +49,7 @@ pub use accel::{
 pub use bezier::{BezierPatch, BezierStats, FALLBACK_DEPTH, MAX_NEWTON_ITERATIONS, REGION_DEPTH};
 pub use bilinear::{BilinearPatch, PatchHit};
 pub use camera::{Camera, CameraRays};
+pub use checks::check_transform;
 pub use csg::{Csg, CsgHit, CsgNode, CsgOp, Solid};
 pub use emitters::Emitters;
 pub use error::SceneError;
@@ -57,7 +58,10 @@ pub use geometry::{Geometry, PrimHit, PrimitiveKind, Shape};
 pub use heightfield::{CellSurface, HeightField, HeightFieldTraversal, MAX_HEIGHT_FIELD_VERTICES};
 pub use hit::Hit;
 pub use material::{Checker, Light, Material, MaterialKind};
-pub use mesh::{PolygonMesh, TriangleMesh};
+pub use mesh::{
+    MAX_EAR_CLIP_VERTICES, PolygonKind, PolygonMesh, TriangleMesh, Triangulated,
+    triangulate_polygon,
+};
 pub use plane::Plane;
 pub use ray::Ray;
 pub use rays::RaySet;

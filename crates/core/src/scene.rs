@@ -54,6 +54,9 @@ pub struct Scene {
     /// Voxel volumes, rendered by the modes `mip` and `composite` (not primitives: they
     /// have no ids and acceleration structures never see them).
     pub volumes: Vec<Arc<Volume>>,
+    /// What is legal but surely not what was meant (an object whose triangles are all
+    /// degenerate, ...), one sentence each; the command line prints them as warnings.
+    pub warnings: Vec<String>,
 }
 
 impl Scene {
@@ -78,6 +81,7 @@ pub struct SceneBuilder {
     prim_material: Vec<u32>,
     objects: Vec<ObjectInfo>,
     volumes: Vec<Arc<Volume>>,
+    warnings: Vec<String>,
 }
 
 fn finite(v: Vec3, what: &str) -> Result<(), SceneError> {
@@ -86,6 +90,18 @@ fn finite(v: Vec3, what: &str) -> Result<(), SceneError> {
     } else {
         Err(SceneError::NonFinite(what.to_string()))
     }
+}
+
+/// A colour or radiance: finite and no component negative (a negative colour or emission
+/// is not light; it would render as silent garbage).
+fn colour(v: Vec3, what: &str) -> Result<(), SceneError> {
+    finite(v, what)?;
+    if v.min_element() < 0.0 {
+        return Err(SceneError::Invalid(format!(
+            "{what} {v} has a negative component (colours and light are at least 0)"
+        )));
+    }
+    Ok(())
 }
 
 /// A position: finite and within [`limits::MAX_COORDINATE`].
@@ -114,21 +130,16 @@ impl SceneBuilder {
             prim_material: Vec::new(),
             objects: Vec::new(),
             volumes: Vec::new(),
+            warnings: Vec::new(),
         }
     }
 
     /// Sets the camera; without one, [`SceneBuilder::build`] frames the geometry.
     ///
     /// # Errors
-    /// When the camera cannot produce rays ([`Camera::is_valid`]).
+    /// When the camera cannot produce rays ([`Camera::check`] says why).
     pub fn camera(&mut self, camera: Camera) -> Result<&mut Self, SceneError> {
-        if !camera.is_valid() {
-            return Err(SceneError::Invalid(
-                "camera: position, look_at and up must be finite, position and look_at \
-                 distinct, up not parallel to the view direction, fov in (0, 180)"
-                    .into(),
-            ));
-        }
+        camera.check().map_err(SceneError::Invalid)?;
         self.camera = Some(camera);
         Ok(self)
     }
@@ -136,9 +147,9 @@ impl SceneBuilder {
     /// Sets the background radiance.
     ///
     /// # Errors
-    /// When it is not finite.
+    /// When it is not finite or has a negative component.
     pub fn background(&mut self, color: Vec3) -> Result<&mut Self, SceneError> {
-        finite(color, "background")?;
+        colour(color, "background")?;
         self.background = color;
         Ok(self)
     }
@@ -146,19 +157,20 @@ impl SceneBuilder {
     /// Adds a material and returns its index.
     ///
     /// # Errors
-    /// When a colour or parameter is not finite.
+    /// When a colour or parameter is not finite, or a colour or the emission has a negative
+    /// component.
     pub fn add_material(&mut self, m: Material) -> Result<u32, SceneError> {
         let what = format!("material '{}'", m.name);
-        finite(m.base_color, &what)?;
-        finite(m.specular, &what)?;
-        finite(m.emission, &what)?;
+        colour(m.base_color, &format!("{what}: color"))?;
+        colour(m.specular, &format!("{what}: specular"))?;
+        colour(m.emission, &format!("{what}: emission"))?;
         if !m.ior.is_finite() || !m.shininess.is_finite() || m.ior <= 0.0 {
             return Err(SceneError::Invalid(format!(
                 "{what}: ior must be positive and finite"
             )));
         }
         if let Some(c) = m.checker {
-            finite(c.color, &what)?;
+            colour(c.color, &format!("{what}: checker color"))?;
             if !(c.size.is_finite() && c.size > 0.0) {
                 return Err(SceneError::Invalid(format!(
                     "{what}: checker size must be positive and finite"
@@ -172,7 +184,8 @@ impl SceneBuilder {
     /// Adds a light.
     ///
     /// # Errors
-    /// When a vector is not finite or a direction is zero.
+    /// When a vector is not finite, a direction is zero or an intensity or radiance has a
+    /// negative component.
     pub fn add_light(&mut self, light: Light) -> Result<&mut Self, SceneError> {
         let light = match light {
             Light::Point {
@@ -180,7 +193,7 @@ impl SceneBuilder {
                 intensity,
             } => {
                 coordinate(position, "light position")?;
-                finite(intensity, "light intensity")?;
+                colour(intensity, "light intensity")?;
                 light
             }
             Light::Directional {
@@ -188,7 +201,7 @@ impl SceneBuilder {
                 radiance,
             } => {
                 finite(direction, "light direction")?;
-                finite(radiance, "light radiance")?;
+                colour(radiance, "light radiance")?;
                 let Some(direction) = direction.try_normalize() else {
                     return Err(SceneError::Invalid("light direction is zero".into()));
                 };
@@ -238,16 +251,28 @@ impl SceneBuilder {
     /// Adds a sphere with material index `material`.
     ///
     /// # Errors
-    /// When the centre or radius is not finite or the radius is not positive.
+    /// When the centre or radius is not finite, or the radius is not positive, above
+    /// [`limits::MAX_COORDINATE`] or too small for `f32` ([`limits::MIN_SPHERE_RADIUS`],
+    /// [`limits::MIN_RELATIVE_SPHERE_RADIUS`]).
     pub fn add_sphere(&mut self, sphere: Sphere, material: u32) -> Result<&mut Self, SceneError> {
         coordinate(sphere.center, "sphere centre")?;
-        if !(sphere.radius.is_finite()
-            && sphere.radius > 0.0
-            && sphere.radius <= limits::MAX_COORDINATE)
-        {
+        let r = sphere.radius;
+        if !(r.is_finite() && r > 0.0 && r <= limits::MAX_COORDINATE) {
             return Err(SceneError::Invalid(format!(
-                "sphere radius {} must be positive, finite and at most 1e18",
-                sphere.radius
+                "sphere radius {r} must be positive, finite and at most {:e}",
+                limits::MAX_COORDINATE
+            )));
+        }
+        let min = limits::MIN_SPHERE_RADIUS
+            .max(limits::MIN_RELATIVE_SPHERE_RADIUS * sphere.center.abs().max_element());
+        if r < min {
+            return Err(SceneError::Invalid(format!(
+                "sphere radius {r:e} is below {min:e}, the smallest that f32 resolves at \
+                 centre {} (radii start at {:e} and at {:e} times the centre's largest \
+                 coordinate)",
+                sphere.center,
+                limits::MIN_SPHERE_RADIUS,
+                limits::MIN_RELATIVE_SPHERE_RADIUS
             )));
         }
         self.check_material(material)?;
@@ -295,7 +320,9 @@ impl SceneBuilder {
         mesh.validate()?;
         self.check_material(material)?;
         self.check_room(mesh.indices.len())?;
-        self.push_object(name.into(), mesh.triangles().map(Shape::Triangle), material);
+        let name = name.into();
+        self.warn_if_degenerate(&name, mesh.triangles());
+        self.push_object(name, mesh.triangles().map(Shape::Triangle), material);
         Ok(self)
     }
 
@@ -392,12 +419,14 @@ impl SceneBuilder {
             self.check_material(m)?;
         }
         self.check_room(triangles.len())?;
+        let name = name.into();
+        self.warn_if_degenerate(&name, triangles.iter().copied());
         let first = self.shapes.len() as u32;
         self.shapes
             .extend(triangles.iter().copied().map(Shape::Triangle));
         self.prim_material.extend_from_slice(materials);
         self.objects.push(ObjectInfo {
-            name: name.into(),
+            name,
             first,
             count: triangles.len() as u32,
         });
@@ -414,6 +443,27 @@ impl SceneBuilder {
         coordinate(b.max, "volume bounds")?;
         self.volumes.push(volume);
         Ok(self)
+    }
+
+    /// Records a warning: something legal but surely not what was meant. It ends up in
+    /// [`Scene::warnings`].
+    pub fn warn(&mut self, message: impl Into<String>) {
+        self.warnings.push(message.into());
+    }
+
+    /// Warns when every one of an object's triangles (at least one) has zero area: they are
+    /// kept, so that ids stay those of the file, but never hit, so the object is invisible.
+    fn warn_if_degenerate(&mut self, name: &str, mut triangles: impl Iterator<Item = Triangle>) {
+        let mut any = false;
+        let all = triangles.all(|t| {
+            any = true;
+            (t.v[1] - t.v[0]).cross(t.v[2] - t.v[0]) == Vec3::ZERO
+        });
+        if any && all {
+            self.warn(format!(
+                "every triangle of {name} has zero area: it will not be visible"
+            ));
+        }
     }
 
     /// Number of primitives added so far.
@@ -449,6 +499,7 @@ impl SceneBuilder {
             objects: self.objects,
             emitters,
             volumes: self.volumes,
+            warnings: self.warnings,
         }
     }
 }
@@ -483,5 +534,64 @@ mod tests {
         assert!(b.add_plane(Vec3::ZERO, Vec3::ZERO, 0).is_err());
         assert!(b.background(Vec3::INFINITY).is_err());
         assert_eq!(b.primitive_count(), 0);
+    }
+
+    /// Issue 18: negative colours, a sphere too small for f32, all-degenerate meshes.
+    #[test]
+    fn silent_garbage_is_refused_or_warned() {
+        let mut b = SceneBuilder::new("t");
+        let neg = |base_color, emission| Material {
+            name: "m".into(),
+            base_color,
+            emission,
+            ..Material::default()
+        };
+        let e = b
+            .add_material(neg(Vec3::new(-1.0, 5.0, 0.5), Vec3::ZERO))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("color [-1, 5, 0.5] has a negative component"),
+            "{e}"
+        );
+        let e = b
+            .add_material(neg(Vec3::ONE, Vec3::new(0.0, -2.0, 0.0)))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("emission"), "{e}");
+        assert!(b.background(Vec3::new(0.0, -0.1, 0.0)).is_err());
+        assert!(
+            b.add_light(Light::Point {
+                position: Vec3::ZERO,
+                intensity: -Vec3::ONE
+            })
+            .is_err()
+        );
+        let e = b
+            .add_sphere(Sphere::new(Vec3::ZERO, 1e-40), 0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("is below 1e-18"), "{e}");
+        // Relative to the centre: 1e-4 at 1e4 is below one ulp (1e4 * 2^-23 = 1.2e-3).
+        assert!(
+            b.add_sphere(Sphere::new(Vec3::splat(1e4), 1e-4), 0)
+                .is_err()
+        );
+        b.add_sphere(Sphere::new(Vec3::splat(1e4), 1e-2), 0)
+            .unwrap();
+        b.add_sphere(Sphere::new(Vec3::ZERO, 1e-18), 0).unwrap();
+        let flat = TriangleMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::X * 2.0],
+            indices: vec![[0, 1, 2], [0, 0, 0]],
+        };
+        b.add_mesh("flat.obj", &flat, 0).unwrap();
+        let fine = TriangleMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            indices: vec![[0, 1, 2], [0, 0, 0]],
+        };
+        b.add_mesh("fine.obj", &fine, 0).unwrap();
+        let s = b.build();
+        assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+        assert!(s.warnings[0].contains("flat.obj"), "{:?}", s.warnings);
     }
 }

@@ -12,8 +12,8 @@
 mod output;
 
 pub use output::{
-    OutputError, id_color, partial_path, srgb8, write_atomically, write_color_png, write_ids_png,
-    write_rgb,
+    OutputError, check_png_path, id_color, partial_path, srgb8, write_atomically, write_color_png,
+    write_ids_png, write_rgb,
 };
 
 use raybench_core::integrator::{assemble, render_tile, tiles};

@@ -7,22 +7,31 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
     /// Encoding or writing failed.
-    #[error("cannot write {path}: {source}")]
+    #[error("cannot write {}: {cause}", path.display())]
     Write {
         /// The file.
         path: PathBuf,
-        /// The cause.
-        source: image::ImageError,
+        /// The cause (in the message, not a separate `source`, which would print it twice
+        /// in a chain of causes).
+        cause: image::ImageError,
+    },
+    /// The path cannot take a PNG image (checked before rendering).
+    #[error("{}: {message}", path.display())]
+    Path {
+        /// The file.
+        path: PathBuf,
+        /// Why it cannot be written.
+        message: String,
     },
     /// Moving the finished file into place failed.
-    #[error("cannot move {from} to {path}: {source}")]
+    #[error("cannot move {} to {}: {cause}", from.display(), path.display())]
     Rename {
         /// The temporary file.
         from: PathBuf,
         /// The final file.
         path: PathBuf,
-        /// The cause.
-        source: std::io::Error,
+        /// The cause (in the message, not a separate `source`).
+        cause: std::io::Error,
     },
 }
 
@@ -83,14 +92,58 @@ pub fn write_atomically<E: From<OutputError>>(
         let _ = std::fs::remove_file(&tmp);
         return Err(e);
     }
-    std::fs::rename(&tmp, path).map_err(|source| {
+    std::fs::rename(&tmp, path).map_err(|cause| {
         let _ = std::fs::remove_file(&tmp);
         E::from(OutputError::Rename {
             from: tmp,
             path: path.to_owned(),
-            source,
+            cause,
         })
     })
+}
+
+/// Checks, before any work, that a PNG image can be written at `path`: its extension is
+/// `.png` (the only format written; a PNG under another name would mislead), it is not a
+/// folder, its folder exists, and a file can be created there (the temporary file
+/// [`partial_path`] is created and removed again), so that a long render is never wasted
+/// on a path that cannot take its result.
+///
+/// # Errors
+/// [`OutputError::Path`] saying which of these fails.
+pub fn check_png_path(path: &Path) -> Result<(), OutputError> {
+    let err = |message: String| OutputError::Path {
+        path: path.to_owned(),
+        message,
+    };
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
+    if !ext.eq_ignore_ascii_case("png") {
+        return Err(err(format!(
+            "images are written as PNG only: name the file *.png (got {})",
+            if ext.is_empty() {
+                "no extension".to_owned()
+            } else {
+                format!("'.{ext}'")
+            }
+        )));
+    }
+    if path.is_dir() {
+        return Err(err("is a folder, not a file".into()));
+    }
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        return Err(err(format!("the folder {} does not exist", dir.display())));
+    }
+    let tmp = partial_path(path);
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&tmp)
+        .map_err(|e| err(format!("cannot create a file in {}: {e}", dir.display())))?;
+    let _ = std::fs::remove_file(&tmp);
+    Ok(())
 }
 
 /// Writes RGB bytes (`3 * width * height`, row by row) to `path` as a PNG, through
@@ -108,9 +161,9 @@ pub fn write_rgb(path: &Path, width: u32, height: u32, rgb: Vec<u8>) -> Result<(
             image::ExtendedColorType::Rgb8,
             image::ImageFormat::Png,
         )
-        .map_err(|source| OutputError::Write {
+        .map_err(|cause| OutputError::Write {
             path: path.to_owned(),
-            source,
+            cause,
         })
     })
 }
@@ -175,13 +228,29 @@ mod tests {
             Err(OutputError::Rename {
                 from: tmp.to_owned(),
                 path: tmp.to_owned(),
-                source: std::io::Error::other("interrupted"),
+                cause: std::io::Error::other("interrupted"),
             })
         });
         assert!(failed.is_err());
         assert_eq!(std::fs::read_to_string(dir.join("c.txt")).unwrap(), "old");
         assert!(!dir.join("c.partial.txt").exists());
         assert!(write_color_png(&frame, &dir.join("no/such/dir.png")).is_err());
+        // Checked before rendering: the extension, the folder, writability.
+        assert!(check_png_path(&dir.join("ok.png")).is_ok());
+        assert!(check_png_path(&dir.join("OK.PNG")).is_ok());
+        assert!(!dir.join("ok.partial.png").exists());
+        for (p, needle) in [
+            (dir.join("x.exr"), "'.exr'"),
+            (dir.join("x.jpg"), "'.jpg'"),
+            (dir.join("x"), "no extension"),
+            (dir.join("no/such/dir.png"), "does not exist"),
+        ] {
+            let e = check_png_path(&p).unwrap_err().to_string();
+            assert!(e.contains(needle), "{e}");
+        }
+        std::fs::create_dir_all(dir.join("d.png")).unwrap();
+        let e = check_png_path(&dir.join("d.png")).unwrap_err().to_string();
+        assert!(e.contains("folder"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

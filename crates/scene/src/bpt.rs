@@ -39,6 +39,7 @@ pub fn load_bpt_file(path: &Path) -> Result<Vec<BptPatch>, LoadError> {
 /// other than `3 3`, a point that is not three numbers, a non-finite coordinate, fewer
 /// patches than declared or data after the declared patches.
 pub fn parse_bpt(text: &str, path: &Path) -> Result<Vec<BptPatch>, LoadError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let err = |line: usize, message: String| LoadError::Parse {
         path: path.to_owned(),
         message: format!("line {line}: {message}"),

@@ -7,12 +7,13 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum LoadError {
     /// The file could not be read.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {cause}", path.display())]
     Io {
         /// The file.
         path: PathBuf,
-        /// The cause.
-        source: std::io::Error,
+        /// The cause (in the message; not a separate `source`, which would print it twice
+        /// in a chain of causes).
+        cause: std::io::Error,
     },
     /// The file does not exist.
     #[error("{}: file not found", path.display())]
@@ -53,13 +54,21 @@ pub enum LoadError {
         /// What is wrong.
         message: String,
     },
+    /// The scene would need more memory than the budget allows (`crate::MemoryBudget`).
+    #[error("{context}: {message}")]
+    OverBudget {
+        /// The scene and the part of it.
+        context: String,
+        /// The estimate, the budget and how to raise it.
+        message: String,
+    },
     /// The content is well-formed but invalid (NaN coordinates, bad indices, ...).
-    #[error("{context}: {source}")]
+    #[error("{context}: {cause}")]
     Scene {
         /// The file or object.
         context: String,
-        /// The problem.
-        source: SceneError,
+        /// The problem (in the message, not a separate `source`).
+        cause: SceneError,
     },
 }
 

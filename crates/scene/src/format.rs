@@ -1,6 +1,7 @@
 //! The TOML scene format (documented in `docs/scene-format.md`).
 
 use crate::bpt::load_bpt_file;
+use crate::budget::{Holds, Reservation};
 use crate::error::LoadError;
 use crate::generators::{self, Generated};
 use crate::gltf_loader::load_gltf_file;
@@ -31,14 +32,86 @@ struct SceneFile {
     name: Option<String>,
     background: Option<V3>,
     camera: Option<CameraDesc>,
+    // The arrays of tables are parsed table by table (`table_item`), so that an error
+    // names the table, its index, kind and line rather than the array's first table.
     #[serde(default, rename = "material")]
-    materials: Vec<MaterialDesc>,
+    materials: Vec<toml::Table>,
     #[serde(default, rename = "light")]
-    lights: Vec<LightDesc>,
+    lights: Vec<toml::Table>,
     #[serde(default, rename = "object")]
-    objects: Vec<ObjectDesc>,
+    objects: Vec<toml::Table>,
     #[serde(default, rename = "volume")]
-    volumes: Vec<VolumeDesc>,
+    volumes: Vec<toml::Table>,
+}
+
+/// The 1-based line of the header of the `index`-th `[[array]]` table in `text`, if the
+/// array is written with such headers (not inline).
+fn header_line(text: &str, array: &str, index: usize) -> Option<usize> {
+    let header = format!("[[{array}]]");
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| {
+            let squeezed: String = l.chars().filter(|c| !c.is_whitespace()).collect();
+            squeezed.starts_with(&header)
+        })
+        .nth(index)
+        .map(|(i, _)| i + 1)
+}
+
+/// The line of key `key` inside the table whose header is on line `header` (up to the next
+/// table header that is not one of its sub-tables, `[array.sub]`).
+fn key_line(text: &str, array: &str, header: usize, key: &str) -> Option<usize> {
+    let sub = format!("[{array}.");
+    text.lines()
+        .enumerate()
+        .skip(header)
+        .take_while(|(_, l)| {
+            let l = l.trim_start();
+            !l.starts_with('[') || l.starts_with(&sub)
+        })
+        .find(|(_, l)| {
+            l.trim_start()
+                .strip_prefix(key)
+                .is_some_and(|rest| rest.trim_start().starts_with(['=', '.']))
+        })
+        .map(|(i, _)| i + 1)
+}
+
+/// Parses the `index`-th table of the array `array` (`object`, `light`, ...) of a scene
+/// file as `T`, and returns it with a label naming it in messages: `line 7: object 2
+/// (sphere)` (the line of its header, its 1-based index, its kind). A parse error
+/// names the same, at the line of the offending key when the message names one.
+fn table_item<T: serde::de::DeserializeOwned>(
+    text: &str,
+    array: &str,
+    index: usize,
+    table: toml::Table,
+    ctx: &Context,
+) -> Result<(T, String), LoadError> {
+    let header = header_line(text, array, index);
+    let mut label = format!("{array} {}", index + 1);
+    if let Some(kind) = table.get("kind").and_then(toml::Value::as_str) {
+        label += &format!(" ({kind})");
+    }
+    let at = |line: Option<usize>| line.map_or(String::new(), |l| format!("line {l}: "));
+    match toml::Value::Table(table).try_into::<T>() {
+        Ok(item) => Ok((item, format!("{}{label}", at(header)))),
+        Err(e) => {
+            let message = e.message().trim_end().to_owned();
+            // `unknown field `colour`, expected ...`: point at the key.
+            let key = message
+                .split('`')
+                .nth(1)
+                .filter(|_| message.starts_with("unknown field"));
+            let line = header
+                .and_then(|h| key.and_then(|k| key_line(text, array, h, k)))
+                .or(header);
+            Err(LoadError::Parse {
+                path: ctx.file.clone(),
+                message: format!("{}{label}: {message}", at(line)),
+            })
+        }
+    }
 }
 
 #[derive(Deserialize, Clone, Copy)]
@@ -149,6 +222,17 @@ struct TransformDesc {
 }
 
 impl TransformDesc {
+    /// The transform of an object's `transform` table, checked as CSG transforms are
+    /// ([`raybench_core::check_transform`]): a zero scale would flatten the object into
+    /// nothing and render an empty image without a word.
+    fn checked(&self) -> Result<Transform, SceneError> {
+        let xf = self.to_transform();
+        if !xf.is_identity() {
+            raybench_core::check_transform(xf.affine(), "transform")?;
+        }
+        Ok(xf)
+    }
+
     fn to_transform(&self) -> Transform {
         Transform {
             scale: match self.scale {
@@ -554,9 +638,9 @@ impl Context<'_> {
 
     fn scene_err(&self, what: &str) -> impl Fn(SceneError) -> LoadError + '_ {
         let context = format!("{}: {what}", self.file.display());
-        move |source| LoadError::Scene {
+        move |cause| LoadError::Scene {
             context: context.clone(),
-            source,
+            cause,
         }
     }
 }
@@ -564,19 +648,13 @@ impl Context<'_> {
 /// Reads a UTF-8 text file of at most `limit` bytes (checked before reading; `what` names
 /// the kind of file in the error).
 pub(crate) fn read_text(path: &Path, limit: u64, what: &str) -> Result<String, LoadError> {
-    let io = |source| LoadError::Io {
+    let io = |cause| LoadError::Io {
         path: path.to_owned(),
-        source,
+        cause,
     };
-    let meta = std::fs::metadata(path).map_err(io)?;
-    if !meta.is_file() {
-        // A device or pipe reports no length and may never end.
-        return Err(LoadError::Parse {
-            path: path.to_owned(),
-            message: format!("{what} is not a regular file"),
-        });
-    }
-    let len = meta.len();
+    // A device or pipe reports no length and may never end.
+    crate::check_regular_file(path)?;
+    let len = std::fs::metadata(path).map_err(io)?.len();
     if len > limit {
         return Err(LoadError::Parse {
             path: path.to_owned(),
@@ -595,6 +673,9 @@ pub(crate) fn read_text(path: &Path, limit: u64, what: &str) -> Result<String, L
             path: path.to_owned(),
             message: format!("{what} exceeds the limit of {limit} bytes"),
         });
+    }
+    if bytes.starts_with(crate::UTF8_BOM) {
+        bytes.drain(..crate::UTF8_BOM.len());
     }
     String::from_utf8(bytes).map_err(|_| LoadError::Parse {
         path: path.to_owned(),
@@ -667,14 +748,18 @@ fn load_mesh_file_any(path: &Path) -> Result<MeshData, LoadError> {
 /// A scene of one mesh file with a light, a grey-blue background and a camera framing it.
 pub(crate) fn bare_mesh_scene(path: &Path) -> Result<Scene, LoadError> {
     let data = load_mesh_file(path)?;
+    Reservation::new()?.reserve(
+        Holds::Primitives(data.mesh.indices.len() as u64),
+        &path.display().to_string(),
+    )?;
     let name = path
         .file_stem()
         .and_then(|s| s.to_str())
         .unwrap_or("mesh")
         .to_owned();
-    let scene_err = |source| LoadError::Scene {
+    let scene_err = |cause| LoadError::Scene {
         context: path.display().to_string(),
-        source,
+        cause,
     };
     let mut b = SceneBuilder::new(&name);
     b.background(Vec3::new(0.55, 0.65, 0.8))
@@ -709,6 +794,9 @@ fn add_mesh_data(
                 .collect()
         }
     };
+    for w in data.warnings {
+        b.warn(w);
+    }
     data.mesh.validate()?;
     let triangles: Vec<Triangle> = data.mesh.triangles().collect();
     b.add_triangles(name, &triangles, &materials)?;
@@ -716,6 +804,7 @@ fn add_mesh_data(
 }
 
 fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let file: SceneFile = toml::from_str(text).map_err(|e| {
         let position = e.span().map_or(String::new(), |span| {
             let before = text.get(..span.start).unwrap_or(text);
@@ -728,6 +817,7 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
             message: format!("{position}{}", e.message()),
         }
     })?;
+    let mut budget = Reservation::new()?;
     let mut b = SceneBuilder::new(file.name.as_deref().unwrap_or(ctx.scene));
     if let Some(bg) = file.background {
         b.background(Vec3::from(bg))
@@ -742,8 +832,10 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
         })
         .map_err(ctx.scene_err("camera"))?;
     }
+    let empty = file.objects.is_empty() && file.volumes.is_empty();
     let mut names: HashMap<String, u32> = HashMap::new();
-    for m in &file.materials {
+    for (index, table) in file.materials.into_iter().enumerate() {
+        let (m, what): (MaterialDesc, _) = table_item(text, "material", index, table, ctx)?;
         let d = Material::default();
         let kind = match m.kind.unwrap_or(KindDesc::Diffuse) {
             KindDesc::Diffuse => MaterialKind::Diffuse,
@@ -771,15 +863,16 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
                     size: c.size,
                 }),
             })
-            .map_err(ctx.scene_err("material"))?;
+            .map_err(ctx.scene_err(&what))?;
         if names.insert(m.name.clone(), id).is_some() {
             return Err(LoadError::Parse {
                 path: ctx.file.clone(),
-                message: format!("material '{}' is defined twice", m.name),
+                message: format!("{what}: material '{}' is defined twice", m.name),
             });
         }
     }
-    for l in &file.lights {
+    for (index, table) in file.lights.into_iter().enumerate() {
+        let (l, what): (LightDesc, _) = table_item(text, "light", index, table, ctx)?;
         let light = match l {
             LightDesc::Point(p) => Light::Point {
                 position: Vec3::from(p.position),
@@ -790,25 +883,25 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
                 radiance: Vec3::from(d.radiance),
             },
         };
-        b.add_light(light).map_err(ctx.scene_err("light"))?;
+        b.add_light(light).map_err(ctx.scene_err(&what))?;
     }
-    let material = |name: &Option<String>| -> Result<Option<u32>, LoadError> {
-        match name {
-            None => Ok(None),
-            Some(n) => names
-                .get(n)
-                .copied()
-                .map(Some)
-                .ok_or_else(|| LoadError::Parse {
-                    path: ctx.file.clone(),
-                    message: format!("material '{n}' is not defined"),
-                }),
-        }
-    };
-    for (index, o) in file.objects.iter().enumerate() {
-        let what = format!("object {}", index + 1);
+    for (index, table) in file.objects.into_iter().enumerate() {
+        let (o, what): (ObjectDesc, _) = table_item(text, "object", index, table, ctx)?;
         let err = ctx.scene_err(&what);
-        match o {
+        let material = |name: &Option<String>| -> Result<Option<u32>, LoadError> {
+            match name {
+                None => Ok(None),
+                Some(n) => names
+                    .get(n)
+                    .copied()
+                    .map(Some)
+                    .ok_or_else(|| LoadError::Parse {
+                        path: ctx.file.clone(),
+                        message: format!("{what}: material '{n}' is not defined"),
+                    }),
+            }
+        };
+        match &o {
             ObjectDesc::Sphere(s) => {
                 let m = material(&s.material)?.unwrap_or(0);
                 b.add_sphere(Sphere::new(Vec3::from(s.center), s.radius), m)
@@ -834,8 +927,16 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
                     positions: p.positions.iter().map(|&v| Vec3::from(v)).collect(),
                     faces: p.faces.clone(),
                 };
-                let mut mesh = poly.triangulate().map_err(&err)?;
-                let xf = p.transform.to_transform();
+                let triangulated = poly.triangulate().map_err(&err)?;
+                if !triangulated.self_intersecting.is_empty() {
+                    b.warn(format!(
+                        "{}: {what}: {}",
+                        ctx.file.display(),
+                        crate::obj::self_intersecting(&triangulated.self_intersecting)
+                    ));
+                }
+                let mut mesh = triangulated.mesh;
+                let xf = p.transform.checked().map_err(&err)?;
                 if !xf.is_identity() {
                     let a = xf.affine();
                     mesh.transform(|v| a.transform_point3(v));
@@ -843,9 +944,13 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
                 b.add_mesh("polygons", &mesh, m).map_err(err)?;
             }
             ObjectDesc::Mesh(md) => {
+                let xf = md.transform.checked().map_err(&err)?;
                 let path = ctx.resolve(&md.path)?;
                 let mut data = load_mesh_file(&path)?;
-                let xf = md.transform.to_transform();
+                budget.reserve(
+                    Holds::Primitives(data.mesh.indices.len() as u64),
+                    &format!("{}: {what}: {}", ctx.file.display(), path.display()),
+                )?;
                 if !xf.is_identity() {
                     let a = xf.affine();
                     data.mesh.transform(|v| a.transform_point3(v));
@@ -855,27 +960,26 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
             }
             ObjectDesc::Generator(g) => {
                 // Refuse before generating: a one-line spec can ask for 2e7 primitives.
-                let (info, count) = generators::parse_spec(&g.spec)?;
-                let count = match info.name {
-                    "icosphere" => 20u64 << (2 * count),
-                    "terrain" => 2 * count * count,
-                    "heightfield" => 1,
-                    _ => count,
-                };
+                let (info, n) = generators::parse_spec(&g.spec)?;
+                let count = generators::primitive_count(&info, n);
                 let limit = raybench_core::limits::MAX_PRIMITIVES as u64;
                 if b.primitive_count() as u64 + count > limit {
                     return Err(LoadError::Scene {
                         context: format!("{}: {what}", ctx.file.display()),
-                        source: SceneError::TooLarge(format!(
+                        cause: SceneError::TooLarge(format!(
                             "generator '{}' would take the scene past {limit} primitives",
                             g.spec
                         )),
                     });
                 }
+                let xf = g.transform.checked().map_err(&err)?;
+                budget.reserve(
+                    generators::holds(&info, n),
+                    &format!("{}: {what}", ctx.file.display()),
+                )?;
                 let generated =
                     generators::generate(&g.spec, g.seed.unwrap_or(generators::DEFAULT_SEED))?;
                 let m = material(&g.material)?.unwrap_or(0);
-                let xf = g.transform.to_transform();
                 let a = xf.affine();
                 match generated {
                     Generated::Mesh(mut mesh) => {
@@ -904,7 +1008,7 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
             }
             ObjectDesc::HeightField(h) => {
                 let m = material(&h.material)?.unwrap_or(0);
-                let field = height_field(h, ctx, &what)?;
+                let field = height_field(h, ctx, &what, &mut budget)?;
                 b.add_height_field("height field", Arc::new(field), m)
                     .map_err(err)?;
             }
@@ -933,7 +1037,7 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
             }
             ObjectDesc::Bezier(bd) => {
                 let m = material(&bd.material)?.unwrap_or(0);
-                bezier(&mut b, bd, ctx, &what, m)?;
+                bezier(&mut b, bd, ctx, &what, m, &mut budget)?;
             }
             ObjectDesc::Sdf(d) => {
                 let m = material(&d.material)?.unwrap_or(0);
@@ -942,11 +1046,17 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
             }
         }
     }
-    for (index, v) in file.volumes.iter().enumerate() {
-        let what = format!("volume {}", index + 1);
-        let volume = volume(v, ctx, &what)?;
+    for (index, table) in file.volumes.into_iter().enumerate() {
+        let (v, what): (VolumeDesc, _) = table_item(text, "volume", index, table, ctx)?;
+        let volume = volume(&v, ctx, &what, &mut budget)?;
         b.add_volume(Arc::new(volume))
             .map_err(ctx.scene_err(&what))?;
+    }
+    if empty {
+        return Err(LoadError::Parse {
+            path: ctx.file.clone(),
+            message: "the scene has no [[object]] and no [[volume]]: nothing to render".into(),
+        });
     }
     Ok(b.build())
 }
@@ -959,13 +1069,14 @@ fn bezier(
     ctx: &Context,
     what: &str,
     material: u32,
+    budget: &mut Reservation,
 ) -> Result<(), LoadError> {
     let path = ctx.resolve(&d.file)?;
     let patches = load_bpt_file(&path)?;
     let scene_err = |context: String| {
-        move |source| LoadError::Scene {
+        move |cause| LoadError::Scene {
             context: format!("{}: {what}: {context}", ctx.file.display()),
-            source,
+            cause,
         }
     };
     if let Some(n) = d.tessellate
@@ -975,7 +1086,19 @@ fn bezier(
             "tessellate = {n}: between 1 and {MAX_TESSELLATE} quads per patch side are accepted"
         ))));
     }
-    let a = d.transform.to_transform().affine();
+    let a = d
+        .transform
+        .checked()
+        .map_err(scene_err(d.file.clone()))?
+        .affine();
+    let primitives = match d.tessellate {
+        None => patches.len() as u64,
+        Some(n) => 2 * u64::from(n) * u64::from(n) * patches.len() as u64,
+    };
+    budget.reserve(
+        Holds::Primitives(primitives),
+        &format!("{}: {what}: {}", ctx.file.display(), d.file),
+    )?;
     let mut built = Vec::with_capacity(patches.len());
     for p in &patches {
         let patch = BezierPatch::new(p.points.map(|q| a.transform_point3(q)))
@@ -1010,14 +1133,20 @@ fn bezier(
 }
 
 /// Builds the volume a `[[volume]]` table describes.
-fn volume(v: &VolumeDesc, ctx: &Context, what: &str) -> Result<Volume, LoadError> {
+fn volume(
+    v: &VolumeDesc,
+    ctx: &Context,
+    what: &str,
+    budget: &mut Reservation,
+) -> Result<Volume, LoadError> {
+    let context = format!("{}: {what}", ctx.file.display());
     let parse = |message: String| LoadError::Parse {
         path: ctx.file.clone(),
         message: format!("{what}: {message}"),
     };
-    let scene_err = |source| LoadError::Scene {
+    let scene_err = |cause| LoadError::Scene {
         context: format!("{}: {what}", ctx.file.display()),
-        source,
+        cause,
     };
     let (dims, data, default_spacing) = match (&v.source, &v.raw) {
         (Some(spec), None) => {
@@ -1025,6 +1154,7 @@ fn volume(v: &VolumeDesc, ctx: &Context, what: &str) -> Result<Volume, LoadError
                 return Err(parse("dims and format belong to raw volumes".into()));
             }
             let n = volumes::parse_volume_spec(spec)?;
+            budget.reserve(Holds::Voxels(u64::from(n).pow(3)), &context)?;
             let data = volumes::rasterize(&volumes::shepp_logan_ellipsoids(), n);
             // Generated volumes span [-1, 1]^3.
             ([n; 3], VolumeData::F32(data), Vec3::splat(2.0 / n as f32))
@@ -1034,6 +1164,7 @@ fn volume(v: &VolumeDesc, ctx: &Context, what: &str) -> Result<Volume, LoadError
                 .dims
                 .ok_or_else(|| parse("a raw volume needs dims = [x, y, z]".into()))?;
             let count = check_volume_dims(dims).map_err(scene_err)?;
+            budget.reserve(Holds::Voxels(count), &context)?;
             let samples = read_raw(
                 &ctx.resolve(raw)?,
                 count,
@@ -1078,7 +1209,7 @@ fn volume(v: &VolumeDesc, ctx: &Context, what: &str) -> Result<Volume, LoadError
         dims,
         spacing,
         data,
-        v.transform.to_transform().affine(),
+        v.transform.checked().map_err(scene_err)?.affine(),
         transfer,
         params,
     )
@@ -1086,7 +1217,13 @@ fn volume(v: &VolumeDesc, ctx: &Context, what: &str) -> Result<Volume, LoadError
 }
 
 /// Builds the height field an object describes, from exactly one source.
-fn height_field(h: &HeightFieldDesc, ctx: &Context, what: &str) -> Result<HeightField, LoadError> {
+fn height_field(
+    h: &HeightFieldDesc,
+    ctx: &Context,
+    what: &str,
+    budget: &mut Reservation,
+) -> Result<HeightField, LoadError> {
+    let context = format!("{}: {what}", ctx.file.display());
     let parse = |message: String| LoadError::Parse {
         path: ctx.file.clone(),
         message: format!("{what}: {message}"),
@@ -1112,15 +1249,24 @@ fn height_field(h: &HeightFieldDesc, ctx: &Context, what: &str) -> Result<Height
                 "source '{spec}' is not a height generator (expected terrain:N)"
             )));
         }
+        budget.reserve(Holds::Vertices((n + 1) * (n + 1)), &context)?;
         let n = n as u32;
         (n + 1, n + 1, generators::terrain_heights(n))
     } else if let Some(png) = &h.png {
-        read_png_gray(&ctx.resolve(png)?, MAX_HEIGHT_FIELD_VERTICES)?
+        // The header's size is checked against the vertex limit before decoding; the
+        // budget counts the decoded heights.
+        let (cols, rows, heights) = read_png_gray(&ctx.resolve(png)?, MAX_HEIGHT_FIELD_VERTICES)?;
+        budget.reserve(Holds::Vertices(heights.len() as u64), &context)?;
+        (cols, rows, heights)
     } else if let Some(raw) = &h.raw {
         let [cols, rows] = h
             .size
             .ok_or_else(|| parse("a raw height field needs size = [columns, rows]".into()))?;
         let count = u64::from(cols) * u64::from(rows);
+        // Beyond the vertex limit, `read_raw` says so (before reading).
+        if count <= MAX_HEIGHT_FIELD_VERTICES {
+            budget.reserve(Holds::Vertices(count), &context)?;
+        }
         let samples = read_raw(
             &ctx.resolve(raw)?,
             count,
@@ -1146,11 +1292,11 @@ fn height_field(h: &HeightFieldDesc, ctx: &Context, what: &str) -> Result<Height
             "a height field needs at least 2 x 2 vertices, got {cols} x {rows}"
         )));
     }
-    let xf = h.transform.to_transform();
-    let scene_err = |source| LoadError::Scene {
+    let scene_err = |cause| LoadError::Scene {
         context: format!("{}: {what}", ctx.file.display()),
-        source,
+        cause,
     };
+    let xf = h.transform.checked().map_err(scene_err)?;
     let field = HeightField::new(
         cols - 1,
         rows - 1,
@@ -1326,9 +1472,54 @@ mod tests {
     }
 
     #[test]
-    fn empty_scene_is_legal() {
-        let s = load("").unwrap();
-        assert!(s.geometry.is_empty());
-        assert!(s.camera.is_valid());
+    fn empty_scene_is_refused() {
+        for text in [
+            "",
+            "background = [1, 0, 0]\n[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]",
+        ] {
+            let e = load(text).unwrap_err().to_string();
+            assert!(e.contains("nothing to render"), "{e}");
+        }
+    }
+
+    /// Issue 18: an error in the second object names it, its kind and its line, and an
+    /// unknown key points at the key's own line.
+    #[test]
+    fn errors_point_at_the_offending_table_and_key() {
+        let text = "[[object]]\nkind = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n\
+                    \n[[object]]\nkind = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n\
+                    colour = 3\n";
+        let e = load(text).unwrap_err().to_string();
+        assert!(
+            e.contains("t.toml: line 10: object 2 (sphere): unknown field `colour`"),
+            "{e}"
+        );
+        let text = "[[object]]\nkind = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 1, 0]\n\
+                    [[object]]\nkind = \"sphere\"\ncenter = [0, 0, 0]\n";
+        let e = load(text).unwrap_err().to_string();
+        assert!(
+            e.contains("line 5: object 2 (sphere): missing field `radius`"),
+            "{e}"
+        );
+        let text = "[[object]]\nkind = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 1, 0]\n\
+                    [[object]]\nkind = \"sphere\"\ncenter = [0, 0, 0]\nradius = -1\n";
+        let e = load(text).unwrap_err().to_string();
+        assert!(
+            e.contains("line 5: object 2 (sphere): sphere radius -1"),
+            "{e}"
+        );
+        let text = "[[light]]\nkind = \"point\"\nposition = [0, 0, 0]\nintensity = [1, 1, 1]\n\
+                    [[light]]\nkind = \"point\"\nposition = [0, 0, 0]\nintensity = [1, -1, 1]\n\
+                    [[object]]\nkind = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n";
+        let e = load(text).unwrap_err().to_string();
+        assert!(
+            e.contains("line 5: light 2 (point): light intensity"),
+            "{e}"
+        );
+        // Sub-tables of the object and keys of later tables are not mistaken for it.
+        let text = "[[object]]\nkind = \"mesh\"\npath = \"a.obj\"\n[object.transform]\n\
+                    scael = 2\n";
+        let e = load(text).unwrap_err().to_string();
+        assert!(e.contains("object 1 (mesh)") && e.contains("scael"), "{e}");
     }
 }

@@ -5,6 +5,7 @@
 //! the core's counter-based [`pcg3d`] hash), so the same spec gives the same scene
 //! everywhere.
 
+use crate::budget::{Holds, Reservation};
 use crate::error::LoadError;
 use raybench_core::HeightField;
 use raybench_core::sampling::{pcg3d, to_unit_f32};
@@ -120,6 +121,26 @@ pub fn parse_spec(spec: &str) -> Result<(GeneratorInfo, u64), LoadError> {
         )));
     }
     Ok((info, n))
+}
+
+/// The number of primitives generator `info` makes with argument `n` (one for a height
+/// field), known before generating.
+#[must_use]
+pub fn primitive_count(info: &GeneratorInfo, n: u64) -> u64 {
+    match info.name {
+        "icosphere" => 20u64 << (2 * n),
+        "terrain" => 2 * n * n,
+        "heightfield" => 1,
+        _ => n,
+    }
+}
+
+/// What generator `info` with argument `n` holds, for the memory budget.
+pub(crate) fn holds(info: &GeneratorInfo, n: u64) -> Holds {
+    match info.name {
+        "heightfield" => Holds::Vertices((n + 1) * (n + 1)),
+        _ => Holds::Primitives(primitive_count(info, n)),
+    }
 }
 
 /// Runs the generator of `spec` with `seed`.
@@ -361,10 +382,12 @@ fn terrain_camera() -> Camera {
 /// # Errors
 /// As [`parse_spec`].
 pub fn generate_scene(spec: &str) -> Result<Scene, LoadError> {
-    let scene_err = |source| LoadError::Scene {
+    let scene_err = |cause| LoadError::Scene {
         context: spec.to_owned(),
-        source,
+        cause,
     };
+    let (info, n) = parse_spec(spec)?;
+    Reservation::new()?.reserve(holds(&info, n), &format!("generator '{spec}'"))?;
     let generated = generate(spec, DEFAULT_SEED)?;
     let mut b = SceneBuilder::new(spec);
     b.background(Vec3::new(0.55, 0.65, 0.8))

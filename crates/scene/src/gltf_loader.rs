@@ -14,23 +14,27 @@ fn parse_err(path: &Path, message: impl Into<String>) -> LoadError {
     }
 }
 
-/// Reads an external buffer: a regular file, at most the declared length (so a URI naming
-/// `/dev/zero` or a huge file cannot exhaust memory).
-fn read_external(file: &Path, declared: usize) -> Result<Vec<u8>, LoadError> {
+/// Reads buffer `index` of the glTF file `gltf` from the external `file`: a regular file,
+/// at most the declared length (so a URI naming `/dev/zero` or a huge file cannot exhaust
+/// memory). Errors name the glTF file, the buffer and the buffer file's full path once.
+fn read_external(
+    gltf: &Path,
+    index: usize,
+    file: &Path,
+    declared: usize,
+) -> Result<Vec<u8>, LoadError> {
     use std::io::Read as _;
-    let io = |source| LoadError::Io {
-        path: file.to_owned(),
-        source,
-    };
-    if !std::fs::metadata(file).map_err(io)?.is_file() {
-        return Err(parse_err(file, "buffer is not a regular file"));
+    let full = std::path::absolute(file).unwrap_or_else(|_| file.to_owned());
+    let err = |why: String| parse_err(gltf, format!("buffer {index}: {}: {why}", full.display()));
+    match std::fs::metadata(file) {
+        Ok(m) if m.is_file() => {}
+        Ok(m) => return Err(err(crate::not_a_file_message(&m))),
+        Err(e) => return Err(err(e.to_string())),
     }
     let mut data = Vec::new();
     std::fs::File::open(file)
-        .map_err(io)?
-        .take(declared as u64)
-        .read_to_end(&mut data)
-        .map_err(io)?;
+        .and_then(|f| f.take(declared as u64).read_to_end(&mut data))
+        .map_err(|e| err(e.to_string()))?;
     Ok(data)
 }
 
@@ -56,7 +60,7 @@ fn load_buffers(
                         .decode(payload)
                         .map_err(|e| parse_err(path, format!("bad base64 buffer: {e}")))?
                 } else {
-                    read_external(&base.join(uri), buffer.length())?
+                    read_external(path, buffer.index(), &base.join(uri), buffer.length())?
                 }
             }
         };
@@ -121,9 +125,10 @@ fn material_of(m: &gltf::Material) -> Material {
 /// # Errors
 /// When the file is missing, malformed, truncated, or has bad indices or coordinates.
 pub fn load_gltf_file(path: &Path) -> Result<MeshData, LoadError> {
-    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
+    crate::check_regular_file(path)?;
+    let bytes = std::fs::read(path).map_err(|cause| LoadError::Io {
         path: path.to_owned(),
-        source,
+        cause,
     })?;
     load_gltf_bytes(&bytes, path)
 }
@@ -136,6 +141,8 @@ pub fn load_gltf_file(path: &Path) -> Result<MeshData, LoadError> {
 /// As [`load_gltf_file`], less the error of reading `path` itself.
 #[doc(hidden)]
 pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<MeshData, LoadError> {
+    // A `.gltf` written with a byte-order mark (JSON parsers refuse one).
+    let bytes = crate::strip_bom(bytes);
     // The `gltf` crate subtracts the 12-byte header from the GLB's declared length
     // unchecked (an overflow, a panic in debug builds, when it declares less).
     if let Some(header) = bytes.strip_prefix(b"glTF")
@@ -208,6 +215,14 @@ fn add_node(
             ));
         }
         if let Some(mesh) = node.mesh() {
+            // As scene files' transforms: a zero scale would flatten the mesh into nothing.
+            let linear = glam::Affine3A::from_mat4(world);
+            raybench_core::check_transform(linear, "transform").map_err(|e| {
+                parse_err(
+                    path,
+                    format!("node {} (mesh {}): {e}", node.index(), mesh.index()),
+                )
+            })?;
             add_mesh(path, &mesh, world, buffers, data)?;
         }
         // Reversed, so that the first child is visited next (node order, as before).

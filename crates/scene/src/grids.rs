@@ -81,9 +81,9 @@ pub fn read_raw(
 ) -> Result<RawSamples, LoadError> {
     use std::io::Read as _;
     let expected = check_raw_count(path, count, format, max_count)?;
-    let io = |source| LoadError::Io {
+    let io = |cause| LoadError::Io {
         path: path.to_owned(),
-        source,
+        cause,
     };
     let meta = std::fs::metadata(path).map_err(io)?;
     if !meta.is_file() {
@@ -189,10 +189,12 @@ pub fn read_png_gray(path: &Path, max_pixels: u64) -> Result<(u32, u32, Vec<f32>
         path: path.to_owned(),
         message,
     };
-    let io = |source| LoadError::Io {
+    let io = |cause| LoadError::Io {
         path: path.to_owned(),
-        source,
+        cause,
     };
+    // A FIFO would block the reader.
+    crate::check_regular_file(path)?;
     let open = || -> Result<image::ImageReader<std::io::BufReader<std::fs::File>>, LoadError> {
         let mut r = image::ImageReader::open(path).map_err(io)?;
         r.set_format(image::ImageFormat::Png);

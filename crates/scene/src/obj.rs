@@ -13,6 +13,24 @@ pub struct MeshData {
     pub materials: Vec<Material>,
     /// Per triangle, an index into `materials`, or `None` for the default material.
     pub triangle_material: Vec<Option<u32>>,
+    /// What is legal but surely not meant (self-intersecting polygons), one sentence each.
+    pub warnings: Vec<String>,
+}
+
+/// The warning for the self-intersecting faces `bad` (0-based, at least one) of an
+/// object: how many, the first, and what happens to them.
+pub(crate) fn self_intersecting(bad: &[usize]) -> String {
+    let first = bad.first().map_or(0, |f| f + 1);
+    let which = if bad.len() == 1 {
+        format!("face {first} is")
+    } else {
+        format!("{} faces (the first: face {first}) are", bad.len())
+    };
+    format!(
+        "{which} self-intersecting (or concave with more than {} vertices): fanned from \
+         the first vertex, which matches no fill rule",
+        raybench_core::MAX_EAR_CLIP_VERTICES
+    )
 }
 
 /// Maps an MTL material onto raybench's model (documented in `docs/scene-format.md`):
@@ -56,33 +74,44 @@ pub fn material_from_mtl(m: &tobj::Material) -> Material {
     }
 }
 
-/// The options raybench loads OBJ files with: polygons triangulated as fans, points and
-/// lines ignored, one index per attribute.
+/// The options raybench loads OBJ files with: polygons kept whole (raybench triangulates
+/// them: [`raybench_core::triangulate_polygon`]), points and lines ignored, one index per
+/// attribute.
 const OBJ_OPTIONS: tobj::LoadOptions = tobj::LoadOptions {
     single_index: false,
-    triangulate: true,
+    triangulate: false,
     ignore_points: true,
     ignore_lines: true,
 };
 
-/// Loads an OBJ file (and its MTL, if readable) into triangles in file order: `tobj`
-/// triangulates polygons as fans, so a quad splits along its first diagonal. A missing or
-/// unreadable MTL file means "no materials" (default material), as SOURCES.md asks.
+/// Loads an OBJ file (and its MTL, if readable) into triangles in file order. Polygons
+/// become `n - 2` triangles each ([`raybench_core::triangulate_polygon`]): convex ones
+/// as fans from their first vertex (a quad splits along its first diagonal), simple
+/// non-convex ones by ear clipping, self-intersecting ones as fans with a warning. A
+/// missing or unreadable MTL file means "no materials" (default material), as SOURCES.md
+/// asks.
 ///
 /// # Errors
 /// When the file is missing, malformed, has out-of-range indices or non-finite coordinates.
 pub fn load_obj_file(path: &Path) -> Result<MeshData, LoadError> {
-    if !path.is_file() {
-        return Err(LoadError::NotFound {
-            path: path.to_owned(),
-        });
-    }
-    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
+    crate::check_regular_file(path)?;
+    let bytes = std::fs::read(path).map_err(|cause| LoadError::Io {
         path: path.to_owned(),
-        source,
+        cause,
     })?;
     let dir = path.parent().unwrap_or(Path::new("."));
-    parse_obj(&bytes, path, |mtl| tobj::load_mtl(dir.join(mtl)))
+    parse_obj(&bytes, path, |mtl| load_mtl(&dir.join(mtl)))
+}
+
+/// Largest MTL file read (material libraries are small text files).
+const MAX_MTL_BYTES: u64 = 16 << 20;
+
+/// Reads an MTL file as `tobj` would, but through [`crate::format::read_text`]: a regular
+/// file of bounded size, with a byte-order mark accepted.
+fn load_mtl(path: &Path) -> tobj::MTLLoadResult {
+    let text = crate::format::read_text(path, MAX_MTL_BYTES, "material library")
+        .map_err(|_| tobj::LoadError::OpenFileFailed)?;
+    tobj::load_mtl_buf(&mut text.as_bytes())
 }
 
 /// Parses OBJ text from memory (`path` names it in errors); `mtllib` statements load no
@@ -140,6 +169,7 @@ fn parse_obj(
     path: &Path,
     mtl: impl Fn(&Path) -> tobj::MTLLoadResult,
 ) -> Result<MeshData, LoadError> {
+    let bytes = crate::strip_bom(bytes);
     check_index_magnitudes(bytes, path)?;
     let (models, materials) =
         tobj::load_obj_buf(&mut { bytes }, &OBJ_OPTIONS, mtl).map_err(|e| LoadError::Parse {
@@ -156,7 +186,9 @@ fn parse_obj(
     };
     for model in &models {
         let m = &model.mesh;
-        if !m.positions.len().is_multiple_of(3) || !m.indices.len().is_multiple_of(3) {
+        if !m.positions.len().is_multiple_of(3)
+            || (m.face_arities.is_empty() && !m.indices.len().is_multiple_of(3))
+        {
             return Err(LoadError::Parse {
                 path: path.to_owned(),
                 message: format!("object '{}' has incomplete vertex or face data", model.name),
@@ -184,15 +216,47 @@ fn parse_obj(
             .material_id
             .filter(|&id| id < data.materials.len())
             .map(|id| id as u32);
-        for f in m.indices.chunks_exact(3) {
-            if f.iter().any(|&i| u64::from(i) >= count) {
+        if m.indices.iter().any(|&i| u64::from(i) >= count) {
+            return Err(LoadError::Parse {
+                path: path.to_owned(),
+                message: format!("object '{}' has a face index out of range", model.name),
+            });
+        }
+        let local = &data.mesh.positions[base as usize..];
+        let mut triangles = Vec::with_capacity(m.indices.len() / 3);
+        // No arities: every face is a triangle.
+        let arities: Box<dyn Iterator<Item = usize>> = if m.face_arities.is_empty() {
+            Box::new(std::iter::repeat_n(3, m.indices.len() / 3))
+        } else {
+            Box::new(m.face_arities.iter().map(|&k| k as usize))
+        };
+        let mut start = 0;
+        let mut bad = Vec::new();
+        for (face, k) in arities.enumerate() {
+            let Some(f) = m.indices.get(start..start + k) else {
                 return Err(LoadError::Parse {
                     path: path.to_owned(),
-                    message: format!("object '{}' has a face index out of range", model.name),
+                    message: format!("object '{}' has incomplete face data", model.name),
                 });
+            };
+            start += k;
+            if raybench_core::triangulate_polygon(local, f, &mut triangles)
+                == raybench_core::PolygonKind::SelfIntersecting
+            {
+                bad.push(face);
             }
-            let b = base as u32;
-            data.mesh.indices.push([f[0] + b, f[1] + b, f[2] + b]);
+        }
+        if !bad.is_empty() {
+            data.warnings.push(format!(
+                "{}: object '{}': {}",
+                path.display(),
+                model.name,
+                self_intersecting(&bad)
+            ));
+        }
+        let b = base as u32;
+        for t in triangles {
+            data.mesh.indices.push(t.map(|i| i + b));
             data.triangle_material.push(material);
         }
     }
