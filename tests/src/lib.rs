@@ -226,21 +226,18 @@ pub fn check(backends: &[&str], scene: &str, size: u32) {
     }
 }
 
-/// A scene with no primitives and the background `[0.25, 0.5, 0.75]`.
+/// A scene with no primitives and the background `[0.25, 0.5, 0.75]`, built directly:
+/// scene files refuse an empty scene (nothing to render), but every backend must still
+/// handle one.
 ///
 /// # Panics
-/// Never (the scene text is fixed).
+/// Never (the background is finite).
 #[must_use]
 pub fn empty_scene() -> Arc<Scene> {
-    Arc::new(
-        raybench_scene::load_scene_str(
-            "background = [0.25, 0.5, 0.75]",
-            "empty",
-            None,
-            std::path::Path::new("."),
-        )
-        .unwrap(),
-    )
+    let mut b = raybench_core::SceneBuilder::new("empty");
+    b.background(raybench_core::Vec3::new(0.25, 0.5, 0.75))
+        .expect("a finite background");
+    Arc::new(b.build())
 }
 
 /// The settings of the mode tests: `size x size`, 4 bounces, seed 7, not counted.
