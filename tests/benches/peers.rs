@@ -32,18 +32,25 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let report = match peers::run(&options) {
-        Ok(r) => r,
+    // Each mesh's tables are printed, and the JSON rewritten, as soon as it is measured.
+    let mut printed = false;
+    let result = peers::run(&options, |report| {
+        if !printed {
+            print!("{}", report.header());
+            printed = true;
+        }
+        let mesh = report.meshes.last().expect("a finished mesh");
+        print!("{}", report.mesh_tables(mesh));
+        peers::write_json(report, &options.json).map_err(|e| format!("cannot write the JSON: {e}"))
+    });
+    match result {
+        Ok(_) => {
+            println!("\nJSON: {}", options.json.display());
+            ExitCode::SUCCESS
+        }
         Err(e) => {
             eprintln!("error: peers: {e}");
-            return ExitCode::FAILURE;
+            ExitCode::FAILURE
         }
-    };
-    print!("{}", report.tables());
-    if let Err(e) = peers::write_json(&report, &options.json) {
-        eprintln!("error: peers: cannot write the JSON: {e}");
-        return ExitCode::FAILURE;
     }
-    println!("\nJSON: {}", options.json.display());
-    ExitCode::SUCCESS
 }

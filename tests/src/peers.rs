@@ -560,16 +560,37 @@ fn embree_description() -> String {
     }
 }
 
-/// Runs the benchmark, printing progress to stderr.
+/// Runs the benchmark, printing progress to stderr and calling `on_mesh` with the report
+/// so far after each mesh (the caller prints and saves as it goes, so an interrupted run
+/// keeps the meshes it finished).
 ///
 /// # Errors
-/// When a mesh cannot be loaded.
-pub fn run(o: &Options) -> Result<Report, String> {
+/// When a mesh cannot be loaded, or as `on_mesh`.
+pub fn run(
+    o: &Options,
+    mut on_mesh: impl FnMut(&Report) -> Result<(), String>,
+) -> Result<Report, String> {
     let threads = o.thread_counts();
+    let mut report = Report {
+        schema: SCHEMA,
+        machine: raybench::report::machine::describe(o.threads),
+        packet_isa: raybench_packet::Isa::detect().name().to_string(),
+        embree: embree_description(),
+        workload: WorkloadInfo {
+            primary_size: o.primary_size,
+            tile: raybench_render::TILE_SIZE,
+            incoherent_rays: o.incoherent_rays,
+            seed: o.seed,
+            chunk: o.chunk,
+            repeat: o.repeat,
+            threads: threads.clone(),
+            shadow_fraction: SHADOW_FRACTION,
+        },
+        meshes: Vec::new(),
+    };
     let pools: Vec<(usize, ThreadPool)> = threads.iter().map(|&t| (t, pool(t))).collect();
     let all = &pools.last().expect("at least one pool").1;
     let contestants = o.selected();
-    let mut meshes = Vec::new();
     for (name, spec) in &o.meshes {
         let start = Instant::now();
         let w = Workload::generate(name, spec, o, all)?;
@@ -611,25 +632,10 @@ pub fn run(o: &Options) -> Result<Report, String> {
             }
         }
         mesh.compute_ratios();
-        meshes.push(mesh);
+        report.meshes.push(mesh);
+        on_mesh(&report)?;
     }
-    Ok(Report {
-        schema: SCHEMA,
-        machine: raybench::report::machine::describe(o.threads),
-        packet_isa: raybench_packet::Isa::detect().name().to_string(),
-        embree: embree_description(),
-        workload: WorkloadInfo {
-            primary_size: o.primary_size,
-            tile: raybench_render::TILE_SIZE,
-            incoherent_rays: o.incoherent_rays,
-            seed: o.seed,
-            chunk: o.chunk,
-            repeat: o.repeat,
-            threads,
-            shadow_fraction: SHADOW_FRACTION,
-        },
-        meshes,
-    })
+    Ok(report)
 }
 
 /// Writes `report` as pretty JSON to `path`, creating its directory.

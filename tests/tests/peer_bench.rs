@@ -149,7 +149,14 @@ fn tiny_run_measures_every_contestant_and_writes_json() {
     ]);
     let dir = std::env::temp_dir().join(format!("raybench-peer-bench-{}", std::process::id()));
     o.json = dir.join("out").join("peers.json");
-    let report = peers::run(&o).unwrap();
+    let mut calls = 0;
+    let report = peers::run(&o, |partial| {
+        calls += 1;
+        assert_eq!(partial.meshes.len(), calls);
+        Ok(())
+    })
+    .unwrap();
+    assert_eq!(calls, 2);
     assert_eq!(report.meshes.len(), 2);
     let all = contestants::all();
     for m in &report.meshes {

@@ -279,10 +279,26 @@ fn per_threads(threads: &[usize], digits: usize, value: impl Fn(usize) -> Option
 }
 
 impl Report {
-    /// The tables: a header with the machine, then per mesh a build table and one table
-    /// per ray set (Mrays/s and ratios at each thread count, counters, differences).
+    /// The tables: [`Report::header`], then [`Report::mesh_tables`] of every mesh.
     #[must_use]
     pub fn tables(&self) -> String {
+        let mut out = self.header();
+        for m in &self.meshes {
+            out.push_str(&self.mesh_tables(m));
+        }
+        out
+    }
+
+    /// Whether Embree's figures are in the report.
+    fn has_embree(&self) -> bool {
+        self.meshes
+            .iter()
+            .any(|m| m.contestants.iter().any(|c| c.name == BUILD_REFERENCE))
+    }
+
+    /// The machine, Embree's version and the workload.
+    #[must_use]
+    pub fn header(&self) -> String {
         let mut out = String::new();
         let w = &self.workload;
         let threads = &w.threads;
@@ -307,18 +323,29 @@ impl Report {
              figures at {t_label} threads",
             w.primary_size, w.tile, w.incoherent_rays, w.seed, w.chunk, w.repeat, w.shadow_fraction
         );
-        let embree = self
-            .meshes
-            .iter()
-            .any(|m| m.contestants.iter().any(|c| c.name == BUILD_REFERENCE));
-        if !embree {
+        if !self.has_embree() && !self.embree.starts_with("Embree") {
             let _ = writeln!(
                 out,
                 "No Embree figures ({}): ratio columns are absent.",
                 self.embree
             );
         }
-        for m in &self.meshes {
+        out
+    }
+
+    /// Mesh `m`'s build table and one table per ray set (Mrays/s and ratios at each
+    /// thread count, counters, differences from `bvh`).
+    #[must_use]
+    pub fn mesh_tables(&self, m: &MeshReport) -> String {
+        let mut out = String::new();
+        let threads = &self.workload.threads;
+        let t_label = threads
+            .iter()
+            .map(ToString::to_string)
+            .collect::<Vec<_>>()
+            .join(" / ");
+        let embree = m.contestants.iter().any(|c| c.name == BUILD_REFERENCE);
+        {
             let _ = writeln!(
                 out,
                 "\n## {} ({}, {} triangles)\n",
