@@ -78,7 +78,6 @@ use raybench_peers::BvhCrateAccel;
 use raybench_peers::{EmbreeAccel, EmbreePacketAccel};
 use raybench_tests::obvhs_peer::{ObvhsPeer, ObvhsTree};
 use std::hint::black_box;
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Scenes beyond the report's quick list: a million-triangle height field and a soup
