@@ -49,85 +49,62 @@ pub trait ObvhsTree: Send + Sync + Sized + 'static {
     fn nodes(&self) -> usize;
 }
 
-impl ObvhsTree for Bvh2 {
-    const NAME: &'static str = "obvhs-bvh2";
+/// [`ObvhsTree`] for obvhs's tree type `$tree` (the same fields and walk functions),
+/// named `$name`, built by `$build`.
+macro_rules! obvhs_tree {
+    ($tree:ty, $name:literal, $build:path) => {
+        impl ObvhsTree for $tree {
+            const NAME: &'static str = $name;
 
-    fn build_tree(tris: &[obvhs::triangle::Triangle]) -> Self {
-        obvhs::bvh2::builder::build_bvh2_from_tris(
-            tris,
-            BvhBuildParams::medium_build(),
-            &mut Duration::default(),
-        )
-    }
+            fn build_tree(tris: &[obvhs::triangle::Triangle]) -> Self {
+                $build(
+                    tris,
+                    BvhBuildParams::medium_build(),
+                    &mut Duration::default(),
+                )
+            }
 
-    #[inline]
-    fn primitive(&self, i: usize) -> u32 {
-        self.primitive_indices[i]
-    }
+            #[inline]
+            fn primitive(&self, i: usize) -> u32 {
+                self.primitive_indices[i]
+            }
 
-    #[inline]
-    fn closest(&self, ray: obvhs::ray::Ray, mut test: impl FnMut(usize) -> f32) {
-        self.ray_traverse(ray, &mut RayHit::none(), |_, i| test(i));
-    }
+            #[inline]
+            fn closest(&self, ray: obvhs::ray::Ray, mut test: impl FnMut(usize) -> f32) {
+                self.ray_traverse(ray, &mut RayHit::none(), |_, i| test(i));
+            }
 
-    #[inline]
-    fn any(&self, ray: obvhs::ray::Ray, mut test: impl FnMut(usize) -> f32) -> bool {
-        !self.ray_traverse_miss(ray, |_, i| test(i))
-    }
+            #[inline]
+            fn any(&self, ray: obvhs::ray::Ray, mut test: impl FnMut(usize) -> f32) -> bool {
+                !self.ray_traverse_miss(ray, |_, i| test(i))
+            }
 
-    fn nodes(&self) -> usize {
-        self.nodes.len()
-    }
+            fn nodes(&self) -> usize {
+                self.nodes.len()
+            }
 
-    fn primitive_ids_mut(&mut self) -> &mut [u32] {
-        &mut self.primitive_indices
-    }
+            fn primitive_ids_mut(&mut self) -> &mut [u32] {
+                &mut self.primitive_indices
+            }
 
-    fn memory_bytes(&self) -> usize {
-        std::mem::size_of_val(self.nodes.as_slice())
-            + std::mem::size_of_val(self.primitive_indices.as_slice())
-    }
+            fn memory_bytes(&self) -> usize {
+                std::mem::size_of_val(self.nodes.as_slice())
+                    + std::mem::size_of_val(self.primitive_indices.as_slice())
+            }
+        }
+    };
 }
 
-impl ObvhsTree for CwBvh {
-    const NAME: &'static str = "obvhs-cwbvh";
-
-    fn build_tree(tris: &[obvhs::triangle::Triangle]) -> Self {
-        obvhs::cwbvh::builder::build_cwbvh_from_tris(
-            tris,
-            BvhBuildParams::medium_build(),
-            &mut Duration::default(),
-        )
-    }
-
-    #[inline]
-    fn primitive(&self, i: usize) -> u32 {
-        self.primitive_indices[i]
-    }
-
-    #[inline]
-    fn closest(&self, ray: obvhs::ray::Ray, mut test: impl FnMut(usize) -> f32) {
-        self.ray_traverse(ray, &mut RayHit::none(), |_, i| test(i));
-    }
-
-    #[inline]
-    fn any(&self, ray: obvhs::ray::Ray, mut test: impl FnMut(usize) -> f32) -> bool {
-        !self.ray_traverse_miss(ray, |_, i| test(i))
-    }
-
-    fn nodes(&self) -> usize {
-        self.nodes.len()
-    }
-
-    fn primitive_ids_mut(&mut self) -> &mut [u32] {
-        &mut self.primitive_indices
-    }
-
-    fn memory_bytes(&self) -> usize {
-        std::mem::size_of_val(self.nodes.as_slice())
-            + std::mem::size_of_val(self.primitive_indices.as_slice())
-    }
-}
+obvhs_tree!(
+    Bvh2,
+    "obvhs-bvh2",
+    obvhs::bvh2::builder::build_bvh2_from_tris
+);
+obvhs_tree!(
+    CwBvh,
+    "obvhs-cwbvh",
+    obvhs::cwbvh::builder::build_cwbvh_from_tris
+);
 
 /// An obvhs tree over a scene's triangles behind [`Accel`]; planes are tested beside it by
 /// every ray, as in raybench's backends, and hits completed by [`Geometry::complete`].

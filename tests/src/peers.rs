@@ -292,6 +292,37 @@ struct Pass<T> {
     counters: Option<RayCounters>,
 }
 
+/// One untimed pass on the current pool over `chunk`-ray batches: `answers` filled by
+/// `trace` (a batch and its counters, when `count`) or by `plain` (a batch, not counting).
+fn pass<T: Send>(
+    rays: &[Ray],
+    mut answers: Vec<T>,
+    chunk: usize,
+    count: bool,
+    trace: impl Fn(&[Ray], &mut [T], &mut RayCounters) + Sync,
+    plain: impl Fn(&[Ray], &mut [T]) + Sync,
+) -> Pass<T> {
+    let counters = if count {
+        let parts: Vec<RayCounters> = answers
+            .par_chunks_mut(chunk)
+            .zip(rays.par_chunks(chunk))
+            .map(|(a, r)| {
+                let mut c = RayCounters::default();
+                trace(r, a, &mut c);
+                c
+            })
+            .collect();
+        Some(sum(&parts))
+    } else {
+        answers
+            .par_chunks_mut(chunk)
+            .zip(rays.par_chunks(chunk))
+            .for_each(|(a, r)| plain(r, a));
+        None
+    };
+    Pass { answers, counters }
+}
+
 /// One untimed pass of closest hits on the current pool, counted when `count`.
 fn closest_pass(
     tracer: &dyn raybench_core::BatchTracer,
@@ -299,28 +330,14 @@ fn closest_pass(
     chunk: usize,
     count: bool,
 ) -> Pass<Option<Hit>> {
-    let mut hits = vec![None; rays.len()];
-    let counters = if count {
-        let parts: Vec<RayCounters> = hits
-            .par_chunks_mut(chunk)
-            .zip(rays.par_chunks(chunk))
-            .map(|(h, r)| {
-                let mut c = RayCounters::default();
-                tracer.trace_batch_counted(r, h, &mut c);
-                c
-            })
-            .collect();
-        Some(sum(&parts))
-    } else {
-        hits.par_chunks_mut(chunk)
-            .zip(rays.par_chunks(chunk))
-            .for_each(|(h, r)| tracer.trace_batch(r, h));
-        None
-    };
-    Pass {
-        answers: hits,
-        counters,
-    }
+    pass(
+        rays,
+        vec![None; rays.len()],
+        chunk,
+        count,
+        |r, h, c| tracer.trace_batch_counted(r, h, c),
+        |r, h| tracer.trace_batch(r, h),
+    )
 }
 
 /// One untimed pass of any hits on the current pool, counted when `count`.
@@ -330,29 +347,14 @@ fn any_pass(
     chunk: usize,
     count: bool,
 ) -> Pass<bool> {
-    let mut occluded = vec![false; rays.len()];
-    let counters = if count {
-        let parts: Vec<RayCounters> = occluded
-            .par_chunks_mut(chunk)
-            .zip(rays.par_chunks(chunk))
-            .map(|(o, r)| {
-                let mut c = RayCounters::default();
-                tracer.occlude_batch_counted(r, o, &mut c);
-                c
-            })
-            .collect();
-        Some(sum(&parts))
-    } else {
-        occluded
-            .par_chunks_mut(chunk)
-            .zip(rays.par_chunks(chunk))
-            .for_each(|(o, r)| tracer.occlude_batch(r, o));
-        None
-    };
-    Pass {
-        answers: occluded,
-        counters,
-    }
+    pass(
+        rays,
+        vec![false; rays.len()],
+        chunk,
+        count,
+        |r, o, c| tracer.occlude_batch_counted(r, o, c),
+        |r, o| tracer.occlude_batch(r, o),
+    )
 }
 
 /// The counters of all chunks, summed in chunk order.
