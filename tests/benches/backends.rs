@@ -68,20 +68,16 @@
 use criterion::{
     BenchmarkId, Criterion, SamplingMode, Throughput, criterion_group, criterion_main,
 };
-use obvhs::BvhBuildParams;
 use obvhs::bvh2::Bvh2;
-use obvhs::ray::RayHit;
 use raybench_bvh::{Bvh, BvhParams, ObvhsAccel};
-use raybench_core::{
-    Accel, Geometry, NoCounters, PrimHit, Ray, Scene, Shape, Triangle, Vec3A, rays,
-};
+use raybench_core::{Accel, Geometry, NoCounters, Ray, Scene, Shape, Triangle, rays};
 use raybench_grid::{Grid, GridParams, TwoLevelGrid, TwoLevelParams};
 use raybench_packet::{PacketAccel, PacketParams};
 use raybench_peers::BvhCrateAccel;
 #[cfg(feature = "embree")]
 use raybench_peers::{EmbreeAccel, EmbreePacketAccel};
+use raybench_tests::obvhs_peer::{ObvhsPeer, ObvhsTree};
 use std::hint::black_box;
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Scenes beyond the report's quick list: a million-triangle height field and a soup
@@ -109,68 +105,6 @@ fn triangles(g: &Geometry) -> Option<Vec<Triangle>> {
 }
 
 // ---------------------------------------------------------------------------------------
-// Peer: obvhs's BVH2.
-
-/// obvhs's BVH2 from its own triangle builder (`build_bvh2_from_tris`, `medium_build`
-/// preset: PLOC, reinsertion, leaves collapsed by cost), traced with its own
-/// `Bvh2::ray_traverse`. The closure obvhs calls per leaf primitive tests raybench's triangle
-/// and returns the best `t` so far, which obvhs uses to cull further nodes.
-struct ObvhsPeer {
-    bvh: Bvh2,
-    /// Primitive tests go through raybench's own `Geometry::test_closest`, as in every
-    /// raybench backend, so that only the structure and traversal differ.
-    geometry: Arc<Geometry>,
-}
-
-impl ObvhsPeer {
-    fn obvhs_tris(tris: &[Triangle]) -> Vec<obvhs::triangle::Triangle> {
-        tris.iter()
-            .map(|t| obvhs::triangle::Triangle {
-                v0: Vec3A::from(t.v[0]),
-                v1: Vec3A::from(t.v[1]),
-                v2: Vec3A::from(t.v[2]),
-            })
-            .collect()
-    }
-
-    fn build_bvh2(otris: &[obvhs::triangle::Triangle]) -> Bvh2 {
-        obvhs::bvh2::builder::build_bvh2_from_tris(
-            otris,
-            BvhBuildParams::medium_build(),
-            &mut Duration::default(),
-        )
-    }
-
-    fn build(tris: &[Triangle], geometry: &Arc<Geometry>) -> Self {
-        Self {
-            bvh: Self::build_bvh2(&Self::obvhs_tris(tris)),
-            geometry: Arc::clone(geometry),
-        }
-    }
-
-    /// obvhs's own ray constructor (it replaces tiny direction components for its slab test).
-    fn ray(ray: &Ray) -> obvhs::ray::Ray {
-        obvhs::ray::Ray::new(
-            Vec3A::from(ray.origin),
-            Vec3A::from(ray.dir),
-            ray.t_min,
-            ray.t_max,
-        )
-    }
-
-    fn closest(&self, ray: &Ray, oray: obvhs::ray::Ray) -> Option<(u32, PrimHit)> {
-        let mut best: Option<(u32, PrimHit)> = None;
-        let mut hit = RayHit::none();
-        self.bvh.ray_traverse(oray, &mut hit, |_, i| {
-            let id = self.bvh.primitive_indices[i];
-            self.geometry.test_closest(id, ray, &mut best);
-            best.map_or(f32::INFINITY, |(_, h)| h.t)
-        });
-        best
-    }
-}
-
-// ---------------------------------------------------------------------------------------
 // Benchmarks.
 
 /// A scene with its ray sets and every structure built once, for the trace benchmarks.
@@ -187,7 +121,8 @@ struct Prepared {
     /// `packet` without packets: every ray alone through the same BVH8 (what packets buy).
     packet_single: PacketAccel,
     bvh_crate: BvhCrateAccel,
-    obvhs_peer: Option<ObvhsPeer>,
+    /// obvhs's BVH2 and its traversal ([`raybench_tests::obvhs_peer`]).
+    obvhs_peer: Option<ObvhsPeer<Bvh2>>,
     /// Embree with single rays and with packets, when it supports the scene.
     #[cfg(feature = "embree")]
     embree: Option<(EmbreeAccel, EmbreePacketAccel)>,
@@ -246,10 +181,7 @@ fn prepare(name: &'static str) -> Option<Prepared> {
         eprintln!("scene {name} has non-triangle primitives: skipping the obvhs-bvh2 peer");
     }
     let (bvh_crate, t_crate) = timed(|| BvhCrateAccel::build(g.clone()));
-    let (obvhs_peer, t_bvh2) = timed(|| {
-        tris.as_deref()
-            .map(|t| ObvhsPeer::build(t, &scene.geometry))
-    });
+    let (obvhs_peer, t_bvh2) = timed(|| tris.as_ref().map(|_| ObvhsPeer::build(g.clone())));
     eprintln!(
         "scene {name}: {} primitives; untimed builds: bvh {t_bvh:.2?}, obvhs {t_obvhs:.2?}, \
          grid {t_grid:.2?}, grid2 {t_grid2:.2?}, packet {t_packet:.2?} ({}), bvh-crate {t_crate:.2?}, obvhs-bvh2 {t_bvh2:.2?}",
@@ -367,11 +299,11 @@ fn check_agreement(p: &Prepared) {
         if let Some(obvhs_peer) = &p.obvhs_peer {
             results.push((
                 "obvhs-bvh2",
-                agree(
-                    &mut rays
-                        .iter()
-                        .map(|r| obvhs_peer.closest(r, ObvhsPeer::ray(r)).map(|(id, _)| id)),
-                ),
+                agree(&mut rays.iter().map(|r| {
+                    obvhs_peer
+                        .closest(r, ObvhsPeer::<Bvh2>::ray(r), None)
+                        .map(|(id, _)| id)
+                })),
             ));
         }
         let hits = reference.iter().filter(|h| h.is_some()).count();
@@ -490,10 +422,10 @@ fn bench_build(c: &mut Criterion, p: &Prepared) {
     }
     if let Some(tris) = &p.tris {
         // The peer's input in its own format, prepared outside the timing.
-        let otris = ObvhsPeer::obvhs_tris(tris);
+        let otris = ObvhsPeer::<Bvh2>::obvhs_tris(tris);
         group.measurement_time(target("obvhs-bvh2"));
         group.bench_function(BenchmarkId::new("obvhs-bvh2", p.name), |b| {
-            b.iter_with_large_drop(|| ObvhsPeer::build_bvh2(black_box(&otris)));
+            b.iter_with_large_drop(|| Bvh2::build_tree(black_box(&otris)));
         });
     }
     group.finish();
@@ -545,12 +477,12 @@ fn bench_trace(c: &mut Criterion, p: &Prepared) {
             let g = &*p.scene.geometry;
             // The peer's own ray type, like raybench's rays, is made outside the timing.
             // Its hits are completed like the backends' (normal, barycentrics).
-            let obvhs_rays: Vec<_> = rays.iter().map(ObvhsPeer::ray).collect();
+            let obvhs_rays: Vec<_> = rays.iter().map(ObvhsPeer::<Bvh2>::ray).collect();
             group.bench_function(id("obvhs-bvh2"), |b| {
                 b.iter(|| {
                     for (ray, oray) in rays.iter().zip(&obvhs_rays) {
                         let ray = black_box(ray);
-                        let best = obvhs_peer.closest(ray, *oray);
+                        let best = obvhs_peer.closest(ray, *oray, None);
                         black_box(g.complete(ray, best));
                     }
                 });

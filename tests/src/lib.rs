@@ -2,7 +2,12 @@
 //!
 //! Shared helpers of the cross-backend tests in `tests/tests/`: loading scenes (skipping, or
 //! failing under `CI=true`, when the shared meshes are absent), rendering with a backend by
-//! name, and [`check`], the one data-driven comparison against the naive oracle.
+//! name, and [`check`], the one data-driven comparison against the naive oracle; and the
+//! benchmarks' shared parts: obvhs's own trees as peers ([`obvhs_peer`]) and the peer
+//! benchmark's workload, measurement and results ([`peers`], run by `benches/peers.rs`).
+
+pub mod obvhs_peer;
+pub mod peers;
 
 use raybench_core::{Frame, Hit, NO_HIT, Ray, RenderSettings, Renderer, Scene, TriangleMesh, Vec3};
 use std::sync::Arc;

@@ -212,3 +212,59 @@ pub trait Accel: Send + Sync + Sized + 'static {
     /// Size and node or cell counts of the structure.
     fn stats(&self) -> AccelStats;
 }
+
+/// The batch entry points of an [`Accel`] behind a trait object, for harnesses that pick a
+/// structure by name ([`crate::Renderer::batch_tracer`]) and time batches of rays without
+/// rendering frames (`tests/benches/peers.rs`). Implemented for every [`Accel`]: one virtual
+/// call per batch, the per-ray path inside it is the structure's generic one.
+pub trait BatchTracer: Send + Sync {
+    /// [`Accel::intersect_batch`], not counting.
+    fn trace_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]);
+
+    /// [`Accel::occluded_batch`], not counting.
+    fn occlude_batch(&self, rays: &[Ray], occluded: &mut [bool]);
+
+    /// [`Accel::intersect_batch`], adding its work to `counters`.
+    fn trace_batch_counted(
+        &self,
+        rays: &[Ray],
+        hits: &mut [Option<Hit>],
+        counters: &mut RayCounters,
+    );
+
+    /// [`Accel::occluded_batch`], adding its work to `counters`.
+    fn occlude_batch_counted(
+        &self,
+        rays: &[Ray],
+        occluded: &mut [bool],
+        counters: &mut RayCounters,
+    );
+}
+
+impl<A: Accel> BatchTracer for A {
+    fn trace_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        self.intersect_batch(rays, hits, &mut NoCounters);
+    }
+
+    fn occlude_batch(&self, rays: &[Ray], occluded: &mut [bool]) {
+        self.occluded_batch(rays, occluded, &mut NoCounters);
+    }
+
+    fn trace_batch_counted(
+        &self,
+        rays: &[Ray],
+        hits: &mut [Option<Hit>],
+        counters: &mut RayCounters,
+    ) {
+        self.intersect_batch(rays, hits, counters);
+    }
+
+    fn occlude_batch_counted(
+        &self,
+        rays: &[Ray],
+        occluded: &mut [bool],
+        counters: &mut RayCounters,
+    ) {
+        self.occluded_batch(rays, occluded, counters);
+    }
+}

@@ -44,7 +44,8 @@ pub mod volume;
 
 pub use aabb::{Aabb, FAR_SCALE, SlabRay};
 pub use accel::{
-    Accel, AccelStats, CULL_SLACK, Counters, NoCounters, NodeStack, RayCounters, cull_bound,
+    Accel, AccelStats, BatchTracer, CULL_SLACK, Counters, NoCounters, NodeStack, RayCounters,
+    cull_bound,
 };
 pub use bezier::{BezierPatch, BezierStats, FALLBACK_DEPTH, MAX_NEWTON_ITERATIONS, REGION_DEPTH};
 pub use bilinear::{BilinearPatch, PatchHit};

@@ -1,6 +1,6 @@
 //! The frame-level renderer interface that the harness talks to.
 
-use crate::accel::{AccelStats, RayCounters};
+use crate::accel::{AccelStats, BatchTracer, RayCounters};
 use crate::frame::{Frame, Timings};
 use crate::hit::Hit;
 use crate::limits;
@@ -230,6 +230,13 @@ pub trait Renderer: Send + Sync {
 
     /// Statistics of the prepared structure, if any.
     fn structure(&self) -> Option<AccelStats>;
+
+    /// The prepared CPU structure's batch entry points, for timing ray batches without
+    /// frames (`tests/benches/peers.rs`); `None` before `prepare` and for backends that are
+    /// not an [`crate::Accel`] on this CPU (the GPU).
+    fn batch_tracer(&self) -> Option<&dyn BatchTracer> {
+        None
+    }
 
     /// Closest hits of arbitrary rays (edge-aimed rays, incoherent ray sets) against the
     /// prepared scene, with the work counters when `count` is set and the backend counts.

@@ -38,6 +38,40 @@ pub const MAX_SIDE_PRIMITIVES: usize = 64;
 /// the CPU's vectors are narrower) and is native with AVX-512.
 pub const DEFAULT_PACKET_WIDTH: usize = 16;
 
+/// Embree's scene mode: the scene flags its BVH is built and traversed with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum EmbreeMode {
+    /// `RTC_SCENE_FLAG_ROBUST`, what the registered backends `embree` and `embree-packet`
+    /// use: Embree's watertight triangle test and conservative traversal. Its default
+    /// mode lets rays aimed at shared edges and vertices of a closed mesh escape
+    /// (tests/tests/watertight.rs: 4,165 of 61,440 from inside an icosphere).
+    Robust,
+    /// No scene flags: Embree's default mode, faster and not watertight; the figure peers
+    /// usually quote (`tests/benches/peers.rs` measures both).
+    Default,
+}
+
+impl EmbreeMode {
+    /// Both modes, robust first.
+    pub const ALL: [Self; 2] = [Self::Robust, Self::Default];
+
+    /// `"robust"` or `"default"`.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Robust => "robust",
+            Self::Default => "default",
+        }
+    }
+
+    fn flags(self) -> RTCSceneFlags {
+        match self {
+            Self::Robust => RTCSceneFlags::ROBUST,
+            Self::Default => RTCSceneFlags::NONE,
+        }
+    }
+}
+
 /// The process's Embree device.
 struct Device(RTCDevice);
 
@@ -169,6 +203,8 @@ struct Inner {
     ids: Vec<u32>,
     /// Bounded primitives Embree does not hold (spheres), tested by every ray.
     side: Vec<u32>,
+    /// The scene mode Embree's scene was built with.
+    mode: EmbreeMode,
 }
 
 /// Panics with Embree's last error on this thread, if any, naming what was being done.
@@ -179,7 +215,7 @@ fn check(device: RTCDevice, what: &str) {
 }
 
 impl Inner {
-    fn build(geometry: Arc<Geometry>) -> Self {
+    fn build(geometry: Arc<Geometry>, mode: EmbreeMode) -> Self {
         let mut ids = Vec::new();
         let mut side = Vec::new();
         for &id in geometry.bounded() {
@@ -188,28 +224,26 @@ impl Inner {
                 _ => side.push(id),
             }
         }
-        let scene = (!ids.is_empty()).then(|| Self::embree_scene(&geometry, &ids));
+        let scene = (!ids.is_empty()).then(|| Self::embree_scene(&geometry, &ids, mode));
         Self {
             geometry,
             scene,
             ids,
             side,
+            mode,
         }
     }
 
     /// One Embree triangle mesh with the triangles `ids` of `geometry` (three vertices of
-    /// their own each: raybench stores triangles, not indexed meshes), committed.
-    fn embree_scene(geometry: &Geometry, ids: &[u32]) -> SceneHandle {
+    /// their own each: raybench stores triangles, not indexed meshes), committed in `mode`.
+    fn embree_scene(geometry: &Geometry, ids: &[u32], mode: EmbreeMode) -> SceneHandle {
         let device = device().unwrap_or_else(|e| panic!("Embree is unavailable: {e}"));
         let n = ids.len();
         // SAFETY: `device` is valid; a failure (null scene) is caught by `check` before use.
         let scene = unsafe { rtcNewScene(device) };
         check(device, "create a scene");
-        // Robust mode: Embree's fast mode lets rays aimed at shared edges and vertices of a
-        // closed mesh escape (tests/tests/watertight.rs: 4,165 of 61,440 from inside an
-        // icosphere).
         // SAFETY: `scene` is a valid, uncommitted scene.
-        unsafe { rtcSetSceneFlags(scene, RTCSceneFlags::ROBUST) };
+        unsafe { rtcSetSceneFlags(scene, mode.flags()) };
         let scene = SceneHandle(scene);
         // SAFETY: as above.
         let mesh = unsafe { rtcNewGeometry(device, RTCGeometryType::TRIANGLE) };
@@ -359,6 +393,7 @@ impl Inner {
             counts: vec![
                 ("embree triangles", n as u64),
                 ("side primitives", self.side.len() as u64),
+                ("robust mode", u64::from(self.mode == EmbreeMode::Robust)),
             ],
         }
     }
@@ -593,7 +628,8 @@ packet_kernels!(
 );
 
 /// Embree 3 with single rays (backend `embree`): one triangle mesh holding the scene's
-/// triangles, built by `rtcCommitScene` with Embree's defaults (medium quality), traced
+/// triangles, built by `rtcCommitScene` with Embree's defaults (medium quality) in
+/// [`EmbreeMode::Robust`] ([`EmbreeAccel::build_with_mode`] picks the mode), traced
 /// with `rtcIntersect1` / `rtcOccluded1`. Planes are tested first
 /// ([`Geometry::closest_unbounded`]) and Embree's `tfar` clipped to their hit; spheres (at
 /// most [`MAX_SIDE_PRIMITIVES`] for the renderer, see [`supports`]) likewise beside it.
@@ -611,28 +647,63 @@ pub struct EmbreeAccel(Inner);
 /// [`Accel::intersect_batch`] and [`Accel::occluded_batch`] sending consecutive rays in
 /// packets of [`DEFAULT_PACKET_WIDTH`] (16) through `rtcIntersect16` / `rtcOccluded16`
 /// with a valid mask (lanes past the batch's end and rays that can hit nothing are
-/// masked off); 8 (`rtcIntersect8`) with [`EmbreePacketAccel::build_with_width`]. Single
-/// rays take `rtcIntersect1` / `rtcOccluded1`.
+/// masked off); 8 (`rtcIntersect8`) with [`EmbreePacketAccel::build_with_width`], and
+/// Embree's default mode with [`EmbreePacketAccel::build_with`]. Single rays take
+/// `rtcIntersect1` / `rtcOccluded1`.
 pub struct EmbreePacketAccel {
     inner: Inner,
     width: usize,
 }
 
+impl EmbreeAccel {
+    /// The structure over `geometry`, built in `mode` ([`Accel::build`]: robust).
+    ///
+    /// # Panics
+    /// As [`Accel::build`].
+    #[must_use]
+    pub fn build_with_mode(geometry: Arc<Geometry>, mode: EmbreeMode) -> Self {
+        Self(Inner::build(geometry, mode))
+    }
+
+    /// The scene mode.
+    #[must_use]
+    pub fn mode(&self) -> EmbreeMode {
+        self.0.mode
+    }
+}
+
 impl EmbreePacketAccel {
-    /// The structure over `geometry`, tracing batches in packets of `width` rays.
+    /// The structure over `geometry` in robust mode, tracing batches in packets of `width`
+    /// rays.
     ///
     /// # Panics
     /// When `width` is neither 8 nor 16, or as [`Accel::build`].
     #[must_use]
     pub fn build_with_width(geometry: Arc<Geometry>, width: usize) -> Self {
+        Self::build_with(geometry, width, EmbreeMode::Robust)
+    }
+
+    /// The structure over `geometry` built in `mode`, tracing batches in packets of `width`
+    /// rays.
+    ///
+    /// # Panics
+    /// When `width` is neither 8 nor 16, or as [`Accel::build`].
+    #[must_use]
+    pub fn build_with(geometry: Arc<Geometry>, width: usize, mode: EmbreeMode) -> Self {
         assert!(
             width == 8 || width == 16,
             "Embree packets hold 8 or 16 rays"
         );
         Self {
-            inner: Inner::build(geometry),
+            inner: Inner::build(geometry, mode),
             width,
         }
+    }
+
+    /// The scene mode.
+    #[must_use]
+    pub fn mode(&self) -> EmbreeMode {
+        self.inner.mode
     }
 
     /// Rays per packet.
@@ -646,7 +717,7 @@ impl Accel for EmbreeAccel {
     /// # Panics
     /// When Embree is unavailable ([`availability`]) or fails to build (out of memory).
     fn build(geometry: Arc<Geometry>) -> Self {
-        Self(Inner::build(geometry))
+        Self::build_with_mode(geometry, EmbreeMode::Robust)
     }
 
     fn geometry(&self) -> &Geometry {

@@ -18,8 +18,8 @@ pub use output::{
 
 use raybench_core::integrator::{assemble, render_tile, tiles};
 use raybench_core::{
-    Accel, AccelStats, Counters, Frame, Geometry, Hit, NoCounters, Ray, RayCounters, RenderError,
-    RenderSettings, Renderer, Scene, Timings,
+    Accel, AccelStats, BatchTracer, Counters, Frame, Geometry, Hit, NoCounters, Ray, RayCounters,
+    RenderError, RenderSettings, Renderer, Scene, Timings,
 };
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -169,6 +169,10 @@ impl<A: Accel> Renderer for CpuRenderer<A> {
 
     fn structure(&self) -> Option<AccelStats> {
         self.accel().map(Accel::stats)
+    }
+
+    fn batch_tracer(&self) -> Option<&dyn BatchTracer> {
+        self.accel().map(|a| a as &dyn BatchTracer)
     }
 
     fn trace_rays(

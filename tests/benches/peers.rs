@@ -1,0 +1,56 @@
+//! The peer benchmark: the workload of `../shared/PEERS.md` (icosphere 81,920 triangles,
+//! soup 100,000, terrain 1,002,528; 1024 x 1024 primary rays in the renderer's tile order and
+//! 1,048,576 incoherent rays per mesh) traced by every exact raybench CPU backend and every
+//! peer in one process: build times, Mrays/s of closest and any hits on 1 thread and on all
+//! cores, ratios to Embree, node visits and primitive tests per ray, and the rays where each
+//! differs from `bvh`. Prints tables and writes JSON ([`raybench_tests::peers`]).
+//!
+//! ```text
+//! cargo bench -p raybench-tests --bench peers --features embree
+//! cargo bench -p raybench-tests --bench peers -- --quick --meshes sphere --contestants bvh,packet,obvhs-bvh2
+//! cargo bench -p raybench-tests --bench peers -- --help
+//! ```
+
+use raybench_tests::peers::{self, Command, USAGE};
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    let options = match peers::Options::parse(std::env::args().skip(1)) {
+        Ok(Command::Run(o)) => o,
+        Ok(Command::Help) => {
+            println!("{USAGE}");
+            return ExitCode::SUCCESS;
+        }
+        Ok(Command::List) => {
+            for c in peers::contestants::all() {
+                println!("{:<18} {:?}: {}", c.name, c.kind, c.description);
+            }
+            return ExitCode::SUCCESS;
+        }
+        Err(e) => {
+            eprintln!("error: peers: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    // Each mesh's tables are printed, and the JSON rewritten, as soon as it is measured.
+    let mut printed = false;
+    let result = peers::run(&options, |report| {
+        if !printed {
+            print!("{}", report.header());
+            printed = true;
+        }
+        let mesh = report.meshes.last().expect("a finished mesh");
+        print!("{}", report.mesh_tables(mesh));
+        peers::write_json(report, &options.json).map_err(|e| format!("cannot write the JSON: {e}"))
+    });
+    match result {
+        Ok(_) => {
+            println!("\nJSON: {}", options.json.display());
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: peers: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

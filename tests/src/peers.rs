@@ -1,0 +1,653 @@
+//! The peer benchmark (`benches/peers.rs`): the workload of `../shared/PEERS.md`, generated
+//! once per mesh, traced by every exact raybench CPU backend and every peer in one process.
+//!
+//! Per mesh (icosphere 81,920 triangles, soup 100,000, terrain 1,002,528) and contestant:
+//! the build (best of `repeat`, all cores), then for each ray set (primary: the scene
+//! camera's `N x N` rays in the renderer's tile order; incoherent: seeded random rays in the
+//! mesh's box) the closest hits (`intersect_batch`) and the any hits (`occluded_batch` on
+//! the same rays ending at half of `bvh`'s closest hit; misses keep their `t_max`), each
+//! timed on 1 thread and on all cores (a local rayon pool over `chunk`-ray batches; best of
+//! `repeat`), after one untimed pass on all cores that counts node visits and primitive
+//! tests (contestants that count) and the rays whose answer differs from `bvh`'s.
+//!
+//! [`contestants`] says who runs, [`report`] what is written ([`report::Report`], JSON
+//! schema `raybench-peers/1`) and printed.
+
+pub mod contestants;
+pub mod report;
+
+use contestants::Contestant;
+use raybench_core::{Hit, Ray, RayCounters, RaySet, Renderer, Scene, rays};
+use rayon::ThreadPool;
+use rayon::prelude::*;
+use report::{
+    ContestantReport, MeshReport, QueryReport, RaySetInfo, Report, Run, SCHEMA, SetReport, Skipped,
+    WorkloadInfo,
+};
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// The meshes of `../shared/PEERS.md`: short name and scene spec.
+pub const MESHES: [(&str, &str); 3] = [
+    ("sphere", "icosphere:6"),
+    ("soup", "soup:100000"),
+    ("terrain", "terrain:708"),
+];
+
+/// The reference every contestant's answers are compared with, and whose closest hits end
+/// the any-hit rays.
+pub const REFERENCE: &str = "bvh";
+
+/// Any-hit rays end at this fraction of the reference's closest hit.
+pub const SHADOW_FRACTION: f32 = 0.5;
+
+/// What to run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Options {
+    /// Meshes: short name and scene spec.
+    pub meshes: Vec<(String, String)>,
+    /// Contestants by name; `None`: all.
+    pub contestants: Option<Vec<String>>,
+    /// Primary rays: a `primary_size x primary_size` image.
+    pub primary_size: u32,
+    /// Incoherent rays per mesh.
+    pub incoherent_rays: usize,
+    /// Seed of the incoherent rays.
+    pub seed: u32,
+    /// Rays per batch call.
+    pub chunk: usize,
+    /// Timed runs per figure and builds per contestant (the best is kept).
+    pub repeat: usize,
+    /// Threads of the "all cores" figures.
+    pub threads: usize,
+    /// Where the JSON goes.
+    pub json: PathBuf,
+}
+
+/// What the command line asks for.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Command {
+    /// Run the benchmark.
+    Run(Options),
+    /// Print the usage.
+    Help,
+    /// List the contestants.
+    List,
+}
+
+/// The command line's usage.
+pub const USAGE: &str = "\
+usage: cargo bench -p raybench-tests --bench peers [--features embree] -- [options]
+
+Traces the workload of ../shared/PEERS.md with every exact raybench CPU backend and every
+peer: build time, Mrays/s of closest and any hits on 1 thread and on all cores, ratios to
+Embree, node visits and primitive tests per ray, differences from `bvh`.
+
+options:
+  --quick               256 x 256 primary rays and 65,536 incoherent rays per mesh
+  --size N              primary rays: an N x N image (default 1024)
+  --rays N              incoherent rays per mesh (default 1048576)
+  --meshes A,B          sphere, soup, terrain (default: all three), or scene specs
+  --contestants A,B     only these (see --list); `bvh` is always built as the reference
+  --repeat N            timed runs per figure and builds, best kept (default 3)
+  --chunk N             rays per intersect_batch / occluded_batch call (default 1024)
+  --threads N           threads of the all-cores figures (default: every core)
+  --json PATH           where the JSON goes (default: target/raybench-peers.json)
+  --list                list the contestants and exit
+  --help                this text";
+
+/// `target/raybench-peers.json` beside the running benchmark (its executable lives in
+/// `target/<profile>/deps`), or `raybench-peers.json` when that cannot be found.
+fn default_json() -> PathBuf {
+    std::env::current_exe()
+        .ok()
+        .and_then(|exe| {
+            exe.ancestors()
+                .nth(3)
+                .map(|t| t.join("raybench-peers.json"))
+        })
+        .unwrap_or_else(|| PathBuf::from("raybench-peers.json"))
+}
+
+impl Options {
+    /// The full workload of `../shared/PEERS.md`.
+    #[must_use]
+    pub fn full() -> Self {
+        Self {
+            meshes: MESHES
+                .iter()
+                .map(|&(n, s)| (n.to_string(), s.to_string()))
+                .collect(),
+            contestants: None,
+            primary_size: 1024,
+            incoherent_rays: 1 << 20,
+            seed: 1,
+            chunk: 1024,
+            repeat: 3,
+            threads: std::thread::available_parallelism().map_or(1, std::num::NonZero::get),
+            json: default_json(),
+        }
+    }
+
+    /// Parses the command line (without the program name). `--bench`, which `cargo bench`
+    /// passes, is accepted and ignored.
+    ///
+    /// # Errors
+    /// A message naming the bad option and why.
+    pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Command, String> {
+        let mut o = Self::full();
+        let mut args = args.into_iter();
+        let (mut size, mut rays) = (None, None);
+        while let Some(arg) = args.next() {
+            let mut value = |name: &str| args.next().ok_or_else(|| format!("{name} needs a value"));
+            let positive = |name: &str, v: String| -> Result<usize, String> {
+                v.parse::<usize>()
+                    .ok()
+                    .filter(|&n| n > 0)
+                    .ok_or_else(|| format!("{name}: '{v}' is not a positive integer"))
+            };
+            let list = |v: String| -> Vec<String> {
+                v.split(',')
+                    .map(str::trim)
+                    .filter(|s| !s.is_empty())
+                    .map(String::from)
+                    .collect()
+            };
+            match arg.as_str() {
+                "--bench" => {}
+                "--help" | "-h" => return Ok(Command::Help),
+                "--list" => return Ok(Command::List),
+                "--quick" => {
+                    o.primary_size = 256;
+                    o.incoherent_rays = 65_536;
+                }
+                "--size" => {
+                    let n = positive("--size", value("--size")?)?;
+                    size = Some(
+                        u32::try_from(n)
+                            .ok()
+                            .filter(|&n| n <= 16_384)
+                            .ok_or_else(|| format!("--size: {n} is above 16384"))?,
+                    );
+                }
+                "--rays" => rays = Some(positive("--rays", value("--rays")?)?),
+                "--repeat" => o.repeat = positive("--repeat", value("--repeat")?)?,
+                "--chunk" => o.chunk = positive("--chunk", value("--chunk")?)?,
+                "--threads" => o.threads = positive("--threads", value("--threads")?)?,
+                "--json" => o.json = PathBuf::from(value("--json")?),
+                "--meshes" => {
+                    let names = list(value("--meshes")?);
+                    if names.is_empty() {
+                        return Err("--meshes: empty list".into());
+                    }
+                    o.meshes = names
+                        .into_iter()
+                        .map(|n| {
+                            let spec = MESHES
+                                .iter()
+                                .find(|(m, _)| *m == n)
+                                .map_or_else(|| n.clone(), |(_, s)| (*s).to_string());
+                            (n, spec)
+                        })
+                        .collect();
+                }
+                "--contestants" => {
+                    let names = list(value("--contestants")?);
+                    contestants::select(&names).map_err(|e| format!("--contestants: {e}"))?;
+                    o.contestants = Some(names);
+                }
+                other => return Err(format!("unknown option '{other}' (see --help)")),
+            }
+        }
+        if let Some(s) = size {
+            o.primary_size = s;
+        }
+        if let Some(r) = rays {
+            o.incoherent_rays = r;
+        }
+        Ok(Command::Run(o))
+    }
+
+    /// The contestants to run.
+    ///
+    /// # Panics
+    /// When a name is unknown ([`Options::parse`] checks them).
+    #[must_use]
+    pub fn selected(&self) -> Vec<Contestant> {
+        match &self.contestants {
+            None => contestants::all(),
+            Some(names) => contestants::select(names).unwrap_or_else(|e| panic!("{e}")),
+        }
+    }
+
+    /// The thread counts measured: 1 and [`Options::threads`] (once when it is 1).
+    #[must_use]
+    pub fn thread_counts(&self) -> Vec<usize> {
+        if self.threads == 1 {
+            vec![1]
+        } else {
+            vec![1, self.threads]
+        }
+    }
+}
+
+/// One ray set of a mesh with the reference's answers.
+pub struct RaySetWork {
+    /// Which set.
+    pub set: RaySet,
+    /// The rays, for closest hits.
+    pub rays: Vec<Ray>,
+    /// The same rays ending at [`SHADOW_FRACTION`] of the reference's closest hit (misses
+    /// keep their `t_max`), for any hits.
+    pub shadow: Vec<Ray>,
+    /// The reference's primitive per ray.
+    pub closest: Vec<Option<u32>>,
+    /// The reference's any-hit answer per shadow ray.
+    pub occluded: Vec<bool>,
+}
+
+/// A mesh's scene and ray sets: the same for every contestant.
+pub struct Workload {
+    /// Short name.
+    pub name: String,
+    /// Scene spec.
+    pub spec: String,
+    /// The scene.
+    pub scene: Arc<Scene>,
+    /// Primary and incoherent rays.
+    pub sets: Vec<RaySetWork>,
+}
+
+/// The rays of `set` for `scene`: primary rays in the renderer's tile order
+/// ([`rays::primary_tiled`]) or seeded incoherent rays ([`rays::incoherent`]).
+#[must_use]
+pub fn ray_set(scene: &Scene, set: RaySet, o: &Options) -> Vec<Ray> {
+    match set {
+        RaySet::Primary => rays::primary_tiled(
+            &scene.camera,
+            o.primary_size,
+            o.primary_size,
+            raybench_render::TILE_SIZE,
+        ),
+        RaySet::Incoherent => rays::incoherent(scene.geometry.bounds(), o.incoherent_rays, o.seed),
+    }
+}
+
+/// `rays` ending at [`SHADOW_FRACTION`] of `closest`'s `t` (unchanged where it is `None`).
+#[must_use]
+pub fn shadow_rays(rays: &[Ray], closest: &[Option<Hit>]) -> Vec<Ray> {
+    rays.iter()
+        .zip(closest)
+        .map(|(r, h)| match h {
+            Some(h) => Ray::with_interval(r.origin, r.dir, r.t_min, h.t * SHADOW_FRACTION),
+            None => *r,
+        })
+        .collect()
+}
+
+/// Answers of one pass: hits or occlusion per ray, and the counters when counted.
+struct Pass<T> {
+    answers: Vec<T>,
+    counters: Option<RayCounters>,
+}
+
+/// One untimed pass on the current pool over `chunk`-ray batches: `answers` filled by
+/// `trace` (a batch and its counters, when `count`) or by `plain` (a batch, not counting).
+fn pass<T: Send>(
+    rays: &[Ray],
+    mut answers: Vec<T>,
+    chunk: usize,
+    count: bool,
+    trace: impl Fn(&[Ray], &mut [T], &mut RayCounters) + Sync,
+    plain: impl Fn(&[Ray], &mut [T]) + Sync,
+) -> Pass<T> {
+    let counters = if count {
+        let parts: Vec<RayCounters> = answers
+            .par_chunks_mut(chunk)
+            .zip(rays.par_chunks(chunk))
+            .map(|(a, r)| {
+                let mut c = RayCounters::default();
+                trace(r, a, &mut c);
+                c
+            })
+            .collect();
+        Some(sum(&parts))
+    } else {
+        answers
+            .par_chunks_mut(chunk)
+            .zip(rays.par_chunks(chunk))
+            .for_each(|(a, r)| plain(r, a));
+        None
+    };
+    Pass { answers, counters }
+}
+
+/// One untimed pass of closest hits on the current pool, counted when `count`.
+fn closest_pass(
+    tracer: &dyn raybench_core::BatchTracer,
+    rays: &[Ray],
+    chunk: usize,
+    count: bool,
+) -> Pass<Option<Hit>> {
+    pass(
+        rays,
+        vec![None; rays.len()],
+        chunk,
+        count,
+        |r, h, c| tracer.trace_batch_counted(r, h, c),
+        |r, h| tracer.trace_batch(r, h),
+    )
+}
+
+/// One untimed pass of any hits on the current pool, counted when `count`.
+fn any_pass(
+    tracer: &dyn raybench_core::BatchTracer,
+    rays: &[Ray],
+    chunk: usize,
+    count: bool,
+) -> Pass<bool> {
+    pass(
+        rays,
+        vec![false; rays.len()],
+        chunk,
+        count,
+        |r, o, c| tracer.occlude_batch_counted(r, o, c),
+        |r, o| tracer.occlude_batch(r, o),
+    )
+}
+
+/// The counters of all chunks, summed in chunk order.
+fn sum(parts: &[RayCounters]) -> RayCounters {
+    let mut total = RayCounters::default();
+    for p in parts {
+        raybench_core::Counters::merge(&mut total, p);
+    }
+    total
+}
+
+/// Best of `repeat` timings of `f` on `pool`, seconds.
+fn best_of(pool: &ThreadPool, repeat: usize, mut f: impl FnMut() + Send) -> f64 {
+    pool.install(|| {
+        (0..repeat)
+            .map(|_| {
+                let start = Instant::now();
+                f();
+                start.elapsed().as_secs_f64()
+            })
+            .fold(f64::INFINITY, f64::min)
+    })
+}
+
+/// A rayon pool of `threads` workers.
+///
+/// # Panics
+/// When the operating system refuses the threads.
+fn pool(threads: usize) -> ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a thread pool")
+}
+
+/// A prepared renderer of `c` for `scene` and its best build time of `repeat` on `pool`,
+/// or why it cannot run.
+fn build(
+    c: &Contestant,
+    scene: &Arc<Scene>,
+    pool: &ThreadPool,
+    repeat: usize,
+) -> Result<(Box<dyn Renderer>, f64), String> {
+    let mut r = (c.make)();
+    r.availability()?;
+    r.supports(scene)?;
+    let mut best = f64::INFINITY;
+    for _ in 0..repeat {
+        let timings = pool
+            .install(|| r.prepare(scene))
+            .map_err(|e| e.to_string())?;
+        best = best.min(timings.get("build").unwrap_or(f64::NAN));
+    }
+    Ok((r, best))
+}
+
+impl Workload {
+    /// Loads mesh `spec` (a generator spec such as `icosphere:6`, or any scene raybench
+    /// loads) and makes its ray sets, with the answers of [`REFERENCE`] on `pool`.
+    ///
+    /// # Errors
+    /// When the scene cannot be loaded (its error, naming the spec).
+    pub fn generate(
+        name: &str,
+        spec: &str,
+        o: &Options,
+        pool: &ThreadPool,
+    ) -> Result<Self, String> {
+        let scene = raybench_scene::load(spec, &raybench_scene::assets_dir(None))
+            .map(Arc::new)
+            .map_err(|e| format!("mesh {name} ({spec}): {e}"))?;
+        let reference = contestants::all()
+            .into_iter()
+            .find(|c| c.name == REFERENCE)
+            .expect("bvh is registered");
+        let (r, _) = build(&reference, &scene, pool, 1)?;
+        let tracer = r.batch_tracer().expect("bvh is a CPU structure");
+        let sets = RaySet::ALL
+            .into_iter()
+            .map(|set| {
+                let rays = ray_set(&scene, set, o);
+                let hits = pool
+                    .install(|| closest_pass(tracer, &rays, o.chunk, false))
+                    .answers;
+                let shadow = shadow_rays(&rays, &hits);
+                let occluded = pool
+                    .install(|| any_pass(tracer, &shadow, o.chunk, false))
+                    .answers;
+                RaySetWork {
+                    set,
+                    closest: hits.iter().map(|h| h.map(|h| h.prim)).collect(),
+                    rays,
+                    shadow,
+                    occluded,
+                }
+            })
+            .collect();
+        Ok(Self {
+            name: name.to_string(),
+            spec: spec.to_string(),
+            scene,
+            sets,
+        })
+    }
+}
+
+/// Per-ray average of a counter.
+fn per_ray(counters: Option<RayCounters>, n: usize, f: impl Fn(RayCounters) -> u64) -> Option<f64> {
+    counters.map(|c| f(c) as f64 / n.max(1) as f64)
+}
+
+/// Measures contestant `c` on workload `w`: build, then per ray set the untimed counted
+/// pass and the timed runs.
+fn measure(
+    c: &Contestant,
+    w: &Workload,
+    o: &Options,
+    pools: &[(usize, ThreadPool)],
+) -> Result<ContestantReport, String> {
+    let all = &pools.last().expect("at least one pool").1;
+    let (r, build_s) = build(c, &w.scene, all, o.repeat)?;
+    let tracer = r.batch_tracer().ok_or("not a CPU structure")?;
+    let count = r.counts_tests();
+    let mut ray_sets = Vec::new();
+    for s in &w.sets {
+        let n = s.rays.len();
+        let closest = all.install(|| closest_pass(tracer, &s.rays, o.chunk, count));
+        let any = all.install(|| any_pass(tracer, &s.shadow, o.chunk, count));
+        let differ_closest = closest
+            .answers
+            .iter()
+            .zip(&s.closest)
+            .filter(|(h, r)| h.map(|h| h.prim) != **r)
+            .count();
+        let differ_any = any
+            .answers
+            .iter()
+            .zip(&s.occluded)
+            .filter(|(a, b)| a != b)
+            .count();
+        let mut hits = closest.answers;
+        let mut occluded = any.answers;
+        let mut closest_runs = Vec::new();
+        let mut any_runs = Vec::new();
+        for (threads, pool) in pools {
+            let seconds = best_of(pool, o.repeat, || {
+                hits.par_chunks_mut(o.chunk)
+                    .zip(s.rays.par_chunks(o.chunk))
+                    .for_each(|(h, r)| tracer.trace_batch(r, h));
+            });
+            closest_runs.push(Run {
+                threads: *threads,
+                seconds,
+                mrays: n as f64 / seconds / 1e6,
+            });
+            let seconds = best_of(pool, o.repeat, || {
+                occluded
+                    .par_chunks_mut(o.chunk)
+                    .zip(s.shadow.par_chunks(o.chunk))
+                    .for_each(|(a, r)| tracer.occlude_batch(r, a));
+            });
+            any_runs.push(Run {
+                threads: *threads,
+                seconds,
+                mrays: n as f64 / seconds / 1e6,
+            });
+        }
+        std::hint::black_box((&hits, &occluded));
+        ray_sets.push(SetReport {
+            name: s.set.name(),
+            closest: QueryReport {
+                runs: closest_runs,
+                differ: differ_closest,
+                node_visits_per_ray: per_ray(closest.counters, n, |c| c.node_visits),
+                prim_tests_per_ray: per_ray(closest.counters, n, |c| c.prim_tests),
+                ratios: Vec::new(),
+            },
+            any: QueryReport {
+                runs: any_runs,
+                differ: differ_any,
+                node_visits_per_ray: per_ray(any.counters, n, |c| c.node_visits),
+                prim_tests_per_ray: per_ray(any.counters, n, |c| c.prim_tests),
+                ratios: Vec::new(),
+            },
+        });
+    }
+    Ok(ContestantReport {
+        name: c.name.to_string(),
+        kind: c.kind,
+        build_s,
+        build_vs_embree: None,
+        ray_sets,
+    })
+}
+
+/// Embree's version, or why it is absent.
+fn embree_description() -> String {
+    #[cfg(feature = "embree")]
+    {
+        raybench_peers::embree_version().unwrap_or_else(|e| format!("absent: {e}"))
+    }
+    #[cfg(not(feature = "embree"))]
+    {
+        "absent: built without the cargo feature `embree`".to_string()
+    }
+}
+
+/// Runs the benchmark, printing progress to stderr and calling `on_mesh` with the report
+/// so far after each mesh (the caller prints and saves as it goes, so an interrupted run
+/// keeps the meshes it finished).
+///
+/// # Errors
+/// When a mesh cannot be loaded, or as `on_mesh`.
+pub fn run(
+    o: &Options,
+    mut on_mesh: impl FnMut(&Report) -> Result<(), String>,
+) -> Result<Report, String> {
+    let threads = o.thread_counts();
+    let mut report = Report {
+        schema: SCHEMA,
+        machine: raybench::report::machine::describe(o.threads),
+        packet_isa: raybench_packet::Isa::detect().name().to_string(),
+        embree: embree_description(),
+        workload: WorkloadInfo {
+            primary_size: o.primary_size,
+            tile: raybench_render::TILE_SIZE,
+            incoherent_rays: o.incoherent_rays,
+            seed: o.seed,
+            chunk: o.chunk,
+            repeat: o.repeat,
+            threads: threads.clone(),
+            shadow_fraction: SHADOW_FRACTION,
+        },
+        meshes: Vec::new(),
+    };
+    let pools: Vec<(usize, ThreadPool)> = threads.iter().map(|&t| (t, pool(t))).collect();
+    let all = &pools.last().expect("at least one pool").1;
+    let contestants = o.selected();
+    for (name, spec) in &o.meshes {
+        let start = Instant::now();
+        let w = Workload::generate(name, spec, o, all)?;
+        eprintln!(
+            "{name} ({spec}): {} primitives, ray sets and reference in {:.1?}",
+            w.scene.geometry.len(),
+            start.elapsed()
+        );
+        let mut mesh = MeshReport {
+            name: name.clone(),
+            spec: spec.clone(),
+            triangles: w.scene.geometry.len(),
+            ray_sets: w
+                .sets
+                .iter()
+                .map(|s| RaySetInfo {
+                    name: s.set.name(),
+                    rays: s.rays.len(),
+                    hits: s.closest.iter().filter(|h| h.is_some()).count(),
+                })
+                .collect(),
+            skipped: Vec::new(),
+            contestants: Vec::new(),
+        };
+        for c in &contestants {
+            let start = Instant::now();
+            match measure(c, &w, o, &pools) {
+                Ok(m) => {
+                    eprintln!("  {} measured in {:.1?}", c.name, start.elapsed());
+                    mesh.contestants.push(m);
+                }
+                Err(reason) => {
+                    eprintln!("  {} skipped: {reason}", c.name);
+                    mesh.skipped.push(Skipped {
+                        name: c.name.to_string(),
+                        reason,
+                    });
+                }
+            }
+        }
+        mesh.compute_ratios();
+        report.meshes.push(mesh);
+        on_mesh(&report)?;
+    }
+    Ok(report)
+}
+
+/// Writes `report` as pretty JSON to `path`, creating its directory.
+///
+/// # Errors
+/// The path and the I/O error.
+pub fn write_json(report: &Report, path: &std::path::Path) -> Result<(), String> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    }
+    let text = serde_json::to_string_pretty(report).map_err(|e| e.to_string())?;
+    std::fs::write(path, text + "\n").map_err(|e| format!("{}: {e}", path.display()))
+}

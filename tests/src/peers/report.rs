@@ -1,0 +1,453 @@
+//! The peer benchmark's results: the JSON schema (`raybench-peers/1`) and the tables printed
+//! from it.
+//!
+//! ```text
+//! {
+//!   "schema": "raybench-peers/1",
+//!   "machine": { cpu, cores, threads, isa, gpu, os, version },   // as raybench report's
+//!   "packet_isa": "avx2",            // what raybench_packet::Isa::detect chose
+//!   "embree": "Embree 3.13.5, native packets 4/8/16" | "absent: ...",
+//!   "workload": { primary_size, tile, incoherent_rays, seed, chunk, repeat, threads: [1, N],
+//!                 shadow_fraction },
+//!   "meshes": [ {
+//!     "name": "sphere", "spec": "icosphere:6", "triangles": 81920,
+//!     "ray_sets": [ { "name": "primary", "rays": 1048576, "hits": 640000 } ],
+//!     "skipped": [ { "name": "packet-avx512", "reason": "this CPU has no AVX-512F" } ],
+//!     "contestants": [ {
+//!       "name": "bvh", "kind": "raybench" | "peer",
+//!       "build_s": 0.012,            // best of `repeat`, all cores
+//!       "build_vs_embree": 1.9,      // build_s / embree1-default's build_s (lower is faster)
+//!       "ray_sets": [ {
+//!         "name": "primary",
+//!         "closest": {               // intersect_batch; "any": occluded_batch on shadow rays
+//!           "runs": [ { "threads": 1, "seconds": 0.25, "mrays": 4.1 } ],   // best of repeat
+//!           "differ": 0,             // rays whose hit/miss or primitive differs from bvh's
+//!           "node_visits_per_ray": 37.0, "prim_tests_per_ray": 2.2,       // or null
+//!           "ratios": [ { "reference": "embree16-robust", "threads": 1, "value": 0.37 } ]
+//!         },
+//!         "any": { ... }
+//!       } ]
+//!     } ]
+//!   } ]
+//! }
+//! ```
+
+use super::contestants::Kind;
+use super::contestants::embree::{PACKET_DEFAULT, PACKET_ROBUST, SINGLE_DEFAULT, SINGLE_ROBUST};
+use raybench::report::results::Machine;
+use raybench_core::RaySet;
+use serde::Serialize;
+use std::fmt::Write as _;
+
+/// The schema name written into every file.
+pub const SCHEMA: &str = "raybench-peers/1";
+
+/// A whole run.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    /// [`SCHEMA`].
+    pub schema: &'static str,
+    /// The machine, as `raybench report` describes it.
+    pub machine: Machine,
+    /// The instruction set `packet` chose (`raybench_packet::Isa::detect`).
+    pub packet_isa: String,
+    /// Embree's version and native packet widths, or why it is absent.
+    pub embree: String,
+    /// What was traced.
+    pub workload: WorkloadInfo,
+    /// One entry per mesh.
+    pub meshes: Vec<MeshReport>,
+}
+
+/// The workload's parameters.
+#[derive(Clone, Debug, Serialize)]
+pub struct WorkloadInfo {
+    /// Primary rays: a `primary_size x primary_size` image of the scene's camera.
+    pub primary_size: u32,
+    /// Edge of the tiles the primary rays are ordered in (4 x 4 pixel blocks inside).
+    pub tile: u32,
+    /// Incoherent rays per mesh.
+    pub incoherent_rays: usize,
+    /// Seed of the incoherent rays.
+    pub seed: u32,
+    /// Rays per `intersect_batch` / `occluded_batch` call.
+    pub chunk: usize,
+    /// Timed runs per figure (the best is kept) and builds per contestant.
+    pub repeat: usize,
+    /// Thread counts measured.
+    pub threads: Vec<usize>,
+    /// Any-hit rays end at this fraction of `bvh`'s closest hit (misses keep `t_max`).
+    pub shadow_fraction: f32,
+}
+
+/// One mesh.
+#[derive(Clone, Debug, Serialize)]
+pub struct MeshReport {
+    /// Short name (`sphere`).
+    pub name: String,
+    /// Scene spec (`icosphere:6`).
+    pub spec: String,
+    /// Primitive count.
+    pub triangles: usize,
+    /// The ray sets.
+    pub ray_sets: Vec<RaySetInfo>,
+    /// Contestants that could not run, with why.
+    pub skipped: Vec<Skipped>,
+    /// Contestants' figures, in table order.
+    pub contestants: Vec<ContestantReport>,
+}
+
+/// A ray set of a mesh.
+#[derive(Clone, Debug, Serialize)]
+pub struct RaySetInfo {
+    /// `primary` or `incoherent`.
+    pub name: &'static str,
+    /// Ray count.
+    pub rays: usize,
+    /// Rays that hit something (per `bvh`).
+    pub hits: usize,
+}
+
+/// A contestant that did not run on a mesh.
+#[derive(Clone, Debug, Serialize)]
+pub struct Skipped {
+    /// Contestant.
+    pub name: String,
+    /// Why.
+    pub reason: String,
+}
+
+/// One contestant on one mesh.
+#[derive(Clone, Debug, Serialize)]
+pub struct ContestantReport {
+    /// Contestant.
+    pub name: String,
+    /// Whose structure.
+    pub kind: Kind,
+    /// Best build time of `repeat`, seconds, all cores.
+    pub build_s: f64,
+    /// `build_s` over Embree's (`embree1-default`); `None` without Embree.
+    pub build_vs_embree: Option<f64>,
+    /// One entry per ray set.
+    pub ray_sets: Vec<SetReport>,
+}
+
+/// One contestant on one ray set.
+#[derive(Clone, Debug, Serialize)]
+pub struct SetReport {
+    /// `primary` or `incoherent`.
+    pub name: &'static str,
+    /// Closest hits (`intersect_batch`).
+    pub closest: QueryReport,
+    /// Any hit (`occluded_batch`) on the shadow rays.
+    pub any: QueryReport,
+}
+
+/// One query of one ray set.
+#[derive(Clone, Debug, Serialize)]
+pub struct QueryReport {
+    /// Best run per thread count.
+    pub runs: Vec<Run>,
+    /// Rays whose answer differs from `bvh`'s (hit/miss or primitive; occluded or not).
+    pub differ: usize,
+    /// Node or cell visits per ray, when the contestant counts.
+    pub node_visits_per_ray: Option<f64>,
+    /// Primitive tests per ray, when the contestant counts.
+    pub prim_tests_per_ray: Option<f64>,
+    /// Throughput over the Embree references of [`references`], per thread count.
+    pub ratios: Vec<Ratio>,
+}
+
+/// A timed figure.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Run {
+    /// Worker threads.
+    pub threads: usize,
+    /// Best time of `repeat`, seconds.
+    pub seconds: f64,
+    /// Million rays per second.
+    pub mrays: f64,
+}
+
+/// A throughput ratio to a reference contestant (above 1: faster than the reference).
+#[derive(Clone, Debug, Serialize)]
+pub struct Ratio {
+    /// The reference contestant.
+    pub reference: &'static str,
+    /// Worker threads of both figures.
+    pub threads: usize,
+    /// Contestant's Mrays/s over the reference's.
+    pub value: f64,
+}
+
+/// Which query of a ray set.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Query {
+    /// Closest hit.
+    Closest,
+    /// Any hit.
+    Any,
+}
+
+/// The Embree contestants a query's throughput is compared with, with their column
+/// headings: primary closest hits against the 16-wide packets, incoherent closest hits
+/// against single rays in both modes, any hits against `rtcOccluded1` in robust mode (the
+/// targets of issue 17).
+#[must_use]
+pub fn references(set: RaySet, query: Query) -> &'static [(&'static str, &'static str)] {
+    match (set, query) {
+        (RaySet::Primary, Query::Closest) => &[
+            (PACKET_ROBUST, "vs E16 robust"),
+            (PACKET_DEFAULT, "vs E16 default"),
+        ],
+        (RaySet::Incoherent, Query::Closest) => &[
+            (SINGLE_ROBUST, "vs E1 robust"),
+            (SINGLE_DEFAULT, "vs E1 default"),
+        ],
+        (_, Query::Any) => &[(SINGLE_ROBUST, "vs O1 robust")],
+    }
+}
+
+/// Embree's build, the reference of `build_vs_embree`.
+pub const BUILD_REFERENCE: &str = SINGLE_DEFAULT;
+
+impl QueryReport {
+    /// Mrays/s on `threads`, if measured.
+    #[must_use]
+    pub fn mrays(&self, threads: usize) -> Option<f64> {
+        self.runs
+            .iter()
+            .find(|r| r.threads == threads)
+            .map(|r| r.mrays)
+    }
+}
+
+impl ContestantReport {
+    /// The query `query` of ray set `set`.
+    #[must_use]
+    pub fn query(&self, set: &str, query: Query) -> Option<&QueryReport> {
+        self.ray_sets
+            .iter()
+            .find(|s| s.name == set)
+            .map(|s| match query {
+                Query::Closest => &s.closest,
+                Query::Any => &s.any,
+            })
+    }
+}
+
+impl MeshReport {
+    /// Fills every contestant's ratios to the Embree references and its build ratio, from
+    /// the figures of the references measured on this mesh.
+    pub fn compute_ratios(&mut self) {
+        let snapshot = self.contestants.clone();
+        let find = |name: &str| snapshot.iter().find(|c| c.name == name);
+        let build_ref = find(BUILD_REFERENCE).map(|c| c.build_s);
+        for c in &mut self.contestants {
+            c.build_vs_embree = build_ref.map(|b| c.build_s / b);
+            for s in &mut c.ray_sets {
+                let set = RaySet::from_name(s.name).expect("a known ray set");
+                for (query, q) in [(Query::Closest, &mut s.closest), (Query::Any, &mut s.any)] {
+                    q.ratios.clear();
+                    for &(reference, _) in references(set, query) {
+                        let Some(r) = find(reference).and_then(|r| r.query(s.name, query)) else {
+                            continue;
+                        };
+                        for run in &q.runs {
+                            if let Some(base) = r.mrays(run.threads) {
+                                q.ratios.push(Ratio {
+                                    reference,
+                                    threads: run.threads,
+                                    value: run.mrays / base,
+                                });
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// `a / b` per thread count as `"a / b"` with `digits` decimals, `-` where absent.
+fn per_threads(threads: &[usize], digits: usize, value: impl Fn(usize) -> Option<f64>) -> String {
+    threads
+        .iter()
+        .map(|&t| value(t).map_or_else(|| "-".to_string(), |v| format!("{v:.digits$}")))
+        .collect::<Vec<_>>()
+        .join(" / ")
+}
+
+impl Report {
+    /// The tables: [`Report::header`], then [`Report::mesh_tables`] of every mesh.
+    #[must_use]
+    pub fn tables(&self) -> String {
+        let mut out = self.header();
+        for m in &self.meshes {
+            out.push_str(&self.mesh_tables(m));
+        }
+        out
+    }
+
+    /// Whether Embree's figures are in the report.
+    fn has_embree(&self) -> bool {
+        self.meshes
+            .iter()
+            .any(|m| m.contestants.iter().any(|c| c.name == BUILD_REFERENCE))
+    }
+
+    /// The machine, Embree's version and the workload.
+    #[must_use]
+    pub fn header(&self) -> String {
+        let mut out = String::new();
+        let w = &self.workload;
+        let threads = &w.threads;
+        let t_label = threads
+            .iter()
+            .map(ToString::to_string)
+            .collect::<Vec<_>>()
+            .join(" / ");
+        let _ = writeln!(out, "# raybench peers ({})", self.schema);
+        let _ = writeln!(
+            out,
+            "CPU: {} ({} logical cores)",
+            self.machine.cpu, self.machine.cores
+        );
+        let _ = writeln!(out, "ISA: {}", self.machine.isa);
+        let _ = writeln!(out, "OS: {}; {}", self.machine.os, self.machine.version);
+        let _ = writeln!(out, "Embree: {}", self.embree);
+        let _ = writeln!(
+            out,
+            "Workload: primary {0} x {0} in {1} x {1} tiles, {2} incoherent rays (seed {3}), \
+             {4}-ray batches, best of {5}; any hit on rays ending at {6} of bvh's closest hit; \
+             figures at {t_label} threads",
+            w.primary_size, w.tile, w.incoherent_rays, w.seed, w.chunk, w.repeat, w.shadow_fraction
+        );
+        if !self.has_embree() && !self.embree.starts_with("Embree") {
+            let _ = writeln!(
+                out,
+                "No Embree figures ({}): ratio columns are absent.",
+                self.embree
+            );
+        }
+        out
+    }
+
+    /// Mesh `m`'s build table and one table per ray set (Mrays/s and ratios at each
+    /// thread count, counters, differences from `bvh`).
+    #[must_use]
+    pub fn mesh_tables(&self, m: &MeshReport) -> String {
+        let mut out = String::new();
+        let threads = &self.workload.threads;
+        let t_label = threads
+            .iter()
+            .map(ToString::to_string)
+            .collect::<Vec<_>>()
+            .join(" / ");
+        let embree = m.contestants.iter().any(|c| c.name == BUILD_REFERENCE);
+        {
+            let _ = writeln!(
+                out,
+                "\n## {} ({}, {} triangles)\n",
+                m.name, m.spec, m.triangles
+            );
+            for s in &m.skipped {
+                let _ = writeln!(out, "skipped {}: {}", s.name, s.reason);
+            }
+            let _ = writeln!(
+                out,
+                "| contestant | build ms ({} threads) |{}",
+                threads.last().copied().unwrap_or(1),
+                if embree { " vs Embree build |" } else { "" }
+            );
+            let _ = writeln!(out, "|---|---:|{}", if embree { "---:|" } else { "" });
+            for c in &m.contestants {
+                let _ = write!(out, "| {} | {:.1} |", c.name, 1e3 * c.build_s);
+                if embree {
+                    let _ = write!(
+                        out,
+                        " {} |",
+                        c.build_vs_embree
+                            .map_or_else(|| "-".into(), |v| format!("{v:.2}"))
+                    );
+                }
+                out.push('\n');
+            }
+            for set in &m.ray_sets {
+                let rs = RaySet::from_name(set.name).expect("a known ray set");
+                let _ = writeln!(
+                    out,
+                    "\n{} {}: {} rays, {} hit; Mrays/s and ratios at {t_label} threads\n",
+                    m.name, set.name, set.rays, set.hits
+                );
+                let mut head = String::from("| contestant | closest |");
+                let mut rule = String::from("|---|---:|");
+                let closest_refs = if embree {
+                    references(rs, Query::Closest)
+                } else {
+                    &[]
+                };
+                let any_refs = if embree {
+                    references(rs, Query::Any)
+                } else {
+                    &[]
+                };
+                for (_, h) in closest_refs {
+                    let _ = write!(head, " {h} |");
+                    rule.push_str("---:|");
+                }
+                head.push_str(" any |");
+                rule.push_str("---:|");
+                for (_, h) in any_refs {
+                    let _ = write!(head, " {h} |");
+                    rule.push_str("---:|");
+                }
+                head.push_str(
+                    " visits/ray closest, any | tests/ray closest, any | differ closest, any |",
+                );
+                rule.push_str("---:|---:|---:|");
+                let _ = writeln!(out, "{head}\n{rule}");
+                for c in &m.contestants {
+                    let (Some(cl), Some(an)) = (
+                        c.query(set.name, Query::Closest),
+                        c.query(set.name, Query::Any),
+                    ) else {
+                        continue;
+                    };
+                    let _ = write!(
+                        out,
+                        "| {} | {} |",
+                        c.name,
+                        per_threads(threads, 2, |t| cl.mrays(t))
+                    );
+                    let ratio = |q: &QueryReport, reference: &str, t: usize| {
+                        q.ratios
+                            .iter()
+                            .find(|r| r.reference == reference && r.threads == t)
+                            .map(|r| r.value)
+                    };
+                    for (r, _) in closest_refs {
+                        let _ = write!(out, " {} |", per_threads(threads, 2, |t| ratio(cl, r, t)));
+                    }
+                    let _ = write!(out, " {} |", per_threads(threads, 2, |t| an.mrays(t)));
+                    for (r, _) in any_refs {
+                        let _ = write!(out, " {} |", per_threads(threads, 2, |t| ratio(an, r, t)));
+                    }
+                    let count =
+                        |v: Option<f64>| v.map_or_else(|| "-".into(), |v| format!("{v:.1}"));
+                    let _ = writeln!(
+                        out,
+                        " {}, {} | {}, {} | {}, {} |",
+                        count(cl.node_visits_per_ray),
+                        count(an.node_visits_per_ray),
+                        count(cl.prim_tests_per_ray),
+                        count(an.prim_tests_per_ray),
+                        cl.differ,
+                        an.differ
+                    );
+                }
+            }
+        }
+        out
+    }
+}

@@ -1,0 +1,228 @@
+//! The peer benchmark (`benches/peers.rs`, [`raybench_tests::peers`]) on a tiny workload, so
+//! that it cannot rot unnoticed: every contestant runs or says why not, exact backends answer
+//! exactly as `bvh`, peers nearly so, every figure is present and the JSON reads back; and
+//! its command line, defaults (the workload of `../shared/PEERS.md`) and ray sets.
+
+use raybench_core::RaySet;
+use raybench_tests::peers::contestants::{self, Kind};
+use raybench_tests::peers::{self, Command, Options};
+
+fn parse(args: &[&str]) -> Result<Command, String> {
+    Options::parse(args.iter().map(|s| (*s).to_string()))
+}
+
+fn options(args: &[&str]) -> Options {
+    match parse(args) {
+        Ok(Command::Run(o)) => o,
+        other => panic!("{args:?}: {other:?}"),
+    }
+}
+
+#[test]
+fn defaults_are_the_peers_workload() {
+    let o = options(&["--bench"]);
+    let meshes: Vec<_> = o
+        .meshes
+        .iter()
+        .map(|(n, s)| (n.as_str(), s.as_str()))
+        .collect();
+    assert_eq!(
+        meshes,
+        [
+            ("sphere", "icosphere:6"),
+            ("soup", "soup:100000"),
+            ("terrain", "terrain:708")
+        ]
+    );
+    assert_eq!(
+        (o.primary_size, o.incoherent_rays, o.seed),
+        (1024, 1 << 20, 1)
+    );
+    assert_eq!((o.chunk, o.contestants.as_ref()), (1024, None));
+    let q = options(&["--quick", "--repeat", "5", "--meshes", "soup,icosphere:3"]);
+    assert_eq!(
+        (q.primary_size, q.incoherent_rays, q.repeat),
+        (256, 65_536, 5)
+    );
+    assert_eq!(q.meshes[0], ("soup".into(), "soup:100000".into()));
+    assert_eq!(q.meshes[1], ("icosphere:3".into(), "icosphere:3".into()));
+    // --size and --rays win over --quick in any order.
+    let s = options(&["--size", "64", "--quick", "--rays", "100"]);
+    assert_eq!((s.primary_size, s.incoherent_rays), (64, 100));
+    assert_eq!(parse(&["--help"]), Ok(Command::Help));
+    assert_eq!(parse(&["--list"]), Ok(Command::List));
+    assert_eq!(options(&["--threads", "1"]).thread_counts(), [1]);
+    assert_eq!(options(&["--threads", "3"]).thread_counts(), [1, 3]);
+}
+
+#[test]
+fn bad_options_are_refused_with_a_reason() {
+    for (args, expected) in [
+        (
+            &["--repeat", "0"][..],
+            "--repeat: '0' is not a positive integer",
+        ),
+        (&["--chunk", "x"], "--chunk: 'x' is not a positive integer"),
+        (&["--size"], "--size needs a value"),
+        (&["--size", "20000"], "--size: 20000 is above 16384"),
+        (&["--meshes", ","], "--meshes: empty list"),
+        (
+            &["--frobnicate"],
+            "unknown option '--frobnicate' (see --help)",
+        ),
+    ] {
+        assert_eq!(parse(args), Err(expected.to_string()), "{args:?}");
+    }
+    let e = parse(&["--contestants", "bvh,nope"]).unwrap_err();
+    assert!(
+        e.starts_with("--contestants: unknown contestant 'nope' (known: bvh,"),
+        "{e}"
+    );
+}
+
+#[test]
+fn contestants_are_the_exact_registry_backends_then_the_peers() {
+    let all = contestants::all();
+    let mut raybench: Vec<_> = all
+        .iter()
+        .filter(|c| c.kind == Kind::Raybench)
+        .map(|c| c.name)
+        .collect();
+    // Every exact backend but the brute force one (in registry order; compared as sets).
+    let mut exact = raybench_tests::EXACT_BACKENDS[1..].to_vec();
+    raybench.sort_unstable();
+    exact.sort_unstable();
+    assert_eq!(raybench, exact);
+    let peers: Vec<_> = all
+        .iter()
+        .filter(|c| c.kind == Kind::Peer)
+        .map(|c| c.name)
+        .collect();
+    assert!(
+        peers.starts_with(&["bvh-crate", "obvhs-bvh2", "obvhs-cwbvh"]),
+        "{peers:?}"
+    );
+    assert_eq!(peers.len(), if cfg!(feature = "embree") { 7 } else { 3 });
+    let picked = contestants::select(&["obvhs-bvh2".into(), "bvh".into()]).unwrap();
+    let names: Vec<_> = picked.iter().map(|c| c.name).collect();
+    assert_eq!(names, ["bvh", "obvhs-bvh2"]);
+}
+
+#[test]
+fn ray_sets_are_deterministic_and_shadow_rays_end_at_half_the_hit() {
+    let o = options(&["--size", "16", "--rays", "500"]);
+    let scene = raybench_scene::load("icosphere:2", &raybench_scene::assets_dir(None)).unwrap();
+    let primary = peers::ray_set(&scene, RaySet::Primary, &o);
+    let incoherent = peers::ray_set(&scene, RaySet::Incoherent, &o);
+    assert_eq!((primary.len(), incoherent.len()), (256, 500));
+    assert_eq!(primary, peers::ray_set(&scene, RaySet::Primary, &o));
+    assert_eq!(incoherent, peers::ray_set(&scene, RaySet::Incoherent, &o));
+    let hit = raybench_core::Hit {
+        t: 3.0,
+        prim: 0,
+        sub: 0,
+        u: 0.0,
+        v: 0.0,
+        normal: raybench_core::Vec3::Z,
+    };
+    let shadow = peers::shadow_rays(&primary[..2], &[Some(hit), None]);
+    assert_eq!(shadow[0].t_max, 1.5);
+    assert_eq!(shadow[0].origin, primary[0].origin);
+    assert_eq!(shadow[1], primary[1]);
+}
+
+#[test]
+fn tiny_run_measures_every_contestant_and_writes_json() {
+    let mut o = options(&[
+        "--size",
+        "24",
+        "--rays",
+        "2000",
+        "--repeat",
+        "1",
+        "--chunk",
+        "100",
+        "--threads",
+        "2",
+        "--meshes",
+        "icosphere:2,soup:300",
+    ]);
+    let dir = std::env::temp_dir().join(format!("raybench-peer-bench-{}", std::process::id()));
+    o.json = dir.join("out").join("peers.json");
+    let mut calls = 0;
+    let report = peers::run(&o, |partial| {
+        calls += 1;
+        assert_eq!(partial.meshes.len(), calls);
+        Ok(())
+    })
+    .unwrap();
+    assert_eq!(calls, 2);
+    assert_eq!(report.meshes.len(), 2);
+    let all = contestants::all();
+    for m in &report.meshes {
+        let ran: Vec<_> = m.contestants.iter().map(|c| c.name.as_str()).collect();
+        for c in &all {
+            let skipped = m.skipped.iter().find(|s| s.name == c.name);
+            assert!(
+                ran.contains(&c.name) != skipped.is_some(),
+                "{} on {}: ran or skipped, once",
+                c.name,
+                m.name
+            );
+            if let Some(s) = skipped {
+                assert!(!s.reason.is_empty());
+                assert_ne!(c.kind, Kind::Peer, "{}: {}", c.name, s.reason);
+            }
+        }
+        let rays: Vec<_> = m.ray_sets.iter().map(|s| (s.name, s.rays)).collect();
+        assert_eq!(rays, [("primary", 576), ("incoherent", 2000)]);
+        assert!(m.ray_sets.iter().all(|s| s.hits > 0), "{}", m.name);
+        // Embree runs wherever the feature is on (CI installs it).
+        let embree = ran.contains(&"embree1-default") && ran.contains(&"embree1-robust");
+        assert_eq!(embree, cfg!(feature = "embree"));
+        for c in &m.contestants {
+            for s in &c.ray_sets {
+                let n = m.ray_sets.iter().find(|i| i.name == s.name).unwrap().rays;
+                for q in [&s.closest, &s.any] {
+                    let threads: Vec<_> = q.runs.iter().map(|r| r.threads).collect();
+                    assert_eq!(threads, [1, 2]);
+                    assert!(q.runs.iter().all(|r| r.mrays.is_finite() && r.mrays > 0.0));
+                    match c.kind {
+                        Kind::Raybench => {
+                            assert_eq!(q.differ, 0, "{} {} {}", c.name, m.name, s.name);
+                            assert!(q.node_visits_per_ray.is_some());
+                            assert!(q.prim_tests_per_ray.is_some());
+                        }
+                        // Peers differ on edge rays only.
+                        Kind::Peer => assert!(q.differ * 100 <= n, "{} {}", c.name, q.differ),
+                    }
+                    // One ratio per Embree reference and thread count.
+                    assert_eq!(q.ratios.is_empty(), !embree, "{}", c.name);
+                    assert_eq!(q.ratios.len() % 2, 0);
+                }
+            }
+            assert_eq!(c.build_vs_embree.is_some(), embree);
+        }
+    }
+    let tables = report.tables();
+    for c in &report.meshes[0].contestants {
+        assert!(tables.contains(&format!("| {} |", c.name)), "{}", c.name);
+    }
+    peers::write_json(&report, &o.json).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&o.json).unwrap()).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(json["schema"], "raybench-peers/1");
+    assert_eq!(json["workload"]["threads"], serde_json::json!([1, 2]));
+    let first = &json["meshes"][0]["contestants"][0];
+    assert_eq!(first["name"], "bvh");
+    assert_eq!(first["kind"], "raybench");
+    assert_eq!(first["ray_sets"][1]["name"], "incoherent");
+    assert!(
+        first["ray_sets"][0]["any"]["runs"][1]["mrays"]
+            .as_f64()
+            .unwrap()
+            > 0.0
+    );
+    assert!(json["machine"]["cpu"].is_string());
+}
