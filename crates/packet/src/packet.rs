@@ -341,6 +341,10 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
             .enumerate()
             .flat_map(|(k, m)| BitIter(*m).map(move |lane| k * L::W + lane))
             .fold(f32::NEG_INFINITY, |a, i| a.max(st.limit[i]));
+        let mut limits = [L::splat(0.0); K];
+        for (k, limit) in limits.iter_mut().enumerate() {
+            *limit = L::load(&st.limit[k * L::W..]);
+        }
         // Children hit by some lane, sorted far to near by the frustum's entry bound.
         let mut found: [Entry<K>; WIDE] = [(0, 0.0, [0; K]); WIDE];
         let mut count = 0;
@@ -356,22 +360,11 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
                     if child == EMPTY_CHILD {
                         continue;
                     }
-                    let mut lanes = [0u32; K];
-                    let mut any = 0;
-                    for k in 0..K {
-                        if masks[k] != 0 {
-                            lanes[k] = chunks[k].0.enters(
-                                node,
-                                first + slot,
-                                &negative,
-                                L::load(&st.limit[k * L::W..]),
-                            ) & masks[k];
-                            any |= lanes[k];
-                        }
-                    }
-                    if any == 0 {
+                    let Some(lanes) =
+                        child_lanes(&chunks, node, first + slot, &negative, &masks, &limits)
+                    else {
                         continue;
-                    }
+                    };
                     let e = t[slot];
                     let mut j = count;
                     while j > 0 && found[j - 1].1 < e {
@@ -390,6 +383,28 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
         stack[sp..sp + count].copy_from_slice(&found[..count]);
         sp += count;
     }
+}
+
+/// The lanes of each vector (among `masks`) that enter child `slot` of `node` no later than
+/// their lane of `limits`, or `None` when no lane does.
+#[inline(always)]
+fn child_lanes<L: Lanes, const K: usize>(
+    chunks: &[(SlabLanes<L>, L::V, u32); K],
+    node: &WideNode,
+    slot: usize,
+    negative: &[bool; 3],
+    masks: &[u32; K],
+    limits: &[L::V; K],
+) -> Option<[u32; K]> {
+    let mut lanes = [0u32; K];
+    let mut any = 0;
+    for k in 0..K {
+        if masks[k] != 0 {
+            lanes[k] = chunks[k].0.enters(node, slot, negative, limits[k]) & masks[k];
+            any |= lanes[k];
+        }
+    }
+    (any != 0).then_some(lanes)
 }
 
 /// Tests the leaf `leaf` against the lanes `masks` of a packet.
@@ -495,6 +510,10 @@ pub(crate) fn occluded<L: Lanes, const K: usize, C: Counters>(
         }
     }
     let chunks = split::<L, K>(rays);
+    let mut t_max = [L::splat(0.0); K];
+    for (t, chunk) in t_max.iter_mut().zip(&chunks) {
+        *t = chunk.1;
+    }
     let mut tri_lanes: Option<[RayLanes<L>; K]> = None;
     let negative = [oct & 1 != 0, oct & 2 != 0, oct & 4 != 0];
     let frustum = Frustum::<L::Single>::new(rays, negative);
@@ -566,18 +585,9 @@ pub(crate) fn occluded<L: Lanes, const K: usize, C: Counters>(
                 if child == EMPTY_CHILD {
                     continue;
                 }
-                let mut lanes = [0u32; K];
-                let mut any = 0;
-                for k in 0..K {
-                    if masks[k] != 0 {
-                        lanes[k] = chunks[k]
-                            .0
-                            .enters(node, first + slot, &negative, chunks[k].1)
-                            & masks[k];
-                        any |= lanes[k];
-                    }
-                }
-                if any != 0 {
+                if let Some(lanes) =
+                    child_lanes(&chunks, node, first + slot, &negative, &masks, &t_max)
+                {
                     single::prefetch_child(layout, child);
                     stack[sp] = (child, lanes);
                     sp += 1;
