@@ -3,16 +3,20 @@
 //! SIMD ray tracing behind raybench's [`Accel`] contract (backend `packet`), bit-identical
 //! to the scalar backends:
 //!
+//! - **One wide tree** (`layout.rs`): the BVH2 of `raybench-bvh` collapsed into a BVH8 by
+//!   an SAH-optimal dynamic program (Ylitie, Karras and Laine, HPG 2017), its children's
+//!   boxes stored as structure of arrays so that one SIMD test checks eight children, its
+//!   leaves stored as contiguous blocks of four triangles with their ids.
 //! - **Coherent packets** (Wald, Slusallek, Benthin and Wagner, "Interactive Rendering with
-//!   Coherent Ray Tracing", 2001): consecutive rays of a batch that share an octant travel
-//!   the BVH2 of `raybench-bvh` together, 16 at a time with AVX2 (two vectors of eight
-//!   lanes), 8 with SSE4.1, with one SIMD slab test per node and vector, nearest child first
-//!   by the packet's direction, each lane clipped to its own best `t`; leaves test one
-//!   triangle against all lanes.
-//! - **A wide BVH for incoherent rays**: the BVH2 collapsed into a BVH8 whose children's
-//!   boxes are stored as structure of arrays, so one SIMD test checks eight children
-//!   against one ray; children are visited nearest first and leaves test `W` triangles at
-//!   once. Single rays (`intersect`, `occluded`) and packets whose lanes diverge take it.
+//!   Coherent Ray Tracing", 2001): consecutive rays of a batch that share an octant walk the
+//!   BVH8 together, 16 at a time with AVX2 (two vectors of eight lanes), 8 with SSE4.1: one
+//!   interval (frustum) test of the packet against all eight children, per-lane slab tests
+//!   of the children it keeps, nearest child first, each lane clipped to its own best `t`;
+//!   leaves test one triangle against all lanes.
+//! - **Single rays** (`intersect`, `occluded`, and batches whose rays share no octant): one
+//!   SIMD test of eight children, nearest first, children prefetched, one SIMD test per
+//!   block of four triangles; a batch's incoherent rays go four at a time, interleaved step
+//!   by step so that their memory waits overlap (`stream.rs`).
 //! - **Instruction sets chosen at run time** ([`Isa::detect`]): AVX2, else SSE4.1, else
 //!   portable code (four plain `f32` lanes, the fallback on any target). The same generic
 //!   kernels are instantiated once per instruction set inside a `#[target_feature]`
