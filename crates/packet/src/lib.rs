@@ -246,16 +246,19 @@ fn batch_closest<L: Lanes, C: Counters>(
             None => pending.extend(start..end),
         }
     }
-    let mut stacks = [[(0, 0.0); single::STACK]; stream::STREAMS];
-    stream::closest::<L, C>(
-        &accel.layout,
-        g,
-        rays,
-        &pending,
-        &mut best,
-        &mut stacks,
-        counters,
-    );
+    if !pending.is_empty() {
+        // Four stacks (15 KB) to zero: only for batches with incoherent rays.
+        let mut stacks = [[(0, 0.0); single::STACK]; stream::STREAMS];
+        stream::closest::<L, C>(
+            &accel.layout,
+            g,
+            rays,
+            &pending,
+            &mut best,
+            &mut stacks,
+            counters,
+        );
+    }
     for ((ray, b), hit) in rays.iter().zip(best).zip(hits) {
         *hit = g.complete(ray, b);
     }
@@ -299,16 +302,18 @@ fn batch_occluded<L: Lanes, C: Counters>(
             ),
         }
     }
-    let mut stacks = [[(0, 0.0); single::STACK]; stream::STREAMS];
-    stream::occluded::<L, C>(
-        &accel.layout,
-        g,
-        rays,
-        &pending,
-        occluded,
-        &mut stacks,
-        counters,
-    );
+    if !pending.is_empty() {
+        let mut stacks = [[(0, 0.0); single::STACK]; stream::STREAMS];
+        stream::occluded::<L, C>(
+            &accel.layout,
+            g,
+            rays,
+            &pending,
+            occluded,
+            &mut stacks,
+            counters,
+        );
+    }
 }
 
 /// One ray's closest hit through the BVH8.
