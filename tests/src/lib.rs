@@ -214,8 +214,11 @@ pub fn check(backends: &[&str], scene: &str, size: u32) {
             );
         }
     }
-    let rays =
-        raybench_core::rays::incoherent(scene_data.geometry.bounds(), (size * size) as usize, 1);
+    let rays = raybench_core::ray_sets::incoherent(
+        scene_data.geometry.bounds(),
+        (size * size) as usize,
+        1,
+    );
     let (reference_rays, _) = prepared("naive", &scene_data)
         .trace_rays(&rays, false)
         .unwrap();
@@ -512,7 +515,8 @@ pub mod gpu {
             };
             assert_close_colors(&what, &reference.color, &frame.color, max_mismatch);
         }
-        let rays = raybench_core::rays::incoherent(s.geometry.bounds(), (size * size) as usize, 1);
+        let rays =
+            raybench_core::ray_sets::incoherent(s.geometry.bounds(), (size * size) as usize, 1);
         let (reference, _) = prepared("naive", &s).trace_rays(&rays, false).unwrap();
         let (hits, _) = gpu.trace_rays(&rays, false).unwrap();
         let key = |h: &[Option<raybench_core::Hit>]| -> (Vec<u32>, Vec<f32>) {

@@ -13,17 +13,17 @@
 
 use super::whitted::{Segment, light_ray, shading_frame};
 use super::{Tile, TileOutput, TileState, add_unshadowed, tile_pixels};
-use crate::accel::{Accel, Counters};
+use crate::Ray;
+use crate::Shape;
 use crate::camera::CameraRays;
-use crate::geometry::Shape;
 use crate::material::MaterialKind;
 use crate::optics::{
     cosine_hemisphere, fresnel_dielectric, offset_ray_origin, reflect, refract, triangle_point,
 };
-use crate::ray::Ray;
 use crate::renderer::RenderSettings;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
+use crate::{Accel, Counters};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
