@@ -47,7 +47,7 @@ struct PathState {
 
 /// Shadow rays towards emissive triangles stop this fraction short of the light, so that
 /// the light's own triangle does not occlude it.
-const SHADOW_SHORTEN: f32 = 1.0 - 1.0 / 1024.0;
+pub const SHADOW_SHORTEN: f32 = 1.0 - 1.0 / 1024.0;
 
 pub(super) fn path_tile<A: Accel, C: Counters>(
     scene: &Scene,

@@ -14,7 +14,7 @@ use crate::{Accel, Counters};
 use glam::Vec3;
 
 /// Ambient term of diffuse surfaces, as a fraction of their colour (Whitted's `k_a`).
-const AMBIENT: f32 = 0.05;
+pub const AMBIENT: f32 = 0.05;
 
 /// A ray in flight and what its radiance is worth to its pixel.
 #[derive(Clone, Copy)]
