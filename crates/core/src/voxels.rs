@@ -506,22 +506,27 @@ impl Volume {
             composite,
         };
         if !self.params.skip_empty {
-            let _ = segments(self.dims, go, gd, t0, t1, &mut |c, ta, tb| {
-                seg.visit(acc, c, ta, tb)
-            });
+            let _ = crate::dda(
+                self.dims,
+                go,
+                gd,
+                t0,
+                t1,
+                &mut segments(|c, ta, tb| seg.visit(acc, c, ta, tb)),
+            );
             return;
         }
         // Empty-space skipping: walk the coarse grid; enter a block's voxels only when it
         // can contribute (compositing: some extinction in its value range; MIP: a value
         // above the maximum so far).
         let scale = 1.0 / SKIP_BLOCK as f32;
-        let _ = segments(
+        let _ = crate::dda(
             self.coarse_dims,
             go * scale,
             gd * scale,
             t0,
             t1,
-            &mut |blk, ta, tb| {
+            &mut segments(|blk, ta, tb| {
                 let i = (blk[2] as usize * self.coarse_dims[1] as usize + blk[1] as usize)
                     * self.coarse_dims[0] as usize
                     + blk[0] as usize;
@@ -539,15 +544,22 @@ impl Volume {
                 let lo_c = blk.map(|c| c * SKIP_BLOCK);
                 let sub = [0, 1, 2].map(|a| (self.dims[a] - lo_c[a]).min(SKIP_BLOCK));
                 let origin = go - Vec3::new(lo_c[0] as f32, lo_c[1] as f32, lo_c[2] as f32);
-                segments(sub, origin, gd, ta, tb, &mut |c, sa, sb| {
-                    seg.visit(
-                        acc,
-                        [c[0] + lo_c[0], c[1] + lo_c[1], c[2] + lo_c[2]],
-                        sa,
-                        sb,
-                    )
-                })
-            },
+                crate::dda(
+                    sub,
+                    origin,
+                    gd,
+                    ta,
+                    tb,
+                    &mut segments(|c, sa, sb| {
+                        seg.visit(
+                            acc,
+                            [c[0] + lo_c[0], c[1] + lo_c[1], c[2] + lo_c[2]],
+                            sa,
+                            sb,
+                        )
+                    }),
+                )
+            }),
         );
     }
 
@@ -557,10 +569,17 @@ impl Volume {
     pub fn voxels_crossed(&self, ray: &Ray, t_max: f32) -> Vec<([u32; 3], f32, f32)> {
         let mut out = Vec::new();
         if let Some((go, gd, t0, t1)) = self.grid_ray(ray, t_max) {
-            let _ = segments(self.dims, go, gd, t0, t1, &mut |c, a, b| {
-                out.push((c, a, b));
-                ControlFlow::Continue(())
-            });
+            let _ = crate::dda(
+                self.dims,
+                go,
+                gd,
+                t0,
+                t1,
+                &mut segments(|c, a, b| {
+                    out.push((c, a, b));
+                    ControlFlow::Continue(())
+                }),
+            );
         }
         out
     }
@@ -604,24 +623,18 @@ impl Segment<'_> {
     }
 }
 
-/// The shared 3D-DDA ([`crate::dda`]) over the segments a ray integrates: the cells it
-/// crosses for a zero length (through an edge or a corner) hold nothing to integrate and
-/// are skipped.
+/// A 3D-DDA visitor ([`crate::dda`]) that skips the cells a ray crosses for a zero length
+/// (through an edge or a corner): they hold no segment to integrate.
 fn segments(
-    dims: [u32; 3],
-    o: Vec3,
-    d: Vec3,
-    t0: f32,
-    t1: f32,
-    visit: &mut impl FnMut([u32; 3], f32, f32) -> ControlFlow<()>,
-) -> ControlFlow<()> {
-    crate::dda(dims, o, d, t0, t1, &mut |c, ta, tb| {
+    mut visit: impl FnMut([u32; 3], f32, f32) -> ControlFlow<()>,
+) -> impl FnMut([u32; 3], f32, f32) -> ControlFlow<()> {
+    move |c, ta, tb| {
         if tb > ta {
             visit(c, ta, tb)
         } else {
             ControlFlow::Continue(())
         }
-    })
+    }
 }
 
 #[cfg(test)]

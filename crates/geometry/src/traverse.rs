@@ -15,16 +15,23 @@ use crate::hit::{Hit, PrimHit};
 use crate::ray::Ray;
 use crate::stack::cull_bound;
 
-/// One closest-hit query in progress: the ray, the best hit so far, the counters.
+/// One query in progress: the ray, the geometry its primitive ids index, the counters, and
+/// the query's own state `S` (the best hit so far for [`Closest`], nothing for [`AnyHit`]).
 #[derive(Debug)]
-pub struct Closest<'a, C: Counters> {
+pub struct Query<'a, C: Counters, S> {
     geometry: &'a Geometry,
     ray: &'a Ray,
-    best: Option<(u32, PrimHit)>,
     counters: &'a mut C,
+    state: S,
 }
 
-impl<'a, C: Counters> Closest<'a, C> {
+/// A closest-hit query in progress: its state is the best hit so far.
+pub type Closest<'a, C> = Query<'a, C, Option<(u32, PrimHit)>>;
+
+/// An any-hit query in progress.
+pub type AnyHit<'a, C> = Query<'a, C, ()>;
+
+impl<'a, C: Counters, S> Query<'a, C, S> {
     /// The geometry the primitive ids index.
     #[inline]
     #[must_use]
@@ -39,32 +46,34 @@ impl<'a, C: Counters> Closest<'a, C> {
         self.ray
     }
 
+    /// Counts `n` visits of nodes or cells.
+    #[inline]
+    pub fn add_visits(&mut self, n: u64) {
+        self.counters.add_visits(n);
+    }
+}
+
+impl<C: Counters> Closest<'_, C> {
     /// Tests primitive `id` ([`Geometry::test_closest`]) and counts the test; returns
     /// whether it became the best hit.
     #[inline]
     pub fn test(&mut self, id: u32) -> bool {
         self.counters.add_tests(1);
-        self.geometry.test_closest(id, self.ray, &mut self.best)
-    }
-
-    /// Counts `n` visits of nodes or cells.
-    #[inline]
-    pub fn add_visits(&mut self, n: u64) {
-        self.counters.add_visits(n);
+        self.geometry.test_closest(id, self.ray, &mut self.state)
     }
 
     /// Whether a hit has been found.
     #[inline]
     #[must_use]
     pub fn has_hit(&self) -> bool {
-        self.best.is_some()
+        self.state.is_some()
     }
 
     /// The best hit's `t`, or the ray's `t_max` while there is none.
     #[inline]
     #[must_use]
     pub fn best_t(&self) -> f32 {
-        self.best.map_or(self.ray.t_max, |(_, h)| h.t)
+        self.state.map_or(self.ray.t_max, |(_, h)| h.t)
     }
 
     /// The largest entry distance at which a node or cell must still be visited
@@ -79,7 +88,16 @@ impl<'a, C: Counters> Closest<'a, C> {
     /// [`crate::keep_closer`]).
     #[inline]
     pub fn best_mut(&mut self) -> &mut Option<(u32, PrimHit)> {
-        &mut self.best
+        &mut self.state
+    }
+}
+
+impl<C: Counters> AnyHit<'_, C> {
+    /// Whether primitive `id` is hit in `[ray.t_min, ray.t_max]`; counts the test.
+    #[inline]
+    pub fn test(&mut self, id: u32) -> bool {
+        self.counters.add_tests(1);
+        self.geometry.shape(id).intersect(self.ray).is_some()
     }
 }
 
@@ -94,51 +112,14 @@ pub fn closest<C: Counters>(
 ) -> Option<Hit> {
     let mut best = None;
     counters.add_tests(geometry.closest_unbounded(ray, &mut best));
-    let mut query = Closest {
+    let mut query = Query {
         geometry,
         ray,
-        best,
         counters,
+        state: best,
     };
     walk(&mut query);
-    geometry.complete(ray, query.best)
-}
-
-/// One any-hit query in progress: the ray and the counters.
-#[derive(Debug)]
-pub struct AnyHit<'a, C: Counters> {
-    geometry: &'a Geometry,
-    ray: &'a Ray,
-    counters: &'a mut C,
-}
-
-impl<'a, C: Counters> AnyHit<'a, C> {
-    /// The geometry the primitive ids index.
-    #[inline]
-    #[must_use]
-    pub fn geometry(&self) -> &'a Geometry {
-        self.geometry
-    }
-
-    /// The original ray.
-    #[inline]
-    #[must_use]
-    pub fn ray(&self) -> &'a Ray {
-        self.ray
-    }
-
-    /// Whether primitive `id` is hit in `[ray.t_min, ray.t_max]`; counts the test.
-    #[inline]
-    pub fn test(&mut self, id: u32) -> bool {
-        self.counters.add_tests(1);
-        self.geometry.shape(id).intersect(self.ray).is_some()
-    }
-
-    /// Counts `n` visits of nodes or cells.
-    #[inline]
-    pub fn add_visits(&mut self, n: u64) {
-        self.counters.add_visits(n);
-    }
+    geometry.complete(ray, query.state)
 }
 
 /// Whether anything blocks `ray`: the unbounded primitives first, then `walk` over the
@@ -154,10 +135,11 @@ pub fn occluded<C: Counters>(
     let (plane_hit, tests) = geometry.occluded_unbounded(ray);
     counters.add_tests(tests);
     plane_hit
-        || walk(&mut AnyHit {
+        || walk(&mut Query {
             geometry,
             ray,
             counters,
+            state: (),
         })
 }
 
