@@ -167,10 +167,17 @@ pub fn supports(geometry: &Geometry) -> Result<(), String> {
         .filter(|&&id| geometry.shape(id).kind() != PrimitiveKind::Triangle)
         .count();
     if side > MAX_SIDE_PRIMITIVES {
+        // Every bounded kind but the triangle, by name, so a new kind joins the message.
+        let kinds: Vec<&str> = PrimitiveKind::ALL
+            .iter()
+            .filter(|&&k| !matches!(k, PrimitiveKind::Triangle | PrimitiveKind::Plane))
+            .map(|k| k.name())
+            .collect();
         return Err(format!(
-            "{side} spheres, height fields, analytic solids / CSG trees, SDF models or Bezier patches: the Embree backends trace triangles in Embree \
-             and test other bounded primitives beside it by every ray, at most \
-             {MAX_SIDE_PRIMITIVES}"
+            "{side} bounded primitives that are not triangles ({}): the Embree backends trace \
+             triangles in Embree and test other bounded primitives beside it by every ray, at \
+             most {MAX_SIDE_PRIMITIVES}",
+            kinds.join(", ")
         ));
     }
     Ok(())
