@@ -21,7 +21,6 @@ pub mod generators;
 mod gltf_loader;
 pub mod grids;
 mod obj;
-mod sdf_format;
 mod transform;
 pub mod volumes;
 
