@@ -19,10 +19,10 @@ mod error;
 mod format;
 pub mod generators;
 mod gltf_loader;
-pub mod grids;
 mod obj;
+pub mod phantom;
+pub mod samples;
 mod transform;
-pub mod volumes;
 
 pub use bpt::{BptPatch, load_bpt_file, parse_bpt};
 pub use budget::{

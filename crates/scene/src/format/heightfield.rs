@@ -5,7 +5,7 @@ use super::{Context, ObjectCx, TransformDesc};
 use crate::budget::{Holds, Reservation};
 use crate::error::LoadError;
 use crate::generators;
-use crate::grids::{SampleFormat, read_png_gray, read_raw};
+use crate::samples::{SampleFormat, read_png_gray, read_raw};
 use raybench_core::{CellSurface, HeightField, HeightFieldTraversal, MAX_HEIGHT_FIELD_VERTICES};
 use serde::Deserialize;
 use std::sync::Arc;

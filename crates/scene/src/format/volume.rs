@@ -4,8 +4,8 @@
 use super::{Context, ScaleDesc, TransformDesc, V3};
 use crate::budget::{Holds, Reservation};
 use crate::error::LoadError;
-use crate::grids::{SampleFormat, read_raw};
-use crate::volumes;
+use crate::phantom;
+use crate::samples::{SampleFormat, read_raw};
 use raybench_core::voxels::{MAX_VOLUME_VOXELS, check_volume_dims};
 use raybench_core::{
     Sampling, TransferFunction, TransferPoint, Vec3, Volume, VolumeData, VolumeParams,
@@ -68,9 +68,9 @@ pub(super) fn volume(
             if v.dims.is_some() || v.format.is_some() {
                 return Err(parse("dims and format belong to raw volumes".into()));
             }
-            let n = volumes::parse_volume_spec(spec)?;
+            let n = phantom::parse_volume_spec(spec)?;
             budget.reserve(Holds::Voxels(u64::from(n).pow(3)), &context)?;
-            let data = volumes::rasterize(&volumes::shepp_logan_ellipsoids(), n);
+            let data = phantom::rasterize(&phantom::shepp_logan_ellipsoids(), n);
             // Generated volumes span [-1, 1]^3.
             ([n; 3], VolumeData::F32(data), Vec3::splat(2.0 / n as f32))
         }
