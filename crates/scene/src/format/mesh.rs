@@ -7,7 +7,7 @@ use crate::budget::{Holds, Reservation};
 use crate::error::LoadError;
 use crate::gltf_loader::load_gltf_file;
 use crate::obj::{MeshData, load_obj_file};
-use raybench_core::{Light, PolygonMesh, Scene, SceneBuilder, SceneError, Triangle, Vec3};
+use raybench_core::{PolygonMesh, Scene, SceneBuilder, SceneError, Triangle, Vec3};
 use serde::Deserialize;
 use std::path::Path;
 
@@ -144,14 +144,7 @@ pub(crate) fn bare_mesh_scene(path: &Path) -> Result<Scene, LoadError> {
         context: path.display().to_string(),
         cause,
     };
-    let mut b = SceneBuilder::new(&name);
-    b.background(Vec3::new(0.55, 0.65, 0.8))
-        .map_err(scene_err)?;
-    b.add_light(Light::Directional {
-        direction: Vec3::new(-0.4, -1.0, -0.6),
-        radiance: Vec3::ONE,
-    })
-    .map_err(scene_err)?;
+    let mut b = crate::lit_builder(&name).map_err(scene_err)?;
     add_mesh_data(&mut b, &name, data, None).map_err(scene_err)?;
     Ok(b.build())
 }
