@@ -405,8 +405,12 @@ pub fn generate_scene(spec: &str) -> Result<Scene, LoadError> {
         }
         Generated::HeightField { n, heights } => {
             let field = HeightField::new(n, n, heights, None).map_err(scene_err)?;
-            b.add_height_field(spec, Arc::new(field), mats[1])
-                .map_err(scene_err)?;
+            b.add_shapes(
+                spec,
+                vec![raybench_core::Shape::HeightField(Arc::new(field))],
+                mats[1],
+            )
+            .map_err(scene_err)?;
             b.camera(terrain_camera()).map_err(scene_err)?;
         }
         Generated::Spheres(spheres) => {

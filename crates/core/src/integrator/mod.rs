@@ -19,8 +19,8 @@ mod whitted;
 
 pub use mip_composite::shade_volumes;
 pub use path::{DIMENSIONS_PER_BOUNCE, ROULETTE_DEPTH, SHADOW_SHORTEN};
-pub use whitted::AMBIENT;
 use wavefront::Wavefront;
+pub use whitted::AMBIENT;
 
 /// A rectangle of pixels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -78,7 +78,14 @@ fn bezier(
     }
     match d.tessellate {
         None => b
-            .add_bezier_patches(d.file.as_str(), built, material)
+            .add_shapes(
+                d.file.as_str(),
+                built
+                    .into_iter()
+                    .map(raybench_core::Shape::Bezier)
+                    .collect(),
+                material,
+            )
             .map_err(scene_err(d.file.clone()))?,
         Some(n) => {
             let triangles = 2 * u64::from(n) * u64::from(n) * built.len() as u64;

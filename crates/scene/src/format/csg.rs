@@ -149,7 +149,8 @@ fn add_solid(
     let err = cx.err();
     let m = cx.material(material)?.unwrap_or(0);
     let csg = Csg::new(&placed(solid, transform)).map_err(&err)?;
-    cx.b.add_csg(name, Arc::new(csg), m).map_err(err)?;
+    cx.b.add_shapes(name, vec![raybench_core::Shape::Csg(Arc::new(csg))], m)
+        .map_err(err)?;
     Ok(())
 }
 
@@ -262,7 +263,8 @@ impl CsgDesc {
         let m = cx.material(self.material.as_ref())?.unwrap_or(0);
         let tree = csg_node(&self.tree, 1).map_err(&err)?;
         let csg = Csg::new(&tree).map_err(&err)?;
-        cx.b.add_csg("csg", Arc::new(csg), m).map_err(err)?;
+        cx.b.add_shapes("csg", vec![raybench_core::Shape::Csg(Arc::new(csg))], m)
+            .map_err(err)?;
         Ok(())
     }
 }

@@ -65,8 +65,12 @@ impl GeneratorDesc {
                 // identity, else `transform_point3` on every vertex.
                 let field = HeightField::new(n, n, heights, (!xf.is_identity()).then_some(a))
                     .map_err(&err)?;
-                cx.b.add_height_field(self.spec.as_str(), Arc::new(field), m)
-                    .map_err(err)?;
+                cx.b.add_shapes(
+                    self.spec.as_str(),
+                    vec![raybench_core::Shape::HeightField(Arc::new(field))],
+                    m,
+                )
+                .map_err(err)?;
             }
         }
         Ok(())

@@ -55,8 +55,12 @@ impl HeightFieldDesc {
         let err = cx.err();
         let m = cx.material(self.material.as_ref())?.unwrap_or(0);
         let field = height_field(self, cx.ctx, cx.what, cx.budget)?;
-        cx.b.add_height_field("height field", Arc::new(field), m)
-            .map_err(err)?;
+        cx.b.add_shapes(
+            "height field",
+            vec![raybench_core::Shape::HeightField(Arc::new(field))],
+            m,
+        )
+        .map_err(err)?;
         Ok(())
     }
 }

@@ -83,7 +83,8 @@ impl SdfDesc {
         let err = cx.err();
         let m = cx.material(self.material.as_ref())?.unwrap_or(0);
         let model = self.build().map_err(&err)?;
-        cx.b.add_sdf("sdf", Arc::new(model), m).map_err(err)?;
+        cx.b.add_shapes("sdf", vec![raybench_core::Shape::Sdf(Arc::new(model))], m)
+            .map_err(err)?;
         Ok(())
     }
 
