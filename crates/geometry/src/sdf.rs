@@ -40,6 +40,7 @@
 use crate::aabb::Aabb;
 use crate::checks;
 use crate::error::SceneError;
+use crate::hit::PrimHit;
 use crate::limits::{
     MAX_COORDINATE, MAX_SDF_DEPTH, MAX_SDF_NODES, MAX_SDF_STEPS, MAX_SDF_TOLERANCE,
     MIN_SDF_TOLERANCE,
@@ -475,8 +476,8 @@ impl Sdf {
     /// of the module documentation.
     #[inline]
     #[must_use]
-    pub fn intersect(&self, ray: &Ray) -> Option<f32> {
-        self.march(ray).t
+    pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
+        self.march(ray).t.map(PrimHit::at)
     }
 
     /// [`Sdf::intersect`] with the number of field evaluations it made.
@@ -933,24 +934,25 @@ mod tests {
         assert!((eps - 1e-4 * 12f32.sqrt()).abs() < 1e-9, "{eps}");
         // Head-on: exact distances converge in one step.
         let r = Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::Z);
-        let t = m.intersect(&r).unwrap();
+        let t = m.intersect(&r).map(|h| h.t).unwrap();
         assert!((t - 4.0).abs() <= eps, "{t}");
         assert!((m.normal(r.at(t)) - -Vec3::Z).length() < 1e-3);
         // From inside: the exit, normal still outward.
         let r = Ray::new(Vec3::ZERO, Vec3::X);
-        let t = m.intersect(&r).unwrap();
+        let t = m.intersect(&r).map(|h| h.t).unwrap();
         assert!((t - 1.0).abs() <= eps, "{t}");
         assert!((m.normal(r.at(t)) - Vec3::X).length() < 1e-3);
         // Miss, and clipped by t_max.
         assert_eq!(
-            m.intersect(&Ray::new(Vec3::new(0.0, 2.0, -5.0), Vec3::Z)),
+            m.intersect(&Ray::new(Vec3::new(0.0, 2.0, -5.0), Vec3::Z))
+                .map(|h| h.t),
             None
         );
         let r = Ray::with_interval(Vec3::new(0.0, 0.0, -5.0), Vec3::Z, 0.0, 3.9);
-        assert_eq!(m.intersect(&r), None);
+        assert_eq!(m.intersect(&r).map(|h| h.t), None);
         // Unnormalised directions give the same point.
         let r = Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::Z * 4.0);
-        assert!((m.intersect(&r).unwrap() - 1.0).abs() <= eps / 4.0);
+        assert!((m.intersect(&r).map(|h| h.t).unwrap() - 1.0).abs() <= eps / 4.0);
     }
 
     /// A ray leaving the surface (reflection outward, refraction inward) does not re-hit it:
@@ -962,11 +964,19 @@ mod tests {
         for offset in [-0.9 * eps, -0.3 * eps, 0.0, 0.3 * eps, 0.9 * eps] {
             let p = Vec3::new(0.0, 0.0, -1.0 - offset);
             // Outward: nothing else to hit.
-            assert_eq!(m.intersect(&Ray::new(p, -Vec3::Z)), None, "{offset}");
+            assert_eq!(
+                m.intersect(&Ray::new(p, -Vec3::Z)).map(|h| h.t),
+                None,
+                "{offset}"
+            );
             // Outward at a slant.
-            assert_eq!(m.intersect(&Ray::new(p, Vec3::new(0.3, 0.0, -1.0))), None);
+            assert_eq!(
+                m.intersect(&Ray::new(p, Vec3::new(0.3, 0.0, -1.0)))
+                    .map(|h| h.t),
+                None
+            );
             // Inward: the far side at t = 2.
-            let t = m.intersect(&Ray::new(p, Vec3::Z)).unwrap();
+            let t = m.intersect(&Ray::new(p, Vec3::Z)).map(|h| h.t).unwrap();
             assert!((t - 2.0).abs() <= 2.0 * eps, "{offset}: {t}");
         }
     }
@@ -1001,6 +1011,7 @@ mod tests {
         assert!((m.distance(Vec3::ZERO) + 0.2).abs() < 1e-6);
         let t = m
             .intersect(&Ray::new(Vec3::new(0.0, 5.0, 0.0), -Vec3::Y))
+            .map(|h| h.t)
             .unwrap();
         assert!(t < 5.0 - 0.1, "the neck is filled: {t}");
         // A blend halfway between a ball and a box of the same centre.
@@ -1011,7 +1022,10 @@ mod tests {
         ));
         assert!((m.distance(Vec3::new(2.0, 0.0, 0.0)) - 1.0).abs() < 1e-6);
         let diag = Vec3::ONE.normalize();
-        let t = m.intersect(&Ray::new(diag * 5.0, -diag)).unwrap();
+        let t = m
+            .intersect(&Ray::new(diag * 5.0, -diag))
+            .map(|h| h.t)
+            .unwrap();
         // The surface on the diagonal is between the ball's (1) and the box's (sqrt 3).
         assert!((5.0 - t) > 1.05 && (5.0 - t) < 3f32.sqrt() - 0.05, "{t}");
     }
@@ -1085,7 +1099,7 @@ mod tests {
             Ray::new(Vec3::new(-5.0, 0.0, 0.0), Vec3::new(f32::NAN, 0.0, 0.0)),
             Ray::new(Vec3::new(-5.0, 0.0, 0.0), Vec3::ZERO),
         ] {
-            assert_eq!(m.intersect(&r), None);
+            assert_eq!(m.intersect(&r).map(|h| h.t), None);
         }
     }
 }

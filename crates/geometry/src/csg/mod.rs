@@ -26,6 +26,7 @@
 
 use crate::aabb::Aabb;
 use crate::error::SceneError;
+use crate::hit::PrimHit;
 use crate::ray::Ray;
 use glam::Vec3;
 
@@ -38,20 +39,9 @@ mod tests;
 mod tree;
 
 pub use solid::Solid;
-use spans::Spans;
+use spans::{End, Spans};
 use tree::Node;
 pub use tree::{CsgNode, CsgOp};
-
-/// A hit with a CSG tree: distance, the leaf hit and the outward normal there.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CsgHit {
-    /// Ray parameter.
-    pub t: f32,
-    /// Index of the leaf (in the order leaves appear left to right in the tree).
-    pub leaf: u32,
-    /// Outward unit normal of the combined solid.
-    pub normal: Vec3,
-}
 
 /// A validated CSG tree: one bounded primitive.
 #[derive(Clone, Debug, PartialEq)]
@@ -115,13 +105,37 @@ impl Csg {
         std::mem::size_of::<Self>() + self.nodes.len() * std::mem::size_of::<Node>()
     }
 
-    /// The first boundary of the combined solid inside `[ray.t_min, ray.t_max]`.
+    /// The first boundary of the combined solid inside `[ray.t_min, ray.t_max]`; the
+    /// sub-primitive id is the index of the leaf hit (in the order leaves appear left to
+    /// right in the tree), and [`Csg::normal`] gives the normal there.
     ///
     /// Rays that miss the tree's box miss without evaluating it: accelerators never test
     /// them, and far from the box the leaves' arithmetic overflows (an origin at `x = 1e30`
     /// made a cone's quadratic report a hit).
     #[must_use]
-    pub fn intersect(&self, ray: &Ray) -> Option<CsgHit> {
+    pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
+        self.first_end(ray).map(|e| PrimHit {
+            t: e.t,
+            sub: e.leaf,
+            u: 0.0,
+            v: 0.0,
+        })
+    }
+
+    /// The outward unit normal of the combined solid at `hit`, a hit of `ray` found by
+    /// [`Csg::intersect`] (a subtracted solid's boundary has its normal negated); `Y` if
+    /// the boundary is not found again.
+    ///
+    /// The tree is evaluated again for the ray clipped to the hit: once per closest hit,
+    /// and deterministic, so it finds the same boundary.
+    #[must_use]
+    pub fn normal(&self, ray: &Ray, hit: &PrimHit) -> Vec3 {
+        self.first_end(&ray.clipped(hit.t))
+            .map_or(Vec3::Y, |e| e.normal)
+    }
+
+    /// The first span end inside `[ray.t_min, ray.t_max]`.
+    fn first_end(&self, ray: &Ray) -> Option<End> {
         self.bounds.intersect(ray, ray.t_max)?;
         let mut leaf = 0;
         let spans = self.spans(self.nodes.len() - 1, ray, &mut leaf);
@@ -131,11 +145,7 @@ impl Csg {
                     return None;
                 }
                 if e.t >= ray.t_min && e.t.is_finite() {
-                    return Some(CsgHit {
-                        t: e.t,
-                        leaf: e.leaf,
-                        normal: e.normal,
-                    });
+                    return Some(e);
                 }
             }
         }

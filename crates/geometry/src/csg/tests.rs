@@ -20,8 +20,21 @@ fn op(op: CsgOp, a: CsgNode, b: CsgNode) -> CsgNode {
     CsgNode::Op(op, Box::new(a), Box::new(b))
 }
 
-fn hit(tree: &CsgNode, o: Vec3, d: Vec3) -> Option<CsgHit> {
-    Csg::new(tree).unwrap().intersect(&Ray::new(o, d))
+/// The public answer, [`Csg::intersect`] completed by [`Csg::normal`], as one span end;
+/// checked against the end the tree gives directly (the normal's re-evaluation finds the
+/// same boundary).
+fn full(c: &Csg, r: &Ray) -> Option<End> {
+    let got = c.intersect(r).map(|h| End {
+        t: h.t,
+        normal: c.normal(r, &h),
+        leaf: h.sub,
+    });
+    assert_eq!(got, c.first_end(r), "{r:?}");
+    got
+}
+
+fn hit(tree: &CsgNode, o: Vec3, d: Vec3) -> Option<End> {
+    full(&Csg::new(tree).unwrap(), &Ray::new(o, d))
 }
 
 const FROM_LEFT: Vec3 = Vec3::new(-10.0, 0.0, 0.0);
@@ -114,9 +127,9 @@ fn the_three_operations() {
     // A ray inside the union hits its far side; inside the difference's hole, the rest.
     let inside = Ray::new(Vec3::ZERO, Vec3::X);
     let u = Csg::new(&op(CsgOp::Union, a.clone(), b.clone())).unwrap();
-    assert_eq!(u.intersect(&inside).unwrap().t, 3.0);
+    assert_eq!(full(&u, &inside).unwrap().t, 3.0);
     let d = Csg::new(&op(CsgOp::Difference, b, a)).unwrap();
-    let h = d.intersect(&inside).unwrap();
+    let h = full(&d, &inside).unwrap();
     assert_eq!((h.t, h.normal), (1.0, -Vec3::X));
 }
 
@@ -127,14 +140,14 @@ fn coincident_faces_follow_the_regularised_rule() {
     let u = Csg::new(&op(CsgOp::Union, left.clone(), right.clone())).unwrap();
     // From inside the left box the shared face x = 0 is not a boundary.
     let r = Ray::new(Vec3::new(-1.0, 0.0, 0.0), Vec3::X);
-    assert_eq!(u.intersect(&r).unwrap().t, 3.0);
+    assert_eq!(full(&u, &r).unwrap().t, 3.0);
     // Touching solids intersect in nothing.
     let i = Csg::new(&op(CsgOp::Intersection, left.clone(), right)).unwrap();
-    assert_eq!(i.intersect(&Ray::new(FROM_LEFT, Vec3::X)), None);
+    assert_eq!(full(&i, &Ray::new(FROM_LEFT, Vec3::X)), None);
     // A subtracted solid sharing the first's front face removes that face.
     let bite = cube(Vec3::new(-2.0, -1.0, -1.0), Vec3::new(-1.0, 1.0, 1.0));
     let d = Csg::new(&op(CsgOp::Difference, left, bite)).unwrap();
-    let h = d.intersect(&Ray::new(FROM_LEFT, Vec3::X)).unwrap();
+    let h = full(&d, &Ray::new(FROM_LEFT, Vec3::X)).unwrap();
     assert_eq!((h.t, h.normal), (9.0, -Vec3::X));
 }
 
@@ -160,14 +173,10 @@ fn half_spaces_cut() {
     );
     let c = Csg::new(&cut).unwrap();
     assert!(c.bounds().max.x < 2.0 + 0.01);
-    let h = c
-        .intersect(&Ray::new(Vec3::new(10.0, 0.0, 0.0), -Vec3::X))
-        .unwrap();
+    let h = full(&c, &Ray::new(Vec3::new(10.0, 0.0, 0.0), -Vec3::X)).unwrap();
     assert_eq!((h.t, h.normal), (10.0, Vec3::X));
     // A ray parallel to the plane on the kept side passes the ball's far side.
-    let h = c
-        .intersect(&Ray::new(Vec3::new(-1.0, -5.0, 0.0), Vec3::Y))
-        .unwrap();
+    let h = full(&c, &Ray::new(Vec3::new(-1.0, -5.0, 0.0), Vec3::Y)).unwrap();
     assert!((h.t - (5.0 - 3.0f32.sqrt())).abs() < 1e-5);
 }
 
@@ -189,9 +198,9 @@ fn leaf_ids_and_bounds() {
             .contains(&Aabb::new(Vec3::splat(-1.0), Vec3::splat(1.0)))
     );
     assert!(c.bounds().max.x < 1.01);
-    let h = c.intersect(&Ray::new(FROM_LEFT, Vec3::X)).unwrap();
+    let h = full(&c, &Ray::new(FROM_LEFT, Vec3::X)).unwrap();
     assert_eq!((h.t, h.leaf), (9.5, 1));
-    let h = c.intersect(&Ray::new(-FROM_LEFT, -Vec3::X)).unwrap();
+    let h = full(&c, &Ray::new(-FROM_LEFT, -Vec3::X)).unwrap();
     assert_eq!((h.t, h.leaf, h.normal), (9.5, 2, Vec3::X));
 }
 
@@ -276,7 +285,7 @@ fn quadrics_and_torus_give_analytic_hits() {
     let h = hit(&par, Vec3::new(0.0, 10.0, 0.0), -Vec3::Y).unwrap();
     assert_eq!((h.t, h.normal), (6.0, Vec3::Y));
     let inside = Csg::new(&par).unwrap();
-    let h = inside.intersect(&Ray::new(Vec3::new(0.0, 2.0, 0.0), -Vec3::Y));
+    let h = full(&inside, &Ray::new(Vec3::new(0.0, 2.0, 0.0), -Vec3::Y));
     assert_eq!(h.map(|h| h.t), Some(2.0));
     // Above the cap, beside it: miss; below the apex along the axis, the apex first.
     assert_eq!(hit(&par, Vec3::new(-10.0, 4.5, 0.0), Vec3::X), None);
@@ -308,11 +317,9 @@ fn horn_and_spindle_tori() {
     // sqrt(4 - 1.2^2) = 1.6. (On the axis apple and lemon touch: a tangency.)
     let spindle = Csg::new(&CsgNode::Leaf(torus(1.0, 2.0))).unwrap();
     let down = Ray::new(Vec3::new(0.2, 10.0, 0.0), -Vec3::Y);
-    let h = spindle.intersect(&down).unwrap();
+    let h = full(&spindle, &down).unwrap();
     assert!((h.t - (10.0 - 3.36f32.sqrt())).abs() < 1e-5, "{h:?}");
-    let h = spindle
-        .intersect(&Ray::new(Vec3::new(0.2, 0.0, 0.0), Vec3::Y))
-        .unwrap();
+    let h = full(&spindle, &Ray::new(Vec3::new(0.2, 0.0, 0.0), Vec3::Y)).unwrap();
     assert!((h.t - 1.6).abs() < 1e-6 && h.normal.y < -0.5, "{h:?}");
 }
 
@@ -336,16 +343,12 @@ fn placed_leaves() {
         Vec3::new(4.0, 2.0, 1.0)
     )));
     assert!(c.bounds().max.x < 4.01 && c.bounds().min.y > -0.01);
-    let h = c
-        .intersect(&Ray::new(Vec3::new(2.0, 10.0, 0.0), -Vec3::Y))
-        .unwrap();
+    let h = full(&c, &Ray::new(Vec3::new(2.0, 10.0, 0.0), -Vec3::Y)).unwrap();
     assert!(
         (h.t - 8.0).abs() < 1e-5 && close(h.normal, Vec3::Y),
         "{h:?}"
     );
-    let h = c
-        .intersect(&Ray::new(FROM_LEFT + Vec3::Y, Vec3::X))
-        .unwrap();
+    let h = full(&c, &Ray::new(FROM_LEFT + Vec3::Y, Vec3::X)).unwrap();
     assert!(
         (h.t - 10.0).abs() < 1e-5 && close(h.normal, -Vec3::X),
         "{h:?}"
@@ -371,8 +374,8 @@ fn placed_leaves() {
         (Vec3::new(-3.0, 2.0, 0.5), Vec3::new(1.0, -0.7, 0.0)),
     ] {
         let (a, b) = (
-            stretched.intersect(&Ray::new(o, d)).unwrap(),
-            ellipsoid.intersect(&Ray::new(o, d)).unwrap(),
+            full(&stretched, &Ray::new(o, d)).unwrap(),
+            full(&ellipsoid, &Ray::new(o, d)).unwrap(),
         );
         assert!((a.t - b.t).abs() < 1e-5 * b.t, "{a:?} {b:?}");
         assert!(close(a.normal, b.normal), "{a:?} {b:?}");
@@ -381,7 +384,7 @@ fn placed_leaves() {
     let plain = Csg::new(&CsgNode::Leaf(torus(2.0, 0.5))).unwrap();
     let placed = Csg::new(&CsgNode::Placed(torus(2.0, 0.5), Affine3A::IDENTITY)).unwrap();
     let r = Ray::new(Vec3::new(-6.0, 0.2, 0.3), Vec3::new(1.0, 0.0, 0.05));
-    let (a, b) = (plain.intersect(&r).unwrap(), placed.intersect(&r).unwrap());
+    let (a, b) = (full(&plain, &r).unwrap(), full(&placed, &r).unwrap());
     assert!(a.t == b.t && close(a.normal, b.normal), "{a:?} {b:?}");
 }
 
@@ -406,19 +409,15 @@ fn a_ring_cut_by_a_rotated_box() {
         ),
     );
     let c = Csg::new(&tree).unwrap();
-    let h = c.intersect(&Ray::new(FROM_LEFT, Vec3::X)).unwrap();
+    let h = full(&c, &Ray::new(FROM_LEFT, Vec3::X)).unwrap();
     assert_eq!((h.t, h.leaf), (7.5, 0));
     // Along z at x = 1.8 the ring spans |z| <= sqrt(2.5^2 - 1.8^2) and the box
     // |z| <= sqrt2 - 0.2: the ring's wall, then from inside it the box's face, its
     // outward normal (-1, 0, -1) / sqrt2 flipped.
     let ring = (2.5f32 * 2.5 - 1.8 * 1.8).sqrt();
-    let h = c
-        .intersect(&Ray::new(Vec3::new(1.8, 0.0, -10.0), Vec3::Z))
-        .unwrap();
+    let h = full(&c, &Ray::new(Vec3::new(1.8, 0.0, -10.0), Vec3::Z)).unwrap();
     assert!((h.t - (10.0 - ring)).abs() < 1e-5 && h.leaf == 0, "{h:?}");
-    let h = c
-        .intersect(&Ray::new(Vec3::new(1.8, 0.0, -1.5), Vec3::Z))
-        .unwrap();
+    let h = full(&c, &Ray::new(Vec3::new(1.8, 0.0, -1.5), Vec3::Z)).unwrap();
     let face = 1.5 - (2.0f32.sqrt() - 0.2);
     assert!((h.t - face).abs() < 1e-5 && h.leaf == 1, "{h:?}");
     assert!(
@@ -492,6 +491,6 @@ fn nan_and_zero_rays_miss() {
         Ray::new(FROM_LEFT, Vec3::new(f32::NAN, 0.0, 0.0)),
         Ray::new(FROM_LEFT, Vec3::ZERO),
     ] {
-        assert_eq!(c.intersect(&r), None);
+        assert_eq!(full(&c, &r), None);
     }
 }
