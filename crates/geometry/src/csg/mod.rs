@@ -40,13 +40,13 @@ mod tree;
 
 pub use solid::Solid;
 use spans::{End, Spans};
-use tree::Node;
 pub use tree::{CsgNode, CsgOp};
+use tree::{Node, Tree};
 
 /// A validated CSG tree: one bounded primitive.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Csg {
-    nodes: Vec<Node>,
+    tree: Tree,
     leaves: u32,
     bounds: Aabb,
 }
@@ -57,12 +57,11 @@ impl Csg {
     ///
     /// # Errors
     /// A parameter that is not finite or out of range, a tree deeper than
-    /// [`MAX_CSG_DEPTH`] or with more than [`MAX_CSG_LEAVES`] leaves, a tree that is not
+    /// [`crate::limits::MAX_CSG_DEPTH`] or with more than [`crate::limits::MAX_CSG_LEAVES`]
+    /// leaves, a tree that is not
     /// bounded (a half-space not cut by an intersection) or whose box is empty.
     pub fn new(root: &CsgNode) -> Result<Self, SceneError> {
-        let mut nodes = Vec::new();
-        let mut leaves = 0u32;
-        let bound = tree::flatten(root, 1, &mut nodes, &mut leaves)?;
+        let (tree, bound, leaves) = Tree::build::<_, Self>(root, &tree::LIMITS)?;
         let Some(b) = bound else {
             return Err(SceneError::Invalid(
                 "the CSG tree is unbounded (a half-space must be cut by an intersection \
@@ -79,7 +78,7 @@ impl Csg {
         // Padding as the sphere's: grazing hits can be computed slightly outside a leaf.
         let pad = Vec3::splat((b.max - b.min).max_element() / 2048.0);
         Ok(Self {
-            nodes,
+            tree,
             leaves,
             bounds: Aabb::new(b.min - pad, b.max + pad),
         })
@@ -90,19 +89,6 @@ impl Csg {
     #[must_use]
     pub fn bounds(&self) -> Aabb {
         self.bounds
-    }
-
-    /// Number of leaves.
-    #[inline]
-    #[must_use]
-    pub fn leaf_count(&self) -> u32 {
-        self.leaves
-    }
-
-    /// Bytes held behind the primitive's `Arc`.
-    #[must_use]
-    pub fn memory_bytes(&self) -> usize {
-        std::mem::size_of::<Self>() + self.nodes.len() * std::mem::size_of::<Node>()
     }
 
     /// The first boundary of the combined solid inside `[ray.t_min, ray.t_max]`; the
@@ -134,11 +120,24 @@ impl Csg {
             .map_or(Vec3::Y, |e| e.normal)
     }
 
+    /// Bytes held behind the primitive's `Arc`.
+    #[must_use]
+    pub fn memory_bytes(&self) -> usize {
+        std::mem::size_of::<Self>() + self.tree.memory_bytes()
+    }
+
+    /// Number of leaves.
+    #[inline]
+    #[must_use]
+    pub fn leaf_count(&self) -> u32 {
+        self.leaves
+    }
+
     /// The first span end inside `[ray.t_min, ray.t_max]`.
     fn first_end(&self, ray: &Ray) -> Option<End> {
         self.bounds.intersect(ray, ray.t_max)?;
         let mut leaf = 0;
-        let spans = self.spans(self.nodes.len() - 1, ray, &mut leaf);
+        let spans = self.spans(self.tree.root(), ray, &mut leaf);
         for s in spans.as_slice() {
             for e in [s.enter, s.exit] {
                 if e.t > ray.t_max {
@@ -155,8 +154,8 @@ impl Csg {
     /// The spans of node `i` on the ray's whole line; `leaf` counts leaves in post-order.
     /// Leaves (at most two spans) allocate nothing; each operator one list.
     fn spans(&self, i: usize, ray: &Ray, leaf: &mut u32) -> Spans {
-        match &self.nodes[i] {
-            Node::Leaf(s, place) => {
+        match self.tree.node(i) {
+            Node::Leaf((s, place)) => {
                 let id = *leaf;
                 *leaf += 1;
                 Spans::Leaf(placement::leaf_spans(s, place.as_ref(), ray, id))
@@ -166,6 +165,7 @@ impl Csg {
                 let sb = self.spans(*b, ray, leaf);
                 Spans::Many(spans::combine(*op, sa.as_slice(), sb.as_slice()))
             }
+            Node::Wrap(never, _) => match *never {},
         }
     }
 }

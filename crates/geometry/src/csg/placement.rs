@@ -1,18 +1,18 @@
-//! Placing a solid by an affine map: the ray taken to the solid's local space, normals
-//! brought back by the inverse transpose, the box of the mapped local box.
+//! Placing a solid by an affine map: the ray taken to the solid's local space and normals
+//! brought back by the inverse transpose (the leaf's box is its local box's, mapped by
+//! [`crate::aabb::Aabb::transformed`]).
 
 use super::solid::{Solid, solid_spans};
 use super::spans::LeafSpans;
-use crate::aabb::Aabb;
 use crate::checks;
 use crate::error::SceneError;
 use crate::ray::Ray;
-use glam::{Affine3A, Mat3A, Vec3};
+use glam::{Affine3A, Mat3A};
 
 /// A placed leaf's maps: world to local for rays, and the normal matrix (the inverse
 /// transpose of the local-to-world linear part) for normals.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct Placement {
+pub(crate) struct Placement {
     pub(super) to_local: Affine3A,
     pub(super) normal: Mat3A,
 }
@@ -26,18 +26,6 @@ impl Placement {
             to_local: to_world.inverse(),
             normal: inv.transpose(),
         })
-    }
-
-    /// The box of the eight corners of `b` mapped by `to_world`.
-    pub(super) fn bounds(to_world: Affine3A, b: Aabb) -> Aabb {
-        Aabb::from_points((0..8).map(|k| {
-            let pick = |bit: usize, lo: f32, hi: f32| if k & bit == 0 { lo } else { hi };
-            to_world.transform_point3(Vec3::new(
-                pick(1, b.min.x, b.max.x),
-                pick(2, b.min.y, b.max.y),
-                pick(4, b.min.z, b.max.z),
-            ))
-        }))
     }
 }
 

@@ -54,7 +54,7 @@ pub enum Solid {
     },
     // Issue 10, tori and quadrics.
     /// An axis-aligned ellipsoid: the unit ball scaled by `radii`, centred at `center` (a
-    /// rotated one is a [`CsgNode::Placed`] ellipsoid).
+    /// rotated one is a [`crate::CsgNode::Placed`] ellipsoid).
     Ellipsoid {
         /// Centre.
         center: Vec3,
@@ -87,6 +87,31 @@ pub enum Solid {
     },
 }
 
+impl Solid {
+    /// A solid standing on the `y` axis from `base` (a cylinder, a cone, a paraboloid): its
+    /// name, base, radius and height; `None` for the others.
+    fn axial(&self) -> Option<(&'static str, Vec3, f32, f32)> {
+        match *self {
+            Self::Cylinder {
+                base,
+                radius,
+                height,
+            } => Some(("cylinder", base, radius, height)),
+            Self::Cone {
+                base,
+                radius,
+                height,
+            } => Some(("cone", base, radius, height)),
+            Self::Paraboloid {
+                base,
+                radius,
+                height,
+            } => Some(("paraboloid", base, radius, height)),
+            _ => None,
+        }
+    }
+}
+
 /// Checks that a point is finite and within [`crate::limits::MAX_COORDINATE`].
 pub(super) fn finite_point(v: Vec3, what: &str) -> Result<(), SceneError> {
     checks::point(v, &format!("CSG {what}"))
@@ -110,29 +135,12 @@ pub(super) fn validate(s: Solid) -> Result<Solid, SceneError> {
                 )));
             }
         }
-        Solid::Cylinder {
-            base,
-            radius,
-            height,
-        }
-        | Solid::Cone {
-            base,
-            radius,
-            height,
-        }
-        | Solid::Paraboloid {
-            base,
-            radius,
-            height,
-        } => {
-            let kind = match s {
-                Solid::Cylinder { .. } => "cylinder",
-                Solid::Cone { .. } => "cone",
-                _ => "paraboloid",
-            };
-            finite(base, &format!("{kind} base"))?;
-            positive(radius, &format!("{kind} radius"))?;
-            positive(height, &format!("{kind} height"))?;
+        Solid::Cylinder { .. } | Solid::Cone { .. } | Solid::Paraboloid { .. } => {
+            if let Some((kind, base, radius, height)) = s.axial() {
+                finite(base, &format!("{kind} base"))?;
+                positive(radius, &format!("{kind} radius"))?;
+                positive(height, &format!("{kind} height"))?;
+            }
         }
         Solid::HalfSpace { point, normal } => {
             finite(point, "half-space point")?;
@@ -154,11 +162,7 @@ pub(super) fn validate(s: Solid) -> Result<Solid, SceneError> {
             center,
             major_radius,
             minor_radius,
-        } => {
-            finite(center, "torus centre")?;
-            positive(major_radius, "torus major radius")?;
-            positive(minor_radius, "torus minor radius")?;
-        }
+        } => checks::torus("CSG", center, major_radius, minor_radius)?,
     }
     Ok(s)
 }
@@ -171,24 +175,14 @@ pub(super) fn solid_bounds(s: &Solid) -> Bound {
             center + Vec3::splat(radius),
         )),
         Solid::Box { min, max } => Some(Aabb::new(min, max)),
-        Solid::Cylinder {
-            base,
-            radius,
-            height,
+        Solid::Cylinder { .. } | Solid::Cone { .. } | Solid::Paraboloid { .. } => {
+            s.axial().map(|(_, base, radius, height)| {
+                Aabb::new(
+                    base - Vec3::new(radius, 0.0, radius),
+                    base + Vec3::new(radius, height, radius),
+                )
+            })
         }
-        | Solid::Cone {
-            base,
-            radius,
-            height,
-        }
-        | Solid::Paraboloid {
-            base,
-            radius,
-            height,
-        } => Some(Aabb::new(
-            base - Vec3::new(radius, 0.0, radius),
-            base + Vec3::new(radius, height, radius),
-        )),
         Solid::HalfSpace { .. } => None,
         Solid::Ellipsoid { center, radii } => Some(Aabb::new(center - radii, center + radii)),
         Solid::Torus {

@@ -1,13 +1,15 @@
 //! The CSG tree: the set operations, the tree as scene files describe it, and its
-//! validated post-order form.
+//! validated post-order form (an [`OpTree`] whose leaves are solids, placed or not).
 
+use super::Csg;
 use super::placement::Placement;
 use super::solid::{Solid, finite_point, solid_bounds, validate};
 use crate::aabb::Aabb;
-use crate::checks;
 use crate::error::SceneError;
 use crate::limits::{MAX_CSG_DEPTH, MAX_CSG_LEAVES};
+use crate::optree::{self, Builder, Counted, Limits, OpTree, Operator, Source, View};
 use glam::Affine3A;
+use std::convert::Infallible;
 
 /// A CSG set operation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -61,84 +63,98 @@ impl CsgNode {
     /// # Errors
     /// [`SceneError::Invalid`] when there are fewer than two operands.
     pub fn fold(op: CsgOp, operands: Vec<CsgNode>) -> Result<Self, SceneError> {
-        checks::at_least_two(&format!("a CSG {}", op.name()), &operands)?;
-        let join = |op| move |a, b| Self::Op(op, Box::new(a), Box::new(b));
-        Ok(checks::fold(
-            operands,
-            op == CsgOp::Difference,
-            &join(op),
-            &join(CsgOp::Union),
-        ))
+        optree::fold(&format!("a CSG {}", op.name()), op, operands, |op, a, b| {
+            Self::Op(op, Box::new(a), Box::new(b))
+        })
     }
 }
 
-/// A node of the validated tree, stored in post-order.
-#[derive(Clone, Debug, PartialEq)]
-pub(super) enum Node {
-    Leaf(Solid, Option<Placement>),
-    Op(CsgOp, usize, usize),
+impl Operator for CsgOp {
+    const UNION: Self = Self::Union;
+    const DIFFERENCE: Self = Self::Difference;
 }
+
+/// A leaf of the validated tree: a solid and its placement, if it has one.
+pub(super) type Leaf = (Solid, Option<Placement>);
+
+/// The validated tree.
+pub(super) type Tree = OpTree<Leaf, CsgOp, Infallible>;
+
+/// A node of the validated tree.
+pub(super) type Node = optree::Node<Leaf, CsgOp, Infallible>;
 
 /// A bound that may be all of space (`None`).
 pub(super) type Bound = Option<Aabb>;
 
-/// Appends `node`'s subtree to `nodes` in post-order, validating it (`depth` is its
-/// level, `leaves` the leaves so far); returns its bound.
-pub(super) fn flatten(
-    node: &CsgNode,
-    depth: usize,
-    nodes: &mut Vec<Node>,
-    leaves: &mut u32,
-) -> Result<Bound, SceneError> {
-    if depth > MAX_CSG_DEPTH {
-        return Err(SceneError::TooLarge(format!(
-            "the CSG tree is deeper than {MAX_CSG_DEPTH} levels"
-        )));
+/// The limits of [`super::Csg::new`].
+pub(super) const LIMITS: Limits = Limits {
+    what: "the CSG tree",
+    depth: MAX_CSG_DEPTH,
+    size: MAX_CSG_LEAVES,
+    counted: Counted::Leaves("solids"),
+};
+
+impl Source for CsgNode {
+    type Leaf = (Solid, Option<Affine3A>);
+    type Op = CsgOp;
+    type Transform = Infallible;
+
+    fn view(&self) -> View<'_, Self> {
+        match self {
+            Self::Leaf(s) => View::Leaf((*s, None)),
+            Self::Placed(s, a) => View::Leaf((*s, Some(*a))),
+            Self::Op(op, a, b) => View::Op(*op, a, b),
+        }
     }
-    match node {
-        CsgNode::Leaf(s) | CsgNode::Placed(s, _) => {
-            if *leaves as usize >= MAX_CSG_LEAVES {
-                return Err(SceneError::TooLarge(format!(
-                    "the CSG tree has more than {MAX_CSG_LEAVES} solids"
-                )));
+}
+
+impl Builder<CsgNode> for Csg {
+    type Leaf = Leaf;
+    type Wrap = Infallible;
+    type Bound = Bound;
+
+    fn leaf((s, to_world): (Solid, Option<Affine3A>)) -> Result<(Leaf, Bound), SceneError> {
+        let s = validate(s)?;
+        let place = to_world.map(Placement::new).transpose()?;
+        let bound = match (solid_bounds(&s), to_world) {
+            (Some(b), Some(a)) => {
+                let b = b.transformed(a);
+                finite_point(b.min, "transformed solid's box")?;
+                finite_point(b.max, "transformed solid's box")?;
+                Some(b)
             }
-            let s = validate(*s)?;
-            let to_world = match node {
-                CsgNode::Placed(_, a) => Some(*a),
+            (b, _) => b,
+        };
+        Ok(((s, place), bound))
+    }
+
+    fn check_op(_: CsgOp) -> Result<(), SceneError> {
+        Ok(())
+    }
+
+    /// Unions join boxes, intersections overlap them, a difference keeps its first
+    /// operand's; an unbounded operand (a half-space) leaves an intersection bounded by
+    /// the other.
+    fn op_bound(op: CsgOp, a: Bound, b: Bound) -> Bound {
+        match op {
+            CsgOp::Union => match (a, b) {
+                (Some(x), Some(y)) => Some(x.union(y)),
                 _ => None,
-            };
-            let place = to_world.map(Placement::new).transpose()?;
-            let bound = match (solid_bounds(&s), to_world) {
-                (Some(b), Some(a)) => {
-                    let b = Placement::bounds(a, b);
-                    finite_point(b.min, "transformed solid's box")?;
-                    finite_point(b.max, "transformed solid's box")?;
-                    Some(b)
-                }
-                (b, _) => b,
-            };
-            *leaves += 1;
-            nodes.push(Node::Leaf(s, place));
-            Ok(bound)
+            },
+            CsgOp::Intersection => match (a, b) {
+                (Some(x), Some(y)) => Some(Aabb::new(x.min.max(y.min), x.max.min(y.max))),
+                (x, None) => x,
+                (None, y) => y,
+            },
+            CsgOp::Difference => a,
         }
-        CsgNode::Op(op, a, b) => {
-            let ba = flatten(a, depth + 1, nodes, leaves)?;
-            let ia = nodes.len() - 1;
-            let bb = flatten(b, depth + 1, nodes, leaves)?;
-            let ib = nodes.len() - 1;
-            nodes.push(Node::Op(*op, ia, ib));
-            Ok(match op {
-                CsgOp::Union => match (ba, bb) {
-                    (Some(x), Some(y)) => Some(x.union(y)),
-                    _ => None,
-                },
-                CsgOp::Intersection => match (ba, bb) {
-                    (Some(x), Some(y)) => Some(Aabb::new(x.min.max(y.min), x.max.min(y.max))),
-                    (x, None) => x,
-                    (None, y) => y,
-                },
-                CsgOp::Difference => ba,
-            })
-        }
+    }
+
+    fn wrap(t: &Infallible) -> Result<Infallible, SceneError> {
+        match *t {}
+    }
+
+    fn wrap_bound(t: &Infallible, _: &Infallible, _: Bound) -> Result<Bound, SceneError> {
+        match *t {}
     }
 }
