@@ -205,7 +205,7 @@ proptest! {
     ) {
         let dir = (c + aim * radius - o) * len;
         let ray = Ray::new(o, dir);
-        let got = Sphere::new(c, radius).intersect(&ray);
+        let got = Sphere::new(c, radius).intersect(&ray).map(|h| h.t);
         let (ov, dv, cv, rv) = (d(o), d(dir), d(c), f64::from(radius));
         let scale = (ov - cv).length() + rv;
         let roots = |delta: f64| ball((ov - cv) / (rv + delta), dv / (rv + delta));
@@ -231,7 +231,7 @@ proptest! {
         prop_assume!(normal.length() > 0.1 && dir.length() > 0.1);
         let plane = Plane::new(point, normal);
         let dir = dir * len;
-        let got = plane.intersect(&Ray::new(o, dir));
+        let got = plane.intersect(&Ray::new(o, dir)).map(|h| h.t);
         let (nv, ov, dv) = (d(plane.normal), d(o), d(dir));
         let cos = nv.dot(dv).abs() / dv.length();
         prop_assume!(cos > 1e-3);

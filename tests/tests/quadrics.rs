@@ -3,7 +3,7 @@
 //! torus, and clear errors for bad parameters and singular transforms. (Cross-backend
 //! equality and the Whitted/path modes on the built-in `quadrics` scene are in
 //! `equivalence.rs`; the quartic solver's accuracy against a dense f64 scan is unit-tested
-//! in `raybench_core::csg::quartic`; the white furnace with these solids is in `csg.rs`.)
+//! in `crates/geometry/src/csg/quartic.rs`; the white furnace with these solids is in `csg.rs`.)
 
 use raybench_core::{Hit, Ray, Scene, Shape, Vec3};
 use std::path::Path;

@@ -123,7 +123,7 @@ fn compare(
     let mut a = Agreement::default();
     for ray in rays(n, center, spread) {
         let want = analytic(&ray);
-        let got = m.intersect(&ray);
+        let got = m.intersect(&ray).map(|h| h.t);
         let len = ray.dir.length();
         match (got, want) {
             (Some(t), Some((ta, na))) => {
@@ -171,7 +171,7 @@ fn compare(
 }
 
 fn csg_hit(c: &Csg) -> impl Fn(&Ray) -> Option<(f32, Vec3)> + '_ {
-    |r: &Ray| c.intersect(r).map(|h| (h.t, h.normal))
+    |r: &Ray| c.intersect(r).map(|h| (h.t, c.normal(r, &h)))
 }
 
 #[test]
@@ -179,7 +179,7 @@ fn sphere_matches_the_analytic_sphere() {
     let c = Vec3::new(0.5, 1.0, -0.5);
     let m = model("{ type = \"sphere\", center = [0.5, 1.0, -0.5], radius = 1.2 }");
     let s = Sphere::new(c, 1.2);
-    let analytic = |r: &Ray| s.intersect(r).map(|t| (t, s.normal_at(r.at(t))));
+    let analytic = |r: &Ray| s.intersect(r).map(|h| (h.t, s.normal_at(r.at(h.t))));
     let a = compare(&m, 20_000, c, 1.5, &analytic, &|_| true);
     println!("sphere: eps {} {a:?}", m.tolerance());
 }
@@ -580,8 +580,8 @@ fn steps_per_ray_on_the_built_in_scene() {
         let n = probe.iter().filter(|r| f(r).is_some()).count();
         (start.elapsed().as_secs_f64() / probe.len() as f64 * 1e9, n)
     };
-    let (ns_sdf, n_sdf) = time(&|r| m.intersect(r));
-    let (ns_sphere, n_sphere) = time(&|r| s.intersect(r));
+    let (ns_sdf, n_sdf) = time(&|r| m.intersect(r).map(|h| h.t));
+    let (ns_sphere, n_sphere) = time(&|r| s.intersect(r).map(|h| h.t));
     let sdf_steps = probe
         .iter()
         .map(|r| u64::from(m.march(r).steps))

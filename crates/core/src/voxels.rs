@@ -623,7 +623,7 @@ impl Segment<'_> {
     }
 }
 
-/// A 3D-DDA visitor ([`crate::dda`]) that skips the cells a ray crosses for a zero length
+/// A 3D-DDA visitor ([`crate::dda()`]) that skips the cells a ray crosses for a zero length
 /// (through an edge or a corner): they hold no segment to integrate.
 fn segments(
     mut visit: impl FnMut([u32; 3], f32, f32) -> ControlFlow<()>,

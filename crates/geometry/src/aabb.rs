@@ -1,7 +1,7 @@
 //! Axis-aligned bounding boxes and the conservative ray/box (slab) test.
 
 use crate::ray::Ray;
-use glam::{Vec3, Vec3A};
+use glam::{Affine3A, Vec3, Vec3A};
 
 /// An axis-aligned box. The empty box has `min = +inf`, `max = -inf`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -41,6 +41,20 @@ impl Aabb {
     #[must_use]
     pub fn from_points(points: impl IntoIterator<Item = Vec3>) -> Self {
         points.into_iter().fold(Self::EMPTY, Self::grow)
+    }
+
+    /// The box of this box's eight corners mapped by `to_world` (a placed CSG solid's, a
+    /// transformed SDF subtree's).
+    #[must_use]
+    pub(crate) fn transformed(self, to_world: Affine3A) -> Self {
+        Self::from_points((0..8).map(|k| {
+            let pick = |bit: usize, lo: f32, hi: f32| if k & bit == 0 { lo } else { hi };
+            to_world.transform_point3(Vec3::new(
+                pick(1, self.min.x, self.max.x),
+                pick(2, self.min.y, self.max.y),
+                pick(4, self.min.z, self.max.z),
+            ))
+        }))
     }
 
     /// This box grown to hold `p`.

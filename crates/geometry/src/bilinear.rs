@@ -1,6 +1,7 @@
 //! Bilinear patches and the ray/patch test of Reshetov, "Cool Patches: A Geometric Approach
 //! to Ray/Bilinear Patch Intersections" (Ray Tracing Gems, ch. 8, 2019).
 
+use crate::hit::PrimHit;
 use crate::ray::Ray;
 use glam::Vec3;
 
@@ -16,17 +17,6 @@ pub struct BilinearPatch {
     pub q11: Vec3,
     /// Corner at `(0, 1)`.
     pub q01: Vec3,
-}
-
-/// Where a ray meets a patch.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PatchHit {
-    /// Ray parameter.
-    pub t: f32,
-    /// Patch parameter along `q00 -> q10`.
-    pub u: f32,
-    /// Patch parameter along `q00 -> q01`.
-    pub v: f32,
 }
 
 impl BilinearPatch {
@@ -56,7 +46,7 @@ impl BilinearPatch {
     /// stable form (`q = -(b + sign(b) sqrt(disc)) / 2`, roots `q / c` and `a / q`), and a
     /// trapezoid (`c = 0`) has the one root `-a / b`.
     #[must_use]
-    pub fn intersect(&self, ray: &Ray) -> Option<PatchHit> {
+    pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
         let d = ray.dir;
         let e10 = self.q10 - self.q00;
         let e11 = self.q11 - self.q10;
@@ -81,7 +71,7 @@ impl BilinearPatch {
             let q = -0.5 * (b + disc.sqrt().copysign(b));
             (q / c, if q == 0.0 { f32::NAN } else { a / q })
         };
-        let mut best: Option<PatchHit> = None;
+        let mut best: Option<PrimHit> = None;
         for u in [u1, u2] {
             if !(0.0..=1.0).contains(&u) {
                 continue;
@@ -101,7 +91,12 @@ impl BilinearPatch {
                 && t <= ray.t_max
                 && best.is_none_or(|h| t < h.t)
             {
-                best = Some(PatchHit { t, u, v: v / det });
+                best = Some(PrimHit {
+                    t,
+                    sub: 0,
+                    u,
+                    v: v / det,
+                });
             }
         }
         best

@@ -1,5 +1,5 @@
-//! Parameter checks and tree folding shared by the object kinds built from trees (CSG trees,
-//! SDF models).
+//! Parameter checks shared by the object kinds built from trees (CSG trees, SDF models) and
+//! by placed objects.
 
 use crate::error::SceneError;
 use crate::limits::{MAX_COORDINATE, MAX_TRANSFORM_CONDITION};
@@ -32,41 +32,17 @@ pub(crate) fn positive(x: f32, what: &str) -> Result<(), SceneError> {
     }
 }
 
-/// An operator's operand list has at least two entries; `what` names the operator ("a CSG
-/// union").
-pub(crate) fn at_least_two<T>(what: &str, operands: &[T]) -> Result<(), SceneError> {
-    if operands.len() < 2 {
-        return Err(SceneError::Invalid(format!(
-            "{what} needs at least two operands, found {}",
-            operands.len()
-        )));
-    }
-    Ok(())
-}
-
-/// `operands` (at least one) joined pairwise into a balanced binary tree, so that depth
-/// grows with the logarithm of the count.
-pub(crate) fn balanced<T>(mut operands: Vec<T>, join: &impl Fn(T, T) -> T) -> T {
-    if operands.len() == 1 {
-        return operands.pop().expect("one operand");
-    }
-    let right = operands.split_off(operands.len() / 2);
-    join(balanced(operands, join), balanced(right, join))
-}
-
-/// An n-ary operator's operands folded into a balanced binary tree by `join`; for a
-/// difference, the first operand joined with the others' balanced `union`.
-pub(crate) fn fold<T>(
-    mut operands: Vec<T>,
-    difference: bool,
-    join: &impl Fn(T, T) -> T,
-    union: &impl Fn(T, T) -> T,
-) -> T {
-    if difference {
-        let first = operands.remove(0);
-        return join(first, balanced(operands, union));
-    }
-    balanced(operands, join)
+/// A torus's parameters: its centre a point ([`point`]), its radii positive. `kind`
+/// prefixes the parameters' names in errors ("CSG").
+pub(crate) fn torus(
+    kind: &str,
+    center: Vec3,
+    major_radius: f32,
+    minor_radius: f32,
+) -> Result<(), SceneError> {
+    point(center, &format!("{kind} torus centre"))?;
+    positive(major_radius, &format!("{kind} torus major radius"))?;
+    positive(minor_radius, &format!("{kind} torus minor radius"))
 }
 
 /// Checks an object's placement `to_world` (`what` names it: "CSG transform", "transform"):

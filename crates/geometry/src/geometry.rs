@@ -10,7 +10,6 @@ use crate::ray::Ray;
 use crate::sdf::Sdf;
 use crate::sphere::Sphere;
 use crate::triangle::Triangle;
-use glam::Vec3;
 use std::sync::Arc;
 
 /// One primitive. A closed enum so that the per-ray path dispatches with a `match`, not a
@@ -123,38 +122,13 @@ impl Shape {
     #[must_use]
     pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
         match self {
-            Self::Triangle(tri) => tri.intersect(ray).map(|h| PrimHit {
-                t: h.t,
-                sub: 0,
-                u: h.u,
-                v: h.v,
-            }),
-            Self::Sphere(s) => s.intersect(ray).map(|t| PrimHit {
-                t,
-                sub: 0,
-                u: 0.0,
-                v: 0.0,
-            }),
-            Self::Plane(p) => p.intersect(ray).map(|t| PrimHit {
-                t,
-                sub: 0,
-                u: 0.0,
-                v: 0.0,
-            }),
+            Self::Triangle(tri) => tri.intersect(ray),
+            Self::Sphere(s) => s.intersect(ray),
+            Self::Plane(p) => p.intersect(ray),
             Self::HeightField(h) => h.intersect(ray),
-            Self::Csg(c) => c.intersect(ray).map(|h| PrimHit {
-                t: h.t,
-                sub: h.leaf,
-                u: 0.0,
-                v: 0.0,
-            }),
+            Self::Csg(c) => c.intersect(ray),
             Self::Bezier(b) => b.intersect(ray),
-            Self::Sdf(m) => m.intersect(ray).map(|t| PrimHit {
-                t,
-                sub: 0,
-                u: 0.0,
-                v: 0.0,
-            }),
+            Self::Sdf(m) => m.intersect(ray),
         }
     }
 
@@ -165,20 +139,12 @@ impl Shape {
             Self::Triangle(tri) => (tri.normal(), h.u, h.v),
             Self::Sphere(s) => {
                 let n = s.normal_at(ray.at(h.t));
-                let u = (n.z.atan2(n.x) / std::f32::consts::TAU).rem_euclid(1.0);
-                let v = n.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI;
+                let (u, v) = Sphere::uv(n);
                 (n, u, v)
             }
             Self::Plane(p) => (p.normal, h.u, h.v),
             Self::HeightField(f) => (f.normal(h.sub, h.u, h.v), h.u, h.v),
-            // The tree is evaluated again for the normal: once per closest hit, and
-            // deterministic, so it finds the same boundary.
-            Self::Csg(c) => (
-                c.intersect(&ray.clipped(h.t))
-                    .map_or(Vec3::Y, |full| full.normal),
-                h.u,
-                h.v,
-            ),
+            Self::Csg(c) => (c.normal(ray, &h), h.u, h.v),
             Self::Bezier(b) => (b.normal(h.u, h.v), h.u, h.v),
             Self::Sdf(m) => (m.normal(ray.at(h.t)), h.u, h.v),
         };

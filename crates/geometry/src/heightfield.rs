@@ -437,26 +437,14 @@ impl HeightField {
         let t_max = |best: &Option<(u32, PrimHit)>| best.map_or(ray.t_max, |(_, h)| h.t);
         if self.surface == CellSurface::Bilinear {
             if let Some(h) = self.cell_patch(i, j).intersect(&ray.clipped(t_max(best))) {
-                let hit = PrimHit {
-                    t: h.t,
-                    sub: base,
-                    u: h.u,
-                    v: h.v,
-                };
-                keep_closer(best, base, hit);
+                keep_closer(best, base, PrimHit { sub: base, ..h });
             }
             return;
         }
         for (k, tri) in self.cell_triangles(i, j).iter().enumerate() {
             let sub = base + k as u32;
             if let Some(h) = tri.intersect(&ray.clipped(t_max(best))) {
-                let hit = PrimHit {
-                    t: h.t,
-                    sub,
-                    u: h.u,
-                    v: h.v,
-                };
-                keep_closer(best, sub, hit);
+                keep_closer(best, sub, PrimHit { sub, ..h });
             }
         }
     }

@@ -35,7 +35,8 @@ impl Hit {
     }
 }
 
-/// A primitive's own answer to a ray: where, and the surface parameters.
+/// A primitive's own answer to a ray: where, which part, and the surface parameters. Every
+/// primitive's `intersect` returns it; [`crate::Shape::complete_hit`] adds the normal.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PrimHit {
     /// Ray parameter.
@@ -46,6 +47,21 @@ pub struct PrimHit {
     pub u: f32,
     /// Second surface parameter (see [`Hit::v`]).
     pub v: f32,
+}
+
+impl PrimHit {
+    /// A hit at `t` with sub-primitive id 0 and no surface parameters (spheres, planes, SDF
+    /// models).
+    #[inline]
+    #[must_use]
+    pub fn at(t: f32) -> Self {
+        Self {
+            t,
+            sub: 0,
+            u: 0.0,
+            v: 0.0,
+        }
+    }
 }
 
 /// Offers the candidate `(id, hit)` to `best` under the tie rule ([`Hit::closer`]): it

@@ -4,6 +4,9 @@
 //! their ray intersection routines, the id-indexed [`Geometry`], the [`Accel`] contract that
 //! every CPU acceleration strategy implements, and the traversal kit they share.
 //!
+//! Every primitive's `intersect` returns the one hit record [`PrimHit`] (distance,
+//! sub-primitive, surface parameters); [`Shape::complete_hit`] adds the primitive's normal.
+//!
 //! The scalar intersection routines in this crate are the workspace's *definition* of a hit:
 //! every backend calls them (or, for SIMD and GPU backends, ports them operation by operation),
 //! so that all raybench CPU backends return bit-identical results. See [`Accel`] for the
@@ -30,6 +33,7 @@ mod heightfield;
 mod hit;
 pub mod limits;
 mod mesh;
+mod optree;
 mod plane;
 pub mod random_rays;
 mod ray;
@@ -43,10 +47,10 @@ mod triangle;
 pub use aabb::{Aabb, FAR_SCALE, SlabRay};
 pub use accel::{Accel, AccelStats, BatchTracer};
 pub use bezier::{BezierPatch, BezierStats, FALLBACK_DEPTH, MAX_NEWTON_ITERATIONS, REGION_DEPTH};
-pub use bilinear::{BilinearPatch, PatchHit};
+pub use bilinear::BilinearPatch;
 pub use checks::check_transform;
 pub use counters::{Counters, NoCounters, RayCounters};
-pub use csg::{Csg, CsgHit, CsgNode, CsgOp, Solid};
+pub use csg::{Csg, CsgNode, CsgOp, Solid};
 pub use dda::dda;
 pub use error::SceneError;
 pub use geometry::{Geometry, PrimitiveKind, Shape};

@@ -1,5 +1,6 @@
 //! Infinite planes.
 
+use crate::hit::PrimHit;
 use crate::ray::Ray;
 use glam::Vec3;
 
@@ -30,13 +31,13 @@ impl Plane {
     /// infinite origin `t = inf`): `denom` and `t` must be finite.
     #[inline]
     #[must_use]
-    pub fn intersect(&self, ray: &Ray) -> Option<f32> {
+    pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
         let denom = self.normal.dot(ray.dir);
         if denom == 0.0 || !denom.is_finite() {
             return None;
         }
         let t = self.normal.dot(self.point - ray.origin) / denom;
-        (t >= ray.t_min && t <= ray.t_max && t.is_finite()).then_some(t)
+        (t >= ray.t_min && t <= ray.t_max && t.is_finite()).then(|| PrimHit::at(t))
     }
 }
 
@@ -47,18 +48,27 @@ mod tests {
     #[test]
     fn analytic_hit_from_both_sides() {
         let p = Plane::new(Vec3::new(0.0, -1.0, 0.0), Vec3::Y);
-        assert_eq!(p.intersect(&Ray::new(Vec3::ZERO, -Vec3::Y)), Some(1.0));
+        assert_eq!(
+            p.intersect(&Ray::new(Vec3::ZERO, -Vec3::Y)).map(|h| h.t),
+            Some(1.0)
+        );
         let r = Ray::new(Vec3::new(0.0, -3.0, 0.0), Vec3::Y);
-        assert_eq!(p.intersect(&r), Some(2.0));
-        assert_eq!(p.intersect(&Ray::new(Vec3::ZERO, Vec3::Y)), None);
+        assert_eq!(p.intersect(&r).map(|h| h.t), Some(2.0));
+        assert_eq!(
+            p.intersect(&Ray::new(Vec3::ZERO, Vec3::Y)).map(|h| h.t),
+            None
+        );
     }
 
     #[test]
     fn parallel_ray_does_not_hit() {
         let p = Plane::new(Vec3::ZERO, Vec3::Y);
-        assert_eq!(p.intersect(&Ray::new(Vec3::Y, Vec3::X)), None);
+        assert_eq!(p.intersect(&Ray::new(Vec3::Y, Vec3::X)).map(|h| h.t), None);
         // Lying in the plane.
-        assert_eq!(p.intersect(&Ray::new(Vec3::ZERO, Vec3::X)), None);
+        assert_eq!(
+            p.intersect(&Ray::new(Vec3::ZERO, Vec3::X)).map(|h| h.t),
+            None
+        );
     }
 
     /// Regression (tests/tests/adversarial.rs): an infinite direction component gave
@@ -67,9 +77,16 @@ mod tests {
     fn rays_with_infinite_components_do_not_hit() {
         let p = Plane::new(Vec3::new(0.0, -1.0, 0.0), Vec3::Y);
         let up = Vec3::new(-0.01, f32::INFINITY, -1.0);
-        assert_eq!(p.intersect(&Ray::new(Vec3::new(0.2, 0.3, 6.0), up)), None);
+        assert_eq!(
+            p.intersect(&Ray::new(Vec3::new(0.2, 0.3, 6.0), up))
+                .map(|h| h.t),
+            None
+        );
         let far = Vec3::new(0.0, f32::INFINITY, 0.0);
-        assert_eq!(p.intersect(&Ray::new(far, -Vec3::Y)), None);
-        assert_eq!(p.intersect(&Ray::new(Vec3::ZERO, Vec3::NAN)), None);
+        assert_eq!(p.intersect(&Ray::new(far, -Vec3::Y)).map(|h| h.t), None);
+        assert_eq!(
+            p.intersect(&Ray::new(Vec3::ZERO, Vec3::NAN)).map(|h| h.t),
+            None
+        );
     }
 }

@@ -40,12 +40,14 @@
 use crate::aabb::Aabb;
 use crate::checks;
 use crate::error::SceneError;
+use crate::hit::PrimHit;
 use crate::limits::{
     MAX_COORDINATE, MAX_SDF_DEPTH, MAX_SDF_NODES, MAX_SDF_STEPS, MAX_SDF_TOLERANCE,
     MIN_SDF_TOLERANCE,
 };
+use crate::optree::{self, Builder, Counted, Limits, OpTree, Operator, Source, View};
 use crate::ray::Ray;
-use glam::{Affine3A, Vec2, Vec3};
+use glam::{Affine3A, Mat3A, Vec2, Vec3, Vec3A};
 
 /// A signed-distance primitive. Tori and cylinders have the `y` axis; transform nodes place
 /// them otherwise.
@@ -170,21 +172,24 @@ impl SdfNode {
     /// # Errors
     /// [`SceneError::Invalid`] when there are fewer than two operands, or a blend has more.
     pub fn fold(op: SdfOp, operands: Vec<SdfNode>) -> Result<Self, SceneError> {
-        checks::at_least_two(&format!("an SDF {}", op.name()), &operands)?;
-        if matches!(op, SdfOp::Blend(_)) && operands.len() != 2 {
+        if matches!(op, SdfOp::Blend(_)) && operands.len() > 2 {
             return Err(SceneError::Invalid(format!(
                 "an SDF blend takes exactly two operands, found {}",
                 operands.len()
             )));
         }
-        let join = |op| move |a, b| Self::Op(op, Box::new(a), Box::new(b));
-        Ok(checks::fold(
+        optree::fold(
+            &format!("an SDF {}", op.name()),
+            op,
             operands,
-            op == SdfOp::Subtraction,
-            &join(op),
-            &join(SdfOp::Union),
-        ))
+            |op, a, b| Self::Op(op, Box::new(a), Box::new(b)),
+        )
     }
+}
+
+impl Operator for SdfOp {
+    const UNION: Self = Self::Union;
+    const DIFFERENCE: Self = Self::Subtraction;
 }
 
 /// Marching options.
@@ -211,18 +216,38 @@ impl Default for SdfParams {
     }
 }
 
-/// A node of the validated tree, stored in post-order (the root last).
-#[derive(Clone, Debug, PartialEq)]
-enum Node {
-    Leaf(SdfPrimitive),
-    Op(SdfOp, usize, usize),
-    /// `scale * f(inverse * p)`.
-    Transform {
-        inverse: Affine3A,
-        scale: f32,
-        child: usize,
-    },
+/// What a transform node of the validated tree stores: it evaluates `scale * f(M^-1 p)`.
+/// The inverse map is kept as its linear part and translation so that the node stays 80
+/// bytes; [`Similarity::local`] applies it as `Affine3A::transform_point3` does.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Similarity {
+    linear: Mat3A,
+    translation: Vec3,
+    scale: f32,
 }
+
+impl Similarity {
+    /// `M^-1 p`, with the operations of `Affine3A::transform_point3` in its order.
+    #[inline]
+    fn local(&self, p: Vec3) -> Vec3 {
+        ((self.linear.x_axis * p.x)
+            + (self.linear.y_axis * p.y)
+            + (self.linear.z_axis * p.z)
+            + Vec3A::from(self.translation))
+        .into()
+    }
+}
+
+/// A node of the validated tree.
+type Node = optree::Node<SdfPrimitive, SdfOp, Similarity>;
+
+/// The limits of [`Sdf::new`].
+const LIMITS: Limits = Limits {
+    what: "the SDF tree",
+    depth: MAX_SDF_DEPTH,
+    size: MAX_SDF_NODES,
+    counted: Counted::Nodes,
+};
 
 /// What [`Sdf::new`] derives for a subtree: its box, its Lipschitz bound, and its *spread*
 /// `g`: `{p : f(p) <= c}` lies within `g c` of the box on every axis, for every `c >= 0`
@@ -231,7 +256,7 @@ enum Node {
 /// blends keep the larger `g` (boxes overlap and join per axis, and a blend is small only
 /// where an operand is); a rotation widens it by the largest row sum of `|R|`.
 #[derive(Clone, Copy, Debug)]
-struct Bound {
+pub(crate) struct Bound {
     aabb: Aabb,
     lipschitz: f32,
     spread: f32,
@@ -249,7 +274,7 @@ pub struct March {
 /// A validated signed-distance model: one bounded primitive.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sdf {
-    nodes: Vec<Node>,
+    tree: OpTree<SdfPrimitive, SdfOp, Similarity>,
     bounds: Aabb,
     lipschitz: f32,
     eps: f32,
@@ -281,12 +306,15 @@ impl Sdf {
                 params.max_steps
             )));
         }
-        let mut nodes = Vec::new();
-        let Bound {
-            aabb: b,
-            lipschitz,
-            spread,
-        } = Self::flatten(root, 1, &mut nodes)?;
+        let (
+            tree,
+            Bound {
+                aabb: b,
+                lipschitz,
+                spread,
+            },
+            _,
+        ) = OpTree::build::<_, Self>(root, &LIMITS)?;
         if b.is_empty() || (b.max - b.min).min_element() < 0.0 {
             return Err(SceneError::Invalid(
                 "the SDF model is empty (the boxes of its intersected operands do not overlap)"
@@ -300,115 +328,12 @@ impl Sdf {
         // point off it (at least `2 eps` away) and covers rounding.
         let pad = Vec3::splat(2.0 * eps * spread + (b.max - b.min).max_element() / 2048.0);
         Ok(Self {
-            nodes,
+            tree,
             bounds: Aabb::new(b.min - pad, b.max + pad),
             lipschitz,
             eps,
             max_steps: params.max_steps,
         })
-    }
-
-    /// Appends `node`'s subtree in post-order; returns its bounds.
-    fn flatten(node: &SdfNode, depth: usize, nodes: &mut Vec<Node>) -> Result<Bound, SceneError> {
-        if depth > MAX_SDF_DEPTH {
-            return Err(SceneError::TooLarge(format!(
-                "the SDF tree is deeper than {MAX_SDF_DEPTH} levels"
-            )));
-        }
-        if nodes.len() >= MAX_SDF_NODES {
-            return Err(SceneError::TooLarge(format!(
-                "the SDF tree has more than {MAX_SDF_NODES} nodes"
-            )));
-        }
-        let result = match node {
-            SdfNode::Leaf(p) => {
-                validate(p)?;
-                nodes.push(Node::Leaf(*p));
-                Bound {
-                    aabb: primitive_bounds(p),
-                    lipschitz: 1.0,
-                    spread: 1.0,
-                }
-            }
-            SdfNode::Op(op, a, b) => {
-                validate_op(*op)?;
-                let Bound {
-                    aabb: ba,
-                    lipschitz: la,
-                    spread: ga,
-                } = Self::flatten(a, depth + 1, nodes)?;
-                let ia = nodes.len() - 1;
-                let Bound {
-                    aabb: bb,
-                    lipschitz: lb,
-                    spread: gb,
-                } = Self::flatten(b, depth + 1, nodes)?;
-                let ib = nodes.len() - 1;
-                nodes.push(Node::Op(*op, ia, ib));
-                let spread = ga.max(gb);
-                let aabb = match op {
-                    SdfOp::Union | SdfOp::Blend(_) => ba.union(bb),
-                    SdfOp::Intersection => Aabb::new(ba.min.max(bb.min), ba.max.min(bb.max)),
-                    SdfOp::Subtraction => ba,
-                    // smin >= min(a, b) - k / 4: the surface lies where min(a, b) <= k / 4,
-                    // within `spread * k / 4` of the operands' boxes (see `Bound`).
-                    SdfOp::SmoothUnion(k) => {
-                        let u = ba.union(bb);
-                        let pad = Vec3::splat(spread * k / 4.0);
-                        Aabb::new(u.min - pad, u.max + pad)
-                    }
-                };
-                Bound {
-                    aabb,
-                    lipschitz: op.lipschitz(la, lb),
-                    spread,
-                }
-            }
-            SdfNode::Transform(m, child) => {
-                let scale = similarity_scale(m)?;
-                let Bound {
-                    aabb: bc,
-                    lipschitz,
-                    spread,
-                } = Self::flatten(child, depth + 1, nodes)?;
-                let ic = nodes.len() - 1;
-                nodes.push(Node::Transform {
-                    inverse: m.inverse(),
-                    scale,
-                    child: ic,
-                });
-                let corners = (0..8).map(|i| {
-                    let pick = |bit: usize, lo: f32, hi: f32| if i & bit == 0 { lo } else { hi };
-                    m.transform_point3(Vec3::new(
-                        pick(1, bc.min.x, bc.max.x),
-                        pick(2, bc.min.y, bc.max.y),
-                        pick(4, bc.min.z, bc.max.z),
-                    ))
-                });
-                let b = Aabb::from_points(corners);
-                if !(b.min.is_finite() && b.max.is_finite())
-                    || b.min.abs().max(b.max.abs()).max_element() > MAX_COORDINATE
-                {
-                    return Err(SceneError::Invalid(format!(
-                        "an SDF transform places the model beyond {MAX_COORDINATE:e}"
-                    )));
-                }
-                // A cube of half size r, rotated, has a box of half size r times the
-                // largest row sum of |R| (at most sqrt 3).
-                let r = m.matrix3 * (1.0 / scale);
-                let rows = r.transpose();
-                let turn = [rows.x_axis, rows.y_axis, rows.z_axis]
-                    .map(|row| row.abs().element_sum())
-                    .into_iter()
-                    .fold(1.0f32, f32::max);
-                Bound {
-                    aabb: b,
-                    lipschitz,
-                    spread: spread * turn,
-                }
-            }
-        };
-        Ok(result)
     }
 
     /// The bounding box (padded by `2 eps` plus `2^-11` of its largest extent).
@@ -443,31 +368,27 @@ impl Sdf {
     #[inline]
     #[must_use]
     pub fn node_count(&self) -> usize {
-        self.nodes.len()
+        self.tree.len()
     }
 
     /// Bytes held behind the primitive's `Arc`.
     #[must_use]
     pub fn memory_bytes(&self) -> usize {
-        std::mem::size_of::<Self>() + self.nodes.len() * std::mem::size_of::<Node>()
+        std::mem::size_of::<Self>() + self.tree.memory_bytes()
     }
 
     /// The field's value at `p`: negative inside the model.
     #[inline]
     #[must_use]
     pub fn distance(&self, p: Vec3) -> f32 {
-        self.eval(self.nodes.len() - 1, p)
+        self.eval(self.tree.root(), p)
     }
 
     fn eval(&self, i: usize, p: Vec3) -> f32 {
-        match &self.nodes[i] {
+        match self.tree.node(i) {
             Node::Leaf(s) => primitive_distance(s, p),
             Node::Op(op, a, b) => op.apply(self.eval(*a, p), self.eval(*b, p)),
-            Node::Transform {
-                inverse,
-                scale,
-                child,
-            } => scale * self.eval(*child, inverse.transform_point3(p)),
+            Node::Wrap(m, child) => m.scale * self.eval(*child, m.local(p)),
         }
     }
 
@@ -475,8 +396,8 @@ impl Sdf {
     /// of the module documentation.
     #[inline]
     #[must_use]
-    pub fn intersect(&self, ray: &Ray) -> Option<f32> {
-        self.march(ray).t
+    pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
+        self.march(ray).t.map(PrimHit::at)
     }
 
     /// [`Sdf::intersect`] with the number of field evaluations it made.
@@ -555,6 +476,96 @@ impl Sdf {
     }
 }
 
+impl Source for SdfNode {
+    type Leaf = SdfPrimitive;
+    type Op = SdfOp;
+    type Transform = Affine3A;
+
+    fn view(&self) -> View<'_, Self> {
+        match self {
+            Self::Leaf(p) => View::Leaf(*p),
+            Self::Op(op, a, b) => View::Op(*op, a, b),
+            Self::Transform(m, child) => View::Wrap(m, child),
+        }
+    }
+}
+
+impl Builder<SdfNode> for Sdf {
+    type Leaf = SdfPrimitive;
+    type Wrap = Similarity;
+    type Bound = Bound;
+
+    fn leaf(p: SdfPrimitive) -> Result<(SdfPrimitive, Bound), SceneError> {
+        validate(&p)?;
+        let bound = Bound {
+            aabb: primitive_bounds(&p),
+            lipschitz: 1.0,
+            spread: 1.0,
+        };
+        Ok((p, bound))
+    }
+
+    fn check_op(op: SdfOp) -> Result<(), SceneError> {
+        validate_op(op)
+    }
+
+    fn op_bound(op: SdfOp, a: Bound, b: Bound) -> Bound {
+        let (ba, bb) = (a.aabb, b.aabb);
+        let spread = a.spread.max(b.spread);
+        let aabb = match op {
+            SdfOp::Union | SdfOp::Blend(_) => ba.union(bb),
+            SdfOp::Intersection => Aabb::new(ba.min.max(bb.min), ba.max.min(bb.max)),
+            SdfOp::Subtraction => ba,
+            // smin >= min(a, b) - k / 4: the surface lies where min(a, b) <= k / 4,
+            // within `spread * k / 4` of the operands' boxes (see `Bound`).
+            SdfOp::SmoothUnion(k) => {
+                let u = ba.union(bb);
+                let pad = Vec3::splat(spread * k / 4.0);
+                Aabb::new(u.min - pad, u.max + pad)
+            }
+        };
+        Bound {
+            aabb,
+            lipschitz: op.lipschitz(a.lipschitz, b.lipschitz),
+            spread,
+        }
+    }
+
+    fn wrap(m: &Affine3A) -> Result<Similarity, SceneError> {
+        let scale = similarity_scale(m)?;
+        let inverse = m.inverse();
+        Ok(Similarity {
+            linear: inverse.matrix3,
+            translation: inverse.translation.into(),
+            scale,
+        })
+    }
+
+    fn wrap_bound(m: &Affine3A, w: &Similarity, child: Bound) -> Result<Bound, SceneError> {
+        let b = child.aabb.transformed(*m);
+        if !(b.min.is_finite() && b.max.is_finite())
+            || b.min.abs().max(b.max.abs()).max_element() > MAX_COORDINATE
+        {
+            return Err(SceneError::Invalid(format!(
+                "an SDF transform places the model beyond {MAX_COORDINATE:e}"
+            )));
+        }
+        // A cube of half size r, rotated, has a box of half size r times the largest row
+        // sum of |R| (at most sqrt 3).
+        let r = m.matrix3 * (1.0 / w.scale);
+        let rows = r.transpose();
+        let turn = [rows.x_axis, rows.y_axis, rows.z_axis]
+            .map(|row| row.abs().element_sum())
+            .into_iter()
+            .fold(1.0f32, f32::max);
+        Ok(Bound {
+            aabb: b,
+            lipschitz: child.lipschitz,
+            spread: child.spread * turn,
+        })
+    }
+}
+
 /// Checks a primitive's parameters.
 fn validate(p: &SdfPrimitive) -> Result<(), SceneError> {
     let point = |v: Vec3, what: &str| checks::point(v, &format!("SDF {what}"));
@@ -588,11 +599,7 @@ fn validate(p: &SdfPrimitive) -> Result<(), SceneError> {
             center,
             major_radius,
             minor_radius,
-        } => {
-            point(center, "torus centre")?;
-            positive(major_radius, "torus major radius")?;
-            positive(minor_radius, "torus minor radius")
-        }
+        } => checks::torus("SDF", center, major_radius, minor_radius),
         SdfPrimitive::Capsule { a, b, radius } => {
             point(a, "capsule end a")?;
             point(b, "capsule end b")?;
@@ -933,24 +940,25 @@ mod tests {
         assert!((eps - 1e-4 * 12f32.sqrt()).abs() < 1e-9, "{eps}");
         // Head-on: exact distances converge in one step.
         let r = Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::Z);
-        let t = m.intersect(&r).unwrap();
+        let t = m.intersect(&r).map(|h| h.t).unwrap();
         assert!((t - 4.0).abs() <= eps, "{t}");
         assert!((m.normal(r.at(t)) - -Vec3::Z).length() < 1e-3);
         // From inside: the exit, normal still outward.
         let r = Ray::new(Vec3::ZERO, Vec3::X);
-        let t = m.intersect(&r).unwrap();
+        let t = m.intersect(&r).map(|h| h.t).unwrap();
         assert!((t - 1.0).abs() <= eps, "{t}");
         assert!((m.normal(r.at(t)) - Vec3::X).length() < 1e-3);
         // Miss, and clipped by t_max.
         assert_eq!(
-            m.intersect(&Ray::new(Vec3::new(0.0, 2.0, -5.0), Vec3::Z)),
+            m.intersect(&Ray::new(Vec3::new(0.0, 2.0, -5.0), Vec3::Z))
+                .map(|h| h.t),
             None
         );
         let r = Ray::with_interval(Vec3::new(0.0, 0.0, -5.0), Vec3::Z, 0.0, 3.9);
-        assert_eq!(m.intersect(&r), None);
+        assert_eq!(m.intersect(&r).map(|h| h.t), None);
         // Unnormalised directions give the same point.
         let r = Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::Z * 4.0);
-        assert!((m.intersect(&r).unwrap() - 1.0).abs() <= eps / 4.0);
+        assert!((m.intersect(&r).map(|h| h.t).unwrap() - 1.0).abs() <= eps / 4.0);
     }
 
     /// A ray leaving the surface (reflection outward, refraction inward) does not re-hit it:
@@ -962,11 +970,19 @@ mod tests {
         for offset in [-0.9 * eps, -0.3 * eps, 0.0, 0.3 * eps, 0.9 * eps] {
             let p = Vec3::new(0.0, 0.0, -1.0 - offset);
             // Outward: nothing else to hit.
-            assert_eq!(m.intersect(&Ray::new(p, -Vec3::Z)), None, "{offset}");
+            assert_eq!(
+                m.intersect(&Ray::new(p, -Vec3::Z)).map(|h| h.t),
+                None,
+                "{offset}"
+            );
             // Outward at a slant.
-            assert_eq!(m.intersect(&Ray::new(p, Vec3::new(0.3, 0.0, -1.0))), None);
+            assert_eq!(
+                m.intersect(&Ray::new(p, Vec3::new(0.3, 0.0, -1.0)))
+                    .map(|h| h.t),
+                None
+            );
             // Inward: the far side at t = 2.
-            let t = m.intersect(&Ray::new(p, Vec3::Z)).unwrap();
+            let t = m.intersect(&Ray::new(p, Vec3::Z)).map(|h| h.t).unwrap();
             assert!((t - 2.0).abs() <= 2.0 * eps, "{offset}: {t}");
         }
     }
@@ -1001,6 +1017,7 @@ mod tests {
         assert!((m.distance(Vec3::ZERO) + 0.2).abs() < 1e-6);
         let t = m
             .intersect(&Ray::new(Vec3::new(0.0, 5.0, 0.0), -Vec3::Y))
+            .map(|h| h.t)
             .unwrap();
         assert!(t < 5.0 - 0.1, "the neck is filled: {t}");
         // A blend halfway between a ball and a box of the same centre.
@@ -1011,7 +1028,10 @@ mod tests {
         ));
         assert!((m.distance(Vec3::new(2.0, 0.0, 0.0)) - 1.0).abs() < 1e-6);
         let diag = Vec3::ONE.normalize();
-        let t = m.intersect(&Ray::new(diag * 5.0, -diag)).unwrap();
+        let t = m
+            .intersect(&Ray::new(diag * 5.0, -diag))
+            .map(|h| h.t)
+            .unwrap();
         // The surface on the diagonal is between the ball's (1) and the box's (sqrt 3).
         assert!((5.0 - t) > 1.05 && (5.0 - t) < 3f32.sqrt() - 0.05, "{t}");
     }
@@ -1085,7 +1105,7 @@ mod tests {
             Ray::new(Vec3::new(-5.0, 0.0, 0.0), Vec3::new(f32::NAN, 0.0, 0.0)),
             Ray::new(Vec3::new(-5.0, 0.0, 0.0), Vec3::ZERO),
         ] {
-            assert_eq!(m.intersect(&r), None);
+            assert_eq!(m.intersect(&r).map(|h| h.t), None);
         }
     }
 }

@@ -1,6 +1,7 @@
 //! Spheres and the numerically stable ray/sphere test.
 
 use crate::aabb::Aabb;
+use crate::hit::PrimHit;
 use crate::ray::Ray;
 use glam::Vec3;
 
@@ -34,7 +35,8 @@ impl Sphere {
     }
 
     /// The smallest root of `|o + t d - c|^2 = r^2` inside `[ray.t_min, ray.t_max]`, so a
-    /// ray starting inside hits the far side.
+    /// ray starting inside hits the far side (the surface parameters are filled in by
+    /// [`Sphere::uv`] when the hit is completed).
     ///
     /// Stable form of Haines et al., Ray Tracing Gems ch. 7: the discriminant is computed
     /// from the distance between the centre and the line (no cancellation for small
@@ -42,7 +44,7 @@ impl Sphere {
     /// `q = b + sign(b) sqrt(a * disc)` (no cancellation between `b` and the root).
     #[inline]
     #[must_use]
-    pub fn intersect(&self, ray: &Ray) -> Option<f32> {
+    pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
         let f = ray.origin - self.center;
         let d = ray.dir;
         let a = d.dot(d);
@@ -62,9 +64,9 @@ impl Sphere {
         let t1 = q / a;
         let (near, far) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
         if near >= ray.t_min && near <= ray.t_max {
-            Some(near)
+            Some(PrimHit::at(near))
         } else if far >= ray.t_min && far <= ray.t_max {
-            Some(far)
+            Some(PrimHit::at(far))
         } else {
             None
         }
@@ -76,6 +78,16 @@ impl Sphere {
     pub fn normal_at(&self, p: Vec3) -> Vec3 {
         ((p - self.center) / self.radius).normalize_or(Vec3::Y)
     }
+
+    /// The surface parameters of the point with outward normal `n`: longitude in `[0, 1)`
+    /// and latitude in `[0, 1]` (0 at the top).
+    #[inline]
+    #[must_use]
+    pub fn uv(n: Vec3) -> (f32, f32) {
+        let u = (n.z.atan2(n.x) / std::f32::consts::TAU).rem_euclid(1.0);
+        let v = n.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI;
+        (u, v)
+    }
 }
 
 #[cfg(test)]
@@ -86,32 +98,38 @@ mod tests {
     fn analytic_distance_from_outside() {
         let s = Sphere::new(Vec3::new(0.0, 0.0, 5.0), 1.0);
         let r = Ray::new(Vec3::ZERO, Vec3::Z);
-        assert_eq!(s.intersect(&r), Some(4.0));
+        assert_eq!(s.intersect(&r).map(|h| h.t), Some(4.0));
         // Unnormalised direction: t scales inversely.
         let r = Ray::new(Vec3::ZERO, Vec3::Z * 2.0);
-        assert_eq!(s.intersect(&r), Some(2.0));
+        assert_eq!(s.intersect(&r).map(|h| h.t), Some(2.0));
     }
 
     #[test]
     fn ray_starting_inside_hits_far_side() {
         let s = Sphere::new(Vec3::ZERO, 2.0);
         let r = Ray::new(Vec3::ZERO, Vec3::X);
-        assert_eq!(s.intersect(&r), Some(2.0));
+        assert_eq!(s.intersect(&r).map(|h| h.t), Some(2.0));
     }
 
     #[test]
     fn behind_and_missing() {
         let s = Sphere::new(Vec3::new(0.0, 0.0, -5.0), 1.0);
-        assert_eq!(s.intersect(&Ray::new(Vec3::ZERO, Vec3::Z)), None);
+        assert_eq!(
+            s.intersect(&Ray::new(Vec3::ZERO, Vec3::Z)).map(|h| h.t),
+            None
+        );
         let s = Sphere::new(Vec3::new(0.0, 3.0, 5.0), 1.0);
-        assert_eq!(s.intersect(&Ray::new(Vec3::ZERO, Vec3::Z)), None);
+        assert_eq!(
+            s.intersect(&Ray::new(Vec3::ZERO, Vec3::Z)).map(|h| h.t),
+            None
+        );
     }
 
     #[test]
     fn small_sphere_far_away_is_stable() {
         // The naive quadratic loses the hit entirely here (b^2 - ac cancels).
         let s = Sphere::new(Vec3::new(0.0, 0.0, 1.0e5), 0.01);
-        let t = s.intersect(&Ray::new(Vec3::ZERO, Vec3::Z)).unwrap();
+        let t = s.intersect(&Ray::new(Vec3::ZERO, Vec3::Z)).unwrap().t;
         assert!((t - (1.0e5 - 0.01)).abs() <= 1.0e5 * 1e-6, "t = {t}");
     }
 
@@ -119,7 +137,7 @@ mod tests {
     fn huge_coordinates_do_not_overflow() {
         let s = Sphere::new(Vec3::new(0.0, 0.0, 4.0e15), 1.0e14);
         let r = Ray::new(Vec3::ZERO, Vec3::new(0.0, 0.0, 4.0e15));
-        let t = s.intersect(&r).unwrap();
+        let t = s.intersect(&r).unwrap().t;
         assert!((t - 0.975).abs() < 1e-5, "t = {t}");
     }
 
@@ -127,8 +145,8 @@ mod tests {
     fn nan_ray_misses() {
         let s = Sphere::new(Vec3::ZERO, 1.0);
         let r = Ray::new(Vec3::new(f32::NAN, 0.0, -3.0), Vec3::Z);
-        assert_eq!(s.intersect(&r), None);
+        assert_eq!(s.intersect(&r).map(|h| h.t), None);
         let r = Ray::new(Vec3::new(0.0, 0.0, -3.0), Vec3::ZERO);
-        assert_eq!(s.intersect(&r), None);
+        assert_eq!(s.intersect(&r).map(|h| h.t), None);
     }
 }

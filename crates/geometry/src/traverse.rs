@@ -7,7 +7,7 @@
 //! counts its node or cell visits. An any-hit query ([`occluded`]) does the same with an
 //! [`AnyHit`]. The way obvhs's `ray_traverse` takes a closure: the walk is the backend's, the
 //! rules are the core's. The pieces the walks themselves share are the nearest-first
-//! [`crate::NodeStack`] and the 3D-DDA ([`crate::dda`]).
+//! [`crate::NodeStack`] and the 3D-DDA ([`crate::dda()`]).
 
 use crate::counters::Counters;
 use crate::geometry::Geometry;

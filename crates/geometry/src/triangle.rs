@@ -1,6 +1,7 @@
 //! Triangles and the watertight ray/triangle test.
 
 use crate::aabb::Aabb;
+use crate::hit::PrimHit;
 use crate::ray::Ray;
 use glam::Vec3;
 
@@ -10,17 +11,6 @@ use glam::Vec3;
 pub struct Triangle {
     /// The vertices `v0, v1, v2`.
     pub v: [Vec3; 3],
-}
-
-/// Where a ray crosses a triangle: distance and the barycentric weights of `v1` and `v2`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TriangleHit {
-    /// Ray parameter.
-    pub t: f32,
-    /// Weight of `v1`.
-    pub u: f32,
-    /// Weight of `v2`.
-    pub v: f32,
 }
 
 impl Triangle {
@@ -63,10 +53,11 @@ impl Triangle {
     /// [`crate::Hit::closer`] picks one).
     ///
     /// This routine is the definition of a triangle hit: SIMD and GPU backends reproduce
-    /// its operations in this order. `t = T / det`, `u = U / det`, `v = V / det`.
+    /// its operations in this order. `t = T / det`, `u = V / det` (the weight of `v1`),
+    /// `v = W / det` (the weight of `v2`); the sub-primitive id is 0.
     #[inline]
     #[must_use]
-    pub fn intersect(&self, ray: &Ray) -> Option<TriangleHit> {
+    pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
         let (kx, ky, kz) = (ray.kx as usize, ray.ky as usize, ray.kz as usize);
         let (sx, sy, sz) = (ray.shear.x, ray.shear.y, ray.shear.z);
 
@@ -125,8 +116,9 @@ impl Triangle {
         if t < ray.t_min || t > ray.t_max || t.is_nan() {
             return None;
         }
-        Some(TriangleHit {
+        Some(PrimHit {
             t,
+            sub: 0,
             u: v / det,
             v: w / det,
         })
