@@ -22,7 +22,6 @@ use crate::progress::Progress;
 use anyhow::Result;
 use raybench_core::{Mode, RaySet, Scene};
 use std::collections::{BTreeMap, BTreeSet};
-use std::fmt::Write as _;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -491,15 +490,12 @@ pub(super) fn fits_intro() -> String {
         Some((last, _)) => (*last).to_string(),
         None => String::new(),
     };
-    let mut s = String::new();
-    let _ = write!(
-        s,
+    format!(
         "Log-log fits `y ~ x^slope` of render time (and tests per ray) against {joined}. \
          The claims under test: naive's time grows linearly with M (slope about 1), an \
          acceleration structure's barely (slope near 0, logarithmic in theory); time grows \
          linearly with N^2 and with K for every backend.\n"
-    );
-    s
+    )
 }
 
 #[cfg(test)]
