@@ -3,7 +3,7 @@
 //! triangles per patch, both in the baseline backend, with each tessellation's image
 //! difference from the direct rendering.
 
-use super::{Chart, Ctx, Observed, Plot, Point, Scaling, scene_for, square};
+use super::{Chart, Ctx, Observed, Plot, Point, Scaling, baseline_only, scene_for, square};
 use crate::Backend;
 use crate::report::charts::Series;
 use crate::report::images::{self, Rgb8};
@@ -72,9 +72,7 @@ impl Scaling for Bezier {
 
     /// The baseline alone (the comparison is of representations, not of structures).
     fn backends(&self, _chosen: &[&'static Backend]) -> Vec<&'static Backend> {
-        crate::with_role(crate::Roles::BASELINE)
-            .into_iter()
-            .collect()
+        baseline_only()
     }
 
     /// The built-in scene, and `NAME:tessellate=N`: the scene with its patches tessellated

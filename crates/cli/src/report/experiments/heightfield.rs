@@ -3,7 +3,7 @@
 //! (`terrain:N`), both in the baseline backend, for growing grids: load, build, memory and
 //! render time.
 
-use super::{Ctx, Observed, Point, Scaling, square};
+use super::{Ctx, Observed, Point, Scaling, baseline_only, square};
 use crate::Backend;
 use crate::report::markdown::{bytes, opt};
 use crate::report::results::{Results, ScalingPoint};
@@ -50,9 +50,7 @@ impl Scaling for Heightfield {
 
     /// The baseline alone (the comparison is of representations, not of structures).
     fn backends(&self, _chosen: &[&'static Backend]) -> Vec<&'static Backend> {
-        crate::with_role(crate::Roles::BASELINE)
-            .into_iter()
-            .collect()
+        baseline_only()
     }
 
     fn record(&self, _state: &mut (), seen: &Observed, point: &mut ScalingPoint) {

@@ -306,6 +306,39 @@ fn scene_for(name: &str) -> Result<&'static str, String> {
         })
 }
 
+/// The points of the built-in scene that names experiment `name` (its one series), one per
+/// value of `values`, at `(x, workload)` from `at`.
+///
+/// # Errors
+/// When no built-in scene names the experiment.
+fn scene_points(
+    name: &str,
+    values: &[u32],
+    at: impl Fn(u32) -> (f64, Workload),
+) -> Result<Vec<Point>, String> {
+    let scene = scene_for(name)?;
+    Ok(values
+        .iter()
+        .map(|&v| {
+            let (x, workload) = at(v);
+            Point {
+                series: scene.into(),
+                x,
+                spec: scene.into(),
+                workload,
+            }
+        })
+        .collect())
+}
+
+/// The baseline backend alone: for the experiments that compare two representations of
+/// one surface, not structures.
+fn baseline_only() -> Vec<&'static Backend> {
+    crate::with_role(crate::Roles::BASELINE)
+        .into_iter()
+        .collect()
+}
+
 /// A scene spec that could not be loaded, and why.
 type SkippedScene = (String, String);
 

@@ -1,7 +1,7 @@
 //! Experiment `spp`: path-tracing time against the samples per pixel K, 64 x 64, on the
 //! built-in scene whose `[benchmark]` table names it (the Cornell box).
 
-use super::{Ctx, Point, Scaling, scene_for, square};
+use super::{Ctx, Point, Scaling, scene_points, square};
 use raybench_core::Mode;
 
 /// Experiment `spp`.
@@ -23,20 +23,13 @@ impl Scaling for Spp {
     }
 
     fn points(&self, ctx: &Ctx) -> Result<Vec<Point>, String> {
-        let scene = scene_for(self.name())?;
         let ks: &[u32] = if ctx.opts.quick {
             &[1, 2, 4, 8, 16]
         } else {
             &[1, 2, 4, 8, 16, 32, 64]
         };
-        Ok(ks
-            .iter()
-            .map(|&k| Point {
-                series: scene.into(),
-                x: f64::from(k),
-                spec: scene.into(),
-                workload: square(64, k, Mode::Path),
-            })
-            .collect())
+        scene_points(self.name(), ks, |k| {
+            (f64::from(k), square(64, k, Mode::Path))
+        })
     }
 }
