@@ -19,7 +19,7 @@ fuzz_target!(|data: &[u8]| {
         1 => SampleFormat::U16,
         _ => SampleFormat::F32,
     };
-    let Ok(count) = raybench_core::volume::check_volume_dims(dims) else {
+    let Ok(count) = raybench_core::voxels::check_volume_dims(dims) else {
         return;
     };
     let path = Path::new("fuzz.raw");

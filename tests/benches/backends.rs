@@ -27,9 +27,9 @@
 //!   Embree's device is created once, before any timing, and shared);
 //! - `trace/<backend>/<scene>/primary`: the 256 x 256 centre rays of the scene's camera, in
 //!   the order the renderer traces them (16 x 16 tiles of 4 x 4 pixel blocks,
-//!   [`raybench_core::rays::primary_tiled`]);
+//!   [`raybench_core::ray_sets::primary_tiled`]);
 //! - `trace/<backend>/<scene>/incoherent`: 65,536 seeded random rays inside the scene's
-//!   bounding box ([`raybench_core::rays::incoherent`], seed 1).
+//!   bounding box ([`raybench_core::ray_sets::incoherent`], seed 1).
 //!
 //! Trace benchmarks run on the calling thread and report throughput in rays (criterion's
 //! `elem/s`); the peers other than `embree-packet` trace single rays one after the other.
@@ -70,7 +70,7 @@ use criterion::{
 };
 use obvhs::bvh2::Bvh2;
 use raybench_bvh::{Bvh, BvhParams, ObvhsAccel};
-use raybench_core::{Accel, Geometry, NoCounters, Ray, Scene, Shape, Triangle, rays};
+use raybench_core::{Accel, Geometry, NoCounters, Ray, Scene, Shape, Triangle, ray_sets};
 use raybench_grid::{Grid, GridParams, TwoLevelGrid, TwoLevelParams};
 use raybench_packet::{PacketAccel, PacketParams};
 use raybench_peers::BvhCrateAccel;
@@ -155,7 +155,7 @@ fn prepare(name: &'static str) -> Option<Prepared> {
     let ray_sets = [
         (
             "primary",
-            rays::primary_tiled(
+            ray_sets::primary_tiled(
                 &scene.camera,
                 PRIMARY_SIZE,
                 PRIMARY_SIZE,
@@ -164,7 +164,7 @@ fn prepare(name: &'static str) -> Option<Prepared> {
         ),
         (
             "incoherent",
-            rays::incoherent(g.bounds(), INCOHERENT_COUNT, INCOHERENT_SEED),
+            ray_sets::incoherent(g.bounds(), INCOHERENT_COUNT, INCOHERENT_SEED),
         ),
     ];
     let (bvh, t_bvh) = timed(|| Bvh::build_with(g.clone(), BvhParams::default()));
@@ -205,7 +205,7 @@ fn prepare(name: &'static str) -> Option<Prepared> {
     // The device is created by the first build (untimed, here) and shared afterwards.
     #[cfg(feature = "embree")]
     let embree = match raybench_peers::embree_availability()
-        .and_then(|()| raybench_peers::embree_supports(&scene))
+        .and_then(|()| raybench_peers::embree_supports(&scene.geometry))
     {
         Ok(()) => {
             let (single, t_embree) = timed(|| EmbreeAccel::build(g.clone()));

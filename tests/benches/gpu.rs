@@ -8,7 +8,7 @@
 //! - `trace/wgpu/<scene>/primary`: a ray-casting frame at `RAYBENCH_GPU_SIZE` squared
 //!   pixels (default 1024): one centre ray per pixel, shading included;
 //! - `trace/wgpu/<scene>/incoherent`: 65,536 seeded random rays inside the scene's box
-//!   ([`raybench_core::rays::incoherent`], seed 1, as the CPU suite's), uploaded and read
+//!   ([`raybench_core::ray_sets::incoherent`], seed 1, as the CPU suite's), uploaded and read
 //!   back around the timed dispatch;
 //! - `trace/wgpu/<scene>/path`: a path-traced frame at the same size, 1 sample per pixel,
 //!   5 bounces (every ray counted: camera, bounce and shadow rays).
@@ -90,7 +90,7 @@ fn benches_all(c: &mut Criterion) {
                 });
             });
         }
-        let rays = raybench_core::rays::incoherent(scene.geometry.bounds(), 65_536, 1);
+        let rays = raybench_core::ray_sets::incoherent(scene.geometry.bounds(), 65_536, 1);
         let _ = r.trace_rays(&rays, false).expect("GPU rays");
         group.throughput(Throughput::Elements(rays.len() as u64));
         group.bench_function(

@@ -17,7 +17,7 @@
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use raybench_bvh::{Bvh, BvhParams};
 use raybench_core::{
-    Accel, HeightFieldTraversal, NoCounters, Ray, Shape, VolumeParams, VolumeSample, rays,
+    Accel, HeightFieldTraversal, NoCounters, Ray, Shape, VolumeParams, VolumeSample, ray_sets,
 };
 use std::hint::black_box;
 use std::path::Path;
@@ -38,7 +38,7 @@ fn bench_heightfield(c: &mut Criterion) {
             .as_ref()
             .clone()
             .with_traversal(HeightFieldTraversal::Dda);
-        let rays: Vec<Ray> = rays::primary_tiled(&scene.camera, SIZE, SIZE, 16);
+        let rays: Vec<Ray> = ray_sets::primary_tiled(&scene.camera, SIZE, SIZE, 16);
         for (name, field) in [("tree", tree.as_ref()), ("dda", &dda)] {
             group.bench_function(BenchmarkId::new(name, n), |b| {
                 b.iter(|| {
@@ -69,7 +69,7 @@ fn bench_volume(c: &mut Criterion) {
     let mut group = c.benchmark_group("volume/phantom");
     let scene = raybench_scene::load("phantom", Path::new("/none")).unwrap();
     let side = 128;
-    let rays: Vec<Ray> = rays::primary_tiled(&scene.camera, side, side, 16);
+    let rays: Vec<Ray> = ray_sets::primary_tiled(&scene.camera, side, side, 16);
     group.throughput(Throughput::Elements(u64::from(side * side)));
     let volume = scene.volumes[0].as_ref();
     for composite in [false, true] {

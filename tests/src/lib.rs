@@ -243,8 +243,11 @@ pub fn check(backends: &[&str], scene: &str, size: u32) {
             );
         }
     }
-    let rays =
-        raybench_core::rays::incoherent(scene_data.geometry.bounds(), (size * size) as usize, 1);
+    let rays = raybench_core::ray_sets::incoherent(
+        scene_data.geometry.bounds(),
+        (size * size) as usize,
+        1,
+    );
     let (reference_rays, _) = prepared(ORACLE, &scene_data)
         .trace_rays(&rays, false)
         .unwrap();
@@ -541,7 +544,8 @@ pub mod gpu {
             };
             assert_close_colors(&what, &reference.color, &frame.color, max_mismatch);
         }
-        let rays = raybench_core::rays::incoherent(s.geometry.bounds(), (size * size) as usize, 1);
+        let rays =
+            raybench_core::ray_sets::incoherent(s.geometry.bounds(), (size * size) as usize, 1);
         let (reference, _) = prepared(super::ORACLE, &s)
             .trace_rays(&rays, false)
             .unwrap();

@@ -14,7 +14,7 @@ use obvhs::bvh2::Bvh2;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::RayHit;
 use raybench_core::{
-    Accel, AccelStats, Counters, Geometry, Hit, PrimHit, Ray, Scene, Shape, Triangle, Vec3A,
+    Accel, AccelStats, Counters, Geometry, Hit, PrimHit, Ray, Shape, Triangle, Vec3A,
 };
 use std::sync::Arc;
 use std::time::Duration;
@@ -145,8 +145,8 @@ impl<T: ObvhsTree> ObvhsPeer<T> {
     ///
     /// # Errors
     /// Why not.
-    pub fn supports(scene: &Scene) -> Result<(), String> {
-        triangles(&scene.geometry)
+    pub fn supports(geometry: &Geometry) -> Result<(), String> {
+        triangles(geometry)
             .map(|_| ())
             .ok_or_else(|| format!("{}: triangles and planes only", T::NAME))
     }

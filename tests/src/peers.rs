@@ -17,7 +17,7 @@ pub mod contestants;
 pub mod report;
 
 use contestants::Contestant;
-use raybench_core::{Hit, Ray, RayCounters, RaySet, Renderer, Scene, rays};
+use raybench_core::{Hit, Ray, RayCounters, RaySet, Renderer, Scene, ray_sets};
 use rayon::ThreadPool;
 use rayon::prelude::*;
 use report::{
@@ -260,17 +260,19 @@ pub struct Workload {
 }
 
 /// The rays of `set` for `scene`: primary rays in the renderer's tile order
-/// ([`rays::primary_tiled`]) or seeded incoherent rays ([`rays::incoherent`]).
+/// ([`ray_sets::primary_tiled`]) or seeded incoherent rays ([`ray_sets::incoherent`]).
 #[must_use]
 pub fn ray_set(scene: &Scene, set: RaySet, o: &Options) -> Vec<Ray> {
     match set {
-        RaySet::Primary => rays::primary_tiled(
+        RaySet::Primary => ray_sets::primary_tiled(
             &scene.camera,
             o.primary_size,
             o.primary_size,
             raybench_render::TILE_SIZE,
         ),
-        RaySet::Incoherent => rays::incoherent(scene.geometry.bounds(), o.incoherent_rays, o.seed),
+        RaySet::Incoherent => {
+            ray_sets::incoherent(scene.geometry.bounds(), o.incoherent_rays, o.seed)
+        }
     }
 }
 

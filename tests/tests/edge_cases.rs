@@ -18,7 +18,7 @@ fn probe_rays(scene: &Scene) -> Vec<Ray> {
     } else {
         (b.min, b.max)
     };
-    let mut rays = raybench_core::rays::incoherent(raybench_core::Aabb::new(min, max), 2000, 3);
+    let mut rays = raybench_core::ray_sets::incoherent(raybench_core::Aabb::new(min, max), 2000, 3);
     for i in 0..=4 {
         for j in 0..=4 {
             let f = |k: usize, a: usize| min[a] + (max[a] - min[a]) * k as f32 / 4.0;

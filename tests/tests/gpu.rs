@@ -135,7 +135,7 @@ fn degenerate_and_extreme_rays_behave_as_on_the_cpu() {
         rays.push(Ray::new(c - axis * 1e6, axis * 1e-20));
     }
     // Ordinary rays between them: a bad lane must not spoil the others.
-    rays.extend(raybench_core::rays::incoherent(
+    rays.extend(raybench_core::ray_sets::incoherent(
         scene.geometry.bounds(),
         64,
         3,

@@ -42,7 +42,7 @@ fn single_huge_triangle() {
     };
     b.add_mesh("t", &mesh, 0).unwrap();
     let scene = Arc::new(b.build());
-    let mut rays = raybench_core::rays::incoherent(scene.geometry.bounds(), 3000, 2);
+    let mut rays = raybench_core::ray_sets::incoherent(scene.geometry.bounds(), 3000, 2);
     rays.extend((0..200).map(|i| {
         Ray::new(
             Vec3::new(i as f32 * 97.0 - 9000.0, 37.0 * i as f32 - 3000.0, 50.0),

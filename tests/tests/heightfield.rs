@@ -40,7 +40,7 @@ fn pair(n: u32, placement: &str, traversal: &str) -> (Arc<Scene>, Arc<Scene>) {
 fn probes(mesh: &Scene, count: u32) -> Vec<Ray> {
     let g = &mesh.geometry;
     let b = g.bounds();
-    let mut rays = raybench_core::rays::incoherent(b, count as usize, 11);
+    let mut rays = raybench_core::ray_sets::incoherent(b, count as usize, 11);
     for k in 0..count {
         let u = |d| to_unit_f32(pcg3d([k, 77, d])[0]);
         let tri = match g.shape((u(0) * g.len() as f32) as u32 % g.len() as u32) {

@@ -23,7 +23,7 @@
 use crate::Bvh;
 use crate::node::Node;
 use crate::params::BvhParams;
-use raybench_core::{Aabb, Geometry, Vec3};
+use raybench_geometry::{Aabb, Geometry, Vec3};
 use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::Arc;

@@ -1,6 +1,6 @@
 //! # raybench-bvh
 //!
-//! Two bounding volume hierarchies behind raybench's [`Accel`](raybench_core::Accel)
+//! Two bounding volume hierarchies behind raybench's [`Accel`](raybench_geometry::Accel)
 //! contract:
 //!
 //! - [`Bvh`] (backend `bvh`): the textbook structure, written here. A binned SAH builder
@@ -24,7 +24,7 @@ pub use node::Node;
 pub use obvhs_adapter::ObvhsAccel;
 pub use params::BvhParams;
 
-use raybench_core::Geometry;
+use raybench_geometry::Geometry;
 use std::sync::Arc;
 
 /// The workspace's own BVH2.
@@ -155,7 +155,7 @@ impl Bvh {
                     let b = g
                         .shapes()
                         .get(id as usize)
-                        .and_then(raybench_core::Shape::bounds)
+                        .and_then(raybench_geometry::Shape::bounds)
                         .ok_or_else(|| {
                             format!("leaf {i} holds unbounded or unknown primitive {id}")
                         })?;
@@ -193,11 +193,11 @@ impl Bvh {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use raybench_core::{Accel, Shape, Sphere, Triangle, Vec3};
+    use raybench_geometry::{Accel, Shape, Sphere, Triangle, Vec3};
     use raybench_scene::generators;
 
     fn geometries() -> Vec<(&'static str, Arc<Geometry>)> {
-        let mesh = |m: raybench_core::TriangleMesh| {
+        let mesh = |m: raybench_geometry::TriangleMesh| {
             Arc::new(Geometry::new(m.triangles().map(Shape::Triangle).collect()))
         };
         let spheres = generators::random_spheres(700, 3)
@@ -371,8 +371,8 @@ mod tests {
                 .collect(),
         ));
         let bvh = Bvh::build_with(g, BvhParams::default());
-        let rays = raybench_core::rays::incoherent(bvh.geometry.bounds(), 2000, 5);
-        let mut c = raybench_core::RayCounters::default();
+        let rays = raybench_geometry::random_rays::incoherent(bvh.geometry.bounds(), 2000, 5);
+        let mut c = raybench_geometry::RayCounters::default();
         for r in &rays {
             let _ = bvh.intersect(r, &mut c);
         }

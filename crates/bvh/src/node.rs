@@ -1,6 +1,6 @@
 //! The flattened node.
 
-use raybench_core::{Aabb, Vec3};
+use raybench_geometry::{Aabb, Vec3};
 
 /// 32-byte node: Wald's layout. Interior nodes have their first child at the next index and
 /// store the second child's index; leaves store a range of the primitive-id array.

@@ -42,7 +42,8 @@ use glam::Vec3A;
 use obvhs::BvhBuildParams;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::RayHit;
-use raybench_core::{Accel, AccelStats, Counters, Geometry, Hit, PrimHit, Ray, cull_bound};
+use raybench_geometry::traverse;
+use raybench_geometry::{Accel, AccelStats, Counters, Geometry, Hit, Ray, cull_bound};
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -197,52 +198,44 @@ impl Accel for ObvhsAccel {
         if !ray.is_valid() || self.too_far(ray) {
             return self.geometry.closest_brute_force(ray, counters);
         }
-        let g = &*self.geometry;
-        let mut best: Option<(u32, PrimHit)> = None;
-        let mut tests = g.closest_unbounded(ray, &mut best);
-        if !self.bvh.nodes.is_empty() {
+        traverse::closest(&self.geometry, ray, counters, |q| {
+            if self.bvh.nodes.is_empty() {
+                return;
+            }
             let mut hit = RayHit::none();
-            let (oray, factor) = self.obvhs_ray(&ray.clipped(best.map_or(ray.t_max, |(_, h)| h.t)));
+            let (oray, factor) = self.obvhs_ray(&ray.clipped(q.best_t()));
             self.bvh.ray_traverse(oray, &mut hit, |_, i| {
-                tests += 1;
-                g.test_closest(self.ids[i], ray, &mut best);
+                q.test(self.ids[i]);
                 // obvhs keeps a node only if its entry is at most this: the contract's slack.
                 // Never below twice obvhs's entry clamp, or ties at t near 0 (rays starting on
                 // a surface) would cull the nodes holding the other candidates.
-                best.map_or(f32::INFINITY, |(_, h)| {
-                    (cull_bound(h.t) * factor).max(2.0 * OBVHS_ENTRY_CLAMP)
-                })
+                if q.has_hit() {
+                    (q.limit() * factor).max(2.0 * OBVHS_ENTRY_CLAMP)
+                } else {
+                    f32::INFINITY
+                }
             });
-        }
-        counters.add_tests(tests);
-        g.complete(ray, best)
+        })
     }
 
     fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
         if !ray.is_valid() || self.too_far(ray) {
             return self.geometry.occluded_brute_force(ray, counters);
         }
-        let g = &*self.geometry;
-        let (plane_hit, mut tests) = g.occluded_unbounded(ray);
-        if plane_hit {
-            counters.add_tests(tests);
-            return true;
-        }
-        let mut hit = false;
-        if !self.bvh.nodes.is_empty() {
+        traverse::occluded(&self.geometry, ray, counters, |q| {
+            if self.bvh.nodes.is_empty() {
+                return false;
+            }
             let (oray, _) = self.obvhs_ray(ray);
-            hit = !self.bvh.ray_traverse_miss(oray, |_, i| {
-                tests += 1;
-                if g.shape(self.ids[i]).intersect(ray).is_some() {
+            !self.bvh.ray_traverse_miss(oray, |_, i| {
+                if q.test(self.ids[i]) {
                     // Any finite value below obvhs's t_max ends the traversal.
                     0.0
                 } else {
                     f32::INFINITY
                 }
-            });
-        }
-        counters.add_tests(tests);
-        hit
+            })
+        })
     }
 
     fn stats(&self) -> AccelStats {

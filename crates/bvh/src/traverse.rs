@@ -3,9 +3,8 @@
 use crate::Bvh;
 use crate::Node;
 use crate::build::MAX_DEPTH;
-use raybench_core::{
-    Accel, AccelStats, Counters, Geometry, Hit, NodeStack, PrimHit, Ray, SlabRay, cull_bound,
-};
+use raybench_geometry::traverse::{self, AnyHit, Closest};
+use raybench_geometry::{Accel, AccelStats, Counters, Geometry, Hit, NodeStack, Ray, SlabRay};
 use std::sync::Arc;
 
 /// Traversal stack: one entry per level plus the far children pushed on the way down.
@@ -21,35 +20,53 @@ impl Accel for Bvh {
     }
 
     fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
-        let g = &*self.geometry;
-        let mut best: Option<(u32, PrimHit)> = None;
-        counters.add_tests(g.closest_unbounded(ray, &mut best));
-        if self.nodes.is_empty() {
-            return g.complete(ray, best);
+        traverse::closest(&self.geometry, ray, counters, |q| self.walk_closest(q))
+    }
+
+    fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
+        traverse::occluded(&self.geometry, ray, counters, |q| self.walk_any(q))
+    }
+
+    fn stats(&self) -> AccelStats {
+        let leaves = self.nodes.iter().filter(|n| n.is_leaf()).count() as u64;
+        AccelStats {
+            memory_bytes: self.nodes.len() * std::mem::size_of::<crate::Node>()
+                + self.prim_ids.len() * std::mem::size_of::<u32>(),
+            counts: vec![
+                ("nodes", self.nodes.len() as u64),
+                ("leaves", leaves),
+                ("depth", self.depth() as u64),
+            ],
         }
-        let bound =
-            |best: &Option<(u32, PrimHit)>| cull_bound(best.map_or(ray.t_max, |(_, h)| h.t));
+    }
+}
+
+impl Bvh {
+    /// The closest-hit walk: depth first, the nearer child first, nodes entered beyond the
+    /// best hit so far skipped (rule 3).
+    fn walk_closest<C: Counters>(&self, q: &mut Closest<'_, C>) {
+        if self.nodes.is_empty() {
+            return;
+        }
         // Per-ray slab setup hoisted out of the loop: 1.1x to 1.2x on bunny rays.
-        let slab = SlabRay::new(ray);
+        let slab = SlabRay::new(q.ray());
         let entry_of =
             |node: &Node, limit: f32| slab.entry(node.min.into(), node.max.into(), limit);
-
         let mut storage = [(0u32, 0.0f32); STACK_SIZE];
         let mut stack = NodeStack::new(&mut storage);
-        let mut limit = bound(&best);
+        let mut limit = q.limit();
         if let Some(t) = entry_of(&self.nodes[0], limit) {
             stack.push(0, t);
         }
         while let Some((index, _)) = stack.pop_within(limit) {
-            counters.add_visits(1);
+            q.add_visits(1);
             let node = &self.nodes[index as usize];
             if node.is_leaf() {
                 let first = node.first_or_right as usize;
                 for &id in &self.prim_ids[first..first + node.count as usize] {
-                    g.test_closest(id, ray, &mut best);
+                    q.test(id);
                 }
-                counters.add_tests(u64::from(node.count));
-                limit = bound(&best);
+                limit = q.limit();
                 continue;
             }
             let (l, r) = (index + 1, node.first_or_right);
@@ -71,16 +88,14 @@ impl Accel for Bvh {
                 (None, None) => {}
             }
         }
-        g.complete(ray, best)
     }
 
-    fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
-        let g = &*self.geometry;
-        let (plane_hit, plane_tests) = g.occluded_unbounded(ray);
-        counters.add_tests(plane_tests);
-        if plane_hit || self.nodes.is_empty() {
-            return plane_hit;
+    /// The any-hit walk: depth first in any order, stopping at the first hit.
+    fn walk_any<C: Counters>(&self, q: &mut AnyHit<'_, C>) -> bool {
+        if self.nodes.is_empty() {
+            return false;
         }
+        let ray = q.ray();
         let slab = SlabRay::new(ray);
         let hits_box = |node: &Node| {
             slab.entry(node.min.into(), node.max.into(), ray.t_max)
@@ -93,20 +108,15 @@ impl Accel for Bvh {
         }
         while sp > 0 {
             sp -= 1;
-            counters.add_visits(1);
+            q.add_visits(1);
             let node = &self.nodes[stack[sp] as usize];
             if node.is_leaf() {
                 let first = node.first_or_right as usize;
-                for (k, &id) in self.prim_ids[first..first + node.count as usize]
-                    .iter()
-                    .enumerate()
-                {
-                    if g.shape(id).intersect(ray).is_some() {
-                        counters.add_tests(k as u64 + 1);
+                for &id in &self.prim_ids[first..first + node.count as usize] {
+                    if q.test(id) {
                         return true;
                     }
                 }
-                counters.add_tests(u64::from(node.count));
                 continue;
             }
             for child in [node.first_or_right, stack[sp] + 1] {
@@ -121,18 +131,5 @@ impl Accel for Bvh {
             }
         }
         false
-    }
-
-    fn stats(&self) -> AccelStats {
-        let leaves = self.nodes.iter().filter(|n| n.is_leaf()).count() as u64;
-        AccelStats {
-            memory_bytes: self.nodes.len() * std::mem::size_of::<crate::Node>()
-                + self.prim_ids.len() * std::mem::size_of::<u32>(),
-            counts: vec![
-                ("nodes", self.nodes.len() as u64),
-                ("leaves", leaves),
-                ("depth", self.depth() as u64),
-            ],
-        }
     }
 }

@@ -28,7 +28,7 @@ pub fn explicit_rays(
             "{count} incoherent rays exceed the limit of {} (use a smaller --width x --height)",
             limits::MAX_EXPLICIT_RAYS
         ),
-        RaySet::Incoherent => Ok(Some(raybench_core::rays::incoherent(
+        RaySet::Incoherent => Ok(Some(raybench_core::ray_sets::incoherent(
             scene.geometry.bounds(),
             count as usize,
             INCOHERENT_SEED,

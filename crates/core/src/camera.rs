@@ -1,7 +1,7 @@
 //! The pinhole camera.
 
-use crate::aabb::Aabb;
-use crate::ray::Ray;
+use crate::Aabb;
+use crate::Ray;
 use glam::Vec3;
 
 /// A pinhole camera: position, point looked at, up vector and vertical field of view.

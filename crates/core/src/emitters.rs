@@ -1,7 +1,7 @@
 //! Emissive triangles as area lights, sampled by area for next-event estimation.
 
-use crate::geometry::{Geometry, Shape};
 use crate::material::Material;
+use crate::{Geometry, Shape};
 
 /// The emissive triangles of a scene with a cumulative area table.
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -1,6 +1,6 @@
 //! The result of rendering one frame.
 
-use crate::accel::RayCounters;
+use crate::RayCounters;
 use glam::Vec3;
 
 /// The id buffer's value for pixels whose centre ray hit nothing.

@@ -1,11 +1,11 @@
 //! The frame-level renderer interface that the harness talks to.
 
-use crate::accel::{AccelStats, BatchTracer, RayCounters};
+use crate::Hit;
+use crate::Ray;
 use crate::frame::{Frame, Timings};
-use crate::hit::Hit;
 use crate::limits;
-use crate::ray::Ray;
 use crate::scene::Scene;
+use crate::{AccelStats, BatchTracer, RayCounters};
 use std::fmt;
 use std::sync::Arc;
 

@@ -1,20 +1,20 @@
 //! The scene: camera, materials, lights and geometry.
 
-use crate::bezier::BezierPatch;
+use crate::BezierPatch;
+use crate::Csg;
+use crate::HeightField;
+use crate::Plane;
+use crate::SceneError;
+use crate::Sdf;
+use crate::Sphere;
+use crate::Triangle;
+use crate::TriangleMesh;
 use crate::camera::Camera;
-use crate::csg::Csg;
 use crate::emitters::Emitters;
-use crate::error::SceneError;
-use crate::geometry::{Geometry, Shape};
-use crate::heightfield::HeightField;
 use crate::limits;
 use crate::material::{Light, Material};
-use crate::mesh::TriangleMesh;
-use crate::plane::Plane;
-use crate::sdf::Sdf;
-use crate::sphere::Sphere;
-use crate::triangle::Triangle;
-use crate::volume::Volume;
+use crate::voxels::Volume;
+use crate::{Geometry, Shape};
 use glam::Vec3;
 use std::sync::Arc;
 

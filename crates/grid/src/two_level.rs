@@ -1,10 +1,10 @@
 //! The two-level grid: a uniform grid whose crowded cells hold a grid of their own, which
 //! fixes the "teapot in a stadium" (a small detailed object inside a large empty box).
 
-use crate::{Grid, GridParams, Mailbox};
-use raybench_core::{
-    Aabb, Accel, AccelStats, Counters, Geometry, Hit, PrimHit, Ray, Vec3, cull_bound,
-};
+use crate::traverse::Mailbox;
+use crate::{Grid, GridParams};
+use raybench_geometry::traverse;
+use raybench_geometry::{Aabb, Accel, AccelStats, Counters, Geometry, Hit, Ray, Vec3};
 use std::sync::Arc;
 
 /// Parameters of the two-level grid.
@@ -81,7 +81,7 @@ impl TwoLevelGrid {
 
     /// Calls `test(ids)` for the primitive lists along `ray`, descending into sub-grids;
     /// `test` returns the bound beyond which nothing can matter (the best hit's
-    /// [`cull_bound`]), or `None` to stop. Each level stops only when that bound lies before
+    /// [`raybench_geometry::cull_bound`]), or `None` to stop. Each level stops only when that bound lies before
     /// the current cell's exit. Returns the cells visited on both levels.
     fn walk(&self, ray: &Ray, mut test: impl FnMut(&[u32]) -> Option<f32>) -> u64 {
         let mut sub_visits = 0;
@@ -121,21 +121,22 @@ impl Accel for TwoLevelGrid {
         if !self.top.dda_is_exact_for(ray) {
             return g.closest_brute_force(ray, counters);
         }
-        let mut best: Option<(u32, PrimHit)> = None;
-        let mut tests = g.closest_unbounded(ray, &mut best);
-        let mut mailbox = Mailbox::new();
-        let visits = self.walk(ray, |ids| {
-            for &id in ids {
-                if !mailbox.seen(id) {
-                    tests += 1;
-                    g.test_closest(id, ray, &mut best);
+        traverse::closest(g, ray, counters, |q| {
+            let mut mailbox = Mailbox::new();
+            let visits = self.walk(q.ray(), |ids| {
+                for &id in ids {
+                    if !mailbox.seen(id) {
+                        q.test(id);
+                    }
                 }
-            }
-            Some(best.map_or(f32::INFINITY, |(_, h)| cull_bound(h.t)))
-        });
-        counters.add_tests(tests);
-        counters.add_visits(visits);
-        g.complete(ray, best)
+                Some(if q.has_hit() {
+                    q.limit()
+                } else {
+                    f32::INFINITY
+                })
+            });
+            q.add_visits(visits);
+        })
     }
 
     fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
@@ -143,28 +144,16 @@ impl Accel for TwoLevelGrid {
         if !self.top.dda_is_exact_for(ray) {
             return g.occluded_brute_force(ray, counters);
         }
-        let (plane_hit, mut tests) = g.occluded_unbounded(ray);
-        if plane_hit {
-            counters.add_tests(tests);
-            return true;
-        }
-        let mut hit = false;
-        let mut mailbox = Mailbox::new();
-        let visits = self.walk(ray, |ids| {
-            for &id in ids {
-                if !mailbox.seen(id) {
-                    tests += 1;
-                    if g.shape(id).intersect(ray).is_some() {
-                        hit = true;
-                        return None;
-                    }
-                }
-            }
-            Some(f32::INFINITY)
-        });
-        counters.add_tests(tests);
-        counters.add_visits(visits);
-        hit
+        traverse::occluded(g, ray, counters, |q| {
+            let mut hit = false;
+            let mut mailbox = Mailbox::new();
+            let visits = self.walk(q.ray(), |ids| {
+                hit = ids.iter().any(|&id| !mailbox.seen(id) && q.test(id));
+                (!hit).then_some(f32::INFINITY)
+            });
+            q.add_visits(visits);
+            hit
+        })
     }
 
     fn stats(&self) -> AccelStats {

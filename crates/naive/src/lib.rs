@@ -8,7 +8,7 @@
 //! closer (or equally close with a smaller id, which in id order never happens), it is the
 //! definition of the right answer: every other raybench CPU backend is tested against it.
 
-use raybench_core::{Accel, AccelStats, Counters, Geometry, Hit, Ray};
+use raybench_geometry::{Accel, AccelStats, Counters, Geometry, Hit, Ray};
 use std::sync::Arc;
 
 /// No acceleration structure: a loop over all primitives.
@@ -47,7 +47,7 @@ impl Accel for NaiveAccel {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use raybench_core::{RayCounters, Shape, Sphere, Triangle, Vec3};
+    use raybench_geometry::{RayCounters, Shape, Sphere, Triangle, Vec3};
 
     #[test]
     fn closest_hit_and_tie_rule() {

@@ -21,7 +21,7 @@
 //! [`MIXED_BIT`] and test them with the core's scalar routine.
 
 use raybench_bvh::{Bvh, Node};
-use raybench_core::{Aabb, Geometry, Shape};
+use raybench_geometry::{Aabb, Geometry, Shape};
 
 /// Children per wide node.
 pub(crate) const WIDE: usize = 8;

@@ -23,7 +23,7 @@
 //!   function; no build needs `-C target-cpu=native`.
 //!
 //! **Exactness.** The SIMD triangle kernels perform, lane by lane, the operations of
-//! [`raybench_core::Triangle::intersect`] in its order, without approximate reciprocals or
+//! [`raybench_geometry::Triangle::intersect`] in its order, without approximate reciprocals or
 //! fused multiply-adds; lanes where that routine would switch to f64 (an edge function
 //! exactly 0) and primitives other than triangles are handed to the scalar routine. Box
 //! tests are the core's conservative slab test with the same early-exit rule, so hits and
@@ -41,7 +41,7 @@ mod tri;
 
 use layout::Layout;
 use raybench_bvh::{Bvh, BvhParams};
-use raybench_core::{Accel, AccelStats, Counters, Geometry, Hit, PrimHit, Ray};
+use raybench_geometry::{Accel, AccelStats, Counters, Geometry, Hit, PrimHit, Ray};
 use simd::{Lanes, Portable};
 use std::sync::{Arc, OnceLock};
 

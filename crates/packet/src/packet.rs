@@ -20,7 +20,7 @@ use crate::single::{
     self, BitIter, FAR_SCALE, STACK, Stack, block_closest, lanes_below, prim_hit, scalar_lanes,
 };
 use crate::tri::{RayLanes, SplatRay, rays_vs_triangle};
-use raybench_core::{Counters, Geometry, Hit, PrimHit, Ray, cull_bound};
+use raybench_geometry::{Counters, Geometry, PrimHit, Ray, cull_bound, keep_closer};
 
 /// Lanes at or below this count leave the packet at an interior node and finish its
 /// subtree one ray at a time (the hybrid of Benthin, Boulos, Lacewell and Wald, "Combining
@@ -218,7 +218,7 @@ fn triangle_lanes<L: Lanes, const K: usize>(rays: &[Ray]) -> [RayLanes<L>; K] {
 }
 
 /// The common octant of `rays` (bit `a` set when the inverse direction along axis `a` is
-/// negative, as `raybench_core::SlabRay` decides), or `None` when the rays are not one
+/// negative, as `raybench_geometry::SlabRay` decides), or `None` when the rays are not one
 /// coherent packet (mixed signs, or a non-finite origin or direction).
 pub(crate) fn octant(rays: &[Ray]) -> Option<u8> {
     let sign = |r: &Ray| {
@@ -471,11 +471,7 @@ fn packet_leaf<L: Lanes, const K: usize, C: Counters>(
                     L::store(r.t, &mut t);
                     for lane in BitIter(r.hit) {
                         let i = base + lane;
-                        let better =
-                            best[i].is_none_or(|(bid, bh)| Hit::closer(t[lane], id, bh.t, bid));
-                        if better {
-                            best[i] = Some((id, prim_hit::<L>(&r, lane, t[lane])));
-                        }
+                        keep_closer(&mut best[i], id, prim_hit::<L>(&r, lane, t[lane]));
                     }
                 }
                 for lane in BitIter(r.zero) {

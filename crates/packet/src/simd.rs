@@ -8,7 +8,7 @@
 //!
 //! `min` and `max` follow the x86 rule (`a < b ? a : b`): when either operand is NaN the
 //! *second* is returned. The box tests rely on that to leave an axis unconstrained when
-//! `0 * inf` makes its distance NaN (see `raybench_core::SlabRay`).
+//! `0 * inf` makes its distance NaN (see `raybench_geometry::SlabRay`).
 
 /// A vector of `W` `f32` lanes and its lane masks.
 pub(crate) trait Lanes: Copy + Send + Sync + 'static {

@@ -5,14 +5,16 @@
 use crate::layout::{BLOCK, EMPTY_CHILD, LEAF_BIT, Layout, LeafRef, TriBlock, WIDE};
 use crate::simd::{Lanes, prefetch};
 use crate::tri::{SplatRay, TriLanes, ray_vs_block};
-use raybench_core::{Counters, Geometry, Hit, NodeStack, PrimHit, Ray, Shape, cull_bound};
+use raybench_geometry::{
+    Counters, Geometry, NodeStack, PrimHit, Ray, Shape, cull_bound, keep_closer,
+};
 
 /// `1 + 2 gamma(3)`: the far-distance scale of the conservative slab test (the core's).
 pub(crate) const FAR_SCALE: f32 =
     1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
 /// A ray prepared for wide slab tests: for each axis, which of a node's `min`/`max` arrays
-/// holds the near plane (by the sign of the inverse direction, as `raybench_core::SlabRay`).
+/// holds the near plane (by the sign of the inverse direction, as `raybench_geometry::SlabRay`).
 pub(crate) struct WideRay<L: Lanes> {
     origin: [L::V; 3],
     inv: [L::V; 3],
@@ -34,7 +36,7 @@ impl<L: Lanes> WideRay<L> {
     }
 
     /// Entry distances of children `first..first + W` of `node`, and the mask of those
-    /// entered at or before `limit` (conservatively: see `raybench_core::Aabb::intersect`).
+    /// entered at or before `limit` (conservatively: see `raybench_geometry::Aabb::intersect`).
     #[inline(always)]
     pub fn entries(
         &self,
@@ -143,10 +145,7 @@ pub(crate) fn take_hits<L: Lanes>(
     L::store(r.t, &mut t);
     for lane in BitIter(r.hit) {
         let id = block.id[lane];
-        let better = best.is_none_or(|(bid, bh)| Hit::closer(t[lane], id, bh.t, bid));
-        if better {
-            *best = Some((id, prim_hit::<L>(r, lane, t[lane])));
-        }
+        keep_closer(best, id, prim_hit::<L>(r, lane, t[lane]));
     }
 }
 

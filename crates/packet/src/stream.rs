@@ -11,7 +11,7 @@ use crate::layout::{LEAF_BIT, Layout, LeafRef};
 use crate::simd::Lanes;
 use crate::single::{self, Stack, WideRay};
 use crate::tri::SplatRay;
-use raybench_core::{Counters, Geometry, NodeStack, PrimHit, Ray, cull_bound};
+use raybench_geometry::{Counters, Geometry, NodeStack, PrimHit, Ray, cull_bound};
 
 /// Rays in flight at once.
 pub(crate) const STREAMS: usize = 4;

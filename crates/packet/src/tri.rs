@@ -1,4 +1,4 @@
-//! The watertight ray/triangle test of `raybench_core::Triangle::intersect`, lane by lane.
+//! The watertight ray/triangle test of `raybench_geometry::Triangle::intersect`, lane by lane.
 //!
 //! Both kernels perform, in every lane, exactly the IEEE operations of the scalar routine
 //! in the same order (translate, permute, shear, the three 2D edge functions, `det = (U +
@@ -39,7 +39,7 @@ pub(crate) struct SplatRay<L: Lanes> {
 
 impl<L: Lanes> SplatRay<L> {
     #[inline(always)]
-    pub fn new(ray: &raybench_core::Ray) -> Self {
+    pub fn new(ray: &raybench_geometry::Ray) -> Self {
         Self {
             origin: [
                 L::splat(ray.origin.x),
@@ -79,7 +79,7 @@ pub(crate) struct RayLanes<L: Lanes> {
 impl<L: Lanes> RayLanes<L> {
     /// Lanes `rays[0..W]`; missing rays are padded with the last one.
     #[inline(always)]
-    pub fn new(rays: &[raybench_core::Ray]) -> Self {
+    pub fn new(rays: &[raybench_geometry::Ray]) -> Self {
         let mut buf = [[0.0f32; 16]; 7];
         let mut k = [[0u32; 3]; 2];
         for lane in 0..L::W {

@@ -4,7 +4,7 @@
 
 use raybench_bvh::BvhParams;
 use raybench_core::{
-    Accel, Camera, Geometry, Hit, NoCounters, Plane, Ray, Shape, Sphere, Vec3, rays,
+    Accel, Camera, Geometry, Hit, NoCounters, Plane, Ray, Shape, Sphere, Vec3, ray_sets,
 };
 use raybench_naive::NaiveAccel;
 use raybench_packet::{Isa, PacketAccel, PacketParams};
@@ -44,8 +44,8 @@ fn ray_sets(g: &Geometry) -> Vec<(&'static str, Vec<Ray>)> {
         g.bounds()
     };
     let camera = Camera::framing(bounds);
-    let primary = rays::primary(&camera, 48, 40);
-    let incoherent = rays::incoherent(bounds, 3000, 7);
+    let primary = ray_sets::primary(&camera, 48, 40);
+    let incoherent = ray_sets::incoherent(bounds, 3000, 7);
     let c = bounds.center();
     let inside: Vec<Ray> = (0..64)
         .map(|i| {
@@ -124,7 +124,7 @@ fn check(params: PacketParams) {
                 );
             }
             // Shadow rays up to 90% of naive's closest hit, then the rays themselves.
-            let shadow = rays::shadow_probes(&rays, &want);
+            let shadow = ray_sets::shadow_probes(&rays, &want);
             let want: Vec<bool> = shadow
                 .iter()
                 .map(|r| naive.occluded(r, &mut NoCounters))

@@ -3,7 +3,8 @@
 use bvh::aabb::{Aabb as CrateAabb, Bounded};
 use bvh::bounding_hierarchy::{BHShape, BoundingHierarchy};
 use bvh::bvh::{Bvh as CrateBvh, BvhNode};
-use raybench_core::{Accel, AccelStats, Counters, Geometry, Hit, PrimHit, Ray};
+use raybench_geometry::traverse::{self, AnyHit, Closest};
+use raybench_geometry::{Accel, AccelStats, Counters, Geometry, Hit, Ray};
 use std::sync::Arc;
 
 /// A bounded primitive as the `bvh` crate's builder wants it: its box and a slot for its
@@ -105,20 +106,15 @@ impl BvhCrateAccel {
         }
     }
 
-    /// The closest bounded primitive hit by `ray`, improving on `best` (the planes' answer).
-    fn closest<C: Counters>(
-        &self,
-        ray: &Ray,
-        best: &mut Option<(u32, PrimHit)>,
-        stack: &mut Stack,
-        counters: &mut C,
-    ) {
+    /// The closest-hit walk: the crate's tree, nearer child first.
+    fn walk_closest<C: Counters>(&self, q: &mut Closest<'_, C>, stack: &mut Stack) {
         let nodes = &self.bvh.nodes;
         if nodes.is_empty() {
             return;
         }
+        let ray = q.ray();
         let cray = Self::crate_ray(ray);
-        let mut best_t = best.map_or(ray.t_max, |(_, h)| h.t);
+        let mut best_t = q.best_t();
         stack.clear();
         // The crate keeps no box for the root: its children's boxes are tested on the way.
         stack.push((0, ray.t_min));
@@ -126,13 +122,11 @@ impl BvhCrateAccel {
             if entry > best_t {
                 continue;
             }
-            counters.add_visits(1);
+            q.add_visits(1);
             match &nodes[index] {
                 BvhNode::Leaf { shape_index, .. } => {
-                    let id = self.id(*shape_index);
-                    self.geometry.test_closest(id, ray, best);
-                    counters.add_tests(1);
-                    best_t = best.map_or(ray.t_max, |(_, h)| h.t);
+                    q.test(self.id(*shape_index));
+                    best_t = q.best_t();
                 }
                 BvhNode::Node {
                     child_l_index,
@@ -165,22 +159,21 @@ impl BvhCrateAccel {
         }
     }
 
-    /// Whether a bounded primitive is hit in `[ray.t_min, ray.t_max]`, stopping at the first.
-    fn any_hit<C: Counters>(&self, ray: &Ray, stack: &mut Stack, counters: &mut C) -> bool {
+    /// The any-hit walk, stopping at the first hit.
+    fn walk_any<C: Counters>(&self, q: &mut AnyHit<'_, C>, stack: &mut Stack) -> bool {
         let nodes = &self.bvh.nodes;
         if nodes.is_empty() {
             return false;
         }
+        let ray = q.ray();
         let cray = Self::crate_ray(ray);
         stack.clear();
         stack.push((0, ray.t_min));
         while let Some((index, _)) = stack.pop() {
-            counters.add_visits(1);
+            q.add_visits(1);
             match &nodes[index] {
                 BvhNode::Leaf { shape_index, .. } => {
-                    let id = self.id(*shape_index);
-                    counters.add_tests(1);
-                    if self.geometry.shape(id).intersect(ray).is_some() {
+                    if q.test(self.id(*shape_index)) {
                         return true;
                     }
                 }
@@ -213,17 +206,13 @@ impl BvhCrateAccel {
         stack: &mut Stack,
         counters: &mut C,
     ) -> Option<Hit> {
-        let g = &*self.geometry;
-        let mut best = None;
-        counters.add_tests(g.closest_unbounded(ray, &mut best));
-        self.closest(ray, &mut best, stack, counters);
-        g.complete(ray, best)
+        traverse::closest(&self.geometry, ray, counters, |q| {
+            self.walk_closest(q, stack);
+        })
     }
 
     fn occluded_with<C: Counters>(&self, ray: &Ray, stack: &mut Stack, counters: &mut C) -> bool {
-        let (plane_hit, tests) = self.geometry.occluded_unbounded(ray);
-        counters.add_tests(tests);
-        plane_hit || self.any_hit(ray, stack, counters)
+        traverse::occluded(&self.geometry, ray, counters, |q| self.walk_any(q, stack))
     }
 }
 

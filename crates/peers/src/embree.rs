@@ -19,8 +19,8 @@ use embree::sys::{
     rtcIntersect1, rtcNewDevice, rtcNewGeometry, rtcNewScene, rtcOccluded1, rtcReleaseGeometry,
     rtcReleaseScene, rtcSetNewGeometryBuffer, rtcSetSceneFlags,
 };
-use raybench_core::{
-    Accel, AccelStats, Counters, Geometry, Hit, PrimHit, PrimitiveKind, Ray, Scene, Shape,
+use raybench_geometry::{
+    Accel, AccelStats, Counters, Geometry, Hit, PrimHit, PrimitiveKind, Ray, Shape, keep_closer,
 };
 use std::sync::{Arc, OnceLock};
 
@@ -150,7 +150,7 @@ pub fn version() -> Result<String, String> {
     ))
 }
 
-/// Whether the Embree backends support `scene`: triangles and planes in any number, other
+/// Whether the Embree backends support `geometry`: triangles and planes in any number, other
 /// bounded primitives (spheres, height fields, CSG trees, SDF models, Bezier patches) up to
 /// [`MAX_SIDE_PRIMITIVES`]. A height
 /// field is one such primitive: it stays beside Embree's scene and every ray meets it
@@ -160,18 +160,24 @@ pub fn version() -> Result<String, String> {
 ///
 /// # Errors
 /// Why not.
-pub fn supports(scene: &Scene) -> Result<(), String> {
-    let side = scene
-        .geometry
+pub fn supports(geometry: &Geometry) -> Result<(), String> {
+    let side = geometry
         .bounded()
         .iter()
-        .filter(|&&id| scene.geometry.shape(id).kind() != PrimitiveKind::Triangle)
+        .filter(|&&id| geometry.shape(id).kind() != PrimitiveKind::Triangle)
         .count();
     if side > MAX_SIDE_PRIMITIVES {
+        // Every bounded kind but the triangle, by name, so a new kind joins the message.
+        let kinds: Vec<&str> = PrimitiveKind::ALL
+            .iter()
+            .filter(|&&k| !matches!(k, PrimitiveKind::Triangle | PrimitiveKind::Plane))
+            .map(|k| k.name())
+            .collect();
         return Err(format!(
-            "{side} spheres, height fields, analytic solids / CSG trees, SDF models or Bezier patches: the Embree backends trace triangles in Embree \
-             and test other bounded primitives beside it by every ray, at most \
-             {MAX_SIDE_PRIMITIVES}"
+            "{side} bounded primitives that are not triangles ({}): the Embree backends trace \
+             triangles in Embree and test other bounded primitives beside it by every ray, at \
+             most {MAX_SIDE_PRIMITIVES}",
+            kinds.join(", ")
         ));
     }
     Ok(())
@@ -333,9 +339,7 @@ impl Inner {
     #[inline]
     fn merge(&self, best: &mut Option<(u32, PrimHit)>, prim_id: u32, t: f32, u: f32, v: f32) {
         let id = self.ids[prim_id as usize];
-        if best.is_none_or(|(bid, bh)| Hit::closer(t, id, bh.t, bid)) {
-            *best = Some((id, PrimHit { t, sub: 0, u, v }));
-        }
+        keep_closer(best, id, PrimHit { t, sub: 0, u, v });
     }
 
     fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
@@ -450,7 +454,7 @@ macro_rules! packet_kernels {
         mod $module {
             use super::{INVALID_ID, Inner, context, interval};
             use embree::sys::{$HitT, $RayHit, $RayT, $intersect, $occluded, RTCIntersectContextFlags};
-            use raybench_core::{Counters, Hit, PrimHit, Ray};
+            use raybench_geometry::{Counters, Hit, PrimHit, Ray};
 
             /// A valid mask, aligned as Embree requires (4 bytes per lane).
             #[repr(C, align(64))]

@@ -13,9 +13,9 @@
 //! test is not conservative and Embree tests triangles with its own routine, so they agree
 //! with naive on nearly every ray, not bit for bit. Planes are kept beside every structure
 //! and tested by every ray, as in raybench's backends, and hits are completed (normals,
-//! surface parameters) by raybench's [`raybench_core::Geometry::complete`].
+//! surface parameters) by raybench's [`raybench_geometry::Geometry::complete`].
 //!
-//! [`Accel`]: raybench_core::Accel
+//! [`Accel`]: raybench_geometry::Accel
 
 mod bvh_crate;
 #[cfg(feature = "embree")]

@@ -5,7 +5,8 @@
 //! `1e-4` relative.
 
 use raybench_core::{
-    Aabb, Accel, Camera, Geometry, Hit, NoCounters, Ray, SceneBuilder, Shape, Sphere, Vec3, rays,
+    Aabb, Accel, Camera, Geometry, Hit, NoCounters, Ray, SceneBuilder, Shape, Sphere, Vec3,
+    ray_sets,
 };
 use raybench_naive::NaiveAccel;
 use raybench_peers::BvhCrateAccel;
@@ -32,8 +33,8 @@ fn ray_sets(g: &Geometry) -> Vec<(&'static str, Vec<Ray>)> {
     } else {
         g.bounds()
     };
-    let primary = rays::primary(&Camera::framing(bounds), 96, 80);
-    let incoherent = rays::incoherent(bounds, 4000, 7);
+    let primary = ray_sets::primary(&Camera::framing(bounds), 96, 80);
+    let incoherent = ray_sets::incoherent(bounds, 4000, 7);
     let awkward = (0..64)
         .map(|i| {
             let r = &primary[(i * 97) % primary.len()];
@@ -120,7 +121,7 @@ fn check_against_naive<A: Accel>(name: &str, build: impl Fn(Arc<Geometry>) -> A,
                 );
             }
             // Shadow rays up to 90% of naive's closest hit, then the rays themselves.
-            let shadow = rays::shadow_probes(&rays, &want);
+            let shadow = ray_sets::shadow_probes(&rays, &want);
             let want: Vec<bool> = shadow
                 .iter()
                 .map(|r| naive.occluded(r, &mut NoCounters))
@@ -212,7 +213,7 @@ fn check_threads<A: Accel>(accel: &A, rays: &[Ray]) {
 fn bvh_crate_is_shareable_between_threads() {
     let g = icosphere();
     let accel = BvhCrateAccel::build(Arc::clone(&g));
-    check_threads(&accel, &rays::incoherent(g.bounds(), 2000, 3));
+    check_threads(&accel, &ray_sets::incoherent(g.bounds(), 2000, 3));
 }
 
 #[test]
@@ -271,7 +272,7 @@ mod embree {
     #[test]
     fn embree_is_shareable_between_threads() {
         let g = icosphere();
-        let rays = rays::incoherent(g.bounds(), 2000, 3);
+        let rays = ray_sets::incoherent(g.bounds(), 2000, 3);
         check_threads(&EmbreeAccel::build(Arc::clone(&g)), &rays);
         check_threads(&EmbreePacketAccel::build(Arc::clone(&g)), &rays);
     }
@@ -336,8 +337,8 @@ mod embree {
             }
             b.build()
         };
-        assert!(raybench_peers::embree_supports(&scene(3)).is_ok());
-        assert!(raybench_peers::embree_supports(&scene(MAX_SIDE_PRIMITIVES + 1)).is_err());
+        assert!(raybench_peers::embree_supports(&scene(3).geometry).is_ok());
+        assert!(raybench_peers::embree_supports(&scene(MAX_SIDE_PRIMITIVES + 1).geometry).is_err());
     }
 
     #[test]

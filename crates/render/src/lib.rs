@@ -71,7 +71,7 @@ pub struct CpuRenderer<A: Accel> {
     description: String,
     build: BuildFn<A>,
     availability: fn() -> Result<(), String>,
-    support: fn(&Scene) -> Result<(), String>,
+    support: fn(&Geometry) -> Result<(), String>,
     counts_tests: bool,
     prepared: Option<(Arc<Scene>, A)>,
 }
@@ -99,11 +99,12 @@ impl<A: Accel> CpuRenderer<A> {
         self
     }
 
-    /// The same renderer, refusing scenes for which `check` fails (a backend that supports
-    /// only some primitive kinds): [`Renderer::supports`] reports it and `prepare` fails
-    /// with [`RenderError::Unsupported`].
+    /// The same renderer, refusing scenes whose geometry `check` refuses (a backend that
+    /// supports only some primitive kinds: a CPU structure sees the geometry and nothing
+    /// else of a scene): [`Renderer::supports`] reports it and `prepare` fails with
+    /// [`RenderError::Unsupported`].
     #[must_use]
-    pub fn with_support_check(mut self, check: fn(&Scene) -> Result<(), String>) -> Self {
+    pub fn with_support_check(mut self, check: fn(&Geometry) -> Result<(), String>) -> Self {
         self.support = check;
         self
     }
@@ -143,7 +144,7 @@ impl<A: Accel> Renderer for CpuRenderer<A> {
     }
 
     fn supports(&self, scene: &Scene) -> Result<(), String> {
-        (self.support)(scene)
+        (self.support)(&scene.geometry)
     }
 
     fn counts_tests(&self) -> bool {
@@ -266,8 +267,8 @@ mod tests {
     #[test]
     fn support_check_refuses_scenes() {
         let mut r = CpuRenderer::<NaiveAccel>::with_default_build("naive", "test")
-            .with_support_check(|s| {
-                if s.geometry.is_empty() {
+            .with_support_check(|g| {
+                if g.is_empty() {
                     Ok(())
                 } else {
                     Err("no primitives wanted".into())

@@ -9,7 +9,7 @@ use crate::grids::{SampleFormat, read_png_gray, read_raw};
 use crate::obj::{MeshData, load_obj_file};
 use crate::transform::Transform;
 use crate::volumes;
-use raybench_core::volume::{MAX_VOLUME_VOXELS, check_volume_dims};
+use raybench_core::voxels::{MAX_VOLUME_VOXELS, check_volume_dims};
 use raybench_core::{
     BezierPatch, Camera, CellSurface, Csg, CsgNode, CsgOp, HeightField, HeightFieldTraversal,
     Light, MAX_HEIGHT_FIELD_VERTICES, Material, MaterialKind, PolygonMesh, Scene, SceneBuilder,

@@ -115,7 +115,7 @@ fn bpt_with_10_12_patches_is_refused() {
 
 #[test]
 fn raw_volume_of_10_6_cubed_voxels_is_refused() {
-    let e = raybench_core::volume::check_volume_dims([1_000_000; 3]).unwrap_err();
+    let e = raybench_core::voxels::check_volume_dims([1_000_000; 3]).unwrap_err();
     assert!(matches!(e, SceneError::TooLarge(_)), "{e}");
     // The raw decoder checks a count against the limit before looking at the bytes.
     assert_err_contains(

@@ -128,7 +128,7 @@ fn bezier_file_on_an_endless_device_is_refused() {
 #[test]
 fn volume_dims_product_does_not_wrap() {
     use raybench_core::SceneError;
-    use raybench_core::volume::check_volume_dims;
+    use raybench_core::voxels::check_volume_dims;
     for dims in [[1 << 22; 3], [u32::MAX; 3], [1 << 21, 1 << 21, 1 << 22]] {
         let e = check_volume_dims(dims).unwrap_err();
         assert!(matches!(e, SceneError::TooLarge(_)), "{dims:?}: {e}");
@@ -201,7 +201,7 @@ fn fuzz_seeds_load() {
                     let dims = [dim(0), dim(1), dim(2)];
                     let format = [SampleFormat::U8, SampleFormat::U16, SampleFormat::F32]
                         [usize::from(bytes[12] % 3)];
-                    let count = raybench_core::volume::check_volume_dims(dims).unwrap();
+                    let count = raybench_core::voxels::check_volume_dims(dims).unwrap();
                     decode_raw(&bytes[13..], count, format, count, &path).map(drop)
                 }
             };

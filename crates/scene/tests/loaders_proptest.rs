@@ -781,7 +781,7 @@ fn raw_volume() -> impl Strategy<Value = ([u32; 3], SampleFormat, Vec<u8>)> {
 #[test]
 fn raw_volumes() {
     let loaded = run_cases(CASES, raw_volume(), |(dims, format, bytes)| {
-        let Ok(count) = raybench_core::volume::check_volume_dims(dims) else {
+        let Ok(count) = raybench_core::voxels::check_volume_dims(dims) else {
             return Ok(false);
         };
         prop_assert!(count <= MAX_VOLUME_VOXELS);

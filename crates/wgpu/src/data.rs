@@ -9,12 +9,10 @@ use raybench_core::{
     Vec3,
 };
 
-/// Primitive kinds as the shaders number them (`KIND_*`).
-const KIND_TRIANGLE: u32 = 0;
-const KIND_SPHERE: u32 = 1;
-const KIND_PLANE: u32 = 2;
-/// Set in `prim_info` for primitives that next-event estimation samples (`EMITTER_BIT`).
-const EMITTER_BIT: u32 = 1 << 31;
+use crate::constants::{
+    EMITTER_BIT, KIND_PLANE, KIND_SPHERE, KIND_TRIANGLE, LIGHT_DIRECTIONAL, LIGHT_POINT,
+    MAT_DIFFUSE, MAT_GLASS, MAT_MIRROR,
+};
 
 /// Per-dispatch parameters: 176 bytes, one 256-byte-aligned slot per dispatch of a frame.
 #[repr(C)]
@@ -252,9 +250,9 @@ impl SceneData {
         let mut shading = Vec::with_capacity(scene.materials.len() * 4 + scene.lights.len() * 2);
         for m in &scene.materials {
             let kind = match m.kind {
-                MaterialKind::Diffuse => 0u32,
-                MaterialKind::Mirror => 1,
-                MaterialKind::Glass => 2,
+                MaterialKind::Diffuse => MAT_DIFFUSE,
+                MaterialKind::Mirror => MAT_MIRROR,
+                MaterialKind::Glass => MAT_GLASS,
             };
             let (checker, size) = m.checker.map_or((Vec3::ZERO, 0.0), |c| (c.color, c.size));
             shading.push(v4(m.base_color, f32::from_bits(kind)));
@@ -268,11 +266,11 @@ impl SceneData {
                 Light::Point {
                     position,
                     intensity,
-                } => (position, 0u32, intensity),
+                } => (position, LIGHT_POINT, intensity),
                 Light::Directional {
                     direction,
                     radiance,
-                } => (direction, 1, radiance),
+                } => (direction, LIGHT_DIRECTIONAL, radiance),
             };
             shading.push(v4(a, f32::from_bits(kind)));
             shading.push(v4(b, 0.0));

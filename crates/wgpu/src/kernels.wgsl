@@ -12,32 +12,10 @@
 // the uncounted kernels carry no counting code).
 override COUNT: bool = false;
 
-const NO_HIT: u32 = 0xffffffffu;
-const KIND_TRIANGLE: u32 = 0u;
-const KIND_SPHERE: u32 = 1u;
-const KIND_PLANE: u32 = 2u;
-const MAT_DIFFUSE: u32 = 0u;
-const MAT_MIRROR: u32 = 1u;
-const MAT_GLASS: u32 = 2u;
-const LIGHT_POINT: u32 = 0u;
-const EMITTER_BIT: u32 = 0x80000000u;
-// Traversal stack: the BVH2's depth is at most 61 (raybench-bvh's build limit), and
-// near-child-first traversal keeps at most one entry per level plus one.
-const STACK_SIZE: u32 = 64u;
-// Whitted's depth-first stack: a popped segment pushes at most two children, so the stack
-// holds at most one entry per bounce plus one (`limits::MAX_DEPTH` is 64).
-const WHITTED_STACK: u32 = 66u;
-// `integrator::whitted::AMBIENT`.
-const AMBIENT: f32 = 0.05;
-// `integrator::path::ROULETTE_DEPTH`, `DIMENSIONS_PER_BOUNCE`, `SHADOW_SHORTEN`.
-const ROULETTE_DEPTH: u32 = 3u;
-const DIMENSIONS_PER_BOUNCE: u32 = 8u;
-const SHADOW_SHORTEN: f32 = 0.9990234375; // 1 - 1/1024
-const MIN_POSITIVE: f32 = 1.17549435e-38;
-const INV_PI: f32 = 0.31830988618379067;
-const TAU: f32 = 6.283185307179586;
-// Pixels are traced in 8 x 8 blocks (one workgroup of 64 threads per block).
-const BLOCK: u32 = 8u;
+// The constants shared with Rust (NO_HIT, KIND_*, MAT_*, LIGHT_POINT, EMITTER_BIT,
+// STACK_SIZE, WHITTED_STACK, AMBIENT, ROULETTE_DEPTH, DIMENSIONS_PER_BOUNCE, SHADOW_SHORTEN,
+// MIN_POSITIVE, INV_PI, TAU, BLOCK) are generated from the Rust definitions and prepended
+// to this file by `crates/wgpu/src/constants.rs`.
 
 // Per-dispatch parameters (`data::Params`).
 struct Params {

@@ -18,14 +18,16 @@
 //!
 //! **Architecture invariant:** this is the only crate that knows wgpu.
 
+mod constants;
 mod context;
 mod data;
 pub mod plan;
 mod renderer;
 
+pub use constants::{kernel_source, wgsl_constants};
 pub use context::{AdapterRequest, describe};
 pub use data::check_kinds;
-pub use renderer::{KERNELS, WgpuRenderer};
+pub use renderer::WgpuRenderer;
 
 /// Whether a wgpu adapter can be opened here (`WGPU_BACKEND`, `WGPU_ADAPTER_NAME`), or why
 /// not.

@@ -14,12 +14,7 @@ use std::sync::{Arc, Mutex, mpsc};
 use std::time::{Duration, Instant};
 use wgpu::util::DeviceExt;
 
-/// The WGSL source of every kernel.
-pub const KERNELS: &str = include_str!("kernels.wgsl");
-
-/// Entries of the kernels' traversal stack (`STACK_SIZE` in `kernels.wgsl`): near-child-first
-/// traversal holds at most one entry per level plus one, so the BVH's depth must stay below.
-const STACK_SIZE: usize = 64;
+use crate::constants::{STACK_SIZE, kernel_source};
 
 /// Compute passes per submission; their timestamps are read back after each submission.
 const PASSES_PER_SUBMIT: usize = 64;
@@ -67,7 +62,7 @@ impl Kernels {
         let d = &gpu.device;
         let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("raybench kernels"),
-            source: wgpu::ShaderSource::Wgsl(KERNELS.into()),
+            source: wgpu::ShaderSource::Wgsl(kernel_source().into()),
         });
         let mut entries = vec![wgpu::BindGroupLayoutEntry {
             binding: 0,
@@ -546,7 +541,7 @@ impl Renderer for WgpuRenderer {
         let bvh = Bvh::build(Arc::clone(&scene.geometry));
         timings.push("build", start.elapsed().as_secs_f64());
         let stats = bvh.stats();
-        if bvh.depth() + 1 > STACK_SIZE {
+        if bvh.depth() + 1 > STACK_SIZE as usize {
             return Err(RenderError::Unsupported(format!(
                 "BVH depth {} exceeds the GPU traversal stack",
                 bvh.depth()
@@ -822,19 +817,5 @@ impl Renderer for WgpuRenderer {
         timings.push("readback", readback);
         timings.push("render", start.elapsed().as_secs_f64());
         Ok((hits, counted, timings))
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_stack_size_is_the_kernels() {
-        let line = format!("const STACK_SIZE: u32 = {STACK_SIZE}u;");
-        assert!(
-            KERNELS.contains(&line),
-            "kernels.wgsl must declare `{line}`"
-        );
     }
 }

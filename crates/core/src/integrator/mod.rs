@@ -2,22 +2,24 @@
 //! over threads; a tile's output depends only on the tile, so frames are identical on any
 //! thread count.
 
-use crate::accel::{Accel, Counters};
+use crate::Hit;
+use crate::Ray;
 use crate::camera::CameraRays;
 use crate::frame::{Frame, FrameStats, NO_HIT};
-use crate::hit::Hit;
 use crate::material::{Light, MaterialKind};
-use crate::ray::Ray;
 use crate::renderer::{Mode, RenderSettings};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
+use crate::{Accel, Counters};
 use glam::Vec3;
 
+mod mip_composite;
 mod path;
-mod volume;
 mod whitted;
 
-pub use volume::shade_volumes;
+pub use mip_composite::shade_volumes;
+pub use path::{DIMENSIONS_PER_BOUNCE, ROULETTE_DEPTH, SHADOW_SHORTEN};
+pub use whitted::AMBIENT;
 
 /// A rectangle of pixels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -13,17 +13,17 @@
 
 use super::whitted::{Segment, light_ray, shading_frame};
 use super::{Tile, TileOutput, TileState, add_unshadowed, tile_pixels};
-use crate::accel::{Accel, Counters};
+use crate::Ray;
+use crate::Shape;
 use crate::camera::CameraRays;
-use crate::geometry::Shape;
 use crate::material::MaterialKind;
 use crate::optics::{
     cosine_hemisphere, fresnel_dielectric, offset_ray_origin, reflect, refract, triangle_point,
 };
-use crate::ray::Ray;
 use crate::renderer::RenderSettings;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
+use crate::{Accel, Counters};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
@@ -47,7 +47,7 @@ struct PathState {
 
 /// Shadow rays towards emissive triangles stop this fraction short of the light, so that
 /// the light's own triangle does not occlude it.
-const SHADOW_SHORTEN: f32 = 1.0 - 1.0 / 1024.0;
+pub const SHADOW_SHORTEN: f32 = 1.0 - 1.0 / 1024.0;
 
 pub(super) fn path_tile<A: Accel, C: Counters>(
     scene: &Scene,

@@ -2,19 +2,19 @@
 //! and then its shadow rays, go through the accelerator's batch entry points.
 
 use super::{Tile, TileOutput, TileState, add_unshadowed, tile_pixels};
-use crate::accel::{Accel, Counters};
+use crate::Hit;
+use crate::Ray;
 use crate::camera::CameraRays;
-use crate::hit::Hit;
 use crate::material::{Light, MaterialKind};
 use crate::optics::{fresnel_dielectric, offset_ray_origin, reflect, refract};
-use crate::ray::Ray;
 use crate::renderer::RenderSettings;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
+use crate::{Accel, Counters};
 use glam::Vec3;
 
 /// Ambient term of diffuse surfaces, as a fraction of their colour (Whitted's `k_a`).
-const AMBIENT: f32 = 0.05;
+pub const AMBIENT: f32 = 0.05;
 
 /// A ray in flight and what its radiance is worth to its pixel.
 #[derive(Clone, Copy)]

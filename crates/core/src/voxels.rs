@@ -13,9 +13,9 @@
 //! placement maps object to world space. The ray is carried into object space (the ray
 //! parameter `t` stays the world ray's).
 
-use crate::aabb::Aabb;
-use crate::error::SceneError;
-use crate::ray::Ray;
+use crate::Aabb;
+use crate::Ray;
+use crate::SceneError;
 use glam::{Affine3A, Vec3};
 use std::ops::ControlFlow;
 
@@ -506,22 +506,27 @@ impl Volume {
             composite,
         };
         if !self.params.skip_empty {
-            let _ = dda(self.dims, go, gd, t0, t1, &mut |c, ta, tb| {
-                seg.visit(acc, c, ta, tb)
-            });
+            let _ = crate::dda(
+                self.dims,
+                go,
+                gd,
+                t0,
+                t1,
+                &mut segments(|c, ta, tb| seg.visit(acc, c, ta, tb)),
+            );
             return;
         }
         // Empty-space skipping: walk the coarse grid; enter a block's voxels only when it
         // can contribute (compositing: some extinction in its value range; MIP: a value
         // above the maximum so far).
         let scale = 1.0 / SKIP_BLOCK as f32;
-        let _ = dda(
+        let _ = crate::dda(
             self.coarse_dims,
             go * scale,
             gd * scale,
             t0,
             t1,
-            &mut |blk, ta, tb| {
+            &mut segments(|blk, ta, tb| {
                 let i = (blk[2] as usize * self.coarse_dims[1] as usize + blk[1] as usize)
                     * self.coarse_dims[0] as usize
                     + blk[0] as usize;
@@ -539,15 +544,22 @@ impl Volume {
                 let lo_c = blk.map(|c| c * SKIP_BLOCK);
                 let sub = [0, 1, 2].map(|a| (self.dims[a] - lo_c[a]).min(SKIP_BLOCK));
                 let origin = go - Vec3::new(lo_c[0] as f32, lo_c[1] as f32, lo_c[2] as f32);
-                dda(sub, origin, gd, ta, tb, &mut |c, sa, sb| {
-                    seg.visit(
-                        acc,
-                        [c[0] + lo_c[0], c[1] + lo_c[1], c[2] + lo_c[2]],
-                        sa,
-                        sb,
-                    )
-                })
-            },
+                crate::dda(
+                    sub,
+                    origin,
+                    gd,
+                    ta,
+                    tb,
+                    &mut segments(|c, sa, sb| {
+                        seg.visit(
+                            acc,
+                            [c[0] + lo_c[0], c[1] + lo_c[1], c[2] + lo_c[2]],
+                            sa,
+                            sb,
+                        )
+                    }),
+                )
+            }),
         );
     }
 
@@ -557,10 +569,17 @@ impl Volume {
     pub fn voxels_crossed(&self, ray: &Ray, t_max: f32) -> Vec<([u32; 3], f32, f32)> {
         let mut out = Vec::new();
         if let Some((go, gd, t0, t1)) = self.grid_ray(ray, t_max) {
-            let _ = dda(self.dims, go, gd, t0, t1, &mut |c, a, b| {
-                out.push((c, a, b));
-                ControlFlow::Continue(())
-            });
+            let _ = crate::dda(
+                self.dims,
+                go,
+                gd,
+                t0,
+                t1,
+                &mut segments(|c, a, b| {
+                    out.push((c, a, b));
+                    ControlFlow::Continue(())
+                }),
+            );
         }
         out
     }
@@ -604,66 +623,16 @@ impl Segment<'_> {
     }
 }
 
-/// The 3D-DDA of Amanatides and Woo over a grid of `dims` unit cells: calls `visit(cell,
-/// t_enter, t_exit)` for each cell the ray `o + t d` (grid units) crosses in `[t0, t1]`, in
-/// order, until `visit` breaks. The crossing distances are recomputed from the cell index
-/// at each step (`(border - o) / d`), not accumulated, so no error builds up along long
-/// walks. Cells crossed for a zero length are not visited.
-pub fn dda(
-    dims: [u32; 3],
-    o: Vec3,
-    d: Vec3,
-    t0: f32,
-    t1: f32,
-    visit: &mut impl FnMut([u32; 3], f32, f32) -> ControlFlow<()>,
-) -> ControlFlow<()> {
-    // Also refuses NaN intervals.
-    if t0 >= t1 || t0.is_nan() || t1.is_nan() {
-        return ControlFlow::Continue(());
-    }
-    // Start in the cell holding the middle of the first stretch to avoid the rounding of
-    // the entry point putting it outside.
-    let p = o + d * t0;
-    let mut cell = [0i64; 3];
-    let mut step = [0i64; 3];
-    for a in 0..3 {
-        cell[a] = (p[a].floor() as i64).clamp(0, i64::from(dims[a]) - 1);
-        step[a] = if d[a] > 0.0 {
-            1
-        } else if d[a] < 0.0 {
-            -1
+/// A 3D-DDA visitor ([`crate::dda`]) that skips the cells a ray crosses for a zero length
+/// (through an edge or a corner): they hold no segment to integrate.
+fn segments(
+    mut visit: impl FnMut([u32; 3], f32, f32) -> ControlFlow<()>,
+) -> impl FnMut([u32; 3], f32, f32) -> ControlFlow<()> {
+    move |c, ta, tb| {
+        if tb > ta {
+            visit(c, ta, tb)
         } else {
-            0
-        };
-    }
-    let next = |cell: &[i64; 3], a: usize| -> f32 {
-        if step[a] == 0 {
-            f32::INFINITY
-        } else {
-            ((cell[a] + i64::from(step[a] > 0)) as f32 - o[a]) / d[a]
-        }
-    };
-    let mut t = t0;
-    loop {
-        let tn = [next(&cell, 0), next(&cell, 1), next(&cell, 2)];
-        let axis = if tn[0] <= tn[1] && tn[0] <= tn[2] {
-            0
-        } else if tn[1] <= tn[2] {
-            1
-        } else {
-            2
-        };
-        let te = tn[axis].min(t1);
-        if te > t {
-            visit([cell[0] as u32, cell[1] as u32, cell[2] as u32], t, te)?;
-            t = te;
-        }
-        if tn[axis] >= t1 || tn[axis].is_nan() {
-            return ControlFlow::Continue(());
-        }
-        cell[axis] += step[axis];
-        if cell[axis] < 0 || cell[axis] >= i64::from(dims[axis]) {
-            return ControlFlow::Continue(());
+            ControlFlow::Continue(())
         }
     }
 }

@@ -1,139 +1,11 @@
-//! The contract every CPU acceleration strategy implements.
+//! The contract every CPU acceleration strategy implements. The frames its queries share
+//! live in [`crate::traverse`], the stack and the early-exit bound in `stack.rs`.
 
+use crate::counters::{Counters, NoCounters, RayCounters};
 use crate::geometry::Geometry;
 use crate::hit::Hit;
 use crate::ray::Ray;
 use std::sync::Arc;
-
-/// Counts of the work a query did. Implemented by [`RayCounters`] (counting) and
-/// [`NoCounters`] (a zero-sized no-op, so counting is free when it is off: the choice is made
-/// once per frame and monomorphised).
-///
-/// Counters are plain values owned by one work item (a tile) and summed when the work items
-/// are reduced, so they are exact under any parallelism without atomics or thread-locals.
-pub trait Counters: Default + Send {
-    /// Whether this type counts at all.
-    const ENABLED: bool;
-    /// Adds `n` ray/primitive tests.
-    fn add_tests(&mut self, n: u64);
-    /// Adds `n` visits of acceleration-structure nodes or cells.
-    fn add_visits(&mut self, n: u64);
-    /// Adds another work item's counts.
-    fn merge(&mut self, other: &Self);
-    /// The counts, or `None` when this type does not count.
-    fn counts(&self) -> Option<RayCounters>;
-}
-
-/// Exact counts of ray/primitive tests and node or cell visits.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct RayCounters {
-    /// Ray/primitive intersection tests.
-    pub prim_tests: u64,
-    /// Node (BVH) or cell (grid) visits.
-    pub node_visits: u64,
-}
-
-impl Counters for RayCounters {
-    const ENABLED: bool = true;
-    #[inline]
-    fn add_tests(&mut self, n: u64) {
-        self.prim_tests += n;
-    }
-    #[inline]
-    fn add_visits(&mut self, n: u64) {
-        self.node_visits += n;
-    }
-    fn merge(&mut self, other: &Self) {
-        self.prim_tests += other.prim_tests;
-        self.node_visits += other.node_visits;
-    }
-    fn counts(&self) -> Option<RayCounters> {
-        Some(*self)
-    }
-}
-
-/// Counters that count nothing and cost nothing.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct NoCounters;
-
-impl Counters for NoCounters {
-    const ENABLED: bool = false;
-    #[inline(always)]
-    fn add_tests(&mut self, _: u64) {}
-    #[inline(always)]
-    fn add_visits(&mut self, _: u64) {}
-    fn merge(&mut self, _: &Self) {}
-    fn counts(&self) -> Option<RayCounters> {
-        None
-    }
-}
-
-/// Relative slack of early-exit comparisons: a node or cell is skipped only when its entry
-/// distance exceeds [`cull_bound`]`(best_t)`, slightly more than the best `t`.
-///
-/// Rule 3 of the contract compares a box's entry distance with a primitive's `t`, two
-/// numbers computed by different routines, each with its own rounding. A primitive hit at
-/// `t` lies inside its box, so the box's true entry is at most the true `t`; but the
-/// computed entry can exceed the computed `t` by a few ulps (the slab test rounds twice, the
-/// triangle test a handful of times). Without slack, two coincident triangles in different
-/// leaves (equal `t`, the tie going to the smaller id) could see the smaller id's leaf
-/// skipped. `2^-16` relative dwarfs those few ulps (`~2^-21`) and costs no measurable
-/// extra visits.
-pub const CULL_SLACK: f32 = 1.0 / 65_536.0;
-
-/// The largest entry distance at which a node or cell must still be visited when the best
-/// hit so far is at `best_t` (see [`CULL_SLACK`]).
-#[inline]
-#[must_use]
-pub fn cull_bound(best_t: f32) -> f32 {
-    best_t + best_t.abs() * CULL_SLACK
-}
-
-/// A closest-hit traversal stack of `(node, entry distance)` pairs over storage the caller
-/// owns (so that a batch can reuse one allocation), which pops only the entries that pass
-/// the strict early exit of rule 3: entries entered beyond the current limit are dropped.
-#[derive(Debug)]
-pub struct NodeStack<'a> {
-    entries: &'a mut [(u32, f32)],
-    len: usize,
-}
-
-impl<'a> NodeStack<'a> {
-    /// An empty stack over `storage` (its capacity).
-    #[inline]
-    pub fn new(storage: &'a mut [(u32, f32)]) -> Self {
-        Self {
-            entries: storage,
-            len: 0,
-        }
-    }
-
-    /// Pushes `node`, entered at `entry`.
-    ///
-    /// # Panics
-    /// When the storage is full (a traversal deeper than it was sized for).
-    #[inline]
-    pub fn push(&mut self, node: u32, entry: f32) {
-        self.entries[self.len] = (node, entry);
-        self.len += 1;
-    }
-
-    /// The most recently pushed entry whose entry distance is at most `limit`
-    /// ([`cull_bound`] of the best hit so far), dropping those above it.
-    #[inline]
-    pub fn pop_within(&mut self, limit: f32) -> Option<(u32, f32)> {
-        while self.len > 0 {
-            self.len -= 1;
-            let e = self.entries[self.len];
-            // Strict: skip only entries *beyond* the limit (an equal one may hold a tie).
-            if e.1 > limit {
-                continue;
-            }
-            return Some(e);
-        }
-        None
-    }
-}
 
 /// Size and shape of a built acceleration structure, for `raybench info` and reports.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -158,7 +30,7 @@ pub struct AccelStats {
 ///    one that hits (robust slab test, [`crate::Aabb::intersect`]; pad where needed).
 /// 3. **Strict early exits.** Skip a node only when its entry `t` is *greater* than the best
 ///    `t` so far (equal must still be visited, for the tie rule), with the small relative
-///    slack of [`cull_bound`] that absorbs the rounding of two different routines; a grid
+///    slack of [`crate::cull_bound`] that absorbs the rounding of two different routines; a grid
 ///    stops only when the best `t` is *less* than the current cell's exit.
 /// 4. **Original rays.** Primitive tests always receive the original ray (its `t_max` may be
 ///    lowered to the best `t` so far, which changes no computed `t`), never one clipped to
@@ -214,7 +86,7 @@ pub trait Accel: Send + Sync + Sized + 'static {
 }
 
 /// The batch entry points of an [`Accel`] behind a trait object, for harnesses that pick a
-/// structure by name ([`crate::Renderer::batch_tracer`]) and time batches of rays without
+/// structure by name (`Renderer::batch_tracer` in `raybench-core`) and time batches of rays without
 /// rendering frames (`tests/benches/peers.rs`). Implemented for every [`Accel`]: one virtual
 /// call per batch, the per-ray path inside it is the structure's generic one.
 pub trait BatchTracer: Send + Sync {

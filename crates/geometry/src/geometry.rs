@@ -4,7 +4,7 @@ use crate::aabb::Aabb;
 use crate::bezier::BezierPatch;
 use crate::csg::Csg;
 use crate::heightfield::HeightField;
-use crate::hit::Hit;
+use crate::hit::{Hit, PrimHit, keep_closer};
 use crate::plane::Plane;
 use crate::ray::Ray;
 use crate::sdf::Sdf;
@@ -85,19 +85,6 @@ impl PrimitiveKind {
             Self::Sdf => "SDF model",
         }
     }
-}
-
-/// A primitive's own answer to a ray: where, and the surface parameters.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PrimHit {
-    /// Ray parameter.
-    pub t: f32,
-    /// Sub-primitive id (0 for simple primitives).
-    pub sub: u32,
-    /// First surface parameter (see [`Hit::u`]).
-    pub u: f32,
-    /// Second surface parameter (see [`Hit::v`]).
-    pub v: f32,
 }
 
 impl Shape {
@@ -324,8 +311,7 @@ impl Geometry {
     }
 
     /// Tests primitive `id` and, if it is hit closer than `best` under the tie rule
-    /// ([`Hit::closer`]), replaces `best`. Returns whether it replaced. The one place where
-    /// backends compare candidate hits.
+    /// ([`keep_closer`]), replaces `best`. Returns whether it replaced.
     #[inline]
     pub fn test_closest(&self, id: u32, ray: &Ray, best: &mut Option<(u32, PrimHit)>) -> bool {
         // The primitive sees the original ray, clipped only to the best t so far (a hit at
@@ -334,14 +320,7 @@ impl Geometry {
         let Some(h) = self.shape(id).intersect(&ray.clipped(t_max)) else {
             return false;
         };
-        let better = match best {
-            None => true,
-            Some((bid, bh)) => Hit::closer(h.t, id, bh.t, *bid),
-        };
-        if better {
-            *best = Some((id, h));
-        }
-        better
+        keep_closer(best, id, h)
     }
 
     /// Tests every unbounded primitive (the planes every structure keeps beside itself) as

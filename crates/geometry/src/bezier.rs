@@ -41,10 +41,11 @@
 use crate::aabb::{Aabb, SlabRay};
 use crate::bilinear::BilinearPatch;
 use crate::error::SceneError;
-use crate::geometry::PrimHit;
+use crate::hit::PrimHit;
 use crate::limits::MAX_COORDINATE;
 use crate::mesh::TriangleMesh;
 use crate::ray::Ray;
+use crate::stack::NodeStack;
 use glam::{DVec3, Vec3, Vec3A};
 
 /// Levels of the precomputed region tree below the whole patch (`2^3 x 2^3` leaf regions).
@@ -386,16 +387,13 @@ impl BezierPatch {
         let bound = |best: &Option<(f64, f64, f64)>| best.map_or(f32::INFINITY, |b| b.2 as f32);
         // Nearest-first walk of the region tree with an explicit stack of (level, iu, iv,
         // entry); at most 3 siblings wait per level.
-        let mut stack: [(u32, u32, u32, f32); 16] = [(0, 0, 0, 0.0); 16];
-        let t0 = slab.entry(self.boxes[0][0], self.boxes[0][1], f32::INFINITY)?;
-        stack[0] = (0, 0, 0, t0);
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let (level, iu, iv, entry) = stack[top];
-            if entry > bound(&best) {
-                continue;
-            }
+        let mut storage = [((0u32, 0u32, 0u32), 0.0f32); 16];
+        let mut stack = NodeStack::new(&mut storage);
+        stack.push(
+            (0, 0, 0),
+            slab.entry(self.boxes[0][0], self.boxes[0][1], f32::INFINITY)?,
+        );
+        while let Some(((level, iu, iv), entry)) = stack.pop_within(bound(&best)) {
             let n = 1u32 << level;
             let region = Region::cell(level, iu, iv);
             if level == REGION_DEPTH {
@@ -416,8 +414,7 @@ impl BezierPatch {
             }
             kids[..count].sort_unstable_by(|a, b| b.2.total_cmp(&a.2));
             for &(cu, cv, t) in &kids[..count] {
-                stack[top] = (level + 1, cu, cv, t);
-                top += 1;
+                stack.push((level + 1, cu, cv), t);
             }
         }
         let (u, v, t) = best?;

@@ -19,13 +19,12 @@
 //! crosses.
 
 use crate::aabb::{Aabb, SlabRay};
-use crate::accel::cull_bound;
 use crate::bilinear::BilinearPatch;
 use crate::error::SceneError;
-use crate::geometry::PrimHit;
-use crate::hit::Hit;
+use crate::hit::{PrimHit, keep_closer};
 use crate::limits;
 use crate::ray::Ray;
+use crate::stack::{NodeStack, cull_bound};
 use crate::triangle::Triangle;
 use glam::{Affine3A, Vec3, Vec3A};
 
@@ -410,12 +409,13 @@ impl HeightField {
     /// `u`, `v` are the triangle's barycentric weights.
     #[must_use]
     pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
-        let mut best: Option<PrimHit> = None;
+        // Candidates keyed by sub-primitive id, the tie rule's id inside the field.
+        let mut best: Option<(u32, PrimHit)> = None;
         match self.traversal {
             HeightFieldTraversal::MinMaxTree => self.walk_tree(ray, &mut best),
             HeightFieldTraversal::Dda => self.walk_dda(ray, &mut best),
         }
-        best
+        best.map(|(_, h)| h)
     }
 
     /// The bilinear patch of cell `(i, j)`.
@@ -431,43 +431,41 @@ impl HeightField {
 
     /// Tests the surface of cell `(i, j)` against `ray`, keeping the closer hit.
     #[inline]
-    fn test_cell(&self, ray: &Ray, i: u32, j: u32, best: &mut Option<PrimHit>) {
+    fn test_cell(&self, ray: &Ray, i: u32, j: u32, best: &mut Option<(u32, PrimHit)>) {
         let base = 2 * (j * self.nx + i);
+        // As `Geometry::test_closest`: the original ray, clipped to the best t so far.
+        let t_max = |best: &Option<(u32, PrimHit)>| best.map_or(ray.t_max, |(_, h)| h.t);
         if self.surface == CellSurface::Bilinear {
-            let t_max = best.map_or(ray.t_max, |h| h.t);
-            if let Some(h) = self.cell_patch(i, j).intersect(&ray.clipped(t_max))
-                && best.is_none_or(|b| Hit::closer(h.t, base, b.t, b.sub))
-            {
-                *best = Some(PrimHit {
+            if let Some(h) = self.cell_patch(i, j).intersect(&ray.clipped(t_max(best))) {
+                let hit = PrimHit {
                     t: h.t,
                     sub: base,
                     u: h.u,
                     v: h.v,
-                });
+                };
+                keep_closer(best, base, hit);
             }
             return;
         }
         for (k, tri) in self.cell_triangles(i, j).iter().enumerate() {
             let sub = base + k as u32;
-            // As `Geometry::test_closest`: the original ray, clipped to the best t so far.
-            let t_max = best.map_or(ray.t_max, |h| h.t);
-            if let Some(h) = tri.intersect(&ray.clipped(t_max))
-                && best.is_none_or(|b| Hit::closer(h.t, sub, b.t, b.sub))
-            {
-                *best = Some(PrimHit {
+            if let Some(h) = tri.intersect(&ray.clipped(t_max(best))) {
+                let hit = PrimHit {
                     t: h.t,
                     sub,
                     u: h.u,
                     v: h.v,
-                });
+                };
+                keep_closer(best, sub, hit);
             }
         }
     }
 
-    fn walk_tree(&self, ray: &Ray, best: &mut Option<PrimHit>) {
+    fn walk_tree(&self, ray: &Ray, best: &mut Option<(u32, PrimHit)>) {
         let slab = SlabRay::new(ray);
         let entry = |b: Aabb, limit: f32| slab.entry(Vec3A::from(b.min), Vec3A::from(b.max), limit);
-        let limit = |best: &Option<PrimHit>| best.map_or(ray.t_max, |h| cull_bound(h.t));
+        let limit =
+            |best: &Option<(u32, PrimHit)>| best.map_or(ray.t_max, |(_, h)| cull_bound(h.t));
         let top = self.top_level();
         let Some(t0) = entry(self.bounds, ray.t_max) else {
             return;
@@ -485,15 +483,10 @@ impl HeightField {
         let (ox, oz) = (u32::from(d.x < 0.0), u32::from(d.z < 0.0));
         // Pushed far to near, so that the nearest pops first.
         let order = [(1 - ox, 1 - oz), (ox, 1 - oz), (1 - ox, oz), (ox, oz)];
-        let mut stack = [(0u32, 0u32, 0u32, 0.0f32); 4 * 32];
-        let mut len = 1;
-        stack[0] = (top, 0, 0, t0);
-        while len > 0 {
-            len -= 1;
-            let (l, i, j, t) = stack[len];
-            if t > limit(best) {
-                continue;
-            }
+        let mut storage = [((0u32, 0u32, 0u32), 0.0f32); 4 * 32];
+        let mut stack = NodeStack::new(&mut storage);
+        stack.push((top, 0, 0), t0);
+        while let Some(((l, i, j), _)) = stack.pop_within(limit(best)) {
             if l == 0 {
                 self.test_cell(ray, i, j, best);
                 continue;
@@ -506,8 +499,7 @@ impl HeightField {
                     && cj < h
                     && let Some(ct) = entry(self.node_box(l - 1, ci, cj), lim)
                 {
-                    stack[len] = (l - 1, ci, cj, ct);
-                    len += 1;
+                    stack.push((l - 1, ci, cj), ct);
                 }
             }
         }
@@ -518,7 +510,7 @@ impl HeightField {
     /// also tests the neighbours of any cell border the ray passes within a small margin
     /// of, so that rounding never skips a cell whose triangles the world-space test would
     /// hit (a corner cut, a ray running along a border line).
-    fn walk_dda(&self, ray: &Ray, best: &mut Option<PrimHit>) {
+    fn walk_dda(&self, ray: &Ray, best: &mut Option<(u32, PrimHit)>) {
         let Some(t0) = self.bounds.intersect(ray, ray.t_max) else {
             return;
         };
@@ -553,7 +545,8 @@ impl HeightField {
             }
         };
         let mut t_enter = t0;
-        let limit = |best: &Option<PrimHit>| best.map_or(ray.t_max, |h| cull_bound(h.t));
+        let limit =
+            |best: &Option<(u32, PrimHit)>| best.map_or(ray.t_max, |(_, h)| cull_bound(h.t));
         loop {
             let tx = next(i, step_i, gox, gdx);
             let tz = next(j, step_j, goz, gdz);
@@ -790,12 +783,13 @@ mod tests {
                     dir.z = 0.0;
                 }
                 let ray = Ray::new(o, dir);
-                let mut brute: Option<PrimHit> = None;
+                let mut brute: Option<(u32, PrimHit)> = None;
                 for j in 0..nz {
                     for i in 0..nx {
                         tree.test_cell(&ray, i, j, &mut brute);
                     }
                 }
+                let brute = brute.map(|(_, h)| h);
                 assert_eq!(tree.intersect(&ray), brute, "{surface:?} tree, ray {k}");
                 assert_eq!(dda.intersect(&ray), brute, "{surface:?} dda, ray {k}");
             }

@@ -2,10 +2,10 @@
 //! the scene's voxel volumes along each camera ray, cut by the first surface.
 
 use super::shade_cast;
-use crate::hit::Hit;
-use crate::ray::Ray;
+use crate::Hit;
+use crate::Ray;
 use crate::scene::Scene;
-use crate::volume::VolumeSample;
+use crate::voxels::VolumeSample;
 use glam::Vec3;
 
 /// The colour of a camera ray in the volume modes. The surface behind (or the background)
@@ -58,7 +58,7 @@ pub fn shade_volumes(
     let mut acc = VolumeSample::default();
     for (_, i) in order {
         scene.volumes[i].integrate(ray, t_max, true, &mut acc);
-        if acc.transmittance < 1.0 - crate::volume::EARLY_TERMINATION {
+        if acc.transmittance < 1.0 - crate::voxels::EARLY_TERMINATION {
             break;
         }
     }

@@ -1,0 +1,66 @@
+//! # raybench-geometry
+//!
+//! What a ray meets, and nothing about pictures: rays, boxes and hits, the primitives and
+//! their ray intersection routines, the id-indexed [`Geometry`], the [`Accel`] contract that
+//! every CPU acceleration strategy implements, and the traversal kit they share.
+//!
+//! The scalar intersection routines in this crate are the workspace's *definition* of a hit:
+//! every backend calls them (or, for SIMD and GPU backends, ports them operation by operation),
+//! so that all raybench CPU backends return bit-identical results. See [`Accel`] for the
+//! equivalence contract.
+//!
+//! The backends (`raybench-naive`, `-bvh`, `-grid`, `-packet`, `-peers`) depend on this crate
+//! only; the rendering core (`raybench-core`: scene, materials, camera, integrators, the
+//! `Renderer` contract) sits above it and re-exports it.
+//!
+//! **Architecture invariant:** this crate knows nothing of threads, I/O, SIMD intrinsics,
+//! GPUs or images. It depends on `glam` and nothing else.
+
+mod aabb;
+mod accel;
+mod bezier;
+mod bilinear;
+mod checks;
+mod counters;
+mod csg;
+mod dda;
+mod error;
+mod geometry;
+mod heightfield;
+mod hit;
+pub mod limits;
+mod mesh;
+mod plane;
+pub mod random_rays;
+mod ray;
+pub mod sampling;
+mod sdf;
+mod sphere;
+mod stack;
+pub mod traverse;
+mod triangle;
+
+pub use aabb::{Aabb, FAR_SCALE, SlabRay};
+pub use accel::{Accel, AccelStats, BatchTracer};
+pub use bezier::{BezierPatch, BezierStats, FALLBACK_DEPTH, MAX_NEWTON_ITERATIONS, REGION_DEPTH};
+pub use bilinear::{BilinearPatch, PatchHit};
+pub use checks::check_transform;
+pub use counters::{Counters, NoCounters, RayCounters};
+pub use csg::{Csg, CsgHit, CsgNode, CsgOp, Solid};
+pub use dda::dda;
+pub use error::SceneError;
+pub use geometry::{Geometry, PrimitiveKind, Shape};
+pub use heightfield::{CellSurface, HeightField, HeightFieldTraversal, MAX_HEIGHT_FIELD_VERTICES};
+pub use hit::{Hit, PrimHit, keep_closer};
+pub use mesh::{
+    MAX_EAR_CLIP_VERTICES, PolygonKind, PolygonMesh, TriangleMesh, Triangulated,
+    triangulate_polygon,
+};
+pub use plane::Plane;
+pub use ray::Ray;
+pub use sdf::{March, Sdf, SdfNode, SdfOp, SdfParams, SdfPrimitive};
+pub use sphere::Sphere;
+pub use stack::{CULL_SLACK, NodeStack, cull_bound};
+pub use triangle::Triangle;
+
+pub use glam::{Affine3A, Vec3, Vec3A};

@@ -1,0 +1,134 @@
+//! The constants the WGSL kernels share with Rust, written into the kernels' source from the
+//! Rust definitions (never copied by hand): [`kernel_source`] prepends them to
+//! `kernels.wgsl`, which declares none of them itself.
+
+use raybench_core::NO_HIT;
+use raybench_core::integrator::{AMBIENT, DIMENSIONS_PER_BOUNCE, ROULETTE_DEPTH, SHADOW_SHORTEN};
+use raybench_core::limits::MAX_DEPTH;
+
+/// Primitive kinds as the shaders number them (`KIND_*`).
+pub(crate) const KIND_TRIANGLE: u32 = 0;
+/// See [`KIND_TRIANGLE`].
+pub(crate) const KIND_SPHERE: u32 = 1;
+/// See [`KIND_TRIANGLE`].
+pub(crate) const KIND_PLANE: u32 = 2;
+/// Material kinds as the shaders number them (`MAT_*`).
+pub(crate) const MAT_DIFFUSE: u32 = 0;
+/// See [`MAT_DIFFUSE`].
+pub(crate) const MAT_MIRROR: u32 = 1;
+/// See [`MAT_DIFFUSE`].
+pub(crate) const MAT_GLASS: u32 = 2;
+/// Light kinds as the shaders number them (`LIGHT_*`).
+pub(crate) const LIGHT_POINT: u32 = 0;
+/// See [`LIGHT_POINT`].
+pub(crate) const LIGHT_DIRECTIONAL: u32 = 1;
+/// Set in `prim_info` for primitives that next-event estimation samples (`EMITTER_BIT`).
+pub(crate) const EMITTER_BIT: u32 = 1 << 31;
+/// Entries of the kernels' traversal stack (`STACK_SIZE`): near-child-first traversal
+/// holds at most one entry per level plus one, so the BVH's depth must stay below.
+pub(crate) const STACK_SIZE: u32 = 64;
+/// Whitted's depth-first stack: a popped segment pushes at most two children, so the stack
+/// holds at most one entry per bounce plus one, plus one for the camera segment.
+pub(crate) const WHITTED_STACK: u32 = MAX_DEPTH + 2;
+
+/// The WGSL declarations of every shared constant, one `const` per line, each from the Rust
+/// definition it names.
+#[must_use]
+pub fn wgsl_constants() -> String {
+    let u32s: [(&str, u32, &str); 15] = [
+        ("NO_HIT", NO_HIT, "raybench_core::NO_HIT"),
+        ("KIND_TRIANGLE", KIND_TRIANGLE, "data.rs primitive kinds"),
+        ("KIND_SPHERE", KIND_SPHERE, "data.rs primitive kinds"),
+        ("KIND_PLANE", KIND_PLANE, "data.rs primitive kinds"),
+        ("MAT_DIFFUSE", MAT_DIFFUSE, "data.rs material kinds"),
+        ("MAT_MIRROR", MAT_MIRROR, "data.rs material kinds"),
+        ("MAT_GLASS", MAT_GLASS, "data.rs material kinds"),
+        ("LIGHT_POINT", LIGHT_POINT, "data.rs light kinds"),
+        (
+            "LIGHT_DIRECTIONAL",
+            LIGHT_DIRECTIONAL,
+            "data.rs light kinds",
+        ),
+        ("EMITTER_BIT", EMITTER_BIT, "data.rs prim_info"),
+        ("STACK_SIZE", STACK_SIZE, "BVH2 traversal stack"),
+        ("WHITTED_STACK", WHITTED_STACK, "limits::MAX_DEPTH + 2"),
+        (
+            "ROULETTE_DEPTH",
+            ROULETTE_DEPTH,
+            "raybench_core::integrator",
+        ),
+        (
+            "DIMENSIONS_PER_BOUNCE",
+            DIMENSIONS_PER_BOUNCE,
+            "raybench_core::integrator",
+        ),
+        (
+            "BLOCK",
+            crate::plan::BLOCK,
+            "plan::BLOCK, pixels per block side",
+        ),
+    ];
+    let f32s: [(&str, f32, &str); 5] = [
+        ("AMBIENT", AMBIENT, "raybench_core::integrator"),
+        (
+            "SHADOW_SHORTEN",
+            SHADOW_SHORTEN,
+            "raybench_core::integrator",
+        ),
+        ("MIN_POSITIVE", f32::MIN_POSITIVE, "f32::MIN_POSITIVE"),
+        ("INV_PI", std::f32::consts::FRAC_1_PI, "std::f32::consts"),
+        ("TAU", std::f32::consts::TAU, "std::f32::consts"),
+    ];
+    let mut out =
+        String::from("// Generated from the Rust constants by crates/wgpu/src/constants.rs.\n");
+    for (name, value, from) in u32s {
+        out += &format!("const {name}: u32 = {value}u; // {from}\n");
+    }
+    for (name, value, from) in f32s {
+        // `{:e}` prints the shortest digits that round-trip, so WGSL parses the same f32.
+        out += &format!("const {name}: f32 = {value:e}; // {from}\n");
+    }
+    out
+}
+
+/// The complete WGSL source: the shared constants, then `kernels.wgsl`.
+#[must_use]
+pub fn kernel_source() -> String {
+    wgsl_constants() + "\n" + include_str!("kernels.wgsl")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_constant_is_declared_once_and_parses_back() {
+        let kernels = include_str!("kernels.wgsl");
+        for line in wgsl_constants().lines().skip(1) {
+            let name = line
+                .strip_prefix("const ")
+                .and_then(|l| l.split(':').next())
+                .expect("a const line");
+            assert!(
+                !kernels.contains(&format!("const {name}:")),
+                "kernels.wgsl declares {name} by hand; it comes from constants.rs"
+            );
+            let value = line
+                .split('=')
+                .nth(1)
+                .unwrap()
+                .split(';')
+                .next()
+                .unwrap()
+                .trim();
+            if let Some(v) = value.strip_suffix('u') {
+                v.parse::<u32>().expect("a u32 literal");
+            } else {
+                // The float literal reads back to the Rust value's bits.
+                let f: f32 = value.parse().expect("an f32 literal");
+                assert!(f.is_finite() && f != 0.0, "{line}");
+            }
+        }
+        assert!(wgsl_constants().contains(&format!("const AMBIENT: f32 = {:e};", AMBIENT)));
+    }
+}
