@@ -5,7 +5,7 @@
 
 use libfuzzer_sys::fuzz_target;
 use raybench_core::{Affine3A, TransferFunction, Vec3, Volume, VolumeData, VolumeParams};
-use raybench_scene::grids::{SampleFormat, decode_raw};
+use raybench_scene::samples::{SampleFormat, decode_raw};
 use std::path::Path;
 
 fuzz_target!(|data: &[u8]| {

@@ -91,8 +91,12 @@ fn kinds_and_modes_without_kernels_are_refused() {
     let points =
         std::array::from_fn(|k| raybench_core::Vec3::new((k % 4) as f32, (k / 4) as f32, 0.0));
     let patch = raybench_core::BezierPatch::new(points).unwrap();
-    b.add_bezier_patches("patch", vec![std::sync::Arc::new(patch)], 0)
-        .unwrap();
+    b.add_shapes(
+        "patch",
+        vec![raybench_core::Shape::Bezier(std::sync::Arc::new(patch))],
+        0,
+    )
+    .unwrap();
     let why = raybench_wgpu::check_kinds(&b.build()).unwrap_err();
     assert!(why.contains("Bezier patch"), "{why}");
     let sdf = raybench_scene::load("sdf", std::path::Path::new(".")).unwrap();

@@ -7,7 +7,7 @@ use raybench_core::{
     Affine3A, Camera, Material, Mode, Ray, RenderSettings, Scene, SceneBuilder, Sphere,
     TransferFunction, TransferPoint, Vec3, Volume, VolumeData, VolumeParams, VolumeSample,
 };
-use raybench_scene::volumes::{Ellipsoid, rasterize};
+use raybench_scene::phantom::{Ellipsoid, rasterize};
 use raybench_tests::{available, render_with};
 use std::sync::Arc;
 

@@ -1,11 +1,7 @@
 //! The scene: camera, materials, lights and geometry.
 
-use crate::BezierPatch;
-use crate::Csg;
-use crate::HeightField;
 use crate::Plane;
 use crate::SceneError;
-use crate::Sdf;
 use crate::Sphere;
 use crate::Triangle;
 use crate::TriangleMesh;
@@ -326,71 +322,31 @@ impl SceneBuilder {
         Ok(self)
     }
 
-    /// Adds a height field as one primitive (its cells are sub-primitives).
+    /// Adds primitives that their own checked constructors built (a height field, a CSG
+    /// tree, Bezier patches, an SDF model: any kind with an object of its own) as one
+    /// object, one primitive id per shape in order. The one entry point of such kinds, so a
+    /// new kind needs nothing here.
     ///
     /// # Errors
-    /// When the material does not exist or the scene is full.
-    pub fn add_height_field(
+    /// When the material does not exist, the scene is full, or a bounded shape's box is not
+    /// finite.
+    pub fn add_shapes(
         &mut self,
         name: impl Into<String>,
-        field: Arc<HeightField>,
+        shapes: Vec<Shape>,
         material: u32,
     ) -> Result<&mut Self, SceneError> {
+        let name = name.into();
         self.check_material(material)?;
-        self.check_room(1)?;
-        self.push_object(name.into(), [Shape::HeightField(field)], material);
-        Ok(self)
-    }
-
-    /// Adds a CSG tree as one primitive (its leaves are sub-primitives).
-    ///
-    /// # Errors
-    /// When the material does not exist or the scene is full.
-    pub fn add_csg(
-        &mut self,
-        name: impl Into<String>,
-        csg: Arc<Csg>,
-        material: u32,
-    ) -> Result<&mut Self, SceneError> {
-        self.check_material(material)?;
-        self.check_room(1)?;
-        self.push_object(name.into(), [Shape::Csg(csg)], material);
-        Ok(self)
-    }
-
-    /// Adds Bezier patches as one object, one primitive per patch.
-    ///
-    /// # Errors
-    /// When the material does not exist or the scene is full.
-    pub fn add_bezier_patches(
-        &mut self,
-        name: impl Into<String>,
-        patches: Vec<Arc<BezierPatch>>,
-        material: u32,
-    ) -> Result<&mut Self, SceneError> {
-        self.check_material(material)?;
-        self.check_room(patches.len())?;
-        self.push_object(
-            name.into(),
-            patches.into_iter().map(Shape::Bezier),
-            material,
-        );
-        Ok(self)
-    }
-
-    /// Adds a signed-distance model as one primitive.
-    ///
-    /// # Errors
-    /// When the material does not exist or the scene is full.
-    pub fn add_sdf(
-        &mut self,
-        name: impl Into<String>,
-        sdf: Arc<Sdf>,
-        material: u32,
-    ) -> Result<&mut Self, SceneError> {
-        self.check_material(material)?;
-        self.check_room(1)?;
-        self.push_object(name.into(), [Shape::Sdf(sdf)], material);
+        self.check_room(shapes.len())?;
+        for s in &shapes {
+            if let Some(b) = s.bounds()
+                && !(b.min.is_finite() && b.max.is_finite())
+            {
+                return Err(SceneError::NonFinite(format!("the box of {name}")));
+            }
+        }
+        self.push_object(name, shapes, material);
         Ok(self)
     }
 

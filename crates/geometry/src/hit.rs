@@ -81,12 +81,24 @@ mod tests {
     #[test]
     fn keep_closer_applies_the_tie_rule() {
         let mut best = None;
-        assert!(keep_closer(&mut best, 7, at(2.0)), "the first candidate wins");
+        assert!(
+            keep_closer(&mut best, 7, at(2.0)),
+            "the first candidate wins"
+        );
         assert!(!keep_closer(&mut best, 3, at(2.5)), "farther loses");
-        assert!(!keep_closer(&mut best, 9, at(2.0)), "a tie with a larger id loses");
-        assert!(keep_closer(&mut best, 5, at(2.0)), "a tie with a smaller id wins");
+        assert!(
+            !keep_closer(&mut best, 9, at(2.0)),
+            "a tie with a larger id loses"
+        );
+        assert!(
+            keep_closer(&mut best, 5, at(2.0)),
+            "a tie with a smaller id wins"
+        );
         assert_eq!(best.map(|(id, h)| (id, h.t)), Some((5, 2.0)));
-        assert!(keep_closer(&mut best, 8, at(1.0)), "closer wins whatever its id");
+        assert!(
+            keep_closer(&mut best, 8, at(1.0)),
+            "closer wins whatever its id"
+        );
         assert!(!keep_closer(&mut best, 0, at(f32::NAN)), "NaN never wins");
         assert_eq!(best.map(|(id, _)| id), Some(8));
     }

@@ -9,7 +9,7 @@ use crate::budget::{Holds, Reservation};
 use crate::error::LoadError;
 use raybench_core::HeightField;
 use raybench_core::sampling::{pcg3d, to_unit_f32};
-use raybench_core::{Camera, Light, Material, Scene, SceneBuilder, Sphere, TriangleMesh, Vec3};
+use raybench_core::{Camera, Material, Scene, Sphere, TriangleMesh, Vec3};
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -389,14 +389,7 @@ pub fn generate_scene(spec: &str) -> Result<Scene, LoadError> {
     let (info, n) = parse_spec(spec)?;
     Reservation::new()?.reserve(holds(&info, n), &format!("generator '{spec}'"))?;
     let generated = generate(spec, DEFAULT_SEED)?;
-    let mut b = SceneBuilder::new(spec);
-    b.background(Vec3::new(0.55, 0.65, 0.8))
-        .map_err(scene_err)?;
-    b.add_light(Light::Directional {
-        direction: Vec3::new(-0.4, -1.0, -0.6),
-        radiance: Vec3::ONE,
-    })
-    .map_err(scene_err)?;
+    let mut b = crate::lit_builder(spec).map_err(scene_err)?;
     let mut mats = Vec::new();
     for m in palette() {
         mats.push(b.add_material(m).map_err(scene_err)?);
@@ -412,8 +405,12 @@ pub fn generate_scene(spec: &str) -> Result<Scene, LoadError> {
         }
         Generated::HeightField { n, heights } => {
             let field = HeightField::new(n, n, heights, None).map_err(scene_err)?;
-            b.add_height_field(spec, Arc::new(field), mats[1])
-                .map_err(scene_err)?;
+            b.add_shapes(
+                spec,
+                vec![raybench_core::Shape::HeightField(Arc::new(field))],
+                mats[1],
+            )
+            .map_err(scene_err)?;
             b.camera(terrain_camera()).map_err(scene_err)?;
         }
         Generated::Spheres(spheres) => {

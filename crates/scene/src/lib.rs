@@ -19,11 +19,10 @@ mod error;
 mod format;
 pub mod generators;
 mod gltf_loader;
-pub mod grids;
 mod obj;
-mod sdf_format;
+pub mod phantom;
+pub mod samples;
 mod transform;
-pub mod volumes;
 
 pub use bpt::{BptPatch, load_bpt_file, parse_bpt};
 pub use budget::{
@@ -38,7 +37,7 @@ pub use gltf_loader::{load_gltf_bytes, load_gltf_file};
 pub use obj::{MeshData, load_obj_bytes, load_obj_file};
 pub use transform::Transform;
 
-use raybench_core::Scene;
+use raybench_core::{Light, Scene, SceneBuilder, SceneError, Vec3};
 use std::path::{Path, PathBuf};
 
 /// The environment variable naming the assets directory.
@@ -83,6 +82,18 @@ pub fn load(spec: &str, assets: &Path) -> Result<Scene, LoadError> {
         });
     }
     Err(LoadError::UnknownScene(spec.to_owned()))
+}
+
+/// A builder for a scene of one mesh file or generator spec: a grey-blue background and
+/// one directional light from above (the camera frames the geometry by default).
+pub(crate) fn lit_builder(name: &str) -> Result<SceneBuilder, SceneError> {
+    let mut b = SceneBuilder::new(name);
+    b.background(Vec3::new(0.55, 0.65, 0.8))?;
+    b.add_light(Light::Directional {
+        direction: Vec3::new(-0.4, -1.0, -0.6),
+        radiance: Vec3::ONE,
+    })?;
+    Ok(b)
 }
 
 /// What a path that exists but is no regular file is, for messages: a folder, a FIFO or a

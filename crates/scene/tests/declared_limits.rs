@@ -4,7 +4,7 @@
 
 use raybench_core::limits;
 use raybench_core::{RenderSettings, SceneError};
-use raybench_scene::grids::{SampleFormat, decode_raw};
+use raybench_scene::samples::{SampleFormat, decode_raw};
 use raybench_scene::{LoadError, load_gltf_bytes, load_obj_bytes, load_scene_str, parse_bpt};
 use std::path::Path;
 

@@ -195,7 +195,7 @@ fn fuzz_seeds_load() {
                 "bpt" => parse_bpt(&text(), &path).map(drop),
                 _ => {
                     // The raw_volume target's layout: three u32 dims, a format byte, samples.
-                    use raybench_scene::grids::{SampleFormat, decode_raw};
+                    use raybench_scene::samples::{SampleFormat, decode_raw};
                     let dim =
                         |i: usize| u32::from_le_bytes(bytes[4 * i..4 * i + 4].try_into().unwrap());
                     let dims = [dim(0), dim(1), dim(2)];

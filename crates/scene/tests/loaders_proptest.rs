@@ -12,7 +12,7 @@ use proptest::prelude::*;
 use proptest::test_runner::{RngAlgorithm, RngSeed};
 use raybench_core::limits::{MAX_BEZIER_PATCHES, MAX_PRIMITIVES, MAX_VOLUME_VOXELS};
 use raybench_core::{Affine3A, TransferFunction, Vec3, Volume, VolumeData, VolumeParams};
-use raybench_scene::grids::{RawSamples, SampleFormat, decode_raw};
+use raybench_scene::samples::{RawSamples, SampleFormat, decode_raw};
 use raybench_scene::{
     LoadError, MeshData, load_gltf_bytes, load_obj_bytes, load_scene_str, parse_bpt,
 };

@@ -8,17 +8,18 @@ use crate::camera::CameraRays;
 use crate::frame::{Frame, FrameStats, NO_HIT};
 use crate::material::{Light, MaterialKind};
 use crate::renderer::{Mode, RenderSettings};
-use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::{Accel, Counters};
 use glam::Vec3;
 
 mod mip_composite;
 mod path;
+mod wavefront;
 mod whitted;
 
 pub use mip_composite::shade_volumes;
 pub use path::{DIMENSIONS_PER_BOUNCE, ROULETTE_DEPTH, SHADOW_SHORTEN};
+use wavefront::Wavefront;
 pub use whitted::AMBIENT;
 
 /// A rectangle of pixels.
@@ -80,95 +81,16 @@ pub fn render_tile<A: Accel, C: Counters>(
     settings: &RenderSettings,
     tile: Tile,
 ) -> TileOutput<C> {
+    let st = Wavefront::new(accel, camera, settings, tile);
     match settings.mode {
-        Mode::Cast => cast_tile(scene, accel, camera, settings, tile, shade_cast),
+        Mode::Cast => cast_tile(scene, st, shade_cast),
         Mode::Mip | Mode::Composite => {
             let composite = settings.mode == Mode::Composite;
-            cast_tile(scene, accel, camera, settings, tile, |s, l, r, h| {
-                shade_volumes(s, l, r, h, composite)
-            })
+            cast_tile(scene, st, |s, l, r, h| shade_volumes(s, l, r, h, composite))
         }
-        Mode::Whitted => whitted::whitted_tile(scene, accel, camera, settings, tile),
-        Mode::Path => path::path_tile(scene, accel, camera, settings, tile),
+        Mode::Whitted => whitted::whitted_tile(scene, st),
+        Mode::Path => path::path_tile(scene, st),
     }
-}
-
-/// What every integrator does around its own work: the tile's centre rays (whose hits are
-/// the id and `t` buffers), the colour accumulator, and the counts of rays and work.
-struct TileState<C> {
-    tile: Tile,
-    centre_rays: Vec<Ray>,
-    centre_hits: Vec<Option<Hit>>,
-    color: Vec<Vec3>,
-    traced: u64,
-    counters: C,
-}
-
-impl<C: Counters> TileState<C> {
-    /// Traces the centre rays; colour starts at zero.
-    fn new<A: Accel>(accel: &A, camera: &CameraRays, tile: Tile) -> Self {
-        let mut counters = C::default();
-        let (centre_rays, centre_hits) = centre_pass(accel, camera, tile, &mut counters);
-        let n = centre_rays.len();
-        Self {
-            tile,
-            centre_rays,
-            centre_hits,
-            color: vec![Vec3::ZERO; n],
-            traced: n as u64,
-            counters,
-        }
-    }
-
-    fn finish(self) -> TileOutput<C> {
-        let (ids, t) = id_t_buffers(&self.centre_hits);
-        TileOutput {
-            tile: self.tile,
-            color: self.color,
-            ids,
-            t,
-            rays: self.traced,
-            counters: self.counters,
-        }
-    }
-}
-
-/// The centre rays of a tile, in [`tile_pixels`] order, with their closest hits (the id
-/// and `t` buffers).
-fn centre_pass<A: Accel, C: Counters>(
-    accel: &A,
-    camera: &CameraRays,
-    tile: Tile,
-    counters: &mut C,
-) -> (Vec<Ray>, Vec<Option<Hit>>) {
-    let rays: Vec<Ray> = tile_pixels(tile, 0)
-        .map(|(x, y, _)| camera.center_ray(x, y))
-        .collect();
-    let mut hits = vec![None; rays.len()];
-    accel.intersect_batch(&rays, &mut hits, counters);
-    (rays, hits)
-}
-
-/// Traces a batch of shadow rays and adds `value` to pixel `px` for each `(px, value)` whose
-/// ray is unblocked. Returns the number of rays traced.
-fn add_unshadowed<A: Accel, C: Counters>(
-    accel: &A,
-    rays: &[Ray],
-    light: &[(usize, Vec3)],
-    color: &mut [Vec3],
-    counters: &mut C,
-) -> u64 {
-    if rays.is_empty() {
-        return 0;
-    }
-    let mut occluded = vec![false; rays.len()];
-    accel.occluded_batch(rays, &mut occluded, counters);
-    for (&(px, value), &blocked) in light.iter().zip(&occluded) {
-        if !blocked {
-            color[px] += value;
-        }
-    }
-    rays.len() as u64
 }
 
 /// Side of the square pixel blocks a tile is ordered in.
@@ -251,15 +173,12 @@ pub fn shade_cast(scene: &Scene, light_dir: Vec3, ray: &Ray, hit: Option<&Hit>) 
 /// the volumes along the camera ray up to its surface hit).
 fn cast_tile<A: Accel, C: Counters>(
     scene: &Scene,
-    accel: &A,
-    camera: &CameraRays,
-    settings: &RenderSettings,
-    tile: Tile,
+    mut st: Wavefront<A, C>,
     shade: impl Fn(&Scene, Vec3, &Ray, Option<&Hit>) -> Vec3,
 ) -> TileOutput<C> {
-    let mut st = TileState::<C>::new(accel, camera, tile);
     let light_dir = cast_light(scene);
-    if settings.spp <= 1 {
+    let spp = st.settings.spp;
+    if spp <= 1 {
         for ((c, r), h) in st
             .color
             .iter_mut()
@@ -270,21 +189,14 @@ fn cast_tile<A: Accel, C: Counters>(
         }
     } else {
         // Jittered samples for colour; ids and t stay those of the centre ray.
-        let n = st.centre_rays.len();
-        let mut rays = st.centre_rays.clone();
-        let mut hits = vec![None; n];
-        for s in 0..settings.spp {
-            for (ray, (x, y, pixel)) in rays.iter_mut().zip(tile_pixels(tile, settings.width)) {
-                let (jx, jy) = Sampler::new(pixel, s, settings.seed).next_2d();
-                *ray = camera.ray(x as f32 + jx, y as f32 + jy);
-            }
-            accel.intersect_batch(&rays, &mut hits, &mut st.counters);
-            st.traced += n as u64;
+        for s in 0..spp {
+            let rays: Vec<Ray> = st.camera_rays(s).map(|(_, ray, _)| ray).collect();
+            let hits = st.trace(&rays);
             for ((acc, r), h) in st.color.iter_mut().zip(&rays).zip(&hits) {
                 *acc += shade(scene, light_dir, r, h.as_ref());
             }
         }
-        let inv = 1.0 / settings.spp as f32;
+        let inv = 1.0 / spp as f32;
         for c in &mut st.color {
             *c *= inv;
         }

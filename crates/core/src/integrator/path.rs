@@ -11,16 +11,15 @@
 //! one-sided, as pbrt's diffuse area lights: they emit on the side their geometric normal
 //! points to (counter-clockwise winding); the Cornell box's light faces down.
 
-use super::whitted::{Segment, light_ray, shading_frame};
-use super::{Tile, TileOutput, TileState, add_unshadowed, tile_pixels};
+use super::TileOutput;
+use super::wavefront::{Segment, ShadowBatch, Surface, Wavefront};
+use super::whitted::light_ray;
 use crate::Ray;
 use crate::Shape;
-use crate::camera::CameraRays;
 use crate::material::MaterialKind;
 use crate::optics::{
     cosine_hemisphere, fresnel_dielectric, offset_ray_origin, reflect, refract, triangle_point,
 };
-use crate::renderer::RenderSettings;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::{Accel, Counters};
@@ -49,33 +48,27 @@ struct PathState {
 /// the light's own triangle does not occlude it.
 pub const SHADOW_SHORTEN: f32 = 1.0 - 1.0 / 1024.0;
 
+/// Renders a tile by path tracing (the estimator of this module's documentation).
 pub(super) fn path_tile<A: Accel, C: Counters>(
     scene: &Scene,
-    accel: &A,
-    camera: &CameraRays,
-    settings: &RenderSettings,
-    tile: Tile,
+    mut st: Wavefront<A, C>,
 ) -> TileOutput<C> {
-    let mut st = TileState::<C>::new(accel, camera, tile);
+    let settings = st.settings;
     let sample_weight = Vec3::splat(1.0 / settings.spp as f32);
     let emitters = &scene.emitters;
     let emitter_area = emitters.total_area();
 
     for s in 0..settings.spp {
-        let mut paths: Vec<PathState> = tile_pixels(tile, settings.width)
-            .enumerate()
-            .map(|(i, (x, y, pixel))| {
-                let mut sampler = Sampler::new(pixel, s, settings.seed);
-                let (jx, jy) = sampler.next_2d();
-                PathState {
-                    segment: Segment {
-                        pixel: i as u32,
-                        weight: sample_weight,
-                        ray: camera.ray(x as f32 + jx, y as f32 + jy),
-                    },
-                    specular: true,
-                    sampler,
-                }
+        let mut paths: Vec<PathState> = st
+            .camera_rays(s)
+            .map(|(pixel, ray, sampler)| PathState {
+                segment: Segment {
+                    pixel,
+                    weight: sample_weight,
+                    ray,
+                },
+                specular: true,
+                sampler,
             })
             .collect();
         for depth in 0..=settings.max_depth {
@@ -83,24 +76,25 @@ pub(super) fn path_tile<A: Accel, C: Counters>(
                 break;
             }
             let rays: Vec<Ray> = paths.iter().map(|p| p.segment.ray).collect();
-            let mut hits = vec![None; rays.len()];
-            accel.intersect_batch(&rays, &mut hits, &mut st.counters);
-            st.traced += rays.len() as u64;
+            let hits = st.trace(&rays);
 
             let mut next = Vec::with_capacity(paths.len());
-            let mut shadow_rays = Vec::new();
-            let mut shadow_light = Vec::new();
+            let mut shadows = ShadowBatch::default();
             for (path, hit) in paths.iter_mut().zip(&hits) {
                 let seg = path.segment;
                 let px = seg.pixel as usize;
-                let Some(hit) = hit else {
-                    st.color[px] += seg.weight * scene.background;
+                let Some(Surface {
+                    prim,
+                    m,
+                    p,
+                    nf,
+                    front,
+                    d,
+                }) = st.surface(scene, &seg, hit.as_ref())
+                else {
                     continue;
                 };
-                let m = scene.material_of(hit.prim);
-                let (p, nf, front) = shading_frame(&seg.ray, hit);
-                let d = seg.ray.dir.normalize();
-                if front && (path.specular || !emitters.contains(hit.prim)) {
+                if front && (path.specular || !emitters.contains(prim)) {
                     st.color[px] += seg.weight * m.emission;
                 }
                 if depth == settings.max_depth {
@@ -121,8 +115,7 @@ pub(super) fn path_tile<A: Accel, C: Counters>(
                         let brdf = albedo * FRAC_1_PI;
                         for light in &scene.lights {
                             if let Some((ray, irradiance, _)) = light_ray(light, p, nf) {
-                                shadow_rays.push(ray);
-                                shadow_light.push((px, weight * brdf * irradiance));
+                                shadows.push(ray, px, weight * brdf * irradiance);
                             }
                         }
                         if let Some(id) = emitters.pick(u_light)
@@ -142,13 +135,8 @@ pub(super) fn path_tile<A: Accel, C: Counters>(
                                 // pdf = 1 / area per unit area; geometry term cos cos / d^2.
                                 let value =
                                     weight * brdf * le * (cos_x * cos_y / dist2 * emitter_area);
-                                shadow_rays.push(Ray::with_interval(
-                                    origin,
-                                    to,
-                                    0.0,
-                                    SHADOW_SHORTEN,
-                                ));
-                                shadow_light.push((px, value));
+                                let ray = Ray::with_interval(origin, to, 0.0, SHADOW_SHORTEN);
+                                shadows.push(ray, px, value);
                             }
                         }
                         weight *= albedo;
@@ -194,13 +182,7 @@ pub(super) fn path_tile<A: Accel, C: Counters>(
                     ..*path
                 });
             }
-            st.traced += add_unshadowed(
-                accel,
-                &shadow_rays,
-                &shadow_light,
-                &mut st.color,
-                &mut st.counters,
-            );
+            st.add_unshadowed(&shadows);
             paths = next;
         }
     }

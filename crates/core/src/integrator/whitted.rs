@@ -1,40 +1,17 @@
 //! Whitted ray tracing, bounce by bounce over a whole tile (wavefront): every bounce's rays,
 //! and then its shadow rays, go through the accelerator's batch entry points.
 
-use super::{Tile, TileOutput, TileState, add_unshadowed, tile_pixels};
-use crate::Hit;
+use super::TileOutput;
+use super::wavefront::{Segment, ShadowBatch, Surface, Wavefront};
 use crate::Ray;
-use crate::camera::CameraRays;
 use crate::material::{Light, MaterialKind};
 use crate::optics::{fresnel_dielectric, offset_ray_origin, reflect, refract};
-use crate::renderer::RenderSettings;
-use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::{Accel, Counters};
 use glam::Vec3;
 
 /// Ambient term of diffuse surfaces, as a fraction of their colour (Whitted's `k_a`).
 pub const AMBIENT: f32 = 0.05;
-
-/// A ray in flight and what its radiance is worth to its pixel.
-#[derive(Clone, Copy)]
-pub(super) struct Segment {
-    /// Index of the pixel in the tile.
-    pub pixel: u32,
-    /// Product of the weights along the way.
-    pub weight: Vec3,
-    /// The ray.
-    pub ray: Ray,
-}
-
-/// The shading frame of a hit: point, unit normal facing the incoming ray, and whether the
-/// ray arrived on the side the geometric normal points to.
-#[inline]
-pub(super) fn shading_frame(ray: &Ray, hit: &Hit) -> (Vec3, Vec3, bool) {
-    let p = ray.at(hit.t);
-    let front = hit.normal.dot(ray.dir) < 0.0;
-    (p, if front { hit.normal } else { -hit.normal }, front)
-}
 
 /// A shadow ray from `p` (normal `n`) towards light `light`, and the unshadowed light it
 /// would bring (irradiance, unit direction), or `None` when the light is behind the surface.
@@ -71,14 +48,13 @@ pub(super) fn light_ray(light: &Light, p: Vec3, n: Vec3) -> Option<(Ray, Vec3, V
     }
 }
 
+/// Renders a tile by Whitted ray tracing: `max_depth` bounces of mirror and glass rays,
+/// direct light with shadow rays at diffuse hits.
 pub(super) fn whitted_tile<A: Accel, C: Counters>(
     scene: &Scene,
-    accel: &A,
-    camera: &CameraRays,
-    settings: &RenderSettings,
-    tile: Tile,
+    mut st: Wavefront<A, C>,
 ) -> TileOutput<C> {
-    let mut st = TileState::<C>::new(accel, camera, tile);
+    let settings = st.settings;
     let sample_weight = Vec3::splat(1.0 / settings.spp as f32);
 
     for s in 0..settings.spp {
@@ -94,15 +70,11 @@ pub(super) fn whitted_tile<A: Accel, C: Counters>(
                 })
                 .collect()
         } else {
-            tile_pixels(tile, settings.width)
-                .enumerate()
-                .map(|(i, (x, y, pixel))| {
-                    let (jx, jy) = Sampler::new(pixel, s, settings.seed).next_2d();
-                    Segment {
-                        pixel: i as u32,
-                        weight: sample_weight,
-                        ray: camera.ray(x as f32 + jx, y as f32 + jy),
-                    }
+            st.camera_rays(s)
+                .map(|(pixel, ray, _)| Segment {
+                    pixel,
+                    weight: sample_weight,
+                    ray,
                 })
                 .collect()
         };
@@ -114,23 +86,18 @@ pub(super) fn whitted_tile<A: Accel, C: Counters>(
                 st.centre_hits.clone()
             } else {
                 let rays: Vec<Ray> = segments.iter().map(|s| s.ray).collect();
-                let mut hits = vec![None; rays.len()];
-                accel.intersect_batch(&rays, &mut hits, &mut st.counters);
-                st.traced += rays.len() as u64;
-                hits
+                st.trace(&rays)
             };
             let mut next = Vec::new();
-            let mut shadow_rays = Vec::new();
-            let mut shadow_light = Vec::new();
+            let mut shadows = ShadowBatch::default();
             for (seg, hit) in segments.iter().zip(&hits) {
                 let px = seg.pixel as usize;
-                let Some(hit) = hit else {
-                    st.color[px] += seg.weight * scene.background;
+                let Some(Surface {
+                    m, p, nf, front, d, ..
+                }) = st.surface(scene, seg, hit.as_ref())
+                else {
                     continue;
                 };
-                let m = scene.material_of(hit.prim);
-                let (p, nf, front) = shading_frame(&seg.ray, hit);
-                let d = seg.ray.dir.normalize();
                 if front {
                     st.color[px] += seg.weight * m.emission;
                 }
@@ -145,8 +112,7 @@ pub(super) fn whitted_tile<A: Accel, C: Counters>(
                             // Lambert plus a Blinn-Phong highlight.
                             let h = (wi - d).normalize_or_zero();
                             let spec = m.specular * nf.dot(h).max(0.0).powf(m.shininess);
-                            shadow_rays.push(ray);
-                            shadow_light.push((px, seg.weight * irradiance * (albedo + spec)));
+                            shadows.push(ray, px, seg.weight * irradiance * (albedo + spec));
                         }
                     }
                     MaterialKind::Mirror if depth < settings.max_depth => {
@@ -176,13 +142,7 @@ pub(super) fn whitted_tile<A: Accel, C: Counters>(
                     MaterialKind::Mirror | MaterialKind::Glass => {}
                 }
             }
-            st.traced += add_unshadowed(
-                accel,
-                &shadow_rays,
-                &shadow_light,
-                &mut st.color,
-                &mut st.counters,
-            );
+            st.add_unshadowed(&shadows);
             // Drop contributions too small to matter (keeps glass-in-glass from doubling
             // the ray count every bounce for nothing); relative to one sample's weight, so
             // the cut does not depend on the sample count.

@@ -1,24 +1,24 @@
 //! The `kind = "sdf"` object of the scene format: a tree of signed-distance primitives and
 //! operations (documented in `docs/scene-format.md`, section "SDF models").
 
-use crate::format::ScaleDesc;
+use super::{ObjectCx, ScaleDesc, V3};
+use crate::error::LoadError;
 use crate::transform::Transform;
 use raybench_core::limits::MAX_SDF_DEPTH;
 use raybench_core::{SceneError, Sdf, SdfNode, SdfOp, SdfParams, SdfPrimitive, Vec3};
 use serde::Deserialize;
-
-type V3 = [f32; 3];
+use std::sync::Arc;
 
 /// An `[[object]]` table with `kind = "sdf"`.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-pub(crate) struct SdfDesc {
+pub(super) struct SdfDesc {
     tree: SdfNodeDesc,
     /// Hit tolerance relative to the model's box diagonal.
     tolerance: Option<f32>,
     /// Step limit.
     max_steps: Option<u32>,
-    pub(crate) material: Option<String>,
+    material: Option<String>,
 }
 
 /// A node of an SDF tree: an operation with its operands, a transform of one operand, or a
@@ -78,8 +78,18 @@ enum SdfNodeDesc {
 }
 
 impl SdfDesc {
+    /// Builds the model and adds it.
+    pub(super) fn add(&self, cx: &mut ObjectCx) -> Result<(), LoadError> {
+        let err = cx.err();
+        let m = cx.material(self.material.as_ref())?.unwrap_or(0);
+        let model = self.build().map_err(&err)?;
+        cx.b.add_shapes("sdf", vec![raybench_core::Shape::Sdf(Arc::new(model))], m)
+            .map_err(err)?;
+        Ok(())
+    }
+
     /// Builds and validates the model.
-    pub(crate) fn build(&self) -> Result<Sdf, SceneError> {
+    fn build(&self) -> Result<Sdf, SceneError> {
         let tree = node(&self.tree, 1)?;
         let params = SdfParams {
             tolerance: self.tolerance.unwrap_or(SdfParams::DEFAULT.tolerance),

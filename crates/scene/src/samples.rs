@@ -233,7 +233,7 @@ mod tests {
     use super::*;
 
     fn temp(name: &str, bytes: &[u8]) -> std::path::PathBuf {
-        let dir = std::env::temp_dir().join(format!("raybench-grids-{}", std::process::id()));
+        let dir = std::env::temp_dir().join(format!("raybench-samples-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let p = dir.join(name);
         std::fs::write(&p, bytes).unwrap();
@@ -266,7 +266,7 @@ mod tests {
 
     #[test]
     fn png_round_trip_and_garbage() {
-        let p = std::env::temp_dir().join(format!("raybench-grids-{}.png", std::process::id()));
+        let p = std::env::temp_dir().join(format!("raybench-samples-{}.png", std::process::id()));
         let img =
             image::ImageBuffer::<image::Luma<u16>, _>::from_raw(2, 1, vec![0u16, 65535]).unwrap();
         img.save(&p).unwrap();

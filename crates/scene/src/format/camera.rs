@@ -1,0 +1,28 @@
+//! The `[camera]` table of the scene format.
+
+use super::V3;
+use raybench_core::{Camera, Vec3};
+use serde::Deserialize;
+
+/// The `[camera]` table: a pinhole camera at `position` looking at `look_at`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct CameraDesc {
+    position: V3,
+    look_at: V3,
+    up: Option<V3>,
+    fov: Option<f32>,
+}
+
+impl CameraDesc {
+    /// The camera (`up` defaults to +y, the vertical field of view to 45 degrees); the
+    /// scene builder checks it.
+    pub(super) fn camera(&self) -> Camera {
+        Camera {
+            position: Vec3::from(self.position),
+            look_at: Vec3::from(self.look_at),
+            up: self.up.map_or(Vec3::Y, Vec3::from),
+            vfov_degrees: self.fov.unwrap_or(45.0),
+        }
+    }
+}

@@ -1,0 +1,180 @@
+//! The triangle objects of the scene format: `kind = "triangle"` (one, inline),
+//! `kind = "polygons"` (faces of any size, triangulated) and `kind = "mesh"` (an OBJ or
+//! glTF file); and the bare mesh file loaded as a scene of its own.
+
+use super::{ObjectCx, TransformDesc, V3};
+use crate::budget::{Holds, Reservation};
+use crate::error::LoadError;
+use crate::gltf_loader::load_gltf_file;
+use crate::obj::{MeshData, load_obj_file};
+use raybench_core::{PolygonMesh, Scene, SceneBuilder, SceneError, Triangle, Vec3};
+use serde::Deserialize;
+use std::path::Path;
+
+/// `kind = "triangle"`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct TriangleDesc {
+    vertices: [V3; 3],
+    material: Option<String>,
+}
+
+/// `kind = "polygons"`: an inline polygon mesh.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct PolygonsDesc {
+    positions: Vec<V3>,
+    faces: Vec<Vec<u32>>,
+    material: Option<String>,
+    #[serde(default)]
+    transform: TransformDesc,
+}
+
+/// `kind = "mesh"`: a mesh file, with its own materials unless `material` overrides them.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct MeshDesc {
+    path: String,
+    material: Option<String>,
+    #[serde(default)]
+    transform: TransformDesc,
+}
+
+impl TriangleDesc {
+    /// Adds the triangle.
+    pub(super) fn add(&self, cx: &mut ObjectCx) -> Result<(), LoadError> {
+        let m = cx.material(self.material.as_ref())?.unwrap_or(0);
+        let tri = Triangle::new(
+            self.vertices[0].into(),
+            self.vertices[1].into(),
+            self.vertices[2].into(),
+        );
+        let err = cx.err();
+        cx.b.add_triangles("triangle", &[tri], &[m]).map_err(err)?;
+        Ok(())
+    }
+}
+
+impl PolygonsDesc {
+    /// Triangulates the polygons (warning about self-intersecting ones), places and adds
+    /// them.
+    pub(super) fn add(&self, cx: &mut ObjectCx) -> Result<(), LoadError> {
+        let err = cx.err();
+        let m = cx.material(self.material.as_ref())?.unwrap_or(0);
+        let poly = PolygonMesh {
+            positions: self.positions.iter().map(|&v| Vec3::from(v)).collect(),
+            faces: self.faces.clone(),
+        };
+        let triangulated = poly.triangulate().map_err(&err)?;
+        if !triangulated.self_intersecting.is_empty() {
+            cx.b.warn(format!(
+                "{}: {}: {}",
+                cx.ctx.file.display(),
+                cx.what,
+                crate::obj::self_intersecting(&triangulated.self_intersecting)
+            ));
+        }
+        let mut mesh = triangulated.mesh;
+        let xf = self.transform.checked().map_err(&err)?;
+        if !xf.is_identity() {
+            let a = xf.affine();
+            mesh.transform(|v| a.transform_point3(v));
+        }
+        cx.b.add_mesh("polygons", &mesh, m).map_err(err)?;
+        Ok(())
+    }
+}
+
+impl MeshDesc {
+    /// Loads the mesh file (reserving its triangles in the budget), places and adds it.
+    pub(super) fn add(&self, cx: &mut ObjectCx) -> Result<(), LoadError> {
+        let err = cx.err();
+        let xf = self.transform.checked().map_err(&err)?;
+        let path = cx.ctx.resolve(&self.path)?;
+        let mut data = load_mesh_file(&path)?;
+        cx.budget.reserve(
+            Holds::Primitives(data.mesh.indices.len() as u64),
+            &format!("{}: {}: {}", cx.ctx.file.display(), cx.what, path.display()),
+        )?;
+        if !xf.is_identity() {
+            let a = xf.affine();
+            data.mesh.transform(|v| a.transform_point3(v));
+        }
+        let m = cx.material(self.material.as_ref())?;
+        add_mesh_data(cx.b, &self.path, data, m).map_err(err)?;
+        Ok(())
+    }
+}
+
+fn load_mesh_file(path: &Path) -> Result<MeshData, LoadError> {
+    let data = load_mesh_file_any(path)?;
+    if data.mesh.indices.is_empty() {
+        return Err(LoadError::Parse {
+            path: path.to_owned(),
+            message: "no triangles found (is this a mesh file?)".into(),
+        });
+    }
+    Ok(data)
+}
+
+fn load_mesh_file_any(path: &Path) -> Result<MeshData, LoadError> {
+    match crate::extension(path).as_str() {
+        "obj" => load_obj_file(path),
+        "gltf" | "glb" => load_gltf_file(path),
+        _ => Err(LoadError::Parse {
+            path: path.to_owned(),
+            message: "unknown mesh file type (expected .obj, .gltf or .glb)".into(),
+        }),
+    }
+}
+
+/// A scene of one mesh file with a light, a grey-blue background and a camera framing it.
+pub(crate) fn bare_mesh_scene(path: &Path) -> Result<Scene, LoadError> {
+    let data = load_mesh_file(path)?;
+    Reservation::new()?.reserve(
+        Holds::Primitives(data.mesh.indices.len() as u64),
+        &path.display().to_string(),
+    )?;
+    let name = path
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("mesh")
+        .to_owned();
+    let scene_err = |cause| LoadError::Scene {
+        context: path.display().to_string(),
+        cause,
+    };
+    let mut b = crate::lit_builder(&name).map_err(scene_err)?;
+    add_mesh_data(&mut b, &name, data, None).map_err(scene_err)?;
+    Ok(b.build())
+}
+
+/// Adds a loaded mesh: its own materials (unless `override_material`), its triangles as one
+/// object.
+fn add_mesh_data(
+    b: &mut SceneBuilder,
+    name: &str,
+    data: MeshData,
+    override_material: Option<u32>,
+) -> Result<(), SceneError> {
+    let materials: Vec<u32> = match override_material {
+        Some(m) => vec![m; data.mesh.indices.len()],
+        None => {
+            let mut ids = Vec::with_capacity(data.materials.len());
+            for m in data.materials {
+                ids.push(b.add_material(m)?);
+            }
+            data.triangle_material
+                .iter()
+                .map(|m| m.map_or(0, |i| ids[i as usize]))
+                .collect()
+        }
+    };
+    for w in data.warnings {
+        b.warn(w);
+    }
+    data.mesh.validate()?;
+    let triangles: Vec<Triangle> = data.mesh.triangles().collect();
+    b.add_triangles(name, &triangles, &materials)?;
+    Ok(())
+}

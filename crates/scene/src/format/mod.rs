@@ -1,0 +1,612 @@
+//! The TOML scene format (documented in `docs/scene-format.md`).
+//!
+//! This file reads the scene file table by table (each error names the table, its index,
+//! kind and line) and hands every table to the file of its kind: `camera.rs`,
+//! `material.rs`, `light.rs` and `volume.rs` for the tables of those names; for each
+//! `[[object]]`, the file of its `kind` (`simple.rs`: spheres and planes; `mesh.rs`:
+//! triangles, polygons and mesh files; `generator.rs`; `heightfield.rs`; `csg.rs`: CSG trees
+//! and the standalone analytic solids; `bezier.rs`; `sdf.rs`). A new object kind is one
+//! file here with its table's struct and its `add`, plus its variant of [`ObjectDesc`] and
+//! the one match arm that calls that `add`.
+
+mod bezier;
+mod camera;
+mod csg;
+mod generator;
+mod heightfield;
+mod light;
+mod material;
+mod mesh;
+mod sdf;
+mod simple;
+mod volume;
+
+pub(crate) use mesh::bare_mesh_scene;
+
+use crate::budget::Reservation;
+use crate::error::LoadError;
+use crate::transform::Transform;
+use raybench_core::{Scene, SceneBuilder, SceneError, Vec3};
+use serde::Deserialize;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// Scene files larger than this are refused before reading (meshes belong in mesh files).
+const MAX_SCENE_FILE_BYTES: u64 = 64 << 20;
+
+type V3 = [f32; 3];
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    name: Option<String>,
+    background: Option<V3>,
+    camera: Option<camera::CameraDesc>,
+    // The arrays of tables are parsed table by table (`table_item`), so that an error
+    // names the table, its index, kind and line rather than the array's first table.
+    #[serde(default, rename = "material")]
+    materials: Vec<toml::Table>,
+    #[serde(default, rename = "light")]
+    lights: Vec<toml::Table>,
+    #[serde(default, rename = "object")]
+    objects: Vec<toml::Table>,
+    #[serde(default, rename = "volume")]
+    volumes: Vec<toml::Table>,
+    /// `[benchmark]`: a built-in scene's report metadata, read by `build.rs`; ignored here.
+    #[serde(default, rename = "benchmark")]
+    _benchmark: Option<serde::de::IgnoredAny>,
+}
+
+/// The 1-based line of the header of the `index`-th `[[array]]` table in `text`, if the
+/// array is written with such headers (not inline).
+fn header_line(text: &str, array: &str, index: usize) -> Option<usize> {
+    let header = format!("[[{array}]]");
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| {
+            let squeezed: String = l.chars().filter(|c| !c.is_whitespace()).collect();
+            squeezed.starts_with(&header)
+        })
+        .nth(index)
+        .map(|(i, _)| i + 1)
+}
+
+/// The line of key `key` inside the table whose header is on line `header` (up to the next
+/// table header that is not one of its sub-tables, `[array.sub]`).
+fn key_line(text: &str, array: &str, header: usize, key: &str) -> Option<usize> {
+    let sub = format!("[{array}.");
+    text.lines()
+        .enumerate()
+        .skip(header)
+        .take_while(|(_, l)| {
+            let l = l.trim_start();
+            !l.starts_with('[') || l.starts_with(&sub)
+        })
+        .find(|(_, l)| {
+            l.trim_start()
+                .strip_prefix(key)
+                .is_some_and(|rest| rest.trim_start().starts_with(['=', '.']))
+        })
+        .map(|(i, _)| i + 1)
+}
+
+/// Parses the `index`-th table of the array `array` (`object`, `light`, ...) of a scene
+/// file as `T`, and returns it with a label naming it in messages: `line 7: object 2
+/// (sphere)` (the line of its header, its 1-based index, its kind). A parse error
+/// names the same, at the line of the offending key when the message names one.
+fn table_item<T: serde::de::DeserializeOwned>(
+    text: &str,
+    array: &str,
+    index: usize,
+    table: toml::Table,
+    ctx: &Context,
+) -> Result<(T, String), LoadError> {
+    let header = header_line(text, array, index);
+    let mut label = format!("{array} {}", index + 1);
+    if let Some(kind) = table.get("kind").and_then(toml::Value::as_str) {
+        label += &format!(" ({kind})");
+    }
+    let at = |line: Option<usize>| line.map_or(String::new(), |l| format!("line {l}: "));
+    match toml::Value::Table(table).try_into::<T>() {
+        Ok(item) => Ok((item, format!("{}{label}", at(header)))),
+        Err(e) => {
+            let message = e.message().trim_end().to_owned();
+            // `unknown field `colour`, expected ...`: point at the key.
+            let key = message
+                .split('`')
+                .nth(1)
+                .filter(|_| message.starts_with("unknown field"));
+            let line = header
+                .and_then(|h| key.and_then(|k| key_line(text, array, h, k)))
+                .or(header);
+            Err(LoadError::Parse {
+                path: ctx.file.clone(),
+                message: format!("{}{label}: {message}", at(line)),
+            })
+        }
+    }
+}
+
+/// A scale: one factor for every axis, or one per axis.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum ScaleDesc {
+    Uniform(f32),
+    PerAxis(V3),
+}
+
+/// An object's `transform` table: scale, then rotate (degrees about x, y, z), then
+/// translate.
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct TransformDesc {
+    scale: Option<ScaleDesc>,
+    rotate: Option<V3>,
+    translate: Option<V3>,
+}
+
+impl TransformDesc {
+    /// The transform of an object's `transform` table, checked as CSG transforms are
+    /// ([`raybench_core::check_transform`]): a zero scale would flatten the object into
+    /// nothing and render an empty image without a word.
+    fn checked(&self) -> Result<Transform, SceneError> {
+        let xf = self.to_transform();
+        if !xf.is_identity() {
+            raybench_core::check_transform(xf.affine(), "transform")?;
+        }
+        Ok(xf)
+    }
+
+    /// The transform, unchecked.
+    fn to_transform(&self) -> Transform {
+        Transform {
+            scale: match self.scale {
+                None => Vec3::ONE,
+                Some(ScaleDesc::Uniform(s)) => Vec3::splat(s),
+                Some(ScaleDesc::PerAxis(s)) => Vec3::from(s),
+            },
+            rotate_degrees: self.rotate.map_or(Vec3::ZERO, Vec3::from),
+            translate: self.translate.map_or(Vec3::ZERO, Vec3::from),
+        }
+    }
+}
+
+/// An `[[object]]` table, by its `kind`: each variant's table and its `add` live in the
+/// file of that kind.
+#[derive(Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+enum ObjectDesc {
+    Sphere(simple::SphereDesc),
+    Plane(simple::PlaneDesc),
+    Triangle(mesh::TriangleDesc),
+    Polygons(mesh::PolygonsDesc),
+    Mesh(mesh::MeshDesc),
+    Generator(generator::GeneratorDesc),
+    HeightField(heightfield::HeightFieldDesc),
+    Csg(csg::CsgDesc),
+    // Issue 10, analytic solids as objects: each is a one-leaf CSG primitive.
+    Torus(csg::TorusDesc),
+    Ellipsoid(csg::EllipsoidDesc),
+    Cylinder(csg::RevolvedDesc),
+    Cone(csg::RevolvedDesc),
+    Paraboloid(csg::RevolvedDesc),
+    Bezier(bezier::BezierDesc),
+    Sdf(sdf::SdfDesc),
+}
+
+impl ObjectDesc {
+    /// Adds the object to the scene: the one dispatch from a kind to its file.
+    fn add(&self, cx: &mut ObjectCx) -> Result<(), LoadError> {
+        match self {
+            Self::Sphere(d) => d.add(cx),
+            Self::Plane(d) => d.add(cx),
+            Self::Triangle(d) => d.add(cx),
+            Self::Polygons(d) => d.add(cx),
+            Self::Mesh(d) => d.add(cx),
+            Self::Generator(d) => d.add(cx),
+            Self::HeightField(d) => d.add(cx),
+            Self::Csg(d) => d.add(cx),
+            Self::Torus(d) => d.add(cx),
+            Self::Ellipsoid(d) => d.add(cx),
+            Self::Cylinder(d) => d.add("cylinder", cx),
+            Self::Cone(d) => d.add("cone", cx),
+            Self::Paraboloid(d) => d.add("paraboloid", cx),
+            Self::Bezier(d) => d.add(cx),
+            Self::Sdf(d) => d.add(cx),
+        }
+    }
+}
+
+/// What adding one `[[object]]` needs: the scene so far, the file, the object's label in
+/// messages (`line 7: object 2 (sphere)`), the memory budget and the materials by name.
+struct ObjectCx<'a> {
+    b: &'a mut SceneBuilder,
+    ctx: &'a Context<'a>,
+    what: &'a str,
+    budget: &'a mut Reservation,
+    materials: &'a HashMap<String, u32>,
+}
+
+impl ObjectCx<'_> {
+    /// The id of the material `name` names (`None` when the object names none).
+    fn material(&self, name: Option<&String>) -> Result<Option<u32>, LoadError> {
+        match name {
+            None => Ok(None),
+            Some(n) => self
+                .materials
+                .get(n)
+                .copied()
+                .map(Some)
+                .ok_or_else(|| LoadError::Parse {
+                    path: self.ctx.file.clone(),
+                    message: format!("{}: material '{n}' is not defined", self.what),
+                }),
+        }
+    }
+
+    /// The scene builder's errors about this object, as load errors naming it (the
+    /// function owns its message, so the builder stays free to borrow).
+    fn err(&self) -> impl Fn(SceneError) -> LoadError + use<> {
+        self.ctx.scene_err(self.what)
+    }
+}
+
+/// Where relative paths of a scene are looked up.
+struct Context<'a> {
+    scene: &'a str,
+    file: PathBuf,
+    dir: Option<&'a Path>,
+    assets: &'a Path,
+}
+
+impl Context<'_> {
+    fn resolve(&self, rel: &str) -> Result<PathBuf, LoadError> {
+        let p = Path::new(rel);
+        if p.is_absolute() {
+            return if p.is_file() {
+                Ok(p.to_owned())
+            } else {
+                Err(self.missing(p.to_owned()))
+            };
+        }
+        if let Some(dir) = self.dir {
+            let candidate = dir.join(p);
+            if candidate.is_file() {
+                return Ok(candidate);
+            }
+        }
+        let candidate = self.assets.join(p);
+        if candidate.is_file() {
+            Ok(candidate)
+        } else {
+            Err(self.missing(candidate))
+        }
+    }
+
+    fn missing(&self, path: PathBuf) -> LoadError {
+        LoadError::MissingAsset {
+            scene: self.scene.to_owned(),
+            path,
+        }
+    }
+
+    fn scene_err(&self, what: &str) -> impl Fn(SceneError) -> LoadError + use<> {
+        let context = format!("{}: {what}", self.file.display());
+        move |cause| LoadError::Scene {
+            context: context.clone(),
+            cause,
+        }
+    }
+}
+
+/// Reads a UTF-8 text file of at most `limit` bytes (checked before reading; `what` names
+/// the kind of file in the error).
+pub(crate) fn read_text(path: &Path, limit: u64, what: &str) -> Result<String, LoadError> {
+    let io = |cause| LoadError::Io {
+        path: path.to_owned(),
+        cause,
+    };
+    // A device or pipe reports no length and may never end.
+    crate::check_regular_file(path)?;
+    let len = std::fs::metadata(path).map_err(io)?.len();
+    if len > limit {
+        return Err(LoadError::Parse {
+            path: path.to_owned(),
+            message: format!("{what} of {len} bytes exceeds the limit of {limit}"),
+        });
+    }
+    // At most `limit + 1` bytes, should the file grow meanwhile.
+    let mut bytes = Vec::new();
+    std::io::Read::read_to_end(
+        &mut std::io::Read::take(std::fs::File::open(path).map_err(io)?, limit + 1),
+        &mut bytes,
+    )
+    .map_err(io)?;
+    if bytes.len() as u64 > limit {
+        return Err(LoadError::Parse {
+            path: path.to_owned(),
+            message: format!("{what} exceeds the limit of {limit} bytes"),
+        });
+    }
+    if bytes.starts_with(crate::UTF8_BOM) {
+        bytes.drain(..crate::UTF8_BOM.len());
+    }
+    String::from_utf8(bytes).map_err(|_| LoadError::Parse {
+        path: path.to_owned(),
+        message: "not UTF-8 text".into(),
+    })
+}
+
+/// Loads a `.toml` scene file; relative mesh paths resolve against its folder, then `assets`.
+///
+/// # Errors
+/// When the file is missing, too large, malformed or invalid, or a mesh it names is.
+pub fn load_toml_file(path: &Path, assets: &Path) -> Result<Scene, LoadError> {
+    let text = read_text(path, MAX_SCENE_FILE_BYTES, "scene file")?;
+    let name = path
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("scene")
+        .to_owned();
+    let ctx = Context {
+        scene: &name,
+        file: path.to_owned(),
+        dir: path.parent(),
+        assets,
+    };
+    parse_and_build(&text, &ctx)
+}
+
+/// Loads a scene from TOML text (the built-in scenes); relative mesh paths resolve against
+/// `dir` (if any), then `assets`.
+///
+/// # Errors
+/// When the text is malformed or invalid, or a mesh it names is.
+pub fn load_scene_str(
+    text: &str,
+    name: &str,
+    dir: Option<&Path>,
+    assets: &Path,
+) -> Result<Scene, LoadError> {
+    let ctx = Context {
+        scene: name,
+        file: PathBuf::from(format!("{name}.toml")),
+        dir,
+        assets,
+    };
+    parse_and_build(text, &ctx)
+}
+
+fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let file: SceneFile = toml::from_str(text).map_err(|e| {
+        let position = e.span().map_or(String::new(), |span| {
+            let before = text.get(..span.start).unwrap_or(text);
+            let line = before.matches('\n').count() + 1;
+            let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+            format!("line {line}, column {column}: ")
+        });
+        LoadError::Parse {
+            path: ctx.file.clone(),
+            message: format!("{position}{}", e.message()),
+        }
+    })?;
+    let mut budget = Reservation::new()?;
+    let mut b = SceneBuilder::new(file.name.as_deref().unwrap_or(ctx.scene));
+    if let Some(bg) = file.background {
+        b.background(Vec3::from(bg))
+            .map_err(ctx.scene_err("background"))?;
+    }
+    if let Some(c) = &file.camera {
+        b.camera(c.camera()).map_err(ctx.scene_err("camera"))?;
+    }
+    let empty = file.objects.is_empty() && file.volumes.is_empty();
+    let mut names: HashMap<String, u32> = HashMap::new();
+    for (index, table) in file.materials.into_iter().enumerate() {
+        let (m, what): (material::MaterialDesc, _) =
+            table_item(text, "material", index, table, ctx)?;
+        let id = b.add_material(m.material()).map_err(ctx.scene_err(&what))?;
+        if names.insert(m.name.clone(), id).is_some() {
+            return Err(LoadError::Parse {
+                path: ctx.file.clone(),
+                message: format!("{what}: material '{}' is defined twice", m.name),
+            });
+        }
+    }
+    for (index, table) in file.lights.into_iter().enumerate() {
+        let (l, what): (light::LightDesc, _) = table_item(text, "light", index, table, ctx)?;
+        b.add_light(l.light()).map_err(ctx.scene_err(&what))?;
+    }
+    for (index, table) in file.objects.into_iter().enumerate() {
+        let (o, what): (ObjectDesc, _) = table_item(text, "object", index, table, ctx)?;
+        o.add(&mut ObjectCx {
+            b: &mut b,
+            ctx,
+            what: &what,
+            budget: &mut budget,
+            materials: &names,
+        })?;
+    }
+    for (index, table) in file.volumes.into_iter().enumerate() {
+        let (v, what): (volume::VolumeDesc, _) = table_item(text, "volume", index, table, ctx)?;
+        let volume = volume::volume(&v, ctx, &what, &mut budget)?;
+        b.add_volume(std::sync::Arc::new(volume))
+            .map_err(ctx.scene_err(&what))?;
+    }
+    if empty {
+        return Err(LoadError::Parse {
+            path: ctx.file.clone(),
+            message: "the scene has no [[object]] and no [[volume]]: nothing to render".into(),
+        });
+    }
+    Ok(b.build())
+}
+
+/// Loads scene text as the scene `t.toml`, without assets (for the unit tests of every
+/// kind's file).
+#[cfg(test)]
+fn load_test_scene(text: &str) -> Result<Scene, LoadError> {
+    load_scene_str(text, "t", None, Path::new("/nonexistent"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::load_test_scene as load;
+    use raybench_core::MaterialKind;
+
+    #[test]
+    fn full_example() {
+        let s = load(
+            r#"
+            name = "demo"
+            background = [0, 0, 0]
+            [camera]
+            position = [0, 1, 5]
+            look_at = [0, 0, 0]
+            fov = 40
+            [[material]]
+            name = "red"
+            color = [0.8, 0.1, 0.1]
+            [[material]]
+            name = "glass"
+            kind = "glass"
+            ior = 1.5
+            [[light]]
+            kind = "point"
+            position = [0, 5, 0]
+            intensity = [10, 10, 10]
+            [[object]]
+            kind = "sphere"
+            center = [0, 0, 0]
+            radius = 1
+            material = "red"
+            [[object]]
+            kind = "plane"
+            point = [0, -1, 0]
+            normal = [0, 1, 0]
+            [[object]]
+            kind = "polygons"
+            positions = [[0,0,0],[1,0,0],[1,1,0],[0,1,0]]
+            faces = [[0,1,2,3]]
+            transform = { scale = 2, translate = [0, 0, 1] }
+            [[object]]
+            kind = "generator"
+            spec = "spheres:3"
+            "#,
+        )
+        .unwrap();
+        assert_eq!(s.name, "demo");
+        assert_eq!(s.geometry.len(), 1 + 1 + 2 + 3);
+        assert_eq!(s.material_of(0).name, "red");
+        assert_eq!(s.materials[2].kind, MaterialKind::Glass);
+        assert_eq!(s.lights.len(), 1);
+    }
+
+    #[test]
+    fn errors_name_the_problem() {
+        let cases = [
+            ("[[object]]\nkind = \"cube\"", "cube"),
+            ("[[object]]\nkind = \"sphere\"\ncenter = [0,0,0]", "radius"),
+            (
+                "[[object]]\nkind = \"sphere\"\ncenter = [0,0,0]\nradius = 1\ncolour = 3",
+                "colour",
+            ),
+            (
+                "[[object]]\nkind = \"sphere\"\ncenter = [0,0,0]\nradius = 1\nmaterial = \"x\"",
+                "'x'",
+            ),
+            (
+                "[[object]]\nkind = \"sphere\"\ncenter = [nan,0,0]\nradius = 1",
+                "not finite",
+            ),
+            (
+                "[[object]]\nkind = \"sphere\"\ncenter = [inf,0,0]\nradius = 1",
+                "not finite",
+            ),
+            (
+                "[[object]]\nkind = \"sphere\"\ncenter = [0,0,0]\nradius = 0",
+                "radius",
+            ),
+            ("[camera]\nposition = [0,0,0]\nlook_at = [0,0,0]", "camera"),
+            (
+                "[[object]]\nkind = \"mesh\"\npath = \"nope.obj\"",
+                "nope.obj",
+            ),
+            (
+                "[[object]]\nkind = \"generator\"\nspec = \"soup:0\"",
+                "soup:0",
+            ),
+            (
+                "[[object]]\nkind = \"polygons\"\npositions = [[0,0,0]]\nfaces = [[0,1,2]]",
+                "out of range",
+            ),
+            ("[[object]\nkind = ", "TOML"),
+            (
+                "[[material]]\nname = \"a\"\n[[material]]\nname = \"a\"",
+                "twice",
+            ),
+        ];
+        for (text, needle) in cases {
+            let e = load(text)
+                .err()
+                .unwrap_or_else(|| panic!("accepted: {text}"))
+                .to_string();
+            assert!(
+                e.to_lowercase().contains(&needle.to_lowercase()) || needle == "TOML",
+                "{text:?} -> {e}"
+            );
+        }
+    }
+
+    #[test]
+    fn empty_scene_is_refused() {
+        for text in [
+            "",
+            "background = [1, 0, 0]\n[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]",
+        ] {
+            let e = load(text).unwrap_err().to_string();
+            assert!(e.contains("nothing to render"), "{e}");
+        }
+    }
+
+    /// Issue 18: an error in the second object names it, its kind and its line, and an
+    /// unknown key points at the key's own line.
+    #[test]
+    fn errors_point_at_the_offending_table_and_key() {
+        let text = "[[object]]\nkind = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n\
+                    \n[[object]]\nkind = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n\
+                    colour = 3\n";
+        let e = load(text).unwrap_err().to_string();
+        assert!(
+            e.contains("t.toml: line 10: object 2 (sphere): unknown field `colour`"),
+            "{e}"
+        );
+        let text = "[[object]]\nkind = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 1, 0]\n\
+                    [[object]]\nkind = \"sphere\"\ncenter = [0, 0, 0]\n";
+        let e = load(text).unwrap_err().to_string();
+        assert!(
+            e.contains("line 5: object 2 (sphere): missing field `radius`"),
+            "{e}"
+        );
+        let text = "[[object]]\nkind = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 1, 0]\n\
+                    [[object]]\nkind = \"sphere\"\ncenter = [0, 0, 0]\nradius = -1\n";
+        let e = load(text).unwrap_err().to_string();
+        assert!(
+            e.contains("line 5: object 2 (sphere): sphere radius -1"),
+            "{e}"
+        );
+        let text = "[[light]]\nkind = \"point\"\nposition = [0, 0, 0]\nintensity = [1, 1, 1]\n\
+                    [[light]]\nkind = \"point\"\nposition = [0, 0, 0]\nintensity = [1, -1, 1]\n\
+                    [[object]]\nkind = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n";
+        let e = load(text).unwrap_err().to_string();
+        assert!(
+            e.contains("line 5: light 2 (point): light intensity"),
+            "{e}"
+        );
+        // Sub-tables of the object and keys of later tables are not mistaken for it.
+        let text = "[[object]]\nkind = \"mesh\"\npath = \"a.obj\"\n[object.transform]\n\
+                    scael = 2\n";
+        let e = load(text).unwrap_err().to_string();
+        assert!(e.contains("object 1 (mesh)") && e.contains("scael"), "{e}");
+    }
+}
