@@ -15,7 +15,7 @@
 //! `embree-packet` ([`raybench_peers::EmbreePacketAccel`], 16-ray packets), both through
 //! the batch entry point.
 //!
-//! Scenes: the report's quick list (`raybench::report::QUICK_SCENES`: spheres, whitted,
+//! Scenes: the report's quick matrix (`raybench::report::matrix_scenes(true)`: spheres, whitted,
 //! cornell-box, bunny, sponza; the meshes come from the assets directory, and a scene whose
 //! files are missing is skipped with a message) and the generators `terrain:708` (about a
 //! million triangles) and `soup:100000` (where a uniform grid should be close to a BVH).
@@ -523,7 +523,8 @@ fn bench_trace(c: &mut Criterion, p: &Prepared) {
 fn benches_all(c: &mut Criterion) {
     // The phantom is a volume without primitives: its integration is benched in
     // `benches/grids.rs`.
-    let scenes = raybench::report::QUICK_SCENES
+    let quick = raybench::report::matrix_scenes(true);
+    let scenes = quick
         .iter()
         .filter(|&&n| n != "phantom")
         .chain(&EXTRA_SCENES);

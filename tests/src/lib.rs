@@ -12,20 +12,49 @@ pub mod peers;
 use raybench_core::{Frame, Hit, NO_HIT, Ray, RenderSettings, Renderer, Scene, TriangleMesh, Vec3};
 use std::sync::Arc;
 
-/// Every backend bound by the bit-exact contract, naive first (the reference): the suites
-/// that compare backends with naive or with themselves run each of these that this machine
-/// can run ([`available`]). A new exact backend joins by adding its name here.
-pub const EXACT_BACKENDS: &[&str] = &[
-    "naive",
-    "bvh",
-    "obvhs",
-    "grid",
-    "grid2",
-    "packet",
-    "packet-sse4.1",
-    "packet-portable",
-    "packet-avx512",
-];
+use raybench::Roles;
+
+/// The number of exact backends in the registry.
+const EXACT_COUNT: usize = raybench::count_with(Roles::EXACT);
+/// Their names, read from the registry at compile time.
+const EXACT_NAMES: [&str; EXACT_COUNT] = raybench::names_with(Roles::EXACT);
+
+/// Every backend bound by the bit-exact contract ([`Roles::EXACT`] in `raybench::BACKENDS`),
+/// the oracle first (the reference): the suites that compare backends with the oracle or
+/// with themselves run each of these that this machine can run ([`available`]). A new
+/// backend registered as exact joins them by itself.
+pub const EXACT_BACKENDS: &[&str] = &EXACT_NAMES;
+
+/// The oracle every exact backend is compared with (naive: [`Roles::ORACLE`]).
+pub const ORACLE: &str = raybench::name_with(Roles::ORACLE);
+
+/// The baseline structure (the BVH: [`Roles::BASELINE`]), for tests that need one fast
+/// exact backend rather than every one.
+pub const BASELINE: &str = raybench::name_with(Roles::BASELINE);
+
+/// The backend on another device (the GPU: [`Roles::DEVICE`]).
+pub const DEVICE: &str = raybench::name_with(Roles::DEVICE);
+
+/// The number of exact backends but the oracle.
+const ACCELERATED_COUNT: usize = EXACT_COUNT - raybench::count_with(Roles::ORACLE);
+
+/// The exact backends but the oracle (pinned variants included: each machine runs those it
+/// can, through [`available`]): the suites that compare each with the oracle.
+pub const ACCELERATED_BACKENDS: &[&str] = &accelerated();
+
+/// [`ACCELERATED_BACKENDS`], at compile time.
+const fn accelerated() -> [&'static str; ACCELERATED_COUNT] {
+    let mut out = [""; ACCELERATED_COUNT];
+    let (mut i, mut n) = (0, 0);
+    while i < EXACT_COUNT {
+        if !raybench::backend_is(EXACT_NAMES[i], Roles::ORACLE) {
+            out[n] = EXACT_NAMES[i];
+            n += 1;
+        }
+        i += 1;
+    }
+    out
+}
 
 /// True under `CI=true`, where every asset is installed and skipping is failing.
 #[must_use]
@@ -125,7 +154,7 @@ pub fn assert_white_furnace(scene: &Arc<Scene>) {
         seed: 5,
         count: false,
     };
-    let frame = render_with("bvh", scene, &settings, 2);
+    let frame = render_with(BASELINE, scene, &settings, 2);
     let n = frame.color.len() as f64;
     let mean = frame.color.iter().map(|c| f64::from(c.x)).sum::<f64>() / n;
     let var = frame
@@ -192,7 +221,7 @@ pub fn check(backends: &[&str], scene: &str, size: u32) {
         count: true,
         ..RenderSettings::default()
     };
-    let reference = render_with("naive", &scene_data, &settings, 1);
+    let reference = render_with(ORACLE, &scene_data, &settings, 1);
     let m = scene_data.geometry.len() as u64;
     assert_eq!(reference.stats.rays, u64::from(size * size));
     assert_eq!(
@@ -219,7 +248,7 @@ pub fn check(backends: &[&str], scene: &str, size: u32) {
         (size * size) as usize,
         1,
     );
-    let (reference_rays, _) = prepared("naive", &scene_data)
+    let (reference_rays, _) = prepared(ORACLE, &scene_data)
         .trace_rays(&rays, false)
         .unwrap();
     for &name in backends {
@@ -277,7 +306,7 @@ pub fn check_modes(backends: &[&str], scene: &str, size: u32) {
         (raybench_core::Mode::Path, 2),
     ] {
         let settings = mode_settings(size, mode, spp);
-        let reference = render_with("naive", &scene_data, &settings, 1);
+        let reference = render_with(ORACLE, &scene_data, &settings, 1);
         for &name in backends {
             for threads in [2, 3] {
                 let frame = render_with(name, &scene_data, &settings, threads);
@@ -412,7 +441,7 @@ pub mod gpu {
     /// Under `CI=true` when no adapter is found.
     #[must_use]
     pub fn available() -> bool {
-        match (raybench::backend("wgpu").unwrap().make)().availability() {
+        match (raybench::backend(super::DEVICE).unwrap().make)().availability() {
             Ok(()) => true,
             Err(e) => {
                 assert!(!in_ci(), "CI=true but the GPU backend is unavailable: {e}");
@@ -497,14 +526,14 @@ pub mod gpu {
         let Some(s) = load_or_skip(scene) else {
             return;
         };
-        let gpu = prepared("wgpu", &s);
+        let gpu = prepared(super::DEVICE, &s);
         let mut cases = vec![(Mode::Cast, 1)];
         if modes {
             cases.extend([(Mode::Cast, 4), (Mode::Whitted, 1), (Mode::Path, 4)]);
         }
         for (mode, spp) in cases {
             let settings = super::mode_settings(size, mode, spp);
-            let reference = render_with("naive", &s, &settings, 2);
+            let reference = render_with(super::ORACLE, &s, &settings, 2);
             let frame = gpu.render(&settings).unwrap();
             let what = format!("wgpu on {scene}, {} spp {spp}", mode.name());
             assert_close_hits(&what, &reference, &frame);
@@ -517,7 +546,9 @@ pub mod gpu {
         }
         let rays =
             raybench_core::ray_sets::incoherent(s.geometry.bounds(), (size * size) as usize, 1);
-        let (reference, _) = prepared("naive", &s).trace_rays(&rays, false).unwrap();
+        let (reference, _) = prepared(super::ORACLE, &s)
+            .trace_rays(&rays, false)
+            .unwrap();
         let (hits, _) = gpu.trace_rays(&rays, false).unwrap();
         let key = |h: &[Option<raybench_core::Hit>]| -> (Vec<u32>, Vec<f32>) {
             (

@@ -17,14 +17,14 @@ use raybench_tests::{
 };
 use std::sync::Arc;
 
-/// The exact CPU backends but naive (the reference).
-const BACKENDS: &[&str] = raybench_tests::EXACT_BACKENDS.split_at(1).1;
+/// The exact CPU backends but the oracle (the reference).
+const BACKENDS: &[&str] = raybench_tests::ACCELERATED_BACKENDS;
 
 /// Traces `rays` (in their order and sorted into packets) with naive and every backend and
 /// asserts bit-identical hits and that invalid rays miss. Returns naive's hits in the
 /// original order.
 fn check(what: &str, scene: &Arc<Scene>, rays: &[Ray]) -> Vec<Option<Hit>> {
-    let naive = prepared("naive", scene);
+    let naive = prepared(raybench_tests::ORACLE, scene);
     let (reference, _) = naive.trace_rays(rays, false).unwrap();
     for (i, (r, h)) in rays.iter().zip(&reference).enumerate() {
         assert!(
@@ -310,7 +310,7 @@ fn an_invalid_ray_does_not_poison_its_packet() {
         Ray::new(eye, Vec3::new(1.0e-40, -1.0e-40, -1.0e-40)),
         Ray::with_interval(eye, valid[3].dir, f32::NAN, f32::NAN),
     ];
-    let mut backends = vec!["naive"];
+    let mut backends = vec![raybench_tests::ORACLE];
     backends.extend(available(BACKENDS));
     for name in backends {
         let r = prepared(name, &scene);
@@ -413,8 +413,12 @@ fn gpu_on_adversarial_rays() {
             rays.push(Ray::new(o, Vec3::new(-0.01, 0.02, -1.0)));
         }
     }
-    let (reference, _) = prepared("naive", &scene).trace_rays(&rays, false).unwrap();
-    let (hits, _) = prepared("wgpu", &scene).trace_rays(&rays, false).unwrap();
+    let (reference, _) = prepared(raybench_tests::ORACLE, &scene)
+        .trace_rays(&rays, false)
+        .unwrap();
+    let (hits, _) = prepared(raybench_tests::DEVICE, &scene)
+        .trace_rays(&rays, false)
+        .unwrap();
     let mut agree = 0usize;
     for (i, ((r, a), b)) in rays.iter().zip(&reference).zip(&hits).enumerate() {
         if !r.is_valid() {

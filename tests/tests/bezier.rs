@@ -169,8 +169,8 @@ fn direct_teapot_agrees_with_a_fine_tessellation() {
     assert_eq!(fine.geometry.len(), 32 * 2 * 64 * 64);
     let size = 256;
     let settings = raybench_tests::mode_settings(size, Mode::Cast, 1);
-    let a = raybench_tests::render_with("bvh", &direct, &settings, 2);
-    let b = raybench_tests::render_with("bvh", &fine, &settings, 2);
+    let a = raybench_tests::render_with(raybench_tests::BASELINE, &direct, &settings, 2);
+    let b = raybench_tests::render_with(raybench_tests::BASELINE, &fine, &settings, 2);
     let none = raybench_core::NO_HIT;
     // Patch index per pixel (the tessellation has 2 * 64^2 triangles per patch).
     let key = |ids: &[u32], i: usize, per: u32| if ids[i] == none { none } else { ids[i] / per };

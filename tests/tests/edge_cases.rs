@@ -3,10 +3,10 @@
 //! boxes, rays starting inside boxes, axis-aligned rays and rays along box faces.
 
 use raybench_core::{Ray, Scene, SceneBuilder, Sphere, TriangleMesh, Vec3};
-use raybench_tests::{assert_same_ray_hits, prepared, triangles};
+use raybench_tests::{assert_same_ray_hits, available, prepared, triangles};
 use std::sync::Arc;
 
-const BACKENDS: &[&str] = &["bvh", "obvhs", "grid", "grid2", "packet", "packet-portable"];
+const BACKENDS: &[&str] = raybench_tests::ACCELERATED_BACKENDS;
 
 /// Rays that probe a scene of the given bounds from everywhere: incoherent rays from inside
 /// the box, axis-aligned rays through a lattice (some exactly on box faces), and rays from
@@ -50,8 +50,10 @@ fn probe_rays(scene: &Scene) -> Vec<Ray> {
 fn check_scene(what: &str, scene: Scene) {
     let scene = Arc::new(scene);
     let rays = probe_rays(&scene);
-    let (reference, _) = prepared("naive", &scene).trace_rays(&rays, false).unwrap();
-    for &name in BACKENDS {
+    let (reference, _) = prepared(raybench_tests::ORACLE, &scene)
+        .trace_rays(&rays, false)
+        .unwrap();
+    for name in available(BACKENDS) {
         let (hits, _) = prepared(name, &scene).trace_rays(&rays, false).unwrap();
         assert_same_ray_hits(&format!("{name}: {what}"), &reference, &hits);
         let bvh = raybench_bvh::Bvh::build_with(
@@ -184,8 +186,10 @@ fn rays_start_inside_boxes_and_on_surfaces() {
             rays.push(Ray::new(t.v[0], Vec3::new(0.3, -0.2, 0.9)));
         }
     }
-    let (reference, _) = prepared("naive", &scene).trace_rays(&rays, false).unwrap();
-    for &name in BACKENDS {
+    let (reference, _) = prepared(raybench_tests::ORACLE, &scene)
+        .trace_rays(&rays, false)
+        .unwrap();
+    for name in available(BACKENDS) {
         let (hits, _) = prepared(name, &scene).trace_rays(&rays, false).unwrap();
         assert_same_ray_hits(name, &reference, &hits);
     }

@@ -1,7 +1,8 @@
 //! Every raybench CPU backend against the naive oracle: bit-identical primitive ids and `t`
 //! on every built-in scene and on rays aimed at shared edges and vertices.
 //!
-//! A new backend joins by adding its name to `raybench_tests::EXACT_BACKENDS`.
+//! A new backend registered as exact (`raybench::Roles::EXACT`) joins by itself:
+//! `raybench_tests::EXACT_BACKENDS` is read from the registry.
 
 use raybench_core::{Ray, Vec3};
 use raybench_tests::{assert_same_ray_hits, available, check, load_or_skip, prepared};
@@ -24,25 +25,21 @@ macro_rules! scene_tests {
 }
 
 scene_tests! {
-    spheres => "spheres",
-    cornell_box => "cornell-box",
-    bunny_lowres => "bunny-lowres",
-    bunny => "bunny",
-    sponza => "sponza",
-    suzanne => "suzanne",
-    teapot => "teapot",
     soup => "soup:10000",
     random_spheres => "spheres:2000",
     icosphere => "icosphere:4",
     terrain => "terrain:64",
-    whitted => "whitted",
-    teapot_stadium => "teapot-stadium",
-    heightfield => "heightfield",
     heightfield_generator => "heightfield:64",
-    csg => "csg",
-    quadrics => "quadrics",
-    teapot_bezier => "teapot-bezier",
-    sdf => "sdf",
+}
+
+/// Every built-in scene: `raybench_scene::BUILTIN_SCENES` is found from `bench-scenes/`, so
+/// a new scene file is checked by itself.
+#[test]
+fn every_builtin_scene() {
+    let backends = available(BACKENDS);
+    for b in raybench_scene::BUILTIN_SCENES {
+        check(&backends, b.name, SIZE);
+    }
 }
 
 macro_rules! mode_tests {
@@ -58,19 +55,21 @@ macro_rules! mode_tests {
 
 // Whitted and path tracing on the scenes small enough for naive's secondary rays.
 mode_tests! {
-    modes_spheres => "spheres",
-    modes_whitted => "whitted",
-    modes_cornell_box => "cornell-box",
-    modes_suzanne => "suzanne",
-    modes_bunny_lowres => "bunny-lowres",
-    modes_teapot => "teapot",
     modes_random_spheres => "spheres:2000",
     modes_terrain => "terrain:32",
-    modes_heightfield => "heightfield",
-    modes_csg => "csg",
-    modes_quadrics => "quadrics",
-    modes_teapot_bezier => "teapot-bezier",
-    modes_sdf => "sdf",
+}
+
+/// Whitted and path tracing on every built-in scene but the `heavy` ones (too many
+/// primitives for naive's secondary rays; their `[benchmark]` table says so).
+#[test]
+fn modes_on_builtin_scenes() {
+    let backends = available(BACKENDS);
+    for b in raybench_scene::BUILTIN_SCENES
+        .iter()
+        .filter(|b| !b.benchmark.heavy)
+    {
+        raybench_tests::check_modes(&backends, b.name, 24);
+    }
 }
 
 /// Backends not bound by the bit-exact contract, and where each is compared with naive
@@ -85,22 +84,16 @@ const TOLERANCE_TESTED: &[(&str, &str)] = &[
     ),
 ];
 
+/// Exact backends are under test by their role (`EXACT_BACKENDS` is read from the
+/// registry); every other one must name where it is compared with the oracle.
 #[test]
 fn every_backend_is_under_test() {
-    for b in raybench::BACKENDS {
-        if b.exact {
-            assert!(
-                BACKENDS.contains(&b.name),
-                "exact backend {} is missing from BACKENDS",
-                b.name
-            );
-        } else {
-            assert!(
-                TOLERANCE_TESTED.iter().any(|(n, _)| *n == b.name),
-                "backend {} is tested nowhere: add it to TOLERANCE_TESTED with its test",
-                b.name
-            );
-        }
+    for b in raybench::BACKENDS.iter().filter(|b| !b.exact()) {
+        assert!(
+            TOLERANCE_TESTED.iter().any(|(n, _)| *n == b.name),
+            "backend {} is tested nowhere: add it to TOLERANCE_TESTED with its test",
+            b.name
+        );
     }
 }
 
@@ -131,7 +124,7 @@ fn rays_at_shared_edges_and_vertices_never_pass_through() {
         let inside = Vec3::new(0.3, -0.2, 0.1);
         rays.push(Ray::new(inside, p - inside));
     }
-    let naive = prepared("naive", &scene);
+    let naive = prepared(raybench_tests::ORACLE, &scene);
     let (reference, _) = naive.trace_rays(&rays, false).unwrap();
     let misses = reference.iter().filter(|h| h.is_none()).count();
     assert_eq!(
@@ -162,26 +155,13 @@ fn empty_scene_renders_background() {
     }
 }
 
-/// `Bvh::validate` on the structure built over every built-in scene and generator above,
-/// with every preset.
+/// `Bvh::validate` on the structure built over every built-in scene and the generators
+/// above, with every preset.
 #[test]
 fn bvh_invariants_hold_on_every_scene() {
-    let scenes = [
-        "spheres",
-        "whitted",
-        "cornell-box",
-        "bunny-lowres",
-        "bunny",
-        "sponza",
-        "suzanne",
-        "teapot",
-        "teapot-stadium",
-        "soup:10000",
-        "spheres:2000",
-        "icosphere:4",
-        "terrain:64",
-    ];
-    for spec in scenes {
+    let generators = ["soup:10000", "spheres:2000", "icosphere:4", "terrain:64"];
+    let builtin = raybench_scene::BUILTIN_SCENES.iter().map(|b| b.name);
+    for spec in builtin.chain(generators) {
         let Some(scene) = raybench_tests::load_or_skip(spec) else {
             continue;
         };

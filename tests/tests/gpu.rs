@@ -59,7 +59,7 @@ fn the_empty_scene_renders_background() {
         return;
     }
     let scene = raybench_tests::empty_scene();
-    let r = raybench_tests::prepared("wgpu", &scene);
+    let r = raybench_tests::prepared(raybench_tests::DEVICE, &scene);
     let settings = raybench_core::RenderSettings {
         width: 8,
         height: 5,
@@ -144,10 +144,10 @@ fn degenerate_and_extreme_rays_behave_as_on_the_cpu() {
         64,
         3,
     ));
-    let (reference, _) = raybench_tests::prepared("naive", &scene)
+    let (reference, _) = raybench_tests::prepared(raybench_tests::ORACLE, &scene)
         .trace_rays(&rays, false)
         .unwrap();
-    let (hits, _) = raybench_tests::prepared("wgpu", &scene)
+    let (hits, _) = raybench_tests::prepared(raybench_tests::DEVICE, &scene)
         .trace_rays(&rays, false)
         .unwrap();
     for (i, (a, b)) in reference.iter().zip(&hits).enumerate() {
@@ -208,8 +208,8 @@ fn samples_split_over_dispatches_accumulate() {
         plan[0].dispatches.len() > 1,
         "the test must split: {plan:?}"
     );
-    let reference = raybench_tests::render_with("naive", &scene, &settings, 2);
-    let frame = raybench_tests::prepared("wgpu", &scene)
+    let reference = raybench_tests::render_with(raybench_tests::ORACLE, &scene, &settings, 2);
+    let frame = raybench_tests::prepared(raybench_tests::DEVICE, &scene)
         .render(&settings)
         .unwrap();
     assert_eq!(frame.ids, reference.ids);

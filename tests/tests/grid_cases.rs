@@ -4,14 +4,16 @@
 
 use raybench_core::{Ray, Scene, SceneBuilder, Sphere, TriangleMesh, Vec3};
 use raybench_grid::{Grid, GridParams};
-use raybench_tests::{assert_same_ray_hits, prepared};
+use raybench_tests::{assert_same_ray_hits, available, prepared};
 use std::sync::Arc;
 
-const BACKENDS: &[&str] = &["bvh", "obvhs", "grid", "grid2", "packet", "packet-portable"];
+const BACKENDS: &[&str] = raybench_tests::ACCELERATED_BACKENDS;
 
 fn check(what: &str, scene: &Arc<Scene>, rays: &[Ray]) {
-    let (reference, _) = prepared("naive", scene).trace_rays(rays, false).unwrap();
-    for &name in BACKENDS {
+    let (reference, _) = prepared(raybench_tests::ORACLE, scene)
+        .trace_rays(rays, false)
+        .unwrap();
+    for name in available(BACKENDS) {
         let (hits, _) = prepared(name, scene).trace_rays(rays, false).unwrap();
         assert_same_ray_hits(&format!("{name}: {what}"), &reference, &hits);
     }

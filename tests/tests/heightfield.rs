@@ -81,8 +81,12 @@ fn direct_height_field_equals_the_tessellated_mesh() {
                 let (mesh, direct) = pair(n, placement, traversal);
                 let what = format!("terrain:{n} {traversal} [{placement}]");
                 let rays = probes(&mesh, 1500);
-                let (reference, _) = prepared("naive", &mesh).trace_rays(&rays, false).unwrap();
-                let (bvh, _) = prepared("bvh", &mesh).trace_rays(&rays, false).unwrap();
+                let (reference, _) = prepared(raybench_tests::ORACLE, &mesh)
+                    .trace_rays(&rays, false)
+                    .unwrap();
+                let (bvh, _) = prepared(raybench_tests::BASELINE, &mesh)
+                    .trace_rays(&rays, false)
+                    .unwrap();
                 let key = |h: &Option<Hit>| h.map(|h| (h.prim, h.t.to_bits()));
                 assert!(reference.iter().map(key).eq(bvh.iter().map(key)), "{what}");
                 for backend in ["naive", "bvh", "grid", "packet"] {
@@ -95,8 +99,8 @@ fn direct_height_field_equals_the_tessellated_mesh() {
                     height: 48,
                     ..RenderSettings::default()
                 };
-                let fm = render_with("bvh", &mesh, &settings, 2);
-                let fd = render_with("bvh", &direct, &settings, 2);
+                let fm = render_with(raybench_tests::BASELINE, &mesh, &settings, 2);
+                let fd = render_with(raybench_tests::BASELINE, &direct, &settings, 2);
                 for (p, (tm, td)) in fm.t.iter().zip(&fd.t).enumerate() {
                     assert_eq!(tm.to_bits(), td.to_bits(), "{what}: pixel {p}");
                 }
@@ -112,8 +116,12 @@ fn height_field_generator_matches_terrain_generator() {
         Arc::new(raybench_scene::load("heightfield:33", Path::new("/nonexistent")).unwrap());
     assert_eq!(direct.geometry.len(), 1);
     let rays = probes(&mesh, 1000);
-    let (reference, _) = prepared("naive", &mesh).trace_rays(&rays, false).unwrap();
-    let (hits, _) = prepared("bvh", &direct).trace_rays(&rays, false).unwrap();
+    let (reference, _) = prepared(raybench_tests::ORACLE, &mesh)
+        .trace_rays(&rays, false)
+        .unwrap();
+    let (hits, _) = prepared(raybench_tests::BASELINE, &direct)
+        .trace_rays(&rays, false)
+        .unwrap();
     same("heightfield:33", &reference, &hits);
 }
 
@@ -128,7 +136,7 @@ fn bilinear_cells_agree_across_backends_traversals_and_threads() {
                 "[[object]]\nkind = \"height_field\"\nsource = \"terrain:24\"\n\
                  cells = \"bilinear\"\ntraversal = \"{traversal}\"\n{placement}\n"
             ));
-            let naive = prepared("naive", &scene)
+            let naive = prepared(raybench_tests::ORACLE, &scene)
                 .trace_rays(&rays, false)
                 .unwrap()
                 .0;
@@ -154,7 +162,7 @@ fn bilinear_cells_agree_across_backends_traversals_and_threads() {
                 height: 32,
                 ..RenderSettings::default()
             };
-            let a = render_with("naive", &scene, &settings, 1);
+            let a = render_with(raybench_tests::ORACLE, &scene, &settings, 1);
             let b = render_with("packet", &scene, &settings, 3);
             raybench_tests::assert_same_hits("bilinear frame", &a, &b);
             assert_eq!(a.color, b.color);

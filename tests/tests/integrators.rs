@@ -59,7 +59,7 @@ fn white_furnace() {
         seed: 3,
         count: false,
     };
-    let frame = render_with("bvh", &scene, &settings, 2);
+    let frame = render_with(raybench_tests::BASELINE, &scene, &settings, 2);
     let (mean, err) = mean_and_error(&frame.color);
     assert!(
         (mean - 1.0).abs() < 5.0 * err + 1e-4,
@@ -106,7 +106,7 @@ fn inside_a_glowing_sphere() {
         seed: 11,
         count: false,
     };
-    let frame = render_with("bvh", &scene, &settings, 2);
+    let frame = render_with(raybench_tests::BASELINE, &scene, &settings, 2);
     let (mean, err) = mean_and_error(&frame.color);
     let expect: f64 = (0..=depth)
         .map(|k| f64::from(le) * f64::from(rho).powi(k as i32))
@@ -141,7 +141,7 @@ fn lambertian_plane_under_uniform_sky() {
         seed: 0,
         count: false,
     };
-    let frame = render_with("naive", &scene, &settings, 1);
+    let frame = render_with(raybench_tests::ORACLE, &scene, &settings, 1);
     for c in &frame.color {
         assert!((c.x - 0.48).abs() < 1e-4, "pixel {c}");
     }
@@ -178,7 +178,7 @@ fn whitted_mirrors_do_not_fade_with_many_samples() {
             mode: Mode::Whitted,
             ..Default::default()
         };
-        let c = render_with("naive", &scene, &settings, 1).color[0];
+        let c = render_with(raybench_tests::ORACLE, &scene, &settings, 1).color[0];
         assert!((c.x - 0.4).abs() < 1e-3, "spp {spp}: {c}");
     }
 }
@@ -209,7 +209,7 @@ fn whitted_point_light_falls_off_with_distance_squared() {
         mode: Mode::Whitted,
         ..Default::default()
     };
-    let frame = render_with("naive", &scene, &settings, 1);
+    let frame = render_with(raybench_tests::ORACLE, &scene, &settings, 1);
     // 0.5 * 8 / 2^2 + 0.05 * 0.5 (ambient).
     let expect = 0.5 * 8.0 / 4.0 + 0.05 * 0.5;
     assert!(

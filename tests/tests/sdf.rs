@@ -423,7 +423,12 @@ fn whitted_reflection_and_refraction_match_analytic_balls() {
         count: false,
     };
     let render = |sdf: bool| {
-        raybench_tests::render_with("naive", &std::sync::Arc::new(balls(sdf)), &settings, 2)
+        raybench_tests::render_with(
+            raybench_tests::ORACLE,
+            &std::sync::Arc::new(balls(sdf)),
+            &settings,
+            2,
+        )
     };
     let (a, b) = (render(false), render(true));
     let differing = a

@@ -11,7 +11,7 @@ use raybench_scene::phantom::{Ellipsoid, rasterize};
 use raybench_tests::{available, render_with};
 use std::sync::Arc;
 
-const BACKENDS: &[&str] = &["bvh", "obvhs", "grid", "grid2", "packet", "packet-portable"];
+const BACKENDS: &[&str] = raybench_tests::ACCELERATED_BACKENDS;
 
 #[test]
 fn mip_of_one_ellipsoid_is_its_value_inside_its_outline_and_zero_outside() {
@@ -127,7 +127,7 @@ fn composite_of_a_homogeneous_block_follows_beer_lambert_up_to_the_surface() {
         mode: Mode::Composite,
         ..RenderSettings::default()
     };
-    let frame = render_with("bvh", &scene, &settings, 2);
+    let frame = render_with(raybench_tests::BASELINE, &scene, &settings, 2);
     let cam = scene.camera.rays(40, 40);
     let mut checked = 0;
     for y in 0..40 {
@@ -180,7 +180,7 @@ fn volume_modes_are_identical_with_every_backend_and_thread_count() {
                     mode,
                     ..RenderSettings::default()
                 };
-                let reference = render_with("naive", scene, &settings, 1);
+                let reference = render_with(raybench_tests::ORACLE, scene, &settings, 1);
                 for name in available(BACKENDS) {
                     for threads in [2, 3] {
                         let f = render_with(name, scene, &settings, threads);

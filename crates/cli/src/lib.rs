@@ -29,6 +29,76 @@ use raybench_peers::{EmbreeAccel, EmbreePacketAccel, embree_availability, embree
 use raybench_render::CpuRenderer;
 use raybench_wgpu::WgpuRenderer;
 
+/// What a backend is for: the flags the report, `compare`, `info`, the machine description
+/// and the tests read, instead of testing backend names. A backend has any number of them
+/// ([`Roles::with`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Roles(u16);
+
+impl Roles {
+    /// No role: an accelerated backend outside the contract that is neither a peer nor on
+    /// another device.
+    pub const NONE: Roles = Roles(0);
+    /// Bound by the equivalence contract (bit-identical ids and `t` to the oracle):
+    /// `compare` exits with status 3 when such a backend disagrees, the report demands
+    /// identical frames, and the tests run every exact backend (`raybench_tests::EXACT_BACKENDS`).
+    pub const EXACT: Roles = Roles(1);
+    /// The oracle: the reference every other backend is compared with (naive). Listed first.
+    pub const ORACLE: Roles = Roles(1 << 1);
+    /// Tests every primitive for every ray: left out of large default lists and of scaling
+    /// points over its time budget.
+    pub const BRUTE_FORCE: Roles = Roles(1 << 2);
+    /// The baseline structure: the report's reference where the oracle is over its budget,
+    /// and the one backend of the experiments that compare two representations of a
+    /// surface (`heightfield`, `bezier`).
+    pub const BASELINE: Roles = Roles(1 << 3);
+    /// A variant of another backend with one parameter pinned (the instruction set): run
+    /// only when named, never in a default list.
+    pub const PINNED: Roles = Roles(1 << 4);
+    /// Runs on another device (the GPU): the machine description names its adapter, and
+    /// the tests compare it with the oracle within tolerances.
+    pub const DEVICE: Roles = Roles(1 << 5);
+    /// Someone else's structure or library (a peer): compared within tolerance, its ties
+    /// counted rather than forbidden.
+    pub const PEER: Roles = Roles(1 << 6);
+    /// A peer the report states every backend's throughput against (Embree).
+    pub const YARDSTICK: Roles = Roles(1 << 7);
+
+    /// Every role with its name, in the order `raybench backends --json` lists them.
+    pub const NAMED: [(Roles, &'static str); 8] = [
+        (Roles::EXACT, "exact"),
+        (Roles::ORACLE, "oracle"),
+        (Roles::BRUTE_FORCE, "brute-force"),
+        (Roles::BASELINE, "baseline"),
+        (Roles::PINNED, "pinned"),
+        (Roles::DEVICE, "device"),
+        (Roles::PEER, "peer"),
+        (Roles::YARDSTICK, "yardstick"),
+    ];
+
+    /// These roles and `other`'s.
+    #[must_use]
+    pub const fn with(self, other: Roles) -> Roles {
+        Roles(self.0 | other.0)
+    }
+
+    /// Whether every role of `other` is among these.
+    #[must_use]
+    pub const fn contains(self, other: Roles) -> bool {
+        self.0 & other.0 == other.0
+    }
+
+    /// The names of these roles ([`Roles::NAMED`]).
+    #[must_use]
+    pub fn names(self) -> Vec<&'static str> {
+        Roles::NAMED
+            .iter()
+            .filter(|(r, _)| self.contains(*r))
+            .map(|(_, n)| *n)
+            .collect()
+    }
+}
+
 /// A registered backend.
 #[derive(Clone, Copy, Debug)]
 pub struct Backend {
@@ -36,17 +106,119 @@ pub struct Backend {
     pub name: &'static str,
     /// One line of description.
     pub description: &'static str,
-    /// Whether it is a raybench CPU backend bound by the equivalence contract (bit-identical
-    /// ids and `t` to naive); `compare` exits with status 3 when such a backend disagrees.
-    pub exact: bool,
-    /// Whether it tests every primitive for every ray (used to skip it by default on large
-    /// workloads).
-    pub brute_force: bool,
-    /// Whether it is a variant of another backend with one parameter forced (such as the
-    /// instruction set): run only when named, never in the default list.
-    pub variant: bool,
+    /// What it is for (exact, oracle, brute force, pinned variant, device, peer, ...).
+    pub roles: Roles,
+    /// What it chose on this machine, for the report's machine description (the packet
+    /// backend's instruction set and lanes: `avx2 (8 lanes)`); `None` for most.
+    pub detail: Option<fn() -> String>,
     /// Makes a fresh, unprepared renderer.
     pub make: fn() -> Box<dyn Renderer>,
+}
+
+impl Backend {
+    /// Whether it has every role of `roles`.
+    #[must_use]
+    pub const fn is(&self, roles: Roles) -> bool {
+        self.roles.contains(roles)
+    }
+
+    /// Whether it is bound by the equivalence contract ([`Roles::EXACT`]).
+    #[must_use]
+    pub const fn exact(&self) -> bool {
+        self.is(Roles::EXACT)
+    }
+}
+
+/// The number of backends with every role of `roles` (for [`names_with`]'s array length).
+#[must_use]
+pub const fn count_with(roles: Roles) -> usize {
+    let (mut i, mut n) = (0, 0);
+    while i < BACKENDS.len() {
+        if BACKENDS[i].is(roles) {
+            n += 1;
+        }
+        i += 1;
+    }
+    n
+}
+
+/// The names of the backends with every role of `roles`, in registry order (so the oracle
+/// first), at compile time: `N` must be [`count_with`]`(roles)`.
+///
+/// # Panics
+/// At compile time, when `N` is not that count.
+#[must_use]
+pub const fn names_with<const N: usize>(roles: Roles) -> [&'static str; N] {
+    assert!(N == count_with(roles), "N must be count_with(roles)");
+    let mut out = [""; N];
+    let (mut i, mut n) = (0, 0);
+    while i < BACKENDS.len() {
+        if BACKENDS[i].is(roles) {
+            out[n] = BACKENDS[i].name;
+            n += 1;
+        }
+        i += 1;
+    }
+    out
+}
+
+/// Whether the backend called `name` has every role of `roles`, at compile time (false for
+/// an unknown name).
+#[must_use]
+pub const fn backend_is(name: &str, roles: Roles) -> bool {
+    let mut i = 0;
+    while i < BACKENDS.len() {
+        if same(BACKENDS[i].name.as_bytes(), name.as_bytes()) {
+            return BACKENDS[i].is(roles);
+        }
+        i += 1;
+    }
+    false
+}
+
+/// Byte equality at compile time.
+const fn same(a: &[u8], b: &[u8]) -> bool {
+    if a.len() != b.len() {
+        return false;
+    }
+    let mut i = 0;
+    while i < a.len() {
+        if a[i] != b[i] {
+            return false;
+        }
+        i += 1;
+    }
+    true
+}
+
+/// The roles of the backend called `name`, built ([`BACKENDS`]) or not ([`NOT_BUILT`]).
+#[must_use]
+pub fn roles_of(name: &str) -> Option<Roles> {
+    BACKENDS
+        .iter()
+        .find(|b| b.name == name)
+        .map(|b| b.roles)
+        .or_else(|| NOT_BUILT.iter().find(|n| n.name == name).map(|n| n.roles))
+}
+
+/// The first backend (in registry order) with every role of `roles`, if any.
+#[must_use]
+pub fn with_role(roles: Roles) -> Option<&'static Backend> {
+    BACKENDS.iter().find(|b| b.is(roles))
+}
+
+/// The name of the first backend with every role of `roles`, at compile time (`""` when
+/// there is none).
+#[must_use]
+pub const fn name_with(roles: Roles) -> &'static str {
+    let mut i = 0;
+    while i < BACKENDS.len() {
+        if BACKENDS[i].is(roles) {
+            return BACKENDS[i].name;
+        }
+        i += 1;
+    }
+    ""
 }
 
 const NAIVE: &str = "every ray tests every primitive (the oracle)";
@@ -57,14 +229,13 @@ const GRID: &str = "uniform grid walked by 3D-DDA (ray marching), mailboxing";
 const GRID2: &str = "two-level grid: crowded cells hold their own grid";
 const PACKET: &str = "SIMD over a BVH8 collapsed by SAH, leaves of 4-triangle blocks: 16-ray packets for coherent rays, interleaved single rays otherwise (AVX2, SSE4.1 or portable, picked at run time; RAYBENCH_ISA overrides)";
 
-/// Every backend, the reference (naive) first.
+/// Every backend, the oracle (naive) first.
 pub const BACKENDS: &[Backend] = &[
     Backend {
         name: "naive",
         description: NAIVE,
-        exact: true,
-        brute_force: true,
-        variant: false,
+        roles: Roles::EXACT.with(Roles::ORACLE).with(Roles::BRUTE_FORCE),
+        detail: None,
         make: || {
             Box::new(CpuRenderer::<NaiveAccel>::with_default_build(
                 "naive", NAIVE,
@@ -74,17 +245,15 @@ pub const BACKENDS: &[Backend] = &[
     Backend {
         name: "bvh",
         description: BVH,
-        exact: true,
-        brute_force: false,
-        variant: false,
+        roles: Roles::EXACT.with(Roles::BASELINE),
+        detail: None,
         make: || Box::new(CpuRenderer::<Bvh>::with_default_build("bvh", BVH)),
     },
     Backend {
         name: "obvhs",
         description: OBVHS,
-        exact: true,
-        brute_force: false,
-        variant: false,
+        roles: Roles::EXACT,
+        detail: None,
         make: || {
             Box::new(CpuRenderer::<ObvhsAccel>::with_default_build(
                 "obvhs", OBVHS,
@@ -94,17 +263,15 @@ pub const BACKENDS: &[Backend] = &[
     Backend {
         name: "grid",
         description: GRID,
-        exact: true,
-        brute_force: false,
-        variant: false,
+        roles: Roles::EXACT,
+        detail: None,
         make: || Box::new(CpuRenderer::<Grid>::with_default_build("grid", GRID)),
     },
     Backend {
         name: "grid2",
         description: GRID2,
-        exact: true,
-        brute_force: false,
-        variant: false,
+        roles: Roles::EXACT,
+        detail: None,
         make: || {
             Box::new(CpuRenderer::<TwoLevelGrid>::with_default_build(
                 "grid2", GRID2,
@@ -114,9 +281,8 @@ pub const BACKENDS: &[Backend] = &[
     Backend {
         name: "packet",
         description: PACKET,
-        exact: true,
-        brute_force: false,
-        variant: false,
+        roles: Roles::EXACT,
+        detail: Some(packet_detail),
         make: || {
             Box::new(CpuRenderer::<PacketAccel>::with_default_build(
                 "packet", PACKET,
@@ -126,33 +292,29 @@ pub const BACKENDS: &[Backend] = &[
     Backend {
         name: "packet-sse4.1",
         description: PACKET_SSE41,
-        exact: true,
-        brute_force: false,
-        variant: true,
+        roles: Roles::EXACT.with(Roles::PINNED),
+        detail: None,
         make: || packet_with(Isa::Sse41, "packet-sse4.1", PACKET_SSE41),
     },
     Backend {
         name: "packet-avx512",
         description: PACKET_AVX512,
-        exact: true,
-        brute_force: false,
-        variant: true,
+        roles: Roles::EXACT.with(Roles::PINNED),
+        detail: None,
         make: || packet_with(Isa::Avx512, "packet-avx512", PACKET_AVX512),
     },
     Backend {
         name: "packet-portable",
         description: PACKET_PORTABLE,
-        exact: true,
-        brute_force: false,
-        variant: true,
+        roles: Roles::EXACT.with(Roles::PINNED),
+        detail: None,
         make: || packet_with(Isa::Portable, "packet-portable", PACKET_PORTABLE),
     },
     Backend {
         name: "bvh-crate",
         description: BVH_CRATE,
-        exact: false,
-        brute_force: false,
-        variant: false,
+        roles: Roles::PEER,
+        detail: None,
         make: || {
             Box::new(CpuRenderer::<BvhCrateAccel>::with_default_build(
                 "bvh-crate",
@@ -163,18 +325,16 @@ pub const BACKENDS: &[Backend] = &[
     Backend {
         name: "wgpu",
         description: WGPU,
-        exact: false,
-        brute_force: false,
-        variant: false,
+        roles: Roles::DEVICE,
+        detail: None,
         make: || Box::new(WgpuRenderer::new("wgpu", WGPU)),
     },
     #[cfg(feature = "embree")]
     Backend {
         name: "embree",
         description: EMBREE,
-        exact: false,
-        brute_force: false,
-        variant: false,
+        roles: Roles::PEER.with(Roles::YARDSTICK),
+        detail: None,
         make: || {
             Box::new(
                 CpuRenderer::<EmbreeAccel>::with_default_build("embree", EMBREE)
@@ -188,9 +348,8 @@ pub const BACKENDS: &[Backend] = &[
     Backend {
         name: "embree-packet",
         description: EMBREE_PACKET,
-        exact: false,
-        brute_force: false,
-        variant: false,
+        roles: Roles::PEER.with(Roles::YARDSTICK),
+        detail: None,
         make: || {
             Box::new(
                 CpuRenderer::<EmbreePacketAccel>::with_default_build(
@@ -215,6 +374,13 @@ const EMBREE_PACKET: &str = "peer: Intel Embree 3, rtcIntersect16 on 16-ray pack
 const PACKET_SSE41: &str = "packet forced to SSE4.1 (4 lanes, 8-ray packets)";
 const PACKET_AVX512: &str = "packet with AVX-512F packets (16 lanes, 32-ray packets; AVX2 for single rays), a measured extra";
 const PACKET_PORTABLE: &str = "packet forced to portable code (4 plain f32 lanes, no intrinsics)";
+
+/// The instruction set the packet backend picks on this CPU and its lanes, for the
+/// machine description ([`Backend::detail`]).
+fn packet_detail() -> String {
+    let isa = Isa::detect();
+    format!("{} ({} lanes)", isa.name(), isa.lanes())
+}
 
 /// The packet backend pinned to `isa`, unavailable where the CPU lacks it.
 fn packet_with(isa: Isa, name: &'static str, description: &'static str) -> Box<dyn Renderer> {
@@ -262,6 +428,9 @@ pub struct NotBuilt {
     pub feature: &'static str,
     /// What the feature needs on the system.
     pub needs: &'static str,
+    /// The roles it has when built (so that a report merged by a build without it still
+    /// reads them).
+    pub roles: Roles,
 }
 
 impl NotBuilt {
@@ -285,6 +454,7 @@ pub const NOT_BUILT: &[NotBuilt] = &[
         description: EMBREE,
         feature: "embree",
         needs: EMBREE_NEEDS,
+        roles: Roles::PEER.with(Roles::YARDSTICK),
     },
     #[cfg(not(feature = "embree"))]
     NotBuilt {
@@ -292,6 +462,7 @@ pub const NOT_BUILT: &[NotBuilt] = &[
         description: EMBREE_PACKET,
         feature: "embree",
         needs: EMBREE_NEEDS,
+        roles: Roles::PEER.with(Roles::YARDSTICK),
     },
 ];
 
@@ -365,9 +536,9 @@ pub fn chosen_backends(
     }
     Ok(BACKENDS
         .iter()
-        .filter(|b| !b.variant)
+        .filter(|b| !b.is(Roles::PINNED))
         .filter(|b| {
-            let keep = !b.brute_force || work <= BRUTE_FORCE_BUDGET_TESTS;
+            let keep = !b.is(Roles::BRUTE_FORCE) || work <= BRUTE_FORCE_BUDGET_TESTS;
             if !keep {
                 eprintln!(
                     "leaving {} out: about {work:.1e} ray/primitive tests (pass --backends {} \
@@ -512,6 +683,42 @@ mod tests {
         assert_eq!(
             brute_force_tests(&path, RaySet::Primary, 10, 1),
             4.0 * brute_force_tests(&s, RaySet::Primary, 10, 1)
+        );
+    }
+
+    /// The roles the harness relies on: one oracle, exact and first; one exact baseline;
+    /// peers and devices outside the contract; the compile-time lists agree with the
+    /// registry.
+    #[test]
+    fn roles_are_consistent() {
+        let with = |r: Roles| BACKENDS.iter().filter(|b| b.is(r)).count();
+        assert_eq!(with(Roles::ORACLE), 1);
+        assert!(BACKENDS[0].is(Roles::ORACLE.with(Roles::EXACT).with(Roles::BRUTE_FORCE)));
+        assert_eq!(with(Roles::BASELINE), 1);
+        assert!(with_role(Roles::BASELINE).is_some_and(Backend::exact));
+        for b in BACKENDS {
+            if b.is(Roles::PEER) || b.is(Roles::DEVICE) {
+                assert!(!b.exact(), "{}", b.name);
+            }
+            if b.is(Roles::YARDSTICK) {
+                assert!(b.is(Roles::PEER), "{}", b.name);
+            }
+            assert_eq!(roles_of(b.name), Some(b.roles));
+            assert!(backend_is(b.name, b.roles));
+        }
+        const N: usize = count_with(Roles::EXACT);
+        let exact: Vec<&str> = BACKENDS
+            .iter()
+            .filter(|b| b.exact())
+            .map(|b| b.name)
+            .collect();
+        assert_eq!(names_with::<N>(Roles::EXACT).to_vec(), exact);
+        assert_eq!(name_with(Roles::ORACLE), BACKENDS[0].name);
+        assert_eq!(name_with(Roles::NONE), BACKENDS[0].name);
+        assert!(!backend_is("no such backend", Roles::NONE));
+        assert_eq!(
+            Roles::EXACT.with(Roles::PINNED).names(),
+            ["exact", "pinned"]
         );
     }
 

@@ -578,7 +578,7 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
                 row.id_match = Some(c.id_match);
                 row.hit_mismatch = Some(c.hit_mismatch);
                 row.max_abs_dt = Some(c.max_abs_dt);
-                if b.exact && c.id_match < 1.0 {
+                if b.exact() && c.id_match < 1.0 {
                     disagree = true;
                 }
             }
@@ -708,6 +708,8 @@ struct BackendRow {
     available: bool,
     reason: Option<String>,
     exact: bool,
+    /// Its roles in the registry (`exact`, `oracle`, `brute-force`, `pinned`, `peer`, ...).
+    roles: Vec<&'static str>,
     description: &'static str,
     /// The device it runs on when that is not this CPU (the GPU adapter).
     device: Option<String>,
@@ -721,7 +723,8 @@ fn backends(json: bool) -> Result<ExitCode> {
             name: b.name,
             available: avail.is_ok(),
             reason: avail.err(),
-            exact: b.exact,
+            exact: b.exact(),
+            roles: b.roles.names(),
             description: b.description,
             device: r.device(),
         }
@@ -731,6 +734,7 @@ fn backends(json: bool) -> Result<ExitCode> {
         available: false,
         reason: Some(n.reason()),
         exact: false,
+        roles: Vec::new(),
         description: n.description,
         device: None,
     });

@@ -332,3 +332,65 @@ fn skipped_scenes_and_experiments_are_listed_once() {
         let _ = std::fs::remove_dir_all(d);
     }
 }
+
+/// A scaling experiment end to end (`spp`: the Cornell box, named by its `[benchmark]`
+/// table, path traced at growing samples per pixel): its points, fits, table and chart.
+#[test]
+fn a_scaling_experiment_runs_and_is_written() {
+    let assets = std::env::var("RAYBENCH_ASSETS").unwrap_or_default();
+    if !Path::new(&assets)
+        .join("cornell-box/CornellBox-Original.obj")
+        .is_file()
+    {
+        assert!(
+            std::env::var("CI").as_deref() != Ok("true"),
+            "CI=true but the Cornell box is missing"
+        );
+        eprintln!("SKIPPED: the Cornell box is not in RAYBENCH_ASSETS");
+        return;
+    }
+    let dir = tmp_dir("scaling");
+    let out = raybench(&[
+        "report",
+        "--quick",
+        "--scenes",
+        "spheres",
+        "--modes",
+        "cast",
+        "--backends",
+        "bvh",
+        "--size",
+        "16",
+        "--repeat",
+        "1",
+        "--experiments",
+        "spp",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = results(&dir);
+    let points = r["scaling"].as_array().unwrap();
+    // --quick: K = 1, 2, 4, 8, 16.
+    assert_eq!(points.len(), 5);
+    for p in points {
+        assert_eq!(p["experiment"], "spp");
+        assert_eq!(p["series"], "cornell-box");
+        assert_eq!(p["backend"], "bvh");
+    }
+    assert_eq!(r["fits"][0]["experiment"], "spp");
+    let md = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
+    assert!(md.contains("## Scaling"), "{md}");
+    assert!(md.contains("| spp | cornell-box | bvh |"), "{md}");
+    if !md.contains("> Charts:") {
+        assert!(
+            md.contains("charts/scaling-spp-cornell-box-seconds.png"),
+            "{md}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

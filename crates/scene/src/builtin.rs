@@ -1,105 +1,137 @@
 //! The built-in scenes, embedded from `bench-scenes/` so they work from any directory.
+//!
+//! There is no hand list: `build.rs` finds every `bench-scenes/NAME.toml` and reads its
+//! `[benchmark]` table (listing order, benchmark matrix, report modes, scaling experiments),
+//! so a new built-in scene is one file. The table is validated when the crate is built; the
+//! TOML loader ignores it.
+
+/// Which matrix of `raybench report` runs a built-in scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Matrix {
+    /// The quick matrix (`--quick`) and the full one.
+    Quick,
+    /// The full matrix only.
+    Full,
+    /// Neither (a scene for the command line and the tests only).
+    None,
+}
+
+/// A built-in scene's report and test metadata: its `[benchmark]` table
+/// (`docs/scene-format.md`).
+#[derive(Clone, Copy, Debug)]
+pub struct Benchmark {
+    /// Its place in listings (`raybench scenes`, the report's matrices): ascending.
+    pub order: i64,
+    /// The matrix that runs it.
+    pub matrix: Matrix,
+    /// The report's render modes beyond ray casting (`whitted`, `path`); the volume modes
+    /// follow from the scene's volumes.
+    pub modes: &'static [&'static str],
+    /// The scaling experiments that use this scene (`pixels`, `spp`, `bezier`).
+    pub experiments: &'static [&'static str],
+    /// Too many primitives for the brute-force oracle's secondary rays: the equivalence
+    /// tests check Whitted and path tracing on every other built-in scene.
+    pub heavy: bool,
+}
+
+impl Benchmark {
+    /// Whether the matrix `quick` (`--quick`) or the full one includes the scene.
+    #[must_use]
+    pub fn in_matrix(&self, quick: bool) -> bool {
+        match self.matrix {
+            Matrix::Quick => true,
+            Matrix::Full => !quick,
+            Matrix::None => false,
+        }
+    }
+}
 
 /// A built-in scene.
 #[derive(Clone, Copy, Debug)]
 pub struct BuiltinScene {
-    /// Its name.
+    /// Its name (the file's name, which is also the scene's `name`).
     pub name: &'static str,
     /// One line of description.
     pub description: &'static str,
-    /// The mesh files it needs from the assets directory (empty: self-contained).
+    /// The files it needs from the assets directory (empty: self-contained): its objects'
+    /// mesh and patch files.
     pub assets: &'static [&'static str],
     /// Its TOML source.
     pub source: &'static str,
+    /// Its `[benchmark]` table.
+    pub benchmark: Benchmark,
 }
 
-macro_rules! builtin {
-    ($name:literal, $desc:literal, [$($asset:literal),*]) => {
-        BuiltinScene {
-            name: $name,
-            description: $desc,
-            assets: &[$($asset),*],
-            source: include_str!(concat!("../../../bench-scenes/", $name, ".toml")),
+/// Every built-in scene, in the order `raybench scenes` lists them (their `order`).
+pub const BUILTIN_SCENES: &[BuiltinScene] =
+    include!(concat!(env!("OUT_DIR"), "/builtin_scenes.rs"));
+
+/// The built-in scene called `name`.
+#[must_use]
+pub fn builtin(name: &str) -> Option<&'static BuiltinScene> {
+    BUILTIN_SCENES.iter().find(|b| b.name == name)
+}
+
+/// The built-in scenes of a report matrix (`quick`, or the full one), in listing order.
+pub fn matrix(quick: bool) -> impl Iterator<Item = &'static BuiltinScene> {
+    BUILTIN_SCENES
+        .iter()
+        .filter(move |b| b.benchmark.in_matrix(quick))
+}
+
+/// The built-in scene that scaling experiment `experiment` uses, if one names it.
+#[must_use]
+pub fn for_experiment(experiment: &str) -> Option<&'static BuiltinScene> {
+    BUILTIN_SCENES
+        .iter()
+        .find(|b| b.benchmark.experiments.contains(&experiment))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use raybench_core::Mode;
+
+    /// The metadata the build script cannot check: mode names, one scene per experiment,
+    /// and that every scene loads (the meshes aside).
+    #[test]
+    fn every_builtin_scene_has_valid_metadata() {
+        assert!(BUILTIN_SCENES.len() >= 15);
+        for b in BUILTIN_SCENES {
+            for m in b.benchmark.modes {
+                assert!(
+                    Mode::ALL.iter().any(|mode| mode.name() == *m)
+                        && !matches!(*m, "cast" | "mip" | "composite"),
+                    "bench-scenes/{}.toml: [benchmark] modes: `{m}` is not one of whitted, path",
+                    b.name
+                );
+            }
+            for e in b.benchmark.experiments {
+                let users: Vec<_> = BUILTIN_SCENES
+                    .iter()
+                    .filter(|o| o.benchmark.experiments.contains(e))
+                    .map(|o| o.name)
+                    .collect();
+                assert_eq!(users.len(), 1, "experiment {e} is claimed by {users:?}");
+            }
+            match crate::load(b.name, std::path::Path::new("/nonexistent")) {
+                Ok(_) => assert!(b.assets.is_empty(), "{} loaded without its assets", b.name),
+                Err(e) => assert!(
+                    e.is_missing_asset() && !b.assets.is_empty(),
+                    "{}: {e}",
+                    b.name
+                ),
+            }
         }
-    };
+        // The quick matrix is part of the full one, in the same order.
+        let full: Vec<_> = matrix(false).map(|b| b.name).collect();
+        let quick: Vec<_> = matrix(true).map(|b| b.name).collect();
+        assert!(!quick.is_empty() && quick.len() < full.len());
+        assert!(quick.iter().all(|q| full.contains(q)));
+        assert!(
+            BUILTIN_SCENES
+                .windows(2)
+                .all(|w| w[0].benchmark.order < w[1].benchmark.order)
+        );
+    }
 }
-
-/// Every built-in scene, in the order `raybench scenes` lists them.
-pub const BUILTIN_SCENES: &[BuiltinScene] = &[
-    builtin!(
-        "spheres",
-        "the lecture's example: five coloured spheres over a plane",
-        []
-    ),
-    builtin!(
-        "whitted",
-        "a glass and a mirror sphere over a checkered floor, point lights",
-        []
-    ),
-    builtin!(
-        "cornell-box",
-        "the Cornell box (36 triangles, area light)",
-        ["cornell-box/CornellBox-Original.obj"]
-    ),
-    builtin!(
-        "bunny-lowres",
-        "Stanford bunny, 3,674 triangles",
-        ["bunny-lowres/bunny-lowres.obj"]
-    ),
-    builtin!(
-        "bunny",
-        "Stanford bunny, 69,451 triangles",
-        ["bunny/stanford-bunny.obj"]
-    ),
-    builtin!(
-        "sponza",
-        "Dabrovic's Sponza atrium, 66,454 triangles, seen from inside",
-        ["sponza-dabrovic/sponza.obj"]
-    ),
-    builtin!(
-        "suzanne",
-        "Blender's Suzanne, 968 triangles",
-        ["suzanne/suzanne.obj"]
-    ),
-    builtin!(
-        "teapot",
-        "the Utah teapot, 6,320 triangles",
-        ["teapot/teapot.obj"]
-    ),
-    builtin!(
-        "teapot-stadium",
-        "the teapot inside a huge, nearly empty box (where uniform grids lose)",
-        ["teapot/teapot.obj"]
-    ),
-    builtin!(
-        "heightfield",
-        "a 1024^2-cell height field intersected directly, a mirror sphere, water",
-        []
-    ),
-    builtin!(
-        "phantom",
-        "the 3D Shepp-Logan head phantom, 128^3 voxels (modes mip and composite)",
-        []
-    ),
-    builtin!(
-        "csg",
-        "CSG trees of spheres, boxes, cylinders, cones and half-spaces: all three operations",
-        []
-    ),
-    // Issue 10, tori and quadrics.
-    builtin!(
-        "quadrics",
-        "tori, an ellipsoid, a paraboloid, a tilted cylinder and cone, a ring cut by a box",
-        []
-    ),
-    builtin!(
-        "teapot-bezier",
-        "the Utah teapot as 32 bicubic Bezier patches, intersected directly",
-        ["teapot-bezier/teapot.bpt"]
-    ),
-    builtin!(
-        "sdf",
-        "signed-distance models by sphere tracing: smooth union, blend, subtraction, torus",
-        []
-    ),
-];

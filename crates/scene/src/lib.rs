@@ -28,7 +28,9 @@ pub use bpt::{BptPatch, load_bpt_file, parse_bpt};
 pub use budget::{
     DEFAULT_SHARE, MEMORY_LIMIT_ENV, MemoryBudget, human_bytes, parse_size, set_memory_limit,
 };
-pub use builtin::{BUILTIN_SCENES, BuiltinScene};
+pub use builtin::{
+    BUILTIN_SCENES, Benchmark, BuiltinScene, Matrix, builtin, for_experiment, matrix,
+};
 pub use error::LoadError;
 pub use format::{load_scene_str, load_toml_file};
 pub use gltf_loader::{load_gltf_bytes, load_gltf_file};

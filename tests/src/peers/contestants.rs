@@ -40,7 +40,7 @@ pub struct Contestant {
 pub fn all() -> Vec<Contestant> {
     raybench::BACKENDS
         .iter()
-        .filter(|b| b.exact && !b.brute_force)
+        .filter(|b| b.exact() && !b.is(raybench::Roles::BRUTE_FORCE))
         .map(|b| Contestant {
             name: b.name,
             kind: Kind::Raybench,

@@ -1,6 +1,7 @@
 //! The machine description at the top of every report.
 
 use super::results::Machine;
+use crate::Roles;
 
 /// Describes this machine; `threads` is the worker count used for rendering.
 #[must_use]
@@ -16,9 +17,12 @@ pub fn describe(threads: usize) -> Machine {
     }
 }
 
-/// The adapter the `wgpu` backend uses, or why there is none.
+/// The adapter the registry's device backend ([`Roles::DEVICE`]) uses, or why there is none.
 fn gpu() -> String {
-    let r = (crate::backend("wgpu").expect("wgpu is registered").make)();
+    let Some(b) = crate::with_role(Roles::DEVICE) else {
+        return "none (no device backend registered)".into();
+    };
+    let r = (b.make)();
     match (r.device(), r.availability()) {
         (Some(d), _) => d,
         (None, Err(why)) => format!("none ({why})"),
@@ -38,8 +42,14 @@ fn cpu_model() -> String {
         .unwrap_or_else(|| format!("unknown ({})", std::env::consts::ARCH))
 }
 
+/// What the backends with a [`crate::Backend::detail`] chose (the packet backend's
+/// instruction set), and the CPU's SIMD extensions.
 fn isa() -> String {
-    let chosen = raybench_packet::Isa::detect();
+    let chosen: Vec<String> = crate::BACKENDS
+        .iter()
+        .filter(|b| !b.is(Roles::PINNED))
+        .filter_map(|b| b.detail.map(|d| format!("{} backend uses {}", b.name, d())))
+        .collect();
     #[cfg(target_arch = "x86_64")]
     let extensions: Vec<&str> = [
         ("sse4.1", std::arch::is_x86_feature_detected!("sse4.1")),
@@ -53,9 +63,12 @@ fn isa() -> String {
     #[cfg(not(target_arch = "x86_64"))]
     let extensions: Vec<&str> = Vec::new();
     format!(
-        "packet backend uses {} ({} lanes); CPU has {}",
-        chosen.name(),
-        chosen.lanes(),
+        "{}; CPU has {}",
+        if chosen.is_empty() {
+            "no SIMD backend".to_string()
+        } else {
+            chosen.join(", ")
+        },
         if extensions.is_empty() {
             "no x86 SIMD extensions".to_string()
         } else {

@@ -52,6 +52,9 @@ struct SceneFile {
     objects: Vec<toml::Table>,
     #[serde(default, rename = "volume")]
     volumes: Vec<toml::Table>,
+    /// `[benchmark]`: a built-in scene's report metadata, read by `build.rs`; ignored here.
+    #[serde(default, rename = "benchmark")]
+    _benchmark: Option<serde::de::IgnoredAny>,
 }
 
 /// The 1-based line of the header of the `index`-th `[[array]]` table in `text`, if the

@@ -1,0 +1,101 @@
+//! Experiment `heightfield`: the direct height field (`heightfield:N`, one primitive walked
+//! by its min-max quadtree) against the same terrain tessellated into triangles
+//! (`terrain:N`), both in the baseline backend, for growing grids: load, build, memory and
+//! render time.
+
+use super::{Ctx, Observed, Point, Scaling, baseline_only, square};
+use crate::Backend;
+use crate::report::markdown::{bytes, opt};
+use crate::report::results::{Results, ScalingPoint};
+use raybench_core::Mode;
+use std::fmt::Write as _;
+
+/// Experiment `heightfield`.
+pub(super) struct Heightfield;
+
+impl Scaling for Heightfield {
+    type State = ();
+
+    fn name(&self) -> &'static str {
+        "heightfield"
+    }
+
+    fn x_label(&self) -> &'static str {
+        "height-field cells N^2"
+    }
+
+    fn axis(&self) -> Option<&'static str> {
+        Some("the height-field cell count N^2 (direct and tessellated, see below)")
+    }
+
+    fn points(&self, ctx: &Ctx) -> Result<Vec<Point>, String> {
+        let sides: &[u32] = if ctx.opts.quick {
+            &[256, 512, 1024]
+        } else {
+            &[256, 512, 1024, 2048, 4096]
+        };
+        let mut plan = Vec::new();
+        for &n in sides {
+            for (series, generator) in [("direct", "heightfield"), ("tessellated", "terrain")] {
+                plan.push(Point {
+                    series: series.into(),
+                    x: f64::from(n) * f64::from(n),
+                    spec: format!("{generator}:{n}"),
+                    workload: square(256, 1, Mode::Cast),
+                });
+            }
+        }
+        Ok(plan)
+    }
+
+    /// The baseline alone (the comparison is of representations, not of structures).
+    fn backends(&self, _chosen: &[&'static Backend]) -> Vec<&'static Backend> {
+        baseline_only()
+    }
+
+    fn record(&self, _state: &mut (), seen: &Observed, point: &mut ScalingPoint) {
+        point.load_seconds = Some(seen.load_seconds);
+        point.build_seconds = Some(seen.build_seconds);
+        point.memory_bytes = Some(seen.memory_bytes);
+    }
+
+    fn write(&self, results: &Results, s: &mut String) {
+        let hf: Vec<_> = results
+            .scaling
+            .iter()
+            .filter(|p| p.experiment == self.name())
+            .collect();
+        if !hf.is_empty() {
+            let _ = writeln!(s, "## Height fields: direct against tessellated\n");
+            let _ = writeln!(
+                s,
+                "The `terrain:N` heights as one height-field primitive intersected directly (min-max \
+                 quadtree over the cells, `heightfield:N`) against the same terrain tessellated into \
+                 2 N^2 triangles (`terrain:N`), both in the `{}` backend; 256 x 256 camera rays. Both \
+                 give the same hits and `t` bit for bit. Load: generating the heights and \
+                 tessellating, or building the min-max levels; build: the BVH; memory: primitives \
+                 plus structure; a height field counts as one primitive test per ray.\n",
+                crate::name_with(crate::Roles::BASELINE)
+            );
+            let _ = writeln!(
+                s,
+                "| cells | series | memory | load s | build s | render s | tests/ray |"
+            );
+            let _ = writeln!(s, "|---:|---|---:|---:|---:|---:|---:|");
+            for p in hf {
+                let _ = writeln!(
+                    s,
+                    "| {}^2 | {} | {} | {} | {} | {:.4} | {} |",
+                    p.x.sqrt().round(),
+                    p.series,
+                    p.memory_bytes.map_or("-".into(), bytes),
+                    opt(p.load_seconds, |v| format!("{v:.3}")),
+                    opt(p.build_seconds, |v| format!("{v:.3}")),
+                    p.seconds,
+                    opt(p.tests_per_ray, |v| format!("{v:.1}"))
+                );
+            }
+            let _ = writeln!(s);
+        }
+    }
+}

@@ -1,0 +1,666 @@
+//! The main matrix: every chosen backend on every workload of every scene, timed and
+//! compared with the reference backend of its scene; its throughput charts, summary, GPU
+//! phases and per-scene tables.
+
+use super::{Chart, Experiment, Planned, Plot};
+use crate::measure::{Measured, explicit_rays, prepare};
+use crate::progress::Progress;
+use crate::report::images::{self, Rgb8};
+use crate::report::markdown::{backends_in, bytes, opt};
+use crate::report::results::{Equality, Images, Results, Run};
+use crate::report::{Ctx, PEER_MAX_FLIP, PEER_MIN_ID_MATCH, Workload, file_safe, skip};
+use crate::{Backend, Roles, compare_hits};
+use anyhow::Result;
+use raybench_core::{Mode, RaySet, Scene};
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::sync::Arc;
+
+/// The main matrix of scenes, workloads and backends.
+pub(super) struct Matrix;
+
+impl Experiment for Matrix {
+    fn name(&self) -> &'static str {
+        "matrix"
+    }
+
+    fn scaling(&self) -> bool {
+        false
+    }
+
+    /// The scenes named by `--scenes`, else the built-in scenes of the chosen matrix.
+    fn units(&self, ctx: &Ctx) -> Vec<String> {
+        match &ctx.opts.scenes {
+            Some(s) => s.iter().map(|s| s.trim().to_string()).collect(),
+            None => crate::report::matrix_scenes(ctx.opts.quick)
+                .into_iter()
+                .map(String::from)
+                .collect(),
+        }
+    }
+
+    fn plan(&self, ctx: &Ctx, unit: &str, results: &mut Results) -> Result<Option<Planned>> {
+        Ok(match ctx.load(unit)? {
+            Ok(scene) => Some(Planned {
+                steps: workloads(ctx, &scene).len() * ctx.chosen.len(),
+                scene: Some(scene),
+            }),
+            Err(reason) => {
+                skip(results, "scene", unit, "skipped", reason);
+                None
+            }
+        })
+    }
+
+    fn run(
+        &self,
+        ctx: &Ctx,
+        planned: Planned,
+        progress: &Progress,
+        results: &mut Results,
+    ) -> Result<()> {
+        if let Some(scene) = &planned.scene {
+            results.runs.extend(run_scene(ctx, scene, progress)?);
+        }
+        Ok(())
+    }
+
+    /// Throughput per scene, one chart per workload kind.
+    fn charts(&self, results: &Results) -> Vec<Chart> {
+        let mut out = Vec::new();
+        let mut kinds: Vec<(String, String)> = Vec::new();
+        for r in &results.runs {
+            let k = (r.mode.clone(), r.ray_set.clone());
+            if !kinds.contains(&k) {
+                kinds.push(k);
+            }
+        }
+        for (mode, set) in &kinds {
+            let runs: Vec<&Run> = results
+                .runs
+                .iter()
+                .filter(|r| &r.mode == mode && &r.ray_set == set)
+                .collect();
+            let mut scenes: Vec<String> = Vec::new();
+            for r in &runs {
+                if !scenes.contains(&r.scene) {
+                    scenes.push(r.scene.clone());
+                }
+            }
+            let series: Vec<(String, Vec<Option<f64>>)> = backends_in(&runs)
+                .into_iter()
+                .map(|b| {
+                    let v = scenes
+                        .iter()
+                        .map(|s| {
+                            runs.iter()
+                                .find(|r| &r.scene == s && r.backend == b)
+                                .and_then(|r| r.mrays_per_s)
+                        })
+                        .collect();
+                    (b, v)
+                })
+                .collect();
+            out.push(Chart {
+                title: format!("Throughput, {mode} ({set} rays)"),
+                stem: format!("throughput-{mode}-{set}"),
+                x_label: String::new(),
+                y_label: "Mrays/s".into(),
+                plot: Plot::Categories(scenes, series),
+            });
+        }
+
+        out
+    }
+
+    /// The summary (ray casting, camera rays), the ratios to the yardstick peers, the GPU
+    /// phases and the per-scene tables.
+    fn write(&self, results: &Results, s: &mut String) {
+        // Summary table: Mrays/s of every backend on every scene, camera rays, ray casting.
+        let summary: Vec<&Run> = results
+            .runs
+            .iter()
+            .filter(|r| r.mode == "cast" && r.ray_set == "primary")
+            .collect();
+        if !summary.is_empty() {
+            let backends = backends_in(&summary);
+            let mut scenes: Vec<&str> = Vec::new();
+            for r in &summary {
+                if !scenes.contains(&r.scene.as_str()) {
+                    scenes.push(&r.scene);
+                }
+            }
+            let _ = writeln!(s, "## Summary: ray casting, camera rays, Mrays/s\n");
+            let _ = writeln!(s, "| scene | primitives | {} |", backends.join(" | "));
+            let _ = writeln!(s, "|---|---:|{}", "---:|".repeat(backends.len()));
+            for sc in &scenes {
+                let prims = summary
+                    .iter()
+                    .find(|r| r.scene == *sc)
+                    .map_or(0, |r| r.primitives);
+                let cells: Vec<String> = backends
+                    .iter()
+                    .map(|b| {
+                        summary
+                            .iter()
+                            .find(|r| r.scene == *sc && &r.backend == b)
+                            .map_or("-".into(), |r| {
+                                let fail = r.equality.as_ref().is_some_and(|e| !e.pass);
+                                match r.mrays_per_s {
+                                    Some(v) => {
+                                        format!("{v:.2}{}", if fail { " (differs)" } else { "" })
+                                    }
+                                    None => r.status.clone(),
+                                }
+                            })
+                    })
+                    .collect();
+                let _ = writeln!(s, "| {sc} | {prims} | {} |", cells.join(" | "));
+            }
+            let _ = writeln!(s);
+            // Ratios to the yardstick peers (Embree's single rays and packets) where they ran
+            // (read from the registry, built or not: a merge may hold runs of either).
+            for base_name in backends
+                .iter()
+                .filter(|b| crate::roles_of(b).is_some_and(|r| r.contains(Roles::YARDSTICK)))
+            {
+                let _ = writeln!(
+                    s,
+                    "Throughput relative to the yardstick peer `{base_name}` on the same rays, same \
+                 run:\n"
+                );
+                let _ = writeln!(s, "| scene | {} |", backends.join(" | "));
+                let _ = writeln!(s, "|---|{}", "---:|".repeat(backends.len()));
+                for sc in &scenes {
+                    let base = summary
+                        .iter()
+                        .find(|r| r.scene == *sc && &r.backend == base_name)
+                        .and_then(|r| r.mrays_per_s);
+                    let cells: Vec<String> = backends
+                        .iter()
+                        .map(|b| {
+                            let v = summary
+                                .iter()
+                                .find(|r| r.scene == *sc && &r.backend == b)
+                                .and_then(|r| r.mrays_per_s);
+                            opt(v.zip(base).map(|(v, e)| v / e), |x| format!("{x:.2}"))
+                        })
+                        .collect();
+                    let _ = writeln!(s, "| {sc} | {} |", cells.join(" | "));
+                }
+                let _ = writeln!(s);
+            }
+        }
+
+        // Phases of backends on another device (the GPU).
+        let phased: Vec<&Run> = results
+            .runs
+            .iter()
+            .filter(|r| !r.phases.is_empty())
+            .collect();
+        if !phased.is_empty() {
+            let _ = writeln!(s, "## GPU phases\n");
+            let _ = writeln!(
+                s,
+                "Seconds per phase on the GPU backend (median of the timed repetitions): the \
+             BVH built on the CPU and the scene uploaded once per scene; then per frame the \
+             parameters uploaded, the kernels' execution on the GPU (timestamp queries when \
+             the adapter has them, else wall time around submit and wait: this is the time \
+             Mrays/s uses), the image read back, and the whole call.\n"
+            );
+            let cols = [
+                "prepare.build",
+                "prepare.upload",
+                "upload",
+                "gpu",
+                "readback",
+                "render",
+            ];
+            let _ = writeln!(
+                s,
+                "| scene | workload | backend | {} | Mrays/s |",
+                cols.join(" | ")
+            );
+            let _ = writeln!(s, "|---|---|---|{}---:|", "---:|".repeat(cols.len()));
+            for r in phased {
+                let cells: Vec<String> = cols
+                    .iter()
+                    .map(|c| opt(r.phases.get(*c).copied(), |v| format!("{v:.4}")))
+                    .collect();
+                let _ = writeln!(
+                    s,
+                    "| {} | {} {} {}x{} spp {} | {} | {} | {} |",
+                    r.scene,
+                    r.mode,
+                    r.ray_set,
+                    r.width,
+                    r.height,
+                    r.spp,
+                    r.backend,
+                    cells.join(" | "),
+                    opt(r.mrays_per_s, |v| format!("{v:.2}"))
+                );
+            }
+            let _ = writeln!(s);
+        }
+
+        // Per scene and workload.
+        let _ = writeln!(s, "## Scenes\n");
+        let mut keys: Vec<(String, String, String, u32, u32, u32)> = Vec::new();
+        for r in &results.runs {
+            let k = (
+                r.scene.clone(),
+                r.mode.clone(),
+                r.ray_set.clone(),
+                r.width,
+                r.height,
+                r.spp,
+            );
+            if !keys.contains(&k) {
+                keys.push(k);
+            }
+        }
+        let mut last_scene = String::new();
+        for (scene, mode, set, w, h, spp) in &keys {
+            let runs: Vec<&Run> = results
+                .runs
+                .iter()
+                .filter(|r| {
+                    &r.scene == scene
+                        && &r.mode == mode
+                        && &r.ray_set == set
+                        && r.width == *w
+                        && r.height == *h
+                        && r.spp == *spp
+                })
+                .collect();
+            if *scene != last_scene {
+                let prims = runs.first().map_or(0, |r| r.primitives);
+                let _ = writeln!(s, "### {scene} ({prims} primitives)\n");
+                last_scene.clone_from(scene);
+            }
+            let what = if set == "primary" {
+                format!("{w} x {h}, {spp} spp")
+            } else {
+                format!("{} random rays", u64::from(*w) * u64::from(*h))
+            };
+            let reference = runs.first().map_or("-", |r| r.reference.as_str());
+            let _ = writeln!(
+                s,
+                "**{mode}, {set} rays** ({what}; reference `{reference}`)\n"
+            );
+            let _ = writeln!(
+                s,
+                "| backend | build s | memory | render s [min-max] | Mrays/s | tests/ray | visits/ray | id match | hit diff | ties | max abs dt | PSNR dB | FLIP | pass |"
+            );
+            let _ = writeln!(
+                s,
+                "|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"
+            );
+            for r in &runs {
+                if r.status != "ok" {
+                    let _ = writeln!(
+                        s,
+                        "| {} | {}: {} ||||||||||||",
+                        r.backend,
+                        r.status,
+                        r.reason.as_deref().unwrap_or("")
+                    );
+                    continue;
+                }
+                let e = r.equality.as_ref();
+                let _ = writeln!(
+                    s,
+                    "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                    r.backend,
+                    opt(r.build_seconds, |v| format!("{v:.3}")),
+                    r.memory_bytes.map_or("-".into(), bytes),
+                    r.seconds.as_ref().map_or("-".into(), |t| format!(
+                        "{:.4} [{:.4}-{:.4}]",
+                        t.median, t.min, t.max
+                    )),
+                    opt(r.mrays_per_s, |v| format!("{v:.3}")),
+                    opt(r.tests_per_ray, |v| format!("{v:.1}")),
+                    opt(r.visits_per_ray, |v| format!("{v:.1}")),
+                    e.map_or("-".into(), |e| format!("{:.4}%", e.id_match * 100.0)),
+                    e.map_or("-".into(), |e| e.hit_mismatch.to_string()),
+                    e.map_or("-".into(), |e| e.tie_mismatch.to_string()),
+                    e.map_or("-".into(), |e| format!("{:.1e}", e.max_abs_dt)),
+                    e.map_or("-".into(), |e| {
+                        match (e.psnr_db, e.identical || e.flip_mean.is_some()) {
+                            (Some(p), _) => format!("{p:.1}"),
+                            (None, true) if e.flip_mean.is_some() => "inf".into(),
+                            _ => "-".into(),
+                        }
+                    }),
+                    e.and_then(|e| e.flip_mean)
+                        .map_or("-".into(), |f| format!("{f:.4}")),
+                    e.map_or("-", |e| if e.pass { "yes" } else { "**no**" }),
+                );
+            }
+            let _ = writeln!(s);
+            let mut pictures = Vec::new();
+            for r in &runs {
+                if let Some(c) = &r.images.color {
+                    pictures.push(format!("[{} image]({c})", r.backend));
+                }
+                if let Some(d) = &r.images.ids_diff {
+                    pictures.push(format!("[{} id differences]({d})", r.backend));
+                }
+                if let Some(f) = &r.images.flip {
+                    pictures.push(format!("[{} FLIP map]({f})", r.backend));
+                }
+            }
+            if let Some(reference_image) = runs.first().and_then(|r| r.images.color.as_ref()) {
+                let _ = writeln!(
+                    s,
+                    "<img src=\"{reference_image}\" width=\"192\" alt=\"{scene} {mode}\">\n"
+                );
+            }
+            if !pictures.is_empty() {
+                let _ = writeln!(s, "Images: {}\n", pictures.join(", "));
+            }
+        }
+    }
+}
+
+/// The workloads of a scene: ray casting (camera and incoherent rays) everywhere; Whitted
+/// and path tracing where its built-in `[benchmark]` table asks for them (lights to shadow
+/// and mirrors to follow; scenes built for path tracing); the volume modes where there are
+/// volumes.
+fn workloads(ctx: &Ctx, scene: &Scene) -> Vec<Workload> {
+    let s = ctx.size;
+    let mut w = Vec::new();
+    let cast = |rays| Workload {
+        mode: Mode::Cast,
+        rays,
+        width: s,
+        height: s,
+        spp: 1,
+    };
+    if ctx.modes.contains(&Mode::Cast) {
+        w.push(cast(RaySet::Primary));
+        w.push(cast(RaySet::Incoherent));
+    }
+    let asks = |mode: Mode| {
+        ctx.modes.contains(&mode)
+            && raybench_scene::builtin(&scene.name)
+                .is_some_and(|b| b.benchmark.modes.contains(&mode.name()))
+    };
+    if asks(Mode::Whitted) {
+        w.push(Workload {
+            mode: Mode::Whitted,
+            ..cast(RaySet::Primary)
+        });
+    }
+    // The volume modes where there are volumes (their integration is the core's, the
+    // same for every backend; the backend traces the surfaces that cut it).
+    if !scene.volumes.is_empty() {
+        for mode in [Mode::Mip, Mode::Composite] {
+            if ctx.modes.contains(&mode) {
+                w.push(Workload {
+                    mode,
+                    ..cast(RaySet::Primary)
+                });
+            }
+        }
+    }
+    if asks(Mode::Path) {
+        let (side, spp) = if ctx.opts.quick {
+            (s / 2, 16)
+        } else {
+            (s / 2, 64)
+        };
+        w.push(Workload {
+            mode: Mode::Path,
+            rays: RaySet::Primary,
+            width: side,
+            height: side,
+            spp,
+        });
+    }
+    w
+}
+
+/// Renders `scene` with every chosen backend on every workload, the reference first.
+fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<Run>> {
+    let workloads = workloads(ctx, scene);
+    let prims = scene.geometry.len();
+    // The reference: the oracle where it fits every workload's budget, else the
+    // baseline. Brute-force backends run only within that budget.
+    let naive_ok = workloads.iter().all(|w| ctx.naive_fits(w, prims));
+    let mut order: Vec<&'static Backend> = ctx
+        .chosen
+        .iter()
+        .copied()
+        .filter(|b| !b.is(Roles::BRUTE_FORCE) || naive_ok)
+        .collect();
+    let left_out: Vec<&str> = ctx
+        .chosen
+        .iter()
+        .filter(|b| b.is(Roles::BRUTE_FORCE) && !naive_ok)
+        .map(|b| b.name)
+        .collect();
+    let reference_name = [Roles::ORACLE, Roles::BASELINE]
+        .into_iter()
+        .find_map(|role| order.iter().find(|b| b.is(role)))
+        .or(order.first())
+        .map_or("", |b| b.name);
+    order.sort_by_key(|b| b.name != reference_name);
+    for name in &left_out {
+        eprintln!(
+            "{}: {name} left out (over its time budget); {reference_name} is the reference",
+            scene.name
+        );
+        progress.remove(workloads.len());
+    }
+    if order.is_empty() {
+        return Ok(Vec::new());
+    }
+
+    let explicit: Vec<Option<Vec<raybench_core::Ray>>> = workloads
+        .iter()
+        .map(|w| explicit_rays(w.rays, scene, &w.settings()))
+        .collect::<Result<_>>()?;
+    let mut reference: Vec<Option<(Measured, Option<Rgb8>)>> =
+        workloads.iter().map(|_| None).collect();
+    let mut runs = Vec::new();
+    for b in order {
+        progress.begin(format!("{} {}: build", scene.name, b.name));
+        let prepared = prepare(b, scene);
+        for (wi, w) in workloads.iter().enumerate() {
+            let mut run = Run {
+                shard: 0,
+                scene: scene.name.clone(),
+                primitives: prims as u64,
+                mode: w.mode.name().into(),
+                ray_set: w.rays.name().into(),
+                width: w.width,
+                height: w.height,
+                spp: w.spp,
+                backend: b.name.into(),
+                exact: b.exact(),
+                reference: reference_name.into(),
+                status: "ok".into(),
+                reason: None,
+                build_seconds: None,
+                memory_bytes: None,
+                structure: BTreeMap::new(),
+                seconds: None,
+                rays: None,
+                mrays_per_s: None,
+                tests_per_ray: None,
+                visits_per_ray: None,
+                equality: None,
+                images: Images::default(),
+                phases: BTreeMap::new(),
+            };
+            let checked = match &prepared {
+                Ok(p) => p.renderer.supports_mode(w.mode).map(|()| p),
+                Err(reason) => Err(reason.clone()),
+            };
+            let (r, build, prepare_phases) = match checked {
+                Ok(p) => (&p.renderer, p.build, &p.phases),
+                Err(reason) => {
+                    let available = (b.make)().availability().is_ok();
+                    run.status = if available {
+                        "unsupported"
+                    } else {
+                        "unavailable"
+                    }
+                    .into();
+                    progress.step(&format!("{} {} {}: {reason}", scene.name, w.key(), b.name));
+                    run.reason = Some(reason);
+                    runs.push(run);
+                    continue;
+                }
+            };
+            progress.begin(format!("{} {} {}", scene.name, w.key(), b.name));
+            let m = ctx.measure(r.as_ref(), w, explicit[wi].as_deref())?;
+            run.build_seconds = Some(build);
+            // Phases only for backends that have more than build and render (a GPU).
+            if prepare_phases.0.len() > 1 || m.phases.0.len() > 1 {
+                run.phases = prepare_phases
+                    .0
+                    .iter()
+                    .map(|(n, s)| (format!("prepare.{n}"), *s))
+                    .chain(m.phases.0.iter().map(|(n, s)| (n.clone(), *s)))
+                    .collect();
+            }
+            if let Some(s) = r.structure() {
+                run.memory_bytes = Some(s.memory_bytes as u64);
+                run.structure = s
+                    .counts
+                    .iter()
+                    .map(|(k, v)| ((*k).to_string(), *v))
+                    .collect();
+            }
+            let rays = m.warm.rays.max(1);
+            run.rays = Some(m.warm.rays);
+            run.mrays_per_s = Some(m.warm.rays as f64 / m.timing.median.max(1e-12) / 1e6);
+            if let Some(c) = m.warm.counters.filter(|_| r.counts_tests()) {
+                run.tests_per_ray = Some(c.prim_tests as f64 / rays as f64);
+                run.visits_per_ray =
+                    (c.node_visits > 0).then(|| c.node_visits as f64 / rays as f64);
+            }
+            run.seconds = Some(m.timing);
+            let image = m
+                .warm
+                .color
+                .as_ref()
+                .map(|c| Rgb8::from_linear(w.width, w.height, c));
+            let stem = format!(
+                "{}-{}-{}",
+                file_safe(&scene.name),
+                w.key(),
+                file_safe(b.name)
+            );
+            match &reference[wi] {
+                None => {
+                    if let Some(img) = &image {
+                        let name = format!("images/{stem}.png");
+                        img.save(&ctx.opts.out.join(&name))?;
+                        run.images.color = Some(name);
+                    }
+                    run.equality = Some(Equality {
+                        id_match: 1.0,
+                        hit_mismatch: 0,
+                        t_mismatch: 0,
+                        tie_mismatch: 0,
+                        max_abs_dt: 0.0,
+                        identical: true,
+                        psnr_db: None,
+                        flip_mean: image.as_ref().map(|_| 0.0),
+                        pass: true,
+                    });
+                    reference[wi] = Some((m.warm, image));
+                }
+                Some((ref_m, ref_img)) => {
+                    run.equality = Some(equality(
+                        ctx,
+                        b,
+                        ref_m,
+                        ref_img.as_ref(),
+                        &m.warm,
+                        image.as_ref(),
+                        w,
+                        &stem,
+                        &mut run.images,
+                    )?);
+                }
+            }
+            progress.step(&format!(
+                "{} {} {}: {:.3} Mrays/s",
+                scene.name,
+                w.key(),
+                b.name,
+                run.mrays_per_s.unwrap_or(0.0)
+            ));
+            runs.push(run);
+        }
+    }
+    Ok(runs)
+}
+
+/// How a backend's measurement compares with the reference's, writing the images of a
+/// difference.
+#[allow(clippy::too_many_arguments)]
+fn equality(
+    ctx: &Ctx,
+    b: &Backend,
+    ref_m: &Measured,
+    ref_img: Option<&Rgb8>,
+    m: &Measured,
+    img: Option<&Rgb8>,
+    w: &Workload,
+    stem: &str,
+    files: &mut Images,
+) -> Result<Equality> {
+    let c = compare_hits(&ref_m.ids, &ref_m.t, &m.ids, &m.t);
+    let same_color = match (&ref_m.color, &m.color) {
+        (Some(a), Some(b)) => a
+            .iter()
+            .zip(b)
+            .all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits)),
+        _ => true,
+    };
+    let identical = c.is_exact() && same_color;
+    let (mut psnr, mut flip) = (None, None);
+    if let (Some(ri), Some(ti)) = (ref_img, img) {
+        psnr = images::psnr(ri, ti);
+        let (mean, map) = images::flip(ri, ti);
+        flip = Some(mean);
+        if !identical {
+            let color = format!("images/{stem}.png");
+            ti.save(&ctx.opts.out.join(&color))?;
+            files.color = Some(color);
+            let ids = format!("images/{stem}-ids-diff.png");
+            images::ids_diff(w.width, w.height, &ref_m.ids, &m.ids, Some(ri))
+                .save(&ctx.opts.out.join(&ids))?;
+            files.ids_diff = Some(ids);
+            let fl = format!("images/{stem}-flip.png");
+            map.save(&ctx.opts.out.join(&fl))?;
+            files.flip = Some(fl);
+        }
+    }
+    // Outside the contract, a different primitive at the same distance is a tie
+    // between coincident surfaces (each library breaks ties its own way), not an error.
+    let n = m.ids.len().max(1) as f64;
+    let pass = if b.exact() {
+        identical
+    } else {
+        c.id_match + c.tie_mismatch as f64 / n >= PEER_MIN_ID_MATCH
+            && flip.is_none_or(|f| f <= PEER_MAX_FLIP)
+    };
+    Ok(Equality {
+        id_match: c.id_match,
+        hit_mismatch: c.hit_mismatch,
+        t_mismatch: c.t_mismatch,
+        tie_mismatch: c.tie_mismatch,
+        max_abs_dt: c.max_abs_dt,
+        identical,
+        psnr_db: psnr,
+        flip_mean: flip,
+        pass,
+    })
+}

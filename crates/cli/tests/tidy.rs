@@ -1,0 +1,236 @@
+//! Tidy: invariants of the source tree that ARCHITECTURE.md states and a test enforces (as
+//! rust-analyzer's `tidy` does; `tests/tests/tidy.rs` holds the crate-graph and code-map
+//! ones). Here: only the registry (`crates/cli/src/lib.rs`) names
+//! concrete backends. Outside it and the allow-list below, no Rust file uses a backend
+//! crate and no Rust file holds a backend's name as a string literal; the rest of the
+//! workspace reads the registry's roles (`raybench::Roles`).
+
+use std::path::{Path, PathBuf};
+
+/// The backend crates, as Rust paths.
+const BACKEND_CRATES: [&str; 6] = [
+    "raybench_bvh",
+    "raybench_grid",
+    "raybench_packet",
+    "raybench_naive",
+    "raybench_peers",
+    "raybench_wgpu",
+];
+
+/// Paths (relative to the workspace root; a trailing `/` is a folder) where backend crates
+/// and names are allowed, and why.
+const ALLOWED: &[(&str, &str)] = &[
+    (
+        "crates/cli/src/lib.rs",
+        "the registry: the one place that maps names and roles to backends",
+    ),
+    ("crates/bvh/", "a backend crate: it names itself"),
+    ("crates/grid/", "a backend crate: it names itself"),
+    (
+        "crates/packet/",
+        "a backend crate: it names itself and builds on raybench-bvh's tree",
+    ),
+    ("crates/naive/", "a backend crate: it names itself"),
+    (
+        "crates/peers/",
+        "the peers' crate: it names itself, and its tests compare with naive",
+    ),
+    (
+        "crates/wgpu/",
+        "a backend crate: it names itself and uploads raybench-bvh's tree",
+    ),
+    (
+        "crates/render/src/lib.rs",
+        "CpuRenderer's unit tests need one Accel below the registry: naive (a dev-dependency)",
+    ),
+    (
+        "crates/cli/tests/",
+        "the command line's tests type backend names as a user does (and this test names the \
+         backend crates it looks for)",
+    ),
+    (
+        "tests/benches/",
+        "the benchmarks measure named structures against each other: backends are their subject",
+    ),
+    (
+        "tests/src/obvhs_peer.rs",
+        "obvhs's own trees as peers, beside raybench-bvh's adapter",
+    ),
+    (
+        "tests/src/peers.rs",
+        "the peer benchmark: named contestants are its subject",
+    ),
+    (
+        "tests/src/peers/",
+        "the peer benchmark: named contestants are its subject",
+    ),
+    (
+        "tests/src/lib.rs",
+        "grid_boundary_rays reads the uniform grid's cells to aim rays along its planes",
+    ),
+    (
+        "tests/tests/adversarial.rs",
+        "aims rays along the uniform grid's cell planes (built with raybench-grid)",
+    ),
+    (
+        "tests/tests/edge_cases.rs",
+        "validates raybench-bvh's invariants on every degenerate scene",
+    ),
+    (
+        "tests/tests/equivalence.rs",
+        "validates raybench-bvh's invariants and maps each non-exact backend to its tolerance test",
+    ),
+    ("tests/tests/gpu.rs", "the GPU backend is its subject"),
+    (
+        "tests/tests/grid_cases.rs",
+        "the uniform grid's resolution and cell cases are its subject",
+    ),
+    (
+        "tests/tests/heightfield.rs",
+        "compares the direct height field in chosen structures (a subset, for time)",
+    ),
+    (
+        "tests/tests/watertight.rs",
+        "a million-triangle case on chosen structures (a subset, for time) and Embree's watertight mode",
+    ),
+    (
+        "tests/tests/tidy.rs",
+        "the crate-graph checks name the backend crates' folders",
+    ),
+    (
+        "tests/tests/peer_bench.rs",
+        "the peer benchmark: named contestants are its subject",
+    ),
+];
+
+/// The workspace root.
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .canonicalize()
+        .expect("crates/cli is two levels below the workspace root")
+}
+
+/// Every `.rs` file under `dir`, skipping build outputs and hidden folders.
+fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let path = entry.path();
+        let name = entry.file_name();
+        let name = name.to_string_lossy();
+        if path.is_dir() {
+            if name != "target" && !name.starts_with('.') {
+                rust_files(&path, out);
+            }
+        } else if name.ends_with(".rs") {
+            out.push(path);
+        }
+    }
+}
+
+/// The allow-list entry that covers `relative`, if any.
+fn allowed(relative: &str) -> Option<&'static str> {
+    ALLOWED
+        .iter()
+        .find(|(p, _)| {
+            if p.ends_with('/') {
+                relative.starts_with(p)
+            } else {
+                relative == *p
+            }
+        })
+        .map(|(_, why)| *why)
+}
+
+/// The backend crates and backend-name literals on the code lines (comments aside) of
+/// `text`: `(line, what)`.
+fn violations(text: &str, names: &[&str]) -> Vec<(usize, String)> {
+    let mut found = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let code = line.trim_start();
+        if code.starts_with("//") {
+            continue;
+        }
+        for c in BACKEND_CRATES {
+            if code.contains(c) {
+                found.push((i + 1, format!("uses crate {c}")));
+            }
+        }
+        for n in names {
+            if code.contains(&format!("\"{n}\"")) {
+                found.push((i + 1, format!("names backend \"{n}\"")));
+            }
+        }
+    }
+    found
+}
+
+/// Every backend name, built or not.
+fn backend_names() -> Vec<&'static str> {
+    raybench::BACKENDS
+        .iter()
+        .map(|b| b.name)
+        .chain(raybench::NOT_BUILT.iter().map(|n| n.name))
+        .collect()
+}
+
+#[test]
+fn only_the_registry_names_backends() {
+    let root = root();
+    let names = backend_names();
+    let mut files = Vec::new();
+    for dir in ["crates", "tests", "fuzz"] {
+        rust_files(&root.join(dir), &mut files);
+    }
+    assert!(files.len() > 50, "found only {} Rust files", files.len());
+    let mut problems = Vec::new();
+    for file in &files {
+        let relative = file
+            .strip_prefix(&root)
+            .expect("under the root")
+            .to_string_lossy()
+            .replace('\\', "/");
+        if allowed(&relative).is_some() {
+            continue;
+        }
+        let text = std::fs::read_to_string(file).expect("a readable source file");
+        for (line, what) in violations(&text, &names) {
+            problems.push(format!("{relative}:{line}: {what}"));
+        }
+    }
+    assert!(
+        problems.is_empty(),
+        "outside the registry (crates/cli/src/lib.rs), code reads the registry's roles \
+         (raybench::Roles) instead of naming backends; or add the file to ALLOWED in \
+         crates/cli/tests/tidy.rs with the reason:\n{}",
+        problems.join("\n")
+    );
+}
+
+/// Every entry of the allow-list exists, so that it cannot silently cover nothing.
+#[test]
+fn the_allow_list_names_existing_paths() {
+    let root = root();
+    for (path, why) in ALLOWED {
+        assert!(!why.is_empty());
+        assert!(
+            root.join(path).exists(),
+            "ALLOWED names {path}, which is gone"
+        );
+    }
+}
+
+/// The check itself: it sees a backend crate and a backend name, and not comments.
+#[test]
+fn the_check_finds_what_it_looks_for() {
+    let names = backend_names();
+    let text = "use raybench_packet::Isa;\nlet b = backend(\"bvh\");\n// \"naive\" in a comment\n";
+    let found = violations(text, &names);
+    assert_eq!(found.len(), 2, "{found:?}");
+    assert_eq!(found[0].0, 1);
+    assert_eq!(found[1].0, 2);
+    assert!(allowed("crates/cli/src/lib.rs").is_some());
+    assert!(allowed("crates/cli/src/report/mod.rs").is_none());
+}
