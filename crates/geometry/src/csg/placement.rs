@@ -31,6 +31,7 @@ impl Placement {
 
 /// The spans of a leaf: the ray taken to its local space when it is placed, and its
 /// normals brought back.
+#[inline]
 pub(super) fn leaf_spans(s: &Solid, place: Option<&Placement>, ray: &Ray, leaf: u32) -> LeafSpans {
     let (o, d) = match place {
         None => (ray.origin, ray.dir),

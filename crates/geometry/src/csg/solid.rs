@@ -284,6 +284,7 @@ fn capped(
 /// The spans of the line `o + t d` (in the solid's own space) inside solid `s`, whose
 /// ends carry the leaf id `leaf`: a torus by its quartic, every other solid by
 /// [`solid_span`].
+#[inline]
 pub(super) fn solid_spans(s: &Solid, o: Vec3, d: Vec3, leaf: u32) -> LeafSpans {
     let mut out = LeafSpans::NONE;
     if let Solid::Torus {
@@ -312,6 +313,7 @@ pub(super) fn solid_spans(s: &Solid, o: Vec3, d: Vec3, leaf: u32) -> LeafSpans {
 
 /// The span of the line `o + t d` inside one convex solid (at most one span). A torus is
 /// not convex: [`solid_spans`] intersects it, and here it gives nothing.
+#[inline]
 fn solid_span(s: &Solid, o: Vec3, d: Vec3, leaf: u32) -> Option<Span> {
     let end = |t: f32, normal: Vec3| End { t, normal, leaf };
     let span = match *s {

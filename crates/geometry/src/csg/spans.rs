@@ -75,6 +75,7 @@ pub(super) fn finish(span: Span) -> Option<Span> {
 /// `t` are applied together (the first operand's first); a span starts or ends where the
 /// combined state changes, with the normal of the last event of the group that moved the
 /// state to its new value, negated when it comes from a subtracted operand.
+#[inline]
 pub(super) fn combine(op: CsgOp, a: &[Span], b: &[Span]) -> Vec<Span> {
     // Event k of a span list: span k / 2's entry (even k) or exit (odd k), read in place.
     struct Events<'a>(&'a [Span]);
