@@ -506,14 +506,7 @@ impl Volume {
             composite,
         };
         if !self.params.skip_empty {
-            let _ = crate::dda(
-                self.dims,
-                go,
-                gd,
-                t0,
-                t1,
-                &mut segments(|c, ta, tb| seg.visit(acc, c, ta, tb)),
-            );
+            self.walk_voxels((go, gd, t0, t1), |c, ta, tb| seg.visit(acc, c, ta, tb));
             return;
         }
         // Empty-space skipping: walk the coarse grid; enter a block's voxels only when it
@@ -568,20 +561,23 @@ impl Volume {
     #[must_use]
     pub fn voxels_crossed(&self, ray: &Ray, t_max: f32) -> Vec<([u32; 3], f32, f32)> {
         let mut out = Vec::new();
-        if let Some((go, gd, t0, t1)) = self.grid_ray(ray, t_max) {
-            let _ = crate::dda(
-                self.dims,
-                go,
-                gd,
-                t0,
-                t1,
-                &mut segments(|c, a, b| {
-                    out.push((c, a, b));
-                    ControlFlow::Continue(())
-                }),
-            );
+        if let Some(grid_ray) = self.grid_ray(ray, t_max) {
+            self.walk_voxels(grid_ray, |c, a, b| {
+                out.push((c, a, b));
+                ControlFlow::Continue(())
+            });
         }
         out
+    }
+
+    /// The plain 3D-DDA over every voxel along a ray in grid units (`grid_ray`'s answer),
+    /// calling `visit(voxel, t_enter, t_exit)` for each segment of non-zero length.
+    fn walk_voxels(
+        &self,
+        (go, gd, t0, t1): (Vec3, Vec3, f32, f32),
+        visit: impl FnMut([u32; 3], f32, f32) -> ControlFlow<()>,
+    ) {
+        let _ = crate::dda(self.dims, go, gd, t0, t1, &mut segments(visit));
     }
 
     /// The grid coordinates of world point `p`.

@@ -79,14 +79,13 @@ pub fn wgsl_constants() -> String {
         ("INV_PI", std::f32::consts::FRAC_1_PI, "std::f32::consts"),
         ("TAU", std::f32::consts::TAU, "std::f32::consts"),
     ];
+    let ints = u32s.map(|(name, value, from)| (name, "u32", format!("{value}u"), from));
+    // `{:e}` prints the shortest digits that round-trip, so WGSL parses the same f32.
+    let floats = f32s.map(|(name, value, from)| (name, "f32", format!("{value:e}"), from));
     let mut out =
         String::from("// Generated from the Rust constants by crates/wgpu/src/constants.rs.\n");
-    for (name, value, from) in u32s {
-        out += &format!("const {name}: u32 = {value}u; // {from}\n");
-    }
-    for (name, value, from) in f32s {
-        // `{:e}` prints the shortest digits that round-trip, so WGSL parses the same f32.
-        out += &format!("const {name}: f32 = {value:e}; // {from}\n");
+    for (name, ty, value, from) in ints.into_iter().chain(floats) {
+        out += &format!("const {name}: {ty} = {value}; // {from}\n");
     }
     out
 }
