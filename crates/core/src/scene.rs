@@ -489,7 +489,14 @@ mod tests {
         assert!(b.add_sphere(Sphere::new(Vec3::ZERO, 1.0), 7).is_err());
         assert!(b.add_plane(Vec3::ZERO, Vec3::ZERO, 0).is_err());
         assert!(b.background(Vec3::INFINITY).is_err());
+        // Objects built elsewhere: a non-finite box and a missing material are refused.
+        let nan = Shape::Sphere(Sphere::new(Vec3::NAN, 1.0));
+        assert!(b.add_shapes("s", vec![nan], 0).is_err());
+        let ok = Shape::Sphere(Sphere::new(Vec3::ZERO, 1.0));
+        assert!(b.add_shapes("s", vec![ok.clone()], 7).is_err());
         assert_eq!(b.primitive_count(), 0);
+        b.add_shapes("s", vec![ok.clone(), ok], 0).unwrap();
+        assert_eq!(b.primitive_count(), 2);
     }
 
     /// Issue 18: negative colours, a sphere too small for f32, all-degenerate meshes.

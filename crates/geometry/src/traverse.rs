@@ -83,13 +83,6 @@ impl<C: Counters> Closest<'_, C> {
     pub fn limit(&self) -> f32 {
         cull_bound(self.best_t())
     }
-
-    /// The best hit so far, for walks whose own kernels found candidates (offer them with
-    /// [`crate::keep_closer`]).
-    #[inline]
-    pub fn best_mut(&mut self) -> &mut Option<(u32, PrimHit)> {
-        &mut self.state
-    }
 }
 
 impl<C: Counters> AnyHit<'_, C> {
