@@ -67,4 +67,4 @@ pub use sphere::Sphere;
 pub use stack::{CULL_SLACK, NodeStack, cull_bound};
 pub use triangle::Triangle;
 
-pub use glam::{Affine3A, Vec3, Vec3A};
+pub use glam::{Affine3A, Vec2, Vec3, Vec3A};

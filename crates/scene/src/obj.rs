@@ -1,7 +1,7 @@
 //! OBJ+MTL meshes through `tobj`.
 
 use crate::error::LoadError;
-use raybench_core::{Material, MaterialKind, TriangleMesh, Vec3};
+use raybench_core::{Material, MaterialKind, TriangleMesh, Vec2, Vec3};
 use std::path::Path;
 
 /// A loaded mesh with its materials: the shared shape of OBJ and glTF results.
@@ -13,6 +13,12 @@ pub struct MeshData {
     pub materials: Vec<Material>,
     /// Per triangle, an index into `materials`, or `None` for the default material.
     pub triangle_material: Vec<Option<u32>>,
+    /// Per vertex (indexed like `mesh.positions`), the file's vertex normal; empty when the
+    /// file has none.
+    pub normals: Vec<Vec3>,
+    /// Per vertex (indexed like `mesh.positions`), the file's texture coordinates; empty
+    /// when the file has none.
+    pub uvs: Vec<Vec2>,
     /// What is legal but surely not meant (self-intersecting polygons), one sentence each.
     pub warnings: Vec<String>,
 }
