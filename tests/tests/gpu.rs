@@ -194,6 +194,7 @@ fn samples_split_over_dispatches_accumulate() {
         max_depth: 3,
         seed: 3,
         count: false,
+        ..RenderSettings::default()
     };
     let pixels = u64::from(settings.width * settings.height);
     let plan = raybench_wgpu::plan::frame(

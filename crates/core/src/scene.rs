@@ -7,6 +7,7 @@ use crate::Triangle;
 use crate::TriangleMesh;
 use crate::camera::Camera;
 use crate::emitters::Emitters;
+use crate::environment::Environment;
 use crate::limits;
 use crate::material::{Light, Material};
 use crate::voxels::Volume;
@@ -33,8 +34,10 @@ pub struct Scene {
     pub name: String,
     /// The camera.
     pub camera: Camera,
-    /// Radiance of rays that hit nothing (linear RGB).
+    /// Radiance of rays that hit nothing (linear RGB), where there is no environment map.
     pub background: Vec3,
+    /// The environment map that replaces the constant background, if any.
+    pub environment: Option<Arc<Environment>>,
     /// Materials; `prim_material` indexes into this.
     pub materials: Vec<Material>,
     /// Light sources.
@@ -45,7 +48,8 @@ pub struct Scene {
     pub prim_material: Vec<u32>,
     /// The objects, in scene order.
     pub objects: Vec<ObjectInfo>,
-    /// Emissive triangles, for next-event estimation.
+    /// The lights next-event estimation samples: emissive bounded primitives and the
+    /// environment map.
     pub emitters: Emitters,
     /// Voxel volumes, rendered by the modes `mip` and `composite` (not primitives: they
     /// have no ids and acceleration structures never see them).
@@ -62,6 +66,27 @@ impl Scene {
     pub fn material_of(&self, prim: u32) -> &Material {
         &self.materials[self.prim_material[prim as usize] as usize]
     }
+
+    /// The radiance primitive `prim` emits at surface parameters `(u, v)` (a hit's, or a
+    /// sampled light point's; for triangles the barycentric weights of vertices 1 and 2),
+    /// on the front of its geometric normal.
+    #[inline]
+    #[must_use]
+    pub fn emission_at(&self, prim: u32, u: f32, v: f32) -> Vec3 {
+        let _ = (u, v);
+        self.material_of(prim).emission
+    }
+
+    /// The radiance arriving along a ray with direction `dir` that hits nothing: the
+    /// environment map's, or the constant background.
+    #[inline]
+    #[must_use]
+    pub fn background_along(&self, dir: Vec3) -> Vec3 {
+        match &self.environment {
+            Some(env) => env.radiance(dir),
+            None => self.background,
+        }
+    }
 }
 
 /// Builds a [`Scene`], object by object, assigning global primitive ids in call order and
@@ -71,6 +96,7 @@ pub struct SceneBuilder {
     name: String,
     camera: Option<Camera>,
     background: Vec3,
+    environment: Option<Arc<Environment>>,
     materials: Vec<Material>,
     lights: Vec<Light>,
     shapes: Vec<Shape>,
@@ -120,6 +146,7 @@ impl SceneBuilder {
             name: name.into(),
             camera: None,
             background: Vec3::new(0.05, 0.05, 0.08),
+            environment: None,
             materials: vec![Material::default()],
             lights: Vec::new(),
             shapes: Vec::new(),
@@ -148,6 +175,13 @@ impl SceneBuilder {
         colour(color, "background")?;
         self.background = color;
         Ok(self)
+    }
+
+    /// Sets an environment map as the background (seen by rays that miss, sampled as a
+    /// light in `path` mode); it replaces the constant background.
+    pub fn environment(&mut self, environment: Arc<Environment>) -> &mut Self {
+        self.environment = Some(environment);
+        self
     }
 
     /// Adds a material and returns its index.
@@ -436,18 +470,30 @@ impl SceneBuilder {
 
     /// Finishes the scene; without a camera, one framing the geometry is chosen.
     #[must_use]
-    pub fn build(self) -> Scene {
+    pub fn build(mut self) -> Scene {
         let geometry = Geometry::new(self.shapes);
         let framed = self
             .volumes
             .iter()
             .fold(geometry.bounds(), |b, v| b.union(v.bounds()));
         let camera = self.camera.unwrap_or_else(|| Camera::framing(framed));
-        let emitters = Emitters::new(&geometry, &self.prim_material, &self.materials);
+        let (emitters, unbounded) = Emitters::new(
+            &geometry,
+            &self.prim_material,
+            &self.materials,
+            self.environment.as_deref(),
+        );
+        if unbounded > 0 {
+            self.warnings.push(format!(
+                "{unbounded} emissive plane(s) are unbounded: path tracing finds their light \
+                 by BSDF sampling only (no next-event estimation), so expect noise"
+            ));
+        }
         Scene {
             name: self.name,
             camera,
             background: self.background,
+            environment: self.environment,
             materials: self.materials,
             lights: self.lights,
             geometry: Arc::new(geometry),
