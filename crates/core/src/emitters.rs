@@ -346,7 +346,7 @@ impl Emitters {
                 let Some(area) = light_area(shape) else {
                     return 0.0;
                 };
-                if !(cos_y > 0.0) {
+                if cos_y.is_nan() || cos_y <= 0.0 {
                     return 0.0;
                 }
                 d2 / (cos_y * area as f32)

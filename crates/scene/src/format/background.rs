@@ -108,10 +108,6 @@ fn read_map(
         path: path.to_owned(),
         message,
     };
-    let io = |cause| LoadError::Io {
-        path: path.to_owned(),
-        cause,
-    };
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -125,33 +121,22 @@ fn read_map(
             ));
         }
     };
-    crate::check_regular_file(path)?;
-    let open = || -> Result<image::ImageReader<std::io::BufReader<std::fs::File>>, LoadError> {
-        let mut r = image::ImageReader::open(path).map_err(io)?;
-        r.set_format(format);
-        Ok(r)
-    };
-    let (w, h) = open()?
-        .into_dimensions()
-        .map_err(|e| parse(format!("not a readable image: {e}")))?;
-    let texels = u64::from(w) * u64::from(h);
-    if texels == 0 || texels > MAX_ENVIRONMENT_TEXELS {
-        return Err(parse(format!(
-            "{w} x {h} environment map has {texels} texels (1 to {MAX_ENVIRONMENT_TEXELS})"
-        )));
+    let img = crate::samples::decode_image(
+        path,
+        format,
+        "image",
+        MAX_ENVIRONMENT_TEXELS,
+        // The widest decoded form: RGBA f32.
+        16,
+        |texels| budget.reserve(Holds::EnvironmentTexels(texels), context),
+    )?;
+    let (w, h) = (img.width(), img.height());
+    if w == 0 || h == 0 {
+        return Err(parse(format!("the {w} x {h} environment map is empty")));
     }
-    budget.reserve(Holds::EnvironmentTexels(texels), context)?;
-    let mut reader = open()?;
-    let mut limits = image::Limits::default();
-    // Room for the decoded image in its widest form (RGBA f32) and the conversion.
-    limits.max_alloc = Some(texels * 16 * 2 + (1 << 20));
-    reader.limits(limits);
-    let img = reader
-        .decode()
-        .map_err(|e| parse(format!("not a readable image: {e}")))?;
     let rgb = img.into_rgb32f();
     let mut negative = false;
-    let mut out = Vec::with_capacity(texels as usize);
+    let mut out = Vec::with_capacity(rgb.pixels().len());
     for p in rgb.pixels() {
         let v = Vec3::from(p.0);
         if !v.is_finite() {
