@@ -545,6 +545,30 @@ mod tests {
         assert_eq!(b.primitive_count(), 2);
     }
 
+    /// Every bounded emitter is a light; an emissive plane is not (it has no bounds) and
+    /// gets a warning.
+    #[test]
+    fn bounded_emitters_are_lights_and_planes_warn() {
+        let mut b = SceneBuilder::new("t");
+        let lamp = b
+            .add_material(Material {
+                emission: Vec3::ONE,
+                ..Material::default()
+            })
+            .unwrap();
+        b.add_sphere(Sphere::new(Vec3::ZERO, 1.0), lamp).unwrap();
+        b.add_sphere(Sphere::new(Vec3::X * 3.0, 1.0), 0).unwrap();
+        b.add_plane(Vec3::ZERO, Vec3::Y, lamp).unwrap();
+        let s = b.build();
+        assert_eq!(s.emitters.ids, vec![0]);
+        assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+        assert!(
+            s.warnings[0].contains("BSDF sampling only"),
+            "{:?}",
+            s.warnings
+        );
+    }
+
     /// Issue 18: negative colours, a sphere too small for f32, all-degenerate meshes.
     #[test]
     fn silent_garbage_is_refused_or_warned() {
