@@ -155,7 +155,13 @@ pub(crate) enum Holds {
     Vertices(u64),
     /// Volume voxels.
     Voxels(u64),
+    /// Texture texels.
+    Texels(u64),
 }
+
+/// Estimated memory per texture texel, in bytes: 12 for the linear RGB texel the scene
+/// keeps, plus the decoding's transient 8-bit RGBA image and RGB copy (7).
+pub(crate) const TEXEL_BYTES_ESTIMATE: u64 = 19;
 
 impl Holds {
     /// The estimate in bytes, and the same in words.
@@ -172,6 +178,7 @@ impl Holds {
                 "height-field vertices",
             ),
             Self::Voxels(n) => (n, VOXEL_BYTES_ESTIMATE, "voxels"),
+            Self::Texels(n) => (n, TEXEL_BYTES_ESTIMATE, "texture texels"),
         };
         (
             n.saturating_mul(each),

@@ -88,6 +88,9 @@ pub(super) fn path_tile<A: Accel, C: Counters>(
                     m,
                     p,
                     nf,
+                    ns,
+                    albedo,
+                    emission,
                     front,
                     d,
                 }) = st.surface(scene, &seg, hit.as_ref())
@@ -95,7 +98,7 @@ pub(super) fn path_tile<A: Accel, C: Counters>(
                     continue;
                 };
                 if front && (path.specular || !emitters.contains(prim)) {
-                    st.color[px] += seg.weight * m.emission;
+                    st.color[px] += seg.weight * emission;
                 }
                 if depth == settings.max_depth {
                     continue;
@@ -109,12 +112,11 @@ pub(super) fn path_tile<A: Accel, C: Counters>(
                 let u_roulette = path.sampler.next_f32();
 
                 let mut weight = seg.weight;
-                let ray = match m.kind {
+                let (dir, side) = match m.kind {
                     MaterialKind::Diffuse => {
-                        let albedo = m.albedo_at(p);
                         let brdf = albedo * FRAC_1_PI;
                         for light in &scene.lights {
-                            if let Some((ray, irradiance, _)) = light_ray(light, p, nf) {
+                            if let Some((ray, irradiance, _)) = light_ray(light, p, nf, ns) {
                                 shadows.push(ray, px, weight * brdf * irradiance);
                             }
                         }
@@ -127,11 +129,13 @@ pub(super) fn path_tile<A: Accel, C: Counters>(
                             let to = y - origin;
                             let dist2 = to.length_squared();
                             let wi = to / dist2.sqrt();
-                            let cos_x = nf.dot(wi);
+                            let cos_x = ns.dot(wi);
                             // One-sided: the light's front faces the shading point.
                             let cos_y = -tri.normal().dot(wi);
-                            if cos_x > 0.0 && cos_y > 0.0 && dist2 > 0.0 {
-                                let le = scene.material_of(id).emission;
+                            if cos_x > 0.0 && cos_y > 0.0 && dist2 > 0.0 && nf.dot(wi) > 0.0 {
+                                // The point's barycentric weights of vertices 1 and 2.
+                                let s = u_point.0.sqrt();
+                                let le = scene.emission_at(id, u_point.1 * s, s - u_point.1 * s);
                                 // pdf = 1 / area per unit area; geometry term cos cos / d^2.
                                 let value =
                                     weight * brdf * le * (cos_x * cos_y / dist2 * emitter_area);
@@ -141,27 +145,30 @@ pub(super) fn path_tile<A: Accel, C: Counters>(
                         }
                         weight *= albedo;
                         path.specular = false;
-                        Ray::new(
-                            offset_ray_origin(p, nf),
-                            cosine_hemisphere(nf, u_dir.0, u_dir.1),
-                        )
+                        (cosine_hemisphere(ns, u_dir.0, u_dir.1), nf)
                     }
                     MaterialKind::Mirror => {
                         weight *= m.specular;
                         path.specular = true;
-                        Ray::new(offset_ray_origin(p, nf), reflect(d, nf))
+                        (reflect(d, ns), nf)
                     }
                     MaterialKind::Glass => {
                         let (n1, n2) = if front { (1.0, m.ior) } else { (m.ior, 1.0) };
-                        let fr = fresnel_dielectric(-d.dot(nf), n1, n2);
+                        let fr = fresnel_dielectric(-d.dot(ns), n1, n2);
                         weight *= m.specular;
                         path.specular = true;
-                        match refract(d, nf, n1, n2) {
-                            Some(t) if u_choice >= fr => Ray::new(offset_ray_origin(p, -nf), t),
-                            _ => Ray::new(offset_ray_origin(p, nf), reflect(d, nf)),
+                        match refract(d, ns, n1, n2) {
+                            Some(t) if u_choice >= fr => (t, -nf),
+                            _ => (reflect(d, ns), nf),
                         }
                     }
                 };
+                // A direction the shading normal sent below the geometric surface on the
+                // side it leaves from ends the path (pbrt's rule).
+                if dir.dot(side) < 0.0 {
+                    continue;
+                }
+                let ray = Ray::new(offset_ray_origin(p, side), dir);
                 if depth >= ROULETTE_DEPTH {
                     let q = weight.max_element() / seg.weight.max_element().max(f32::MIN_POSITIVE);
                     let q = q.clamp(0.05, 0.95);
