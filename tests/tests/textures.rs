@@ -158,7 +158,11 @@ fn gltf_base_colour_textures_render_their_texels() {
     assert_quadrants(&cast(&scene, 64, Mode::Cast), scale, "cast");
     // Whitted: the light's irradiance (1) on the colour plus the ambient term.
     let whitted = cast(&scene, 64, Mode::Whitted);
-    assert_quadrants(&whitted, scale * (1.0 + raybench_core::AMBIENT), "whitted");
+    assert_quadrants(
+        &whitted,
+        scale * (1.0 + raybench_core::integrator::AMBIENT),
+        "whitted",
+    );
 }
 
 #[test]
@@ -316,13 +320,18 @@ fn sphere_obj(dir: &Path, rings: u32, segments: u32) {
     std::fs::write(dir.join("sphere.obj"), obj).unwrap();
 }
 
-/// The largest brightness step between horizontally neighbouring pixels that both hit.
-fn largest_step(f: &Frame) -> f32 {
+/// The largest brightness step between horizontally neighbouring pixels inside a disc of
+/// `radius` pixels around the image's centre (inside the sphere's silhouette, where the
+/// interpolated normals of its outermost facets turn away from the viewer and the geometric
+/// normals take over).
+fn largest_step(f: &Frame, radius: f32) -> f32 {
     let mut step = 0.0f32;
+    let c = f.width as f32 / 2.0;
     for y in 0..f.height {
         for x in 1..f.width {
             let (a, b) = ((y * f.width + x - 1) as usize, (y * f.width + x) as usize);
-            if f.ids[a] != NO_HIT && f.ids[b] != NO_HIT {
+            if (x as f32 - c).hypot(y as f32 + 0.5 - c) < radius {
+                assert!(f.ids[a] != NO_HIT && f.ids[b] != NO_HIT);
                 step = step.max((f.color[a].x - f.color[b].x).abs());
             }
         }
@@ -352,10 +361,11 @@ fn vertex_normals_shade_smoothly_and_change_no_hit() {
         let s = cast(&smooth, 96, mode);
         let f = cast(&faceted, 96, mode);
         // Ray casting has no shadows (Whitted's shadow rays cut the smooth terminator
-        // along the facets, as in every renderer with shading normals).
+        // along the facets, as in every renderer with shading normals). Measured: steps
+        // of at most 0.013 smooth, 0.28 faceted.
         if mode == Mode::Cast {
-            let (ss, fs) = (largest_step(&s), largest_step(&f));
-            assert!(ss < 0.3 * fs, "{mode:?}: smooth steps {ss}, faceted {fs}");
+            let (ss, fs) = (largest_step(&s, 24.0), largest_step(&f, 24.0));
+            assert!(ss < 0.1 * fs, "{mode:?}: smooth steps {ss}, faceted {fs}");
         }
         // Shading normals change the colours, never the ids or t.
         assert_eq!(s.ids, f.ids, "{mode:?}");
@@ -366,7 +376,7 @@ fn vertex_normals_shade_smoothly_and_change_no_hit() {
         );
         assert_ne!(s.color, f.color);
         // Every exact backend shades the same hits the same way.
-        for backend in EXACT_BACKENDS {
+        for backend in raybench_tests::available(EXACT_BACKENDS) {
             let settings = RenderSettings {
                 width: 96,
                 height: 96,
