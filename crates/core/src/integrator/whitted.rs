@@ -114,13 +114,14 @@ pub(super) fn whitted_tile<A: Accel, C: Counters>(
                 // Mirror and glass rays bent by the shading normal below the geometric
                 // surface on their side are dropped (pbrt's rule): they would start inside.
                 let mut bounce = |weight: Vec3, dir: Vec3, side: Vec3| {
-                    if !(dir.dot(side) < 0.0) {
-                        next.push(Segment {
-                            pixel: seg.pixel,
-                            weight,
-                            ray: Ray::new(offset_ray_origin(p, side), dir),
-                        });
+                    if dir.dot(side) < 0.0 {
+                        return;
                     }
+                    next.push(Segment {
+                        pixel: seg.pixel,
+                        weight,
+                        ray: Ray::new(offset_ray_origin(p, side), dir),
+                    });
                 };
                 match m.kind {
                     MaterialKind::Diffuse => {
