@@ -188,6 +188,18 @@ impl Holds {
 }
 
 impl Reservation {
+    /// A reservation against a budget of `bytes` (for tests of what a budget refuses).
+    #[cfg(test)]
+    pub(crate) fn with_limit(bytes: u64) -> Self {
+        Self {
+            budget: MemoryBudget {
+                bytes: Some(bytes),
+                origin: "test".into(),
+            },
+            used: 0,
+        }
+    }
+
     /// A reservation against the budget in force ([`MemoryBudget::current`]).
     pub(crate) fn new() -> Result<Self, LoadError> {
         Ok(Self {

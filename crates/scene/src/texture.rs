@@ -166,3 +166,53 @@ pub(crate) fn add_textures(
     }
     Ok(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A `w x h` black PNG as a texture of encoded bytes.
+    fn png(w: u32, h: u32) -> TextureRef {
+        let mut out = std::io::Cursor::new(Vec::new());
+        image::RgbImage::new(w, h)
+            .write_to(&mut out, image::ImageFormat::Png)
+            .unwrap();
+        TextureRef {
+            name: format!("{w}x{h}"),
+            source: ImageSource::Bytes {
+                key: format!("{w}x{h}"),
+                bytes: out.into_inner().into(),
+            },
+            wrap: [Wrap::Repeat; 2],
+        }
+    }
+
+    #[test]
+    fn sizes_and_the_budget_apply_before_decoding() {
+        let mut b = SceneBuilder::new("t");
+        let mut budget = Reservation::with_limit(1 << 20);
+        // Small: decoded once, then reused.
+        let small = png(4, 2);
+        let ids = add_textures(&mut b, &[small.clone(), small], &mut budget, "s").unwrap();
+        assert_eq!(ids, [Some(0), Some(0)]);
+        // Wider than the limit: a warning and no texture.
+        let ids = add_textures(&mut b, &[png(MAX_TEXTURE_SIZE + 1, 1)], &mut budget, "s");
+        assert_eq!(ids.unwrap(), [None]);
+        let s = b.build();
+        assert_eq!(s.textures.len(), 1);
+        assert!(
+            s.warnings[0].contains("each side must be 1 to 16384"),
+            "{:?}",
+            s.warnings
+        );
+        // Over the budget (2048 x 2048 texels, 19 bytes each, in 1 MiB): refused.
+        let mut b = SceneBuilder::new("t");
+        let e = add_textures(&mut b, &[png(2048, 2048)], &mut budget, "scene.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("scene.toml: texture 2048x2048") && e.contains("texture texels"),
+            "{e}"
+        );
+    }
+}
