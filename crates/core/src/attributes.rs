@@ -72,7 +72,7 @@ impl ShadingAttributes {
 
     /// Adds the attributes of the object whose triangles are `indices`, from primitive id
     /// `first` on (after every range added so far). `normals` are unit or zero; either
-    /// list may be empty, both empty adds nothing.
+    /// list may be empty; both empty, or no triangle, adds nothing.
     pub(crate) fn push(
         &mut self,
         first: u32,
@@ -80,7 +80,7 @@ impl ShadingAttributes {
         normals: Vec<Vec3>,
         uvs: Vec<Vec2>,
     ) {
-        if normals.is_empty() && uvs.is_empty() {
+        if indices.is_empty() || (normals.is_empty() && uvs.is_empty()) {
             return;
         }
         debug_assert!(self.ranges.last().is_none_or(|r| r.first < first));

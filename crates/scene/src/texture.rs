@@ -173,9 +173,14 @@ mod tests {
 
     /// A `w x h` black PNG as a texture of encoded bytes.
     fn png(w: u32, h: u32) -> TextureRef {
+        encoded(w, h, image::ImageFormat::Png)
+    }
+
+    /// A `w x h` black image in `format` as a texture of encoded bytes.
+    fn encoded(w: u32, h: u32, format: image::ImageFormat) -> TextureRef {
         let mut out = std::io::Cursor::new(Vec::new());
         image::RgbImage::new(w, h)
-            .write_to(&mut out, image::ImageFormat::Png)
+            .write_to(&mut out, format)
             .unwrap();
         TextureRef {
             name: format!("{w}x{h}"),
@@ -195,11 +200,17 @@ mod tests {
         let small = png(4, 2);
         let ids = add_textures(&mut b, &[small.clone(), small], &mut budget, "s").unwrap();
         assert_eq!(ids, [Some(0), Some(0)]);
+        // JPEG too.
+        let jpeg = encoded(8, 8, image::ImageFormat::Jpeg);
+        assert_eq!(
+            add_textures(&mut b, &[jpeg], &mut budget, "s").unwrap(),
+            [Some(1)]
+        );
         // Wider than the limit: a warning and no texture.
         let ids = add_textures(&mut b, &[png(MAX_TEXTURE_SIZE + 1, 1)], &mut budget, "s");
         assert_eq!(ids.unwrap(), [None]);
         let s = b.build();
-        assert_eq!(s.textures.len(), 1);
+        assert_eq!(s.textures.len(), 2);
         assert!(
             s.warnings[0].contains("each side must be 1 to 16384"),
             "{:?}",
