@@ -679,6 +679,51 @@ mod tests {
         assert_eq!(b.primitive_count(), 2);
     }
 
+    #[test]
+    fn attributes_are_checked_and_shade_only() {
+        let mesh = TriangleMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            indices: vec![[0, 1, 2]],
+        };
+        let attrs = |normals: Vec<Vec3>, uvs: Vec<Vec2>| VertexAttributes { normals, uvs };
+        let mut b = SceneBuilder::new("t");
+        let e = b
+            .add_mesh_with_attributes("m", &mesh, attrs(vec![Vec3::Z; 2], vec![]), &[0])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("2 vertex normals for 3 vertices"), "{e}");
+        let nan = vec![Vec2::ZERO, Vec2::NAN, Vec2::ONE];
+        let e = b
+            .add_mesh_with_attributes("m", &mesh, attrs(vec![], nan), &[0])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("texture coordinates of vertex 2"), "{e}");
+        assert_eq!(b.primitive_count(), 0);
+        // Normals opposite to the winding, one of them NaN: the geometric normal, a warning.
+        let n = vec![-Vec3::Z, Vec3::NAN, -Vec3::Z];
+        b.add_mesh_with_attributes("m", &mesh, attrs(n, vec![]), &[0])
+            .unwrap();
+        let n = vec![-Vec3::Z, Vec3::new(0.0, 1.0, -1.0), -Vec3::Z];
+        b.add_mesh_with_attributes("m", &mesh, attrs(n, vec![]), &[0])
+            .unwrap();
+        let s = b.build();
+        assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+        let hit = |prim| Hit {
+            t: 1.0,
+            prim,
+            sub: 0,
+            u: 0.5,
+            v: 0.0,
+            normal: Vec3::Z,
+        };
+        assert_eq!(s.shading(&hit(0), Vec3::ZERO).normal, Vec3::Z);
+        // Half-way between -z and (0, 1, -1) / sqrt 2, turned to the geometric normal's side.
+        let n = s.shading(&hit(1), Vec3::ZERO).normal;
+        let half = 0.5 * 0.5f32.sqrt();
+        let expect = -Vec3::new(0.0, half, -0.5 - half).normalize();
+        assert!((n - expect).length() < 1e-6, "{n}");
+    }
+
     /// Issue 18: negative colours, a sphere too small for f32, all-degenerate meshes.
     #[test]
     fn silent_garbage_is_refused_or_warned() {
