@@ -135,6 +135,42 @@ fn kinds_and_modes_without_kernels_are_refused() {
     ));
 }
 
+/// Textures and shading normals have no WGSL port yet: scenes with them are refused with a
+/// reason (without an adapter too), and faceted ones without textures are not.
+#[test]
+fn textures_and_shading_normals_are_refused() {
+    use raybench_core::{
+        Material, Renderer as _, SceneBuilder, Texture, TriangleMesh, Vec2, Vec3, VertexAttributes,
+        Wrap,
+    };
+    let r = raybench_wgpu::WgpuRenderer::new("wgpu", "test");
+    let mesh = TriangleMesh {
+        positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+        indices: vec![[0, 1, 2]],
+    };
+    let scene = |normals: Vec<Vec3>, textured: bool| {
+        let mut b = SceneBuilder::new("t");
+        let mut m = Material::default();
+        if textured {
+            let t = Texture::new("t", 1, 1, vec![Vec3::ONE], [Wrap::Repeat; 2]).unwrap();
+            m.base_color_texture = Some(b.add_texture("t", t));
+        }
+        let m = b.add_material(m).unwrap();
+        let uvs = vec![Vec2::ZERO; 3];
+        b.add_mesh_with_attributes("m", &mesh, VertexAttributes { normals, uvs }, &[m])
+            .unwrap();
+        b.build()
+    };
+    let why = r.supports(&scene(vec![], true)).unwrap_err();
+    assert!(why.contains("no textures"), "{why}");
+    let why = r.supports(&scene(vec![Vec3::Z; 3], false)).unwrap_err();
+    assert!(why.contains("no shading normals"), "{why}");
+    // Texture coordinates alone change nothing the GPU renders.
+    let plain = scene(vec![], false);
+    assert!(!plain.attributes.is_empty());
+    assert_eq!(r.supports(&plain), Ok(()));
+}
+
 /// Rays no camera makes: NaN, zero and infinite directions must miss on the GPU as on the
 /// CPU (and not poison their neighbours in the same workgroup); denormal, huge and
 /// axis-aligned rays must find naive's hits.

@@ -1,8 +1,9 @@
 //! # raybench-core
 //!
 //! The rendering core: the scene data model and its checked builder, materials and lights,
-//! the pinhole camera, voxel volumes, the per-pixel integrators, the standard ray sets, and
-//! the frame-level [`Renderer`] contract that every backend is driven through.
+//! textures and the shading attributes of meshes, the pinhole camera, voxel volumes, the
+//! per-pixel integrators, the standard ray sets, and the frame-level [`Renderer`] contract
+//! that every backend is driven through.
 //!
 //! What a ray meets (rays, boxes, hits, primitives, [`Geometry`], the [`Accel`] contract and
 //! its traversal kit) lives one crate below, in `raybench-geometry`, which this crate
@@ -12,6 +13,7 @@
 //! **Architecture invariant:** this crate knows nothing of threads, I/O, SIMD intrinsics or
 //! GPUs. It depends on `raybench-geometry` and `glam` and nothing else.
 
+mod attributes;
 mod camera;
 mod emitters;
 mod environment;
@@ -22,10 +24,12 @@ pub mod optics;
 pub mod ray_sets;
 mod renderer;
 mod scene;
+mod texture;
 pub mod voxels;
 
 pub use raybench_geometry::*;
 
+pub use attributes::{AttributeRange, AttributesAt, ShadingAttributes, VertexAttributes};
 pub use camera::{Camera, CameraOverrides, CameraRays, NamedCamera};
 pub use emitters::{Chosen, Emitters, LightSample};
 pub use environment::{Environment, luminance};
@@ -33,7 +37,8 @@ pub use frame::{Frame, FrameStats, NO_HIT, Timings};
 pub use material::{Checker, Light, Material, MaterialKind};
 pub use ray_sets::RaySet;
 pub use renderer::{LightSampling, Mode, RenderError, RenderSettings, Renderer, TracedRays};
-pub use scene::{ObjectInfo, Scene, SceneBuilder};
+pub use scene::{ObjectInfo, Scene, SceneBuilder, SurfaceShading};
+pub use texture::{MAX_TEXTURE_SIZE, Texture, Wrap, srgb_to_linear};
 pub use voxels::{
     Sampling, TransferFunction, TransferPoint, Volume, VolumeData, VolumeParams, VolumeSample,
 };

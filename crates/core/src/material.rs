@@ -32,6 +32,15 @@ pub struct Material {
     pub ior: f32,
     /// An optional checkerboard replacing `base_color` on alternate squares.
     pub checker: Option<Checker>,
+    /// An optional base-colour texture (an index into [`crate::Scene::textures`]): the
+    /// diffuse colour is `base_color` times its texel at the hit's texture coordinates
+    /// (glTF `baseColorTexture` times `baseColorFactor`, MTL `map_Kd` times `Kd`).
+    /// Primitives without texture coordinates get `base_color` alone.
+    pub base_color_texture: Option<u32>,
+    /// An optional emission texture (an index into [`crate::Scene::textures`]): the
+    /// emitted radiance is `emission` times its texel (glTF `emissiveTexture` times
+    /// `emissiveFactor`).
+    pub emission_texture: Option<u32>,
 }
 
 /// A checkerboard in x and z (for floors): squares of edge `size` alternate between the
@@ -75,6 +84,8 @@ impl Default for Material {
             emission: Vec3::ZERO,
             ior: 1.5,
             checker: None,
+            base_color_texture: None,
+            emission_texture: None,
         }
     }
 }

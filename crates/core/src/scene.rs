@@ -5,14 +5,17 @@ use crate::SceneError;
 use crate::Sphere;
 use crate::Triangle;
 use crate::TriangleMesh;
+use crate::attributes::{ShadingAttributes, VertexAttributes};
 use crate::camera::{Camera, CameraOverrides, NamedCamera};
 use crate::emitters::Emitters;
 use crate::environment::Environment;
 use crate::limits;
 use crate::material::{Light, Material};
+use crate::texture::Texture;
 use crate::voxels::Volume;
-use crate::{Geometry, Shape};
-use glam::Vec3;
+use crate::{Geometry, Hit, Shape};
+use glam::{Vec2, Vec3};
+use std::collections::HashMap;
 use std::sync::Arc;
 
 /// One object of the scene file and the primitive ids it became.
@@ -58,9 +61,29 @@ pub struct Scene {
     /// Voxel volumes, rendered by the modes `mip` and `composite` (not primitives: they
     /// have no ids and acceleration structures never see them).
     pub volumes: Vec<Arc<Volume>>,
+    /// Image textures, each held once and shared by the materials naming it
+    /// ([`Material::base_color_texture`], [`Material::emission_texture`]).
+    pub textures: Vec<Arc<Texture>>,
+    /// Vertex normals and texture coordinates of the meshes that have them.
+    pub attributes: ShadingAttributes,
     /// What is legal but surely not what was meant (an object whose triangles are all
     /// degenerate, ...), one sentence each; the command line prints them as warnings.
     pub warnings: Vec<String>,
+}
+
+/// What a surface looks like at a hit, beyond where it is: what the integrators shade.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceShading {
+    /// The unit shading normal, on the side the geometric normal ([`Hit::normal`]) points
+    /// to: the vertex normals interpolated, or the geometric normal without them.
+    pub normal: Vec3,
+    /// The diffuse colour (checkerboard and base-colour texture applied).
+    pub albedo: Vec3,
+    /// The base colour times its texture, without the checkerboard: ray casting's colour
+    /// (which leaves checkerboards out, as the GPU's port does).
+    pub base_color: Vec3,
+    /// The emitted radiance (emission texture applied).
+    pub emission: Vec3,
 }
 
 impl Scene {
@@ -113,14 +136,55 @@ impl Scene {
         &self.materials[self.prim_material[prim as usize] as usize]
     }
 
-    /// The radiance primitive `prim` emits at surface parameters `(u, v)` (a hit's, or a
-    /// sampled light point's; for triangles the barycentric weights of vertices 1 and 2),
-    /// on the front of its geometric normal.
+    /// Texture `t` at `uv`, or 1 without texture (a factor to multiply with).
+    #[inline]
+    fn texel(&self, t: Option<u32>, uv: Option<Vec2>) -> Vec3 {
+        match (t, uv) {
+            (Some(t), Some(uv)) => self.textures[t as usize].sample(uv),
+            _ => Vec3::ONE,
+        }
+    }
+
+    /// The shading normal, colour and emission at `hit`, whose point is `p`. The vertex
+    /// normals are interpolated with the hit's barycentric weights `u`, `v` and flipped,
+    /// when they disagree with the winding, to the geometric normal's side.
+    #[inline]
+    #[must_use]
+    pub fn shading(&self, hit: &Hit, p: Vec3) -> SurfaceShading {
+        let m = self.material_of(hit.prim);
+        let at = self.attributes.at(hit.prim, hit.u, hit.v);
+        let normal = match at.normal {
+            Some(n) if n.dot(hit.normal) < 0.0 => -n,
+            Some(n) => n,
+            None => hit.normal,
+        };
+        let texel = self.texel(m.base_color_texture, at.uv);
+        SurfaceShading {
+            normal,
+            albedo: m.albedo_at(p) * texel,
+            base_color: m.base_color * texel,
+            emission: m.emission * self.texel(m.emission_texture, at.uv),
+        }
+    }
+
+    /// The radiance primitive `prim` emits at surface parameters `u`, `v` (for triangles
+    /// the barycentric weights of vertices 1 and 2), the emission texture applied.
     #[inline]
     #[must_use]
     pub fn emission_at(&self, prim: u32, u: f32, v: f32) -> Vec3 {
-        let _ = (u, v);
-        self.material_of(prim).emission
+        let m = self.material_of(prim);
+        if m.emission_texture.is_none() {
+            return m.emission;
+        }
+        m.emission * self.texel(m.emission_texture, self.attributes.at(prim, u, v).uv)
+    }
+
+    /// Whether some material uses a texture.
+    #[must_use]
+    pub fn has_textures(&self) -> bool {
+        self.materials
+            .iter()
+            .any(|m| m.base_color_texture.is_some() || m.emission_texture.is_some())
     }
 
     /// The radiance arriving along a ray with direction `dir` that hits nothing: the
@@ -149,6 +213,9 @@ pub struct SceneBuilder {
     prim_material: Vec<u32>,
     objects: Vec<ObjectInfo>,
     volumes: Vec<Arc<Volume>>,
+    textures: Vec<Arc<Texture>>,
+    texture_keys: HashMap<String, u32>,
+    attributes: ShadingAttributes,
     warnings: Vec<String>,
 }
 
@@ -199,6 +266,9 @@ impl SceneBuilder {
             prim_material: Vec::new(),
             objects: Vec::new(),
             volumes: Vec::new(),
+            textures: Vec::new(),
+            texture_keys: HashMap::new(),
+            attributes: ShadingAttributes::default(),
             warnings: Vec::new(),
         }
     }
@@ -277,6 +347,16 @@ impl SceneBuilder {
                 "{what}: ior must be positive and finite"
             )));
         }
+        for t in [m.base_color_texture, m.emission_texture]
+            .into_iter()
+            .flatten()
+        {
+            if t as usize >= self.textures.len() {
+                return Err(SceneError::Invalid(format!(
+                    "{what}: texture index {t} does not exist"
+                )));
+            }
+        }
         if let Some(c) = m.checker {
             colour(c.color, &format!("{what}: checker color"))?;
             if !(c.size.is_finite() && c.size > 0.0) {
@@ -287,6 +367,27 @@ impl SceneBuilder {
         }
         self.materials.push(m);
         Ok((self.materials.len() - 1) as u32)
+    }
+
+    /// Adds a texture under `key` (what identifies its source: a canonical file path and
+    /// its wrap modes, say) and returns its index; a texture already added under `key` is
+    /// not added again, its index is returned.
+    pub fn add_texture(&mut self, key: impl Into<String>, texture: Texture) -> u32 {
+        let key = key.into();
+        if let Some(&i) = self.texture_keys.get(&key) {
+            return i;
+        }
+        self.textures.push(Arc::new(texture));
+        let i = (self.textures.len() - 1) as u32;
+        self.texture_keys.insert(key, i);
+        i
+    }
+
+    /// The index of the texture added under `key`, if any (so a loader decodes each image
+    /// once per scene).
+    #[must_use]
+    pub fn texture(&self, key: &str) -> Option<u32> {
+        self.texture_keys.get(key).copied()
     }
 
     /// Adds a light.
@@ -501,6 +602,68 @@ impl SceneBuilder {
         Ok(self)
     }
 
+    /// Adds a triangle mesh with one material per triangle (`materials[i]` for triangle
+    /// `i`) and per-vertex shading attributes, as one object: the entry point of mesh
+    /// files. Either attribute list may be empty; a non-empty one has one entry per vertex.
+    /// Vertex normals are normalised; zero or non-finite ones are replaced by the geometric
+    /// normal of their triangles, with a warning. Texture coordinates outside `[0, 1]` wrap
+    /// (the texture's modes decide how).
+    ///
+    /// # Errors
+    /// From [`TriangleMesh::validate`]; when an attribute list's length is not the vertex
+    /// count, a texture coordinate is not finite, a material does not exist, the lengths of
+    /// `materials` and the triangles differ, or the scene grows past the limit.
+    pub fn add_mesh_with_attributes(
+        &mut self,
+        name: impl Into<String>,
+        mesh: &TriangleMesh,
+        attributes: VertexAttributes,
+        materials: &[u32],
+    ) -> Result<&mut Self, SceneError> {
+        let name = name.into();
+        mesh.validate()?;
+        let vertices = mesh.positions.len();
+        for (what, len) in [
+            ("vertex normals", attributes.normals.len()),
+            ("texture coordinates", attributes.uvs.len()),
+        ] {
+            if len != 0 && len != vertices {
+                return Err(SceneError::Invalid(format!(
+                    "{name}: {len} {what} for {vertices} vertices"
+                )));
+            }
+        }
+        if let Some(i) = attributes.uvs.iter().position(|uv| !uv.is_finite()) {
+            return Err(SceneError::NonFinite(format!(
+                "{name}: texture coordinates of vertex {}",
+                i + 1
+            )));
+        }
+        let mut unusable = 0usize;
+        let normals: Vec<Vec3> = attributes
+            .normals
+            .iter()
+            .map(|n| {
+                n.try_normalize().unwrap_or_else(|| {
+                    unusable += 1;
+                    Vec3::ZERO
+                })
+            })
+            .collect();
+        let triangles: Vec<Triangle> = mesh.triangles().collect();
+        let first = self.shapes.len() as u32;
+        self.add_triangles(name.clone(), &triangles, materials)?;
+        if unusable > 0 {
+            self.warn(format!(
+                "{name}: {unusable} vertex normals are zero or not finite: their triangles \
+                 are shaded with their geometric normals"
+            ));
+        }
+        self.attributes
+            .push(first, mesh.indices.clone(), normals, attributes.uvs);
+        Ok(self)
+    }
+
     /// Adds a voxel volume.
     ///
     /// # Errors
@@ -515,8 +678,13 @@ impl SceneBuilder {
 
     /// Records a warning: something legal but surely not what was meant. It ends up in
     /// [`Scene::warnings`].
+    /// A warning already recorded is not repeated (a missing texture named by several
+    /// materials is one warning).
     pub fn warn(&mut self, message: impl Into<String>) {
-        self.warnings.push(message.into());
+        let message = message.into();
+        if !self.warnings.contains(&message) {
+            self.warnings.push(message);
+        }
     }
 
     /// Warns when every one of an object's triangles (at least one) has zero area: they are
@@ -587,6 +755,8 @@ impl SceneBuilder {
             objects: self.objects,
             emitters,
             volumes: self.volumes,
+            textures: self.textures,
+            attributes: self.attributes,
             warnings: self.warnings,
         }
     }
@@ -653,6 +823,51 @@ mod tests {
             "{:?}",
             s.warnings
         );
+    }
+
+    #[test]
+    fn attributes_are_checked_and_shade_only() {
+        let mesh = TriangleMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            indices: vec![[0, 1, 2]],
+        };
+        let attrs = |normals: Vec<Vec3>, uvs: Vec<Vec2>| VertexAttributes { normals, uvs };
+        let mut b = SceneBuilder::new("t");
+        let e = b
+            .add_mesh_with_attributes("m", &mesh, attrs(vec![Vec3::Z; 2], vec![]), &[0])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("2 vertex normals for 3 vertices"), "{e}");
+        let nan = vec![Vec2::ZERO, Vec2::NAN, Vec2::ONE];
+        let e = b
+            .add_mesh_with_attributes("m", &mesh, attrs(vec![], nan), &[0])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("texture coordinates of vertex 2"), "{e}");
+        assert_eq!(b.primitive_count(), 0);
+        // Normals opposite to the winding, one of them NaN: the geometric normal, a warning.
+        let n = vec![-Vec3::Z, Vec3::NAN, -Vec3::Z];
+        b.add_mesh_with_attributes("m", &mesh, attrs(n, vec![]), &[0])
+            .unwrap();
+        let n = vec![-Vec3::Z, Vec3::new(0.0, 1.0, -1.0), -Vec3::Z];
+        b.add_mesh_with_attributes("m", &mesh, attrs(n, vec![]), &[0])
+            .unwrap();
+        let s = b.build();
+        assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+        let hit = |prim| Hit {
+            t: 1.0,
+            prim,
+            sub: 0,
+            u: 0.5,
+            v: 0.0,
+            normal: Vec3::Z,
+        };
+        assert_eq!(s.shading(&hit(0), Vec3::ZERO).normal, Vec3::Z);
+        // Half-way between -z and (0, 1, -1) / sqrt 2, turned to the geometric normal's side.
+        let n = s.shading(&hit(1), Vec3::ZERO).normal;
+        let half = 0.5 * 0.5f32.sqrt();
+        let expect = -Vec3::new(0.0, half, -0.5 - half).normalize();
+        assert!((n - expect).length() < 1e-6, "{n}");
     }
 
     /// Issue 18: negative colours, a sphere too small for f32, all-degenerate meshes.

@@ -157,11 +157,16 @@ pub(crate) enum Holds {
     Voxels(u64),
     /// Texels of an environment map.
     EnvironmentTexels(u64),
+    /// Texture texels.
+    Texels(u64),
 }
 
 /// Bytes per environment-map texel while it loads: the decoded RGBA f32 image (16), the
 /// linear RGB copy (12) and the sampling table (8).
 const ENVIRONMENT_TEXEL_BYTES_ESTIMATE: u64 = 36;
+/// Estimated memory per texture texel, in bytes: 12 for the linear RGB texel the scene
+/// keeps, plus the decoding's transient 8-bit RGBA image and RGB copy (7).
+pub(crate) const TEXEL_BYTES_ESTIMATE: u64 = 19;
 
 impl Holds {
     /// The estimate in bytes, and the same in words.
@@ -183,6 +188,7 @@ impl Holds {
                 ENVIRONMENT_TEXEL_BYTES_ESTIMATE,
                 "environment-map texels",
             ),
+            Self::Texels(n) => (n, TEXEL_BYTES_ESTIMATE, "texture texels"),
         };
         (
             n.saturating_mul(each),
@@ -192,6 +198,18 @@ impl Holds {
 }
 
 impl Reservation {
+    /// A reservation against a budget of `bytes` (for tests of what a budget refuses).
+    #[cfg(test)]
+    pub(crate) fn with_limit(bytes: u64) -> Self {
+        Self {
+            budget: MemoryBudget {
+                bytes: Some(bytes),
+                origin: "test".into(),
+            },
+            used: 0,
+        }
+    }
+
     /// A reservation against the budget in force ([`MemoryBudget::current`]).
     pub(crate) fn new() -> Result<Self, LoadError> {
         Ok(Self {

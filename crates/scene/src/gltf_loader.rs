@@ -2,9 +2,11 @@
 
 use crate::error::LoadError;
 use crate::obj::MeshData;
+use crate::texture::{ImageSource, TextureRef};
 use base64::Engine as _;
-use glam::{Mat4, Vec3};
-use raybench_core::{Camera, Material, NamedCamera, TriangleMesh};
+use glam::{Mat3, Mat4, Vec2, Vec3};
+use raybench_core::{Camera, Material, NamedCamera, TriangleMesh, Wrap};
+use std::collections::HashMap;
 use std::path::Path;
 
 fn parse_err(path: &Path, message: impl Into<String>) -> LoadError {
@@ -164,6 +166,7 @@ pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<MeshData, LoadError>
         materials: doc.materials().map(|m| material_of(&m)).collect(),
         ..Default::default()
     };
+    add_material_textures(path, doc, &buffers, &mut data);
     let scene = doc.default_scene().or_else(|| doc.scenes().next());
     match scene {
         Some(scene) => {
@@ -271,44 +274,53 @@ fn add_camera(camera: &gltf::Camera, node: usize, world: Mat4, data: &mut MeshDa
     data.cameras.push(NamedCamera { name, camera: cam });
 }
 
+/// Refuses an accessor the `gltf` crate's readers would panic on: strides no shorter than
+/// an element of `elem` bytes, at least one element, and data inside its buffer view.
+fn check_accessor(
+    path: &Path,
+    a: &gltf::Accessor,
+    what: &str,
+    elem: usize,
+) -> Result<(), LoadError> {
+    let bad = |why: &str| parse_err(path, format!("accessor {} ({what}): {why}", a.index()));
+    if a.count() == 0 {
+        return Err(bad("no elements"));
+    }
+    let view = a
+        .view()
+        .ok_or_else(|| bad("no buffer view (sparse accessors are not supported)"))?;
+    let stride = view.stride().unwrap_or(elem);
+    if stride < elem {
+        return Err(bad("byte stride shorter than an element"));
+    }
+    let end = a
+        .offset()
+        .checked_add(
+            (a.count() - 1)
+                .checked_mul(stride)
+                .ok_or_else(|| bad("too large"))?,
+        )
+        .and_then(|e| e.checked_add(elem))
+        .ok_or_else(|| bad("too large"))?;
+    if end > view.length() {
+        return Err(bad("runs past its buffer view"));
+    }
+    let view_end = view
+        .offset()
+        .checked_add(view.length())
+        .ok_or_else(|| bad("too large"))?;
+    if view_end > view.buffer().length() {
+        return Err(bad("buffer view runs past its buffer"));
+    }
+    Ok(())
+}
+
 /// Refuses accessors the `gltf` crate's readers would panic on: positions must be `f32`
 /// VEC3 and indices unsigned scalars, with strides no shorter than an element, at least one
 /// element, and data inside their buffer view.
 fn check_accessors(path: &Path, prim: &gltf::Primitive) -> Result<(), LoadError> {
     use gltf::accessor::{DataType, Dimensions};
-    let check = |a: &gltf::Accessor, what: &str, elem: usize| -> Result<(), LoadError> {
-        let bad = |why: &str| parse_err(path, format!("accessor {} ({what}): {why}", a.index()));
-        if a.count() == 0 {
-            return Err(bad("no elements"));
-        }
-        let view = a
-            .view()
-            .ok_or_else(|| bad("no buffer view (sparse accessors are not supported)"))?;
-        let stride = view.stride().unwrap_or(elem);
-        if stride < elem {
-            return Err(bad("byte stride shorter than an element"));
-        }
-        let end = a
-            .offset()
-            .checked_add(
-                (a.count() - 1)
-                    .checked_mul(stride)
-                    .ok_or_else(|| bad("too large"))?,
-            )
-            .and_then(|e| e.checked_add(elem))
-            .ok_or_else(|| bad("too large"))?;
-        if end > view.length() {
-            return Err(bad("runs past its buffer view"));
-        }
-        let view_end = view
-            .offset()
-            .checked_add(view.length())
-            .ok_or_else(|| bad("too large"))?;
-        if view_end > view.buffer().length() {
-            return Err(bad("buffer view runs past its buffer"));
-        }
-        Ok(())
-    };
+    let check = |a: &gltf::Accessor, what: &str, elem: usize| check_accessor(path, a, what, elem);
     let position = prim
         .get(&gltf::Semantic::Positions)
         .ok_or_else(|| parse_err(path, "a primitive has no POSITION attribute"))?;
@@ -379,6 +391,15 @@ fn add_mesh(
         let base = data.mesh.positions.len() as u32;
         let material = prim.material().index().map(|i| i as u32);
         data.mesh.positions.extend_from_slice(&local.positions);
+        add_shading_attributes(
+            path,
+            mesh.index(),
+            &prim,
+            world,
+            buffers,
+            base as usize,
+            data,
+        )?;
         for [a, b, c] in local.indices {
             data.mesh.indices.push([a + base, b + base, c + base]);
             data.triangle_material.push(material);
@@ -388,6 +409,217 @@ fn add_mesh(
         }
     }
     Ok(())
+}
+
+/// Reads a primitive's vertex normals (`NORMAL`, through the inverse transpose of the
+/// node's world matrix) and texture coordinates (`TEXCOORD_0`) into `data`, whose vertices
+/// of this primitive start at `base`; then pads the lists to every vertex so far
+/// ([`MeshData::pad_attributes`]).
+fn add_shading_attributes(
+    path: &Path,
+    mesh: usize,
+    prim: &gltf::Primitive,
+    world: Mat4,
+    buffers: &[Vec<u8>],
+    base: usize,
+    data: &mut MeshData,
+) -> Result<(), LoadError> {
+    use gltf::accessor::{DataType, Dimensions};
+    let count = data.mesh.positions.len() - base;
+    let check = |a: &gltf::Accessor, what: &str, elem: usize| {
+        check_accessor(path, a, what, elem)?;
+        if a.count() != count {
+            return Err(parse_err(
+                path,
+                format!(
+                    "mesh {mesh}: {what} has {} elements for {count} vertices",
+                    a.count()
+                ),
+            ));
+        }
+        Ok(())
+    };
+    let normal = prim.get(&gltf::Semantic::Normals);
+    if let Some(a) = &normal {
+        if a.data_type() != DataType::F32 || a.dimensions() != Dimensions::Vec3 {
+            return Err(parse_err(
+                path,
+                format!("mesh {mesh}: NORMAL must be f32 VEC3"),
+            ));
+        }
+        check(a, "NORMAL", 12)?;
+    }
+    let uv = prim.get(&gltf::Semantic::TexCoords(0));
+    if let Some(a) = &uv {
+        let elem = match (a.data_type(), a.normalized()) {
+            (DataType::F32, _) => 8,
+            (DataType::U8, true) => 2,
+            (DataType::U16, true) => 4,
+            _ => {
+                return Err(parse_err(
+                    path,
+                    format!("mesh {mesh}: TEXCOORD_0 must be f32 or normalised u8 or u16"),
+                ));
+            }
+        };
+        if a.dimensions() != Dimensions::Vec2 {
+            return Err(parse_err(
+                path,
+                format!("mesh {mesh}: TEXCOORD_0 must be VEC2"),
+            ));
+        }
+        check(a, "TEXCOORD_0", elem)?;
+    }
+    let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+    if normal.is_some()
+        && let Some(normals) = reader.read_normals()
+    {
+        let m = Mat3::from_mat4(world).inverse().transpose();
+        data.normals.resize(base, Vec3::ZERO);
+        data.normals.extend(normals.map(|n| m * Vec3::from(n)));
+    }
+    if uv.is_some()
+        && let Some(uvs) = reader.read_tex_coords(0)
+    {
+        data.uvs.resize(base, Vec2::ZERO);
+        data.uvs.extend(uvs.into_f32().map(Vec2::from));
+    }
+    data.pad_attributes();
+    Ok(())
+}
+
+/// `%XX` escapes of a URI decoded (image file names with spaces).
+fn percent_decode(uri: &str) -> String {
+    let b = uri.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        let hex = b
+            .get(i + 1..i + 3)
+            .and_then(|h| std::str::from_utf8(h).ok())
+            .and_then(|h| u8::from_str_radix(h, 16).ok());
+        match (b[i], hex) {
+            (b'%', Some(x)) => {
+                out.push(x);
+                i += 3;
+            }
+            (c, _) => {
+                out.push(c);
+                i += 1;
+            }
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+/// The texture a material's texture slot names (`what`: `baseColorTexture`, ...): its
+/// image (a file beside the glTF file, a data URI or a buffer view) and its sampler's wrap
+/// modes; `Err` says why it cannot be used.
+fn texture_ref(
+    path: &Path,
+    info: &gltf::texture::Info,
+    buffers: &[Vec<u8>],
+) -> Result<TextureRef, String> {
+    use gltf::texture::WrappingMode;
+    if info.tex_coord() != 0 {
+        return Err(format!(
+            "it uses TEXCOORD_{} (only TEXCOORD_0 is read)",
+            info.tex_coord()
+        ));
+    }
+    let texture = info.texture();
+    let image = texture.source();
+    let wrap = |m: WrappingMode| match m {
+        WrappingMode::Repeat => Wrap::Repeat,
+        WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+        WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+    };
+    let sampler = texture.sampler();
+    let wrap = [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())];
+    let key = format!("{} image {}", path.display(), image.index());
+    let name = format!("image {} of {}", image.index(), path.display());
+    let bytes = |bytes: Vec<u8>| ImageSource::Bytes {
+        key: key.clone(),
+        bytes: bytes.into(),
+    };
+    let source = match image.source() {
+        gltf::image::Source::View { view, .. } => {
+            let start = view.offset();
+            let data = buffers
+                .get(view.buffer().index())
+                .and_then(|b| b.get(start..start.checked_add(view.length())?))
+                .ok_or("its buffer view runs past its buffer")?;
+            bytes(data.to_vec())
+        }
+        gltf::image::Source::Uri { uri, .. } => match uri.strip_prefix("data:") {
+            Some(rest) => {
+                let (_, payload) = rest
+                    .split_once(";base64,")
+                    .ok_or("its data URI is not base64")?;
+                let data = base64::engine::general_purpose::STANDARD
+                    .decode(payload)
+                    .map_err(|e| format!("bad base64 image: {e}"))?;
+                bytes(data)
+            }
+            None => {
+                let file = path
+                    .parent()
+                    .unwrap_or(Path::new("."))
+                    .join(percent_decode(uri));
+                return Ok(TextureRef {
+                    name: file.display().to_string(),
+                    source: ImageSource::File(file),
+                    wrap,
+                });
+            }
+        },
+    };
+    Ok(TextureRef { name, source, wrap })
+}
+
+/// Points the file's materials at their base-colour and emissive textures (glTF
+/// `baseColorTexture` and `emissiveTexture`, which multiply `baseColorFactor` and
+/// `emissiveFactor`), listed once each in `data.textures`; one that cannot be located is a
+/// warning and a flat colour.
+fn add_material_textures(
+    path: &Path,
+    doc: &gltf::Document,
+    buffers: &[Vec<u8>],
+    data: &mut MeshData,
+) {
+    let mut listed: HashMap<usize, Option<u32>> = HashMap::new();
+    let mut slot = |info: Option<gltf::texture::Info>, what: &str, data: &mut MeshData| {
+        let info = info?;
+        *listed.entry(info.texture().index()).or_insert_with(|| {
+            match texture_ref(path, &info, buffers) {
+                Ok(t) => {
+                    data.textures.push(t);
+                    Some(data.textures.len() as u32 - 1)
+                }
+                Err(why) => {
+                    data.warnings.push(format!(
+                        "{}: texture {} ({what}) cannot be used ({why}): its materials keep \
+                         their flat colour",
+                        path.display(),
+                        info.texture().index()
+                    ));
+                    None
+                }
+            }
+        })
+    };
+    for (i, m) in doc.materials().enumerate() {
+        let base = slot(
+            m.pbr_metallic_roughness().base_color_texture(),
+            "baseColorTexture",
+            data,
+        );
+        let emissive = slot(m.emissive_texture(), "emissiveTexture", data);
+        if let Some(material) = data.materials.get_mut(i) {
+            material.base_color_texture = base;
+            material.emission_texture = emissive;
+        }
+    }
 }
 
 #[cfg(test)]

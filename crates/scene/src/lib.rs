@@ -22,6 +22,7 @@ mod gltf_loader;
 mod obj;
 pub mod phantom;
 pub mod samples;
+mod texture;
 mod transform;
 
 pub use bpt::{BptPatch, load_bpt_file, parse_bpt};
@@ -35,6 +36,7 @@ pub use error::LoadError;
 pub use format::{load_scene_str, load_toml_file};
 pub use gltf_loader::{load_gltf_bytes, load_gltf_file};
 pub use obj::{MeshData, load_obj_bytes, load_obj_file};
+pub use texture::{ImageSource, TextureRef};
 pub use transform::Transform;
 
 use raybench_core::{Light, Scene, SceneBuilder, SceneError, Vec3};

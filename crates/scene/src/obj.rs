@@ -1,8 +1,11 @@
 //! OBJ+MTL meshes through `tobj`.
 
 use crate::error::LoadError;
-use raybench_core::{Material, MaterialKind, NamedCamera, TriangleMesh, Vec2, Vec3};
-use std::path::Path;
+use crate::texture::{ImageSource, TextureRef};
+use raybench_core::{Material, MaterialKind, NamedCamera, TriangleMesh, Vec2, Vec3, Wrap};
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
 
 /// A loaded mesh with its materials: the shared shape of OBJ and glTF results.
 #[derive(Clone, Debug, Default)]
@@ -16,13 +19,32 @@ pub struct MeshData {
     /// Per vertex (indexed like `mesh.positions`), the file's vertex normal; empty when the
     /// file has none.
     pub normals: Vec<Vec3>,
-    /// Per vertex (indexed like `mesh.positions`), the file's texture coordinates; empty
-    /// when the file has none.
+    /// Per vertex (indexed like `mesh.positions`), the file's texture coordinates (glTF's
+    /// convention: `v` counts down from the image's top row); empty when the file has none.
     pub uvs: Vec<Vec2>,
     /// Cameras the file defines (glTF), in node order; a bare mesh scene renders the first.
     pub cameras: Vec<NamedCamera>,
+    /// The textures the materials name: a material's `base_color_texture` and
+    /// `emission_texture` index this list (not yet the scene's textures; they are decoded
+    /// when the mesh is added to a scene).
+    pub textures: Vec<TextureRef>,
     /// What is legal but surely not meant (self-intersecting polygons), one sentence each.
     pub warnings: Vec<String>,
+}
+
+impl MeshData {
+    /// Extends the non-empty attribute lists to one entry per vertex: vertices of parts
+    /// without normals get zero normals (their triangles are shaded with the geometric
+    /// normal), those without texture coordinates `(0, 0)`.
+    pub(crate) fn pad_attributes(&mut self) {
+        let vertices = self.mesh.positions.len();
+        if !self.normals.is_empty() {
+            self.normals.resize(vertices, Vec3::ZERO);
+        }
+        if !self.uvs.is_empty() {
+            self.uvs.resize(vertices, Vec2::ZERO);
+        }
+    }
 }
 
 /// The warning for the self-intersecting faces `bad` (0-based, at least one) of an
@@ -79,7 +101,42 @@ pub fn material_from_mtl(m: &tobj::Material) -> Material {
         emission,
         ior: m.optical_density.filter(|&n| n > 0.0).unwrap_or(d.ior),
         checker: None,
+        base_color_texture: None,
+        emission_texture: None,
     }
+}
+
+/// The image file and wrap mode of an MTL texture statement's value (`map_Kd -clamp on
+/// wood.png`): options are skipped (`-clamp on` clamps to the edge), backslashes become
+/// slashes, the rest is the file name, relative to the MTL file's folder `dir`.
+fn mtl_texture(value: &str, dir: &Path) -> Option<TextureRef> {
+    let mut words = value.split_whitespace().peekable();
+    let mut wrap = Wrap::Repeat;
+    while let Some(option) = words.next_if(|w| w.starts_with('-')) {
+        let numbers = match option {
+            "-o" | "-s" | "-t" => 3,
+            "-mm" => 2,
+            "-clamp" => {
+                if words.next() == Some("on") {
+                    wrap = Wrap::ClampToEdge;
+                }
+                0
+            }
+            _ => 1,
+        };
+        for _ in 0..numbers {
+            // `-o`, `-s` and `-t` take one to three numbers.
+            if words.next_if(|w| w.parse::<f32>().is_ok()).is_none() {
+                break;
+            }
+        }
+    }
+    let file = words.collect::<Vec<_>>().join(" ").replace('\\', "/");
+    (!file.is_empty()).then(|| TextureRef {
+        name: file.clone(),
+        source: ImageSource::File(dir.join(&file)),
+        wrap: [wrap; 2],
+    })
 }
 
 /// The options raybench loads OBJ files with: polygons kept whole (raybench triangulates
@@ -108,7 +165,24 @@ pub fn load_obj_file(path: &Path) -> Result<MeshData, LoadError> {
         cause,
     })?;
     let dir = path.parent().unwrap_or(Path::new("."));
-    parse_obj(&bytes, path, |mtl| load_mtl(&dir.join(mtl)))
+    // The folder of each material's MTL file, in material order (map_Kd is relative to it).
+    let mtl_dirs = RefCell::new(Vec::new());
+    parse_obj(
+        &bytes,
+        path,
+        |mtl| {
+            let mtl = dir.join(mtl);
+            let result = load_mtl(&mtl);
+            if let Ok((ms, _)) = &result {
+                let mtl_dir = mtl.parent().map_or_else(|| dir.to_owned(), Path::to_owned);
+                mtl_dirs
+                    .borrow_mut()
+                    .extend(ms.iter().map(|_| mtl_dir.clone()));
+            }
+            result
+        },
+        |i| mtl_dirs.borrow().get(i).cloned(),
+    )
 }
 
 /// Largest MTL file read (material libraries are small text files).
@@ -129,7 +203,12 @@ fn load_mtl(path: &Path) -> tobj::MTLLoadResult {
 /// As [`load_obj_file`], less the file errors.
 #[doc(hidden)]
 pub fn load_obj_bytes(bytes: &[u8], path: &Path) -> Result<MeshData, LoadError> {
-    parse_obj(bytes, path, |_| Err(tobj::LoadError::OpenFileFailed))
+    parse_obj(
+        bytes,
+        path,
+        |_| Err(tobj::LoadError::OpenFileFailed),
+        |_| None,
+    )
 }
 
 /// Refuses face, line and point elements with an index beyond `u32` in magnitude or a
@@ -171,11 +250,110 @@ fn check_index_magnitudes(bytes: &[u8], path: &Path) -> Result<(), LoadError> {
     Ok(())
 }
 
-/// Parses OBJ text, with `mtl` loading the material libraries it names.
+/// Gives each distinct (position, texture coordinate, normal) triple of an object's face
+/// corners a vertex of its own, when the object has normals or texture coordinates (OBJ
+/// indexes them separately, `MeshData` per vertex): a position keeps its index for the
+/// first triple that uses it, later different triples get copies appended to
+/// `data.mesh.positions`, which already holds the object's positions from `base` on. The
+/// normals and texture coordinates go to `data.normals` and `data.uvs` (`v` flipped to
+/// count down from the image's top row). Returns the faces' corners as vertex indices
+/// relative to `base`, or `None` without attributes (the corners are the position indices).
+fn weld_attributes(
+    m: &tobj::Mesh,
+    base: usize,
+    data: &mut MeshData,
+    object: &str,
+    path: &Path,
+) -> Result<Option<Vec<u32>>, LoadError> {
+    let (has_n, has_t) = (!m.normal_indices.is_empty(), !m.texcoord_indices.is_empty());
+    if !has_n && !has_t {
+        return Ok(None);
+    }
+    let bad = |what: &str| LoadError::Parse {
+        path: path.to_owned(),
+        message: format!("object '{object}' has {what}"),
+    };
+    if (has_n && m.normal_indices.len() != m.indices.len())
+        || (has_t && m.texcoord_indices.len() != m.indices.len())
+    {
+        return Err(bad("incomplete normal or texture coordinate indices"));
+    }
+    let normal = |i: u32| {
+        let i = i as usize * 3;
+        m.normals
+            .get(i..i + 3)
+            .map(|n| Vec3::new(n[0], n[1], n[2]))
+            .ok_or_else(|| bad("a normal index out of range"))
+    };
+    let uv = |i: u32| {
+        let i = i as usize * 2;
+        m.texcoords
+            .get(i..i + 2)
+            .map(|t| Vec2::new(t[0], 1.0 - t[1]))
+            .ok_or_else(|| bad("a texture coordinate index out of range"))
+    };
+    let count = data.mesh.positions.len();
+    if has_n {
+        data.normals.resize(count, Vec3::ZERO);
+    }
+    if has_t {
+        data.uvs.resize(count, Vec2::ZERO);
+    }
+    // The (texture coordinate, normal) pair each position's own vertex took.
+    let mut owner: Vec<Option<(u32, u32)>> = vec![None; count - base];
+    let mut copies: HashMap<(u32, u32, u32), u32> = HashMap::new();
+    let mut corners = Vec::with_capacity(m.indices.len());
+    for (k, &p) in m.indices.iter().enumerate() {
+        let t = if has_t { m.texcoord_indices[k] } else { 0 };
+        let n = if has_n { m.normal_indices[k] } else { 0 };
+        let slot = owner
+            .get_mut(p as usize)
+            .ok_or_else(|| bad("a face index out of range"))?;
+        let vertex = match *slot {
+            Some(pair) if pair == (t, n) => p,
+            None => {
+                *slot = Some((t, n));
+                if has_n {
+                    data.normals[base + p as usize] = normal(n)?;
+                }
+                if has_t {
+                    data.uvs[base + p as usize] = uv(t)?;
+                }
+                p
+            }
+            Some(_) => match copies.get(&(p, t, n)) {
+                Some(&v) => v,
+                None => {
+                    let v = data.mesh.positions.len() - base;
+                    if data.mesh.positions.len() >= u32::MAX as usize {
+                        return Err(bad("too many vertices"));
+                    }
+                    data.mesh
+                        .positions
+                        .push(data.mesh.positions[base + p as usize]);
+                    if has_n {
+                        data.normals.push(normal(n)?);
+                    }
+                    if has_t {
+                        data.uvs.push(uv(t)?);
+                    }
+                    copies.insert((p, t, n), v as u32);
+                    v as u32
+                }
+            },
+        };
+        corners.push(vertex);
+    }
+    Ok(Some(corners))
+}
+
+/// Parses OBJ text, with `mtl` loading the material libraries it names and `texture_dir`
+/// giving the folder textures of material `i` are relative to (its MTL file's).
 fn parse_obj(
     bytes: &[u8],
     path: &Path,
     mtl: impl Fn(&Path) -> tobj::MTLLoadResult,
+    texture_dir: impl Fn(usize) -> Option<PathBuf>,
 ) -> Result<MeshData, LoadError> {
     let bytes = crate::strip_bom(bytes);
     check_index_magnitudes(bytes, path)?;
@@ -184,14 +362,22 @@ fn parse_obj(
             path: path.to_owned(),
             message: format!("malformed OBJ: {e}"),
         })?;
-    let materials: Vec<Material> = materials
-        .map(|ms| ms.iter().map(material_from_mtl).collect())
-        .unwrap_or_default();
-
-    let mut data = MeshData {
-        materials,
-        ..Default::default()
-    };
+    let mut data = MeshData::default();
+    for (i, m) in materials.unwrap_or_default().iter().enumerate() {
+        let mut material = material_from_mtl(m);
+        if let Some(value) = &m.diffuse_texture
+            && let Some(dir) = texture_dir(i)
+            && let Some(texture) = mtl_texture(value, &dir)
+        {
+            material.base_color_texture = Some(data.textures.len() as u32);
+            // The texture is the colour when Kd does not scale it.
+            if m.diffuse.is_none() {
+                material.base_color = Vec3::ONE;
+            }
+            data.textures.push(texture);
+        }
+        data.materials.push(material);
+    }
     for model in &models {
         let m = &model.mesh;
         if !m.positions.len().is_multiple_of(3)
@@ -230,6 +416,8 @@ fn parse_obj(
                 message: format!("object '{}' has a face index out of range", model.name),
             });
         }
+        let welded = weld_attributes(m, base as usize, &mut data, &model.name, path)?;
+        let corners = welded.as_deref().unwrap_or(&m.indices);
         let local = &data.mesh.positions[base as usize..];
         let mut triangles = Vec::with_capacity(m.indices.len() / 3);
         // No arities: every face is a triangle.
@@ -241,7 +429,7 @@ fn parse_obj(
         let mut start = 0;
         let mut bad = Vec::new();
         for (face, k) in arities.enumerate() {
-            let Some(f) = m.indices.get(start..start + k) else {
+            let Some(f) = corners.get(start..start + k) else {
                 return Err(LoadError::Parse {
                     path: path.to_owned(),
                     message: format!("object '{}' has incomplete face data", model.name),
@@ -268,6 +456,7 @@ fn parse_obj(
             data.triangle_material.push(material);
         }
     }
+    data.pad_attributes();
     // Finite coordinates can still exceed the coordinate limit (`1e30`).
     data.mesh.validate().map_err(|e| LoadError::Parse {
         path: path.to_owned(),

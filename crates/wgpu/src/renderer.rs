@@ -516,6 +516,18 @@ impl Renderer for WgpuRenderer {
 
     fn supports(&self, scene: &Scene) -> Result<(), String> {
         check_kinds(scene)?;
+        if scene.has_textures() {
+            return Err(
+                "the GPU kernels have no textures (render the scene with a CPU backend)".into(),
+            );
+        }
+        if scene.attributes.has_normals() {
+            return Err(
+                "the GPU kernels have no shading normals (render the scene with a CPU \
+                        backend, or set smooth = false on its mesh objects)"
+                    .into(),
+            );
+        }
         // The largest buffer: the primitives (48 bytes each, plus the emitter list).
         if let Ok(g) = gpu(&self.request) {
             let need = (scene.geometry.len() + scene.emitters.ids.len()) as u64 * 48;

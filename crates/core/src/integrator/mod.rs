@@ -143,8 +143,9 @@ pub fn cast_light(scene: &Scene) -> Vec3 {
         .unwrap_or_else(|| Vec3::new(-0.4, -1.0, -0.6).normalize())
 }
 
-/// Ray-casting shading: base colour times a mix of `|cos|` to the viewer and a directional
-/// light (no shadows), plus emission. Deliberately simple: this mode measures visibility.
+/// Ray-casting shading: the base colour (textures applied, no checkerboard) times a mix of `|cos|` to the viewer
+/// and a directional light (no shadows), with the shading normal, plus emission.
+/// Deliberately simple: this mode measures visibility.
 #[inline]
 #[must_use]
 pub fn shade_cast(scene: &Scene, light_dir: Vec3, ray: &Ray, hit: Option<&Hit>) -> Vec3 {
@@ -152,21 +153,18 @@ pub fn shade_cast(scene: &Scene, light_dir: Vec3, ray: &Ray, hit: Option<&Hit>) 
         return scene.background_along(ray.dir);
     };
     let m = scene.material_of(hit.prim);
-    let view = -ray.dir.normalize_or_zero();
-    let cos_view = hit.normal.dot(view);
-    // Face the normal towards the viewer.
-    let n = if cos_view < 0.0 {
-        -hit.normal
-    } else {
-        hit.normal
-    };
+    let d = ray.dir.normalize_or_zero();
+    let shading = scene.shading(hit, ray.at(hit.t));
+    // Both normals face the viewer.
+    let (_, n, _) = wavefront::facing(hit.normal, shading.normal, d);
+    let cos_view = -n.dot(d);
     let diffuse = n.dot(-light_dir).max(0.0);
     let albedo = match m.kind {
-        MaterialKind::Diffuse => m.base_color,
+        MaterialKind::Diffuse => shading.base_color,
         MaterialKind::Mirror => m.specular.max(Vec3::splat(0.2)),
         MaterialKind::Glass => Vec3::new(0.75, 0.85, 0.9),
     };
-    albedo * (0.35 * cos_view.abs() + 0.65 * diffuse) + m.emission
+    albedo * (0.35 * cos_view.abs() + 0.65 * diffuse) + shading.emission
 }
 
 /// Camera rays only, shaded by `shade` (ray casting, and the volume modes, which integrate

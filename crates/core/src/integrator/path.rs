@@ -119,19 +119,22 @@ pub(super) fn path_tile<A: Accel, C: Counters>(
                     m,
                     p,
                     nf,
+                    ns,
+                    albedo,
+                    emission,
                     front,
                     d,
                 }) = st.surface(scene, &seg, Some(hit))
                 else {
                     continue;
                 };
-                if front && m.emission.max_element() > 0.0 {
+                if front && emission.max_element() > 0.0 {
                     let mut w = 1.0;
                     if weighted {
                         let light = emitters.pdf_hit(scene, seg.ray.origin, prim, p, hit.normal);
                         w = power_heuristic(path.pdf_bsdf, light);
                     }
-                    st.color[px] += seg.weight * w * scene.emission_at(prim, hit.u, hit.v);
+                    st.color[px] += seg.weight * w * emission;
                 }
                 if depth == settings.max_depth {
                     continue;
@@ -145,19 +148,24 @@ pub(super) fn path_tile<A: Accel, C: Counters>(
                 let u_roulette = path.sampler.next_f32();
 
                 let mut weight = seg.weight;
-                let ray = match m.kind {
+                let (dir, side) = match m.kind {
                     MaterialKind::Diffuse => {
-                        let albedo = m.albedo_at(p);
                         let brdf = albedo * FRAC_1_PI;
                         for light in &scene.lights {
-                            if let Some((ray, irradiance, _)) = light_ray(light, p, nf) {
+                            if let Some((ray, irradiance, _)) = light_ray(light, p, nf, ns) {
                                 shadows.push(ray, px, weight * brdf * irradiance);
                             }
                         }
                         let origin = offset_ray_origin(p, nf);
                         if mis && let Some(ls) = emitters.sample(scene, origin, u_light, u_point) {
-                            let cos_x = nf.dot(ls.wi);
-                            if cos_x > 0.0 && ls.pdf > 0.0 && ls.pdf.is_finite() {
+                            // The shading normal's cosine; a light below the geometric surface does
+                            // not light it.
+                            let cos_x = ns.dot(ls.wi);
+                            if cos_x > 0.0
+                                && nf.dot(ls.wi) > 0.0
+                                && ls.pdf > 0.0
+                                && ls.pdf.is_finite()
+                            {
                                 let w = power_heuristic(ls.pdf, cos_x * FRAC_1_PI);
                                 let value = weight * brdf * ls.radiance * (cos_x * w / ls.pdf);
                                 let ray = if ls.dist.is_finite() {
@@ -170,26 +178,32 @@ pub(super) fn path_tile<A: Accel, C: Counters>(
                         }
                         weight *= albedo;
                         path.specular = false;
-                        let dir = cosine_hemisphere(nf, u_dir.0, u_dir.1);
-                        path.pdf_bsdf = nf.dot(dir).max(0.0) * FRAC_1_PI;
-                        Ray::new(origin, dir)
+                        let dir = cosine_hemisphere(ns, u_dir.0, u_dir.1);
+                        path.pdf_bsdf = ns.dot(dir).max(0.0) * FRAC_1_PI;
+                        (dir, nf)
                     }
                     MaterialKind::Mirror => {
                         weight *= m.specular;
                         path.specular = true;
-                        Ray::new(offset_ray_origin(p, nf), reflect(d, nf))
+                        (reflect(d, ns), nf)
                     }
                     MaterialKind::Glass => {
                         let (n1, n2) = if front { (1.0, m.ior) } else { (m.ior, 1.0) };
-                        let fr = fresnel_dielectric(-d.dot(nf), n1, n2);
+                        let fr = fresnel_dielectric(-d.dot(ns), n1, n2);
                         weight *= m.specular;
                         path.specular = true;
-                        match refract(d, nf, n1, n2) {
-                            Some(t) if u_choice >= fr => Ray::new(offset_ray_origin(p, -nf), t),
-                            _ => Ray::new(offset_ray_origin(p, nf), reflect(d, nf)),
+                        match refract(d, ns, n1, n2) {
+                            Some(t) if u_choice >= fr => (t, -nf),
+                            _ => (reflect(d, ns), nf),
                         }
                     }
                 };
+                // A direction the shading normal sent below the geometric surface on the
+                // side it leaves from ends the path (pbrt's rule).
+                if dir.dot(side) < 0.0 {
+                    continue;
+                }
+                let ray = Ray::new(offset_ray_origin(p, side), dir);
                 if depth >= ROULETTE_DEPTH {
                     let q = weight.max_element() / seg.weight.max_element().max(f32::MIN_POSITIVE);
                     let q = q.clamp(0.05, 0.95);

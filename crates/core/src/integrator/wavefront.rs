@@ -32,21 +32,32 @@ pub(super) struct Surface<'s> {
     pub m: &'s Material,
     /// The hit point.
     pub p: Vec3,
-    /// The unit normal, facing the incoming ray.
+    /// The unit geometric normal, facing the incoming ray: it decides sides and offsets
+    /// ray origins.
     pub nf: Vec3,
+    /// The unit shading normal ([`Scene::shading`]), flipped with the geometric one to
+    /// face the incoming ray's side: Lambert and Blinn-Phong terms, reflection, refraction
+    /// and sampled directions use it.
+    pub ns: Vec3,
+    /// The diffuse colour at the hit (textures applied).
+    pub albedo: Vec3,
+    /// The emitted radiance at the hit (textures applied).
+    pub emission: Vec3,
     /// Whether the ray arrived on the side the geometric normal points to.
     pub front: bool,
     /// The ray's unit direction.
     pub d: Vec3,
 }
 
-/// The shading frame of a hit: point, unit normal facing the incoming ray, and whether the
-/// ray arrived on the side the geometric normal points to.
+/// The normals of a hit facing a ray of unit direction `d`: the geometric normal `ng` and
+/// the shading normal `ns` (on `ng`'s side) flipped together to the side the ray comes
+/// from, and whether that is the side `ng` points to. Where the shading normal faces away
+/// from the ray (a grazing view of a strongly bent normal), the geometric normal shades.
 #[inline]
-fn shading_frame(ray: &Ray, hit: &Hit) -> (Vec3, Vec3, bool) {
-    let p = ray.at(hit.t);
-    let front = hit.normal.dot(ray.dir) < 0.0;
-    (p, if front { hit.normal } else { -hit.normal }, front)
+pub(super) fn facing(ng: Vec3, ns: Vec3, d: Vec3) -> (Vec3, Vec3, bool) {
+    let front = ng.dot(d) < 0.0;
+    let (nf, ns) = if front { (ng, ns) } else { (-ng, -ns) };
+    (nf, if ns.dot(d) < 0.0 { ns } else { nf }, front)
 }
 
 /// One tile in flight: what it traces through and with, its centre rays and hits, its
@@ -135,15 +146,20 @@ impl<'a, A: Accel, C: Counters> Wavefront<'a, A, C> {
             self.color[seg.pixel as usize] += seg.weight * scene.background_along(seg.ray.dir);
             return None;
         };
-        let m = scene.material_of(hit.prim);
-        let (p, nf, front) = shading_frame(&seg.ray, hit);
+        let p = seg.ray.at(hit.t);
+        let d = seg.ray.dir.normalize();
+        let shading = scene.shading(hit, p);
+        let (nf, ns, front) = facing(hit.normal, shading.normal, d);
         Some(Surface {
             prim: hit.prim,
-            m,
+            m: scene.material_of(hit.prim),
             p,
             nf,
+            ns,
+            albedo: shading.albedo,
+            emission: shading.emission,
             front,
-            d: seg.ray.dir.normalize(),
+            d,
         })
     }
 

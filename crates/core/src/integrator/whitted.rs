@@ -13,11 +13,13 @@ use glam::Vec3;
 /// Ambient term of diffuse surfaces, as a fraction of their colour (Whitted's `k_a`).
 pub const AMBIENT: f32 = 0.05;
 
-/// A shadow ray from `p` (normal `n`) towards light `light`, and the unshadowed light it
-/// would bring (irradiance, unit direction), or `None` when the light is behind the surface.
+/// A shadow ray from `p` towards light `light`, and the unshadowed light it would bring
+/// (irradiance on the shading normal `ns`, unit direction), or `None` when the light is
+/// behind the surface: below the shading normal's hemisphere or below the geometric
+/// surface (normal `nf`, which also offsets the ray's origin), both facing the viewer.
 #[inline]
-pub(super) fn light_ray(light: &Light, p: Vec3, n: Vec3) -> Option<(Ray, Vec3, Vec3)> {
-    let origin = offset_ray_origin(p, n);
+pub(super) fn light_ray(light: &Light, p: Vec3, nf: Vec3, ns: Vec3) -> Option<(Ray, Vec3, Vec3)> {
+    let origin = offset_ray_origin(p, nf);
     match *light {
         Light::Point {
             position,
@@ -26,8 +28,8 @@ pub(super) fn light_ray(light: &Light, p: Vec3, n: Vec3) -> Option<(Ray, Vec3, V
             let to = position - p;
             let dist2 = to.length_squared();
             let dir = to / dist2.sqrt();
-            let cos = n.dot(dir);
-            if !(cos > 0.0 && dist2 > 0.0) {
+            let cos = ns.dot(dir);
+            if !(cos > 0.0 && dist2 > 0.0 && nf.dot(dir) > 0.0) {
                 return None;
             }
             // Parametrised from the offset origin to the light: blockers at t in [0, 1).
@@ -39,8 +41,8 @@ pub(super) fn light_ray(light: &Light, p: Vec3, n: Vec3) -> Option<(Ray, Vec3, V
             radiance,
         } => {
             let dir = -direction;
-            let cos = n.dot(dir);
-            if cos <= 0.0 {
+            let cos = ns.dot(dir);
+            if !(cos > 0.0 && nf.dot(dir) > 0.0) {
                 return None;
             }
             Some((Ray::new(origin, dir), radiance * cos, dir))
@@ -93,50 +95,57 @@ pub(super) fn whitted_tile<A: Accel, C: Counters>(
             for (seg, hit) in segments.iter().zip(&hits) {
                 let px = seg.pixel as usize;
                 let Some(Surface {
-                    m, p, nf, front, d, ..
+                    m,
+                    p,
+                    nf,
+                    ns,
+                    albedo,
+                    emission,
+                    front,
+                    d,
+                    ..
                 }) = st.surface(scene, seg, hit.as_ref())
                 else {
                     continue;
                 };
                 if front {
-                    st.color[px] += seg.weight * m.emission;
+                    st.color[px] += seg.weight * emission;
                 }
+                // Mirror and glass rays bent by the shading normal below the geometric
+                // surface on their side are dropped (pbrt's rule): they would start inside.
+                let mut bounce = |weight: Vec3, dir: Vec3, side: Vec3| {
+                    if dir.dot(side) < 0.0 {
+                        return;
+                    }
+                    next.push(Segment {
+                        pixel: seg.pixel,
+                        weight,
+                        ray: Ray::new(offset_ray_origin(p, side), dir),
+                    });
+                };
                 match m.kind {
                     MaterialKind::Diffuse => {
-                        let albedo = m.albedo_at(p);
                         st.color[px] += seg.weight * albedo * AMBIENT;
                         for light in &scene.lights {
-                            let Some((ray, irradiance, wi)) = light_ray(light, p, nf) else {
+                            let Some((ray, irradiance, wi)) = light_ray(light, p, nf, ns) else {
                                 continue;
                             };
                             // Lambert plus a Blinn-Phong highlight.
                             let h = (wi - d).normalize_or_zero();
-                            let spec = m.specular * nf.dot(h).max(0.0).powf(m.shininess);
+                            let spec = m.specular * ns.dot(h).max(0.0).powf(m.shininess);
                             shadows.push(ray, px, seg.weight * irradiance * (albedo + spec));
                         }
                     }
                     MaterialKind::Mirror if depth < settings.max_depth => {
-                        next.push(Segment {
-                            pixel: seg.pixel,
-                            weight: seg.weight * m.specular,
-                            ray: Ray::new(offset_ray_origin(p, nf), reflect(d, nf)),
-                        });
+                        bounce(seg.weight * m.specular, reflect(d, ns), nf);
                     }
                     MaterialKind::Glass if depth < settings.max_depth => {
                         // Entering when the ray meets the side the normal points to.
                         let (n1, n2) = if front { (1.0, m.ior) } else { (m.ior, 1.0) };
-                        let fr = fresnel_dielectric(-d.dot(nf), n1, n2);
-                        next.push(Segment {
-                            pixel: seg.pixel,
-                            weight: seg.weight * m.specular * fr,
-                            ray: Ray::new(offset_ray_origin(p, nf), reflect(d, nf)),
-                        });
-                        if let Some(t) = refract(d, nf, n1, n2) {
-                            next.push(Segment {
-                                pixel: seg.pixel,
-                                weight: seg.weight * m.specular * (1.0 - fr),
-                                ray: Ray::new(offset_ray_origin(p, -nf), t),
-                            });
+                        let fr = fresnel_dielectric(-d.dot(ns), n1, n2);
+                        bounce(seg.weight * m.specular * fr, reflect(d, ns), nf);
+                        if let Some(t) = refract(d, ns, n1, n2) {
+                            bounce(seg.weight * m.specular * (1.0 - fr), t, -nf);
                         }
                     }
                     MaterialKind::Mirror | MaterialKind::Glass => {}

@@ -62,6 +62,8 @@ impl MaterialDesc {
                 color: Vec3::from(c.color),
                 size: c.size,
             }),
+            base_color_texture: None,
+            emission_texture: None,
         }
     }
 }

@@ -7,7 +7,8 @@ use crate::budget::{Holds, Reservation};
 use crate::error::LoadError;
 use crate::gltf_loader::load_gltf_file;
 use crate::obj::{MeshData, load_obj_file};
-use raybench_core::{PolygonMesh, Scene, SceneBuilder, SceneError, Triangle, Vec3};
+use crate::texture::add_textures;
+use raybench_core::{PolygonMesh, Scene, SceneBuilder, Triangle, Vec3, VertexAttributes};
 use serde::Deserialize;
 use std::path::Path;
 
@@ -30,12 +31,14 @@ pub(super) struct PolygonsDesc {
     transform: TransformDesc,
 }
 
-/// `kind = "mesh"`: a mesh file, with its own materials unless `material` overrides them.
+/// `kind = "mesh"`: a mesh file, with its own materials unless `material` overrides them,
+/// shaded with its vertex normals unless `smooth = false`.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct MeshDesc {
     path: String,
     material: Option<String>,
+    smooth: Option<bool>,
     #[serde(default)]
     transform: TransformDesc,
 }
@@ -99,9 +102,18 @@ impl MeshDesc {
         if !xf.is_identity() {
             let a = xf.affine();
             data.mesh.transform(|v| a.transform_point3(v));
+            // Normals go through the inverse transpose (non-uniform scales bend them).
+            let n = a.matrix3.inverse().transpose();
+            for v in &mut data.normals {
+                *v = n.mul_vec3(*v);
+            }
+        }
+        if self.smooth == Some(false) {
+            data.normals.clear();
         }
         let m = cx.material(self.material.as_ref())?;
-        add_mesh_data(cx.b, &self.path, data, m).map_err(err)?;
+        let context = format!("{}: {}", cx.ctx.file.display(), cx.what);
+        add_mesh_data(cx.b, &self.path, data, m, cx.budget, &context)?;
         Ok(())
     }
 }
@@ -131,7 +143,8 @@ fn load_mesh_file_any(path: &Path) -> Result<MeshData, LoadError> {
 /// A scene of one mesh file with a light, a grey-blue background and a camera framing it.
 pub(crate) fn bare_mesh_scene(path: &Path) -> Result<Scene, LoadError> {
     let data = load_mesh_file(path)?;
-    Reservation::new()?.reserve(
+    let mut budget = Reservation::new()?;
+    budget.reserve(
         Holds::Primitives(data.mesh.indices.len() as u64),
         &path.display().to_string(),
     )?;
@@ -148,24 +161,47 @@ pub(crate) fn bare_mesh_scene(path: &Path) -> Result<Scene, LoadError> {
     for c in &data.cameras {
         b.add_camera(Some(&c.name), c.camera).map_err(scene_err)?;
     }
-    add_mesh_data(&mut b, &name, data, None).map_err(scene_err)?;
+    add_mesh_data(
+        &mut b,
+        &name,
+        data,
+        None,
+        &mut budget,
+        &path.display().to_string(),
+    )?;
     Ok(b.build())
 }
 
-/// Adds a loaded mesh: its own materials (unless `override_material`), its triangles as one
-/// object.
+/// Adds a loaded mesh: its own materials (unless `override_material`) with their textures
+/// (decoded once per scene; one that cannot be used is a warning), its triangles as one
+/// object with their vertex normals and texture coordinates. `context` names the mesh in
+/// messages.
 fn add_mesh_data(
     b: &mut SceneBuilder,
     name: &str,
-    data: MeshData,
+    mut data: MeshData,
     override_material: Option<u32>,
-) -> Result<(), SceneError> {
+    budget: &mut Reservation,
+    context: &str,
+) -> Result<(), LoadError> {
+    let scene_err = |cause| LoadError::Scene {
+        context: context.to_owned(),
+        cause,
+    };
     let materials: Vec<u32> = match override_material {
-        Some(m) => vec![m; data.mesh.indices.len()],
+        Some(m) => {
+            // The file's materials and their textures are not used.
+            data.uvs.clear();
+            vec![m; data.mesh.indices.len()]
+        }
         None => {
+            let textures = add_textures(b, &data.textures, budget, context)?;
+            let texture = |t: Option<u32>| t.and_then(|t| textures.get(t as usize).copied()?);
             let mut ids = Vec::with_capacity(data.materials.len());
-            for m in data.materials {
-                ids.push(b.add_material(m)?);
+            for mut m in data.materials {
+                m.base_color_texture = texture(m.base_color_texture);
+                m.emission_texture = texture(m.emission_texture);
+                ids.push(b.add_material(m).map_err(scene_err)?);
             }
             data.triangle_material
                 .iter()
@@ -176,8 +212,11 @@ fn add_mesh_data(
     for w in data.warnings {
         b.warn(w);
     }
-    data.mesh.validate()?;
-    let triangles: Vec<Triangle> = data.mesh.triangles().collect();
-    b.add_triangles(name, &triangles, &materials)?;
+    let attributes = VertexAttributes {
+        normals: data.normals,
+        uvs: data.uvs,
+    };
+    b.add_mesh_with_attributes(name, &data.mesh, attributes, &materials)
+        .map_err(scene_err)?;
     Ok(())
 }

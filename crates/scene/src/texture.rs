@@ -1,0 +1,229 @@
+//! The image textures mesh files name (OBJ `map_Kd`, glTF `baseColorTexture` and
+//! `emissiveTexture`): where each image is, and its decoding (PNG or JPEG through `image`,
+//! sRGB to linear) once per scene. A texture that is missing, undecodable or too large is a
+//! warning, and its material keeps its flat colour; the memory budget refuses textures the
+//! scene cannot hold.
+
+use crate::budget::{Holds, Reservation};
+use crate::error::LoadError;
+use raybench_core::{MAX_TEXTURE_SIZE, SceneBuilder, Texture, Wrap};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// Where a texture's encoded image is.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ImageSource {
+    /// An image file.
+    File(PathBuf),
+    /// Encoded bytes held in memory (a data URI or a glTF buffer view); `key` identifies
+    /// them within a scene (the glTF file's path and the image's index).
+    Bytes {
+        /// What identifies these bytes (two equal keys are the same image).
+        key: String,
+        /// The encoded image.
+        bytes: Arc<[u8]>,
+    },
+}
+
+/// A colour texture a mesh file's material names: where its image is, a name for messages,
+/// and its wrap modes. Colour textures hold sRGB-encoded values; they are decoded to linear
+/// once, when the scene is built.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureRef {
+    /// For messages: the image's file name or what holds it (`image 2 of duck.glb`).
+    pub name: String,
+    /// The encoded image.
+    pub source: ImageSource,
+    /// Wrap modes along `u` and `v`.
+    pub wrap: [Wrap; 2],
+}
+
+impl TextureRef {
+    /// What identifies the decoded texture within a scene: the source and the wrap modes.
+    fn key(&self) -> String {
+        let source = match &self.source {
+            ImageSource::File(p) => std::fs::canonicalize(p)
+                .unwrap_or_else(|_| p.clone())
+                .display()
+                .to_string(),
+            ImageSource::Bytes { key, .. } => key.clone(),
+        };
+        format!("{source} {:?}", self.wrap)
+    }
+}
+
+/// Largest image file read for a texture.
+const MAX_IMAGE_FILE_BYTES: u64 = 1 << 30;
+
+/// Decodes `tex` (its size checked against [`MAX_TEXTURE_SIZE`] and the budget before its
+/// pixels are decoded). The outer error is the budget's refusal; the inner one says why
+/// the texture cannot be used.
+fn decode(
+    tex: &TextureRef,
+    budget: &mut Reservation,
+    context: &str,
+) -> Result<Result<Texture, String>, LoadError> {
+    use std::io::{BufRead, Cursor, Read as _, Seek};
+    fn reader<R: BufRead + Seek>(r: R) -> Result<image::ImageReader<R>, String> {
+        image::ImageReader::new(r)
+            .with_guessed_format()
+            .map_err(|e| e.to_string())
+    }
+    let bytes: Arc<[u8]> = match &tex.source {
+        ImageSource::Bytes { bytes, .. } => Arc::clone(bytes),
+        ImageSource::File(path) => {
+            let read = || -> Result<Vec<u8>, String> {
+                let meta = std::fs::metadata(path).map_err(|e| e.to_string())?;
+                if !meta.is_file() {
+                    return Err(crate::not_a_file_message(&meta));
+                }
+                if meta.len() > MAX_IMAGE_FILE_BYTES {
+                    return Err(format!(
+                        "the file has {} bytes (limit {MAX_IMAGE_FILE_BYTES})",
+                        meta.len()
+                    ));
+                }
+                let mut data = Vec::new();
+                std::fs::File::open(path)
+                    .and_then(|f| f.take(MAX_IMAGE_FILE_BYTES).read_to_end(&mut data))
+                    .map_err(|e| e.to_string())?;
+                Ok(data)
+            };
+            match read() {
+                Ok(b) => b.into(),
+                Err(why) => return Ok(Err(format!("{}: {why}", path.display()))),
+            }
+        }
+    };
+    let dims = reader(Cursor::new(&bytes[..])).and_then(|r| {
+        if r.format().is_none() {
+            return Err("not a PNG or JPEG image".into());
+        }
+        r.into_dimensions().map_err(|e| e.to_string())
+    });
+    let (w, h) = match dims {
+        Ok(d) => d,
+        Err(why) => return Ok(Err(why)),
+    };
+    if w == 0 || h == 0 || w > MAX_TEXTURE_SIZE || h > MAX_TEXTURE_SIZE {
+        return Ok(Err(format!(
+            "{w} x {h} texels (each side must be 1 to {MAX_TEXTURE_SIZE})"
+        )));
+    }
+    let texels = u64::from(w) * u64::from(h);
+    budget.reserve(
+        Holds::Texels(texels),
+        &format!("{context}: texture {}", tex.name),
+    )?;
+    let decoded = reader(Cursor::new(&bytes[..])).and_then(|mut r| {
+        let mut limits = image::Limits::default();
+        // The widest decoded form (16-bit RGBA) and the 8-bit RGB copy.
+        limits.max_alloc = Some(texels * 11 + (1 << 20));
+        r.limits(limits);
+        r.decode().map_err(|e| e.to_string())
+    });
+    Ok(match decoded {
+        Ok(img) => {
+            let rgb = img.into_rgb8();
+            Texture::from_srgb8(tex.name.clone(), w, h, rgb.as_raw(), tex.wrap)
+                .map_err(|e| e.to_string())
+        }
+        Err(why) => Err(why),
+    })
+}
+
+/// Adds the textures `refs` to the scene (each decoded once per scene: a texture already
+/// added, from the same source with the same wrap modes, is reused) and returns each one's
+/// index, or `None` where it cannot be used, with a warning naming it (`context` names the
+/// mesh).
+///
+/// # Errors
+/// [`LoadError::OverBudget`] when a texture does not fit in the memory budget.
+pub(crate) fn add_textures(
+    b: &mut SceneBuilder,
+    refs: &[TextureRef],
+    budget: &mut Reservation,
+    context: &str,
+) -> Result<Vec<Option<u32>>, LoadError> {
+    let mut out = Vec::with_capacity(refs.len());
+    for tex in refs {
+        let key = tex.key();
+        if let Some(i) = b.texture(&key) {
+            out.push(Some(i));
+            continue;
+        }
+        match decode(tex, budget, context)? {
+            Ok(t) => out.push(Some(b.add_texture(key, t))),
+            Err(why) => {
+                b.warn(format!(
+                    "{context}: texture {} cannot be used ({why}): its material keeps its \
+                     flat colour",
+                    tex.name
+                ));
+                out.push(None);
+            }
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A `w x h` black PNG as a texture of encoded bytes.
+    fn png(w: u32, h: u32) -> TextureRef {
+        encoded(w, h, image::ImageFormat::Png)
+    }
+
+    /// A `w x h` black image in `format` as a texture of encoded bytes.
+    fn encoded(w: u32, h: u32, format: image::ImageFormat) -> TextureRef {
+        let mut out = std::io::Cursor::new(Vec::new());
+        image::RgbImage::new(w, h)
+            .write_to(&mut out, format)
+            .unwrap();
+        TextureRef {
+            name: format!("{w}x{h}"),
+            source: ImageSource::Bytes {
+                key: format!("{w}x{h}"),
+                bytes: out.into_inner().into(),
+            },
+            wrap: [Wrap::Repeat; 2],
+        }
+    }
+
+    #[test]
+    fn sizes_and_the_budget_apply_before_decoding() {
+        let mut b = SceneBuilder::new("t");
+        let mut budget = Reservation::with_limit(1 << 20);
+        // Small: decoded once, then reused.
+        let small = png(4, 2);
+        let ids = add_textures(&mut b, &[small.clone(), small], &mut budget, "s").unwrap();
+        assert_eq!(ids, [Some(0), Some(0)]);
+        // JPEG too.
+        let jpeg = encoded(8, 8, image::ImageFormat::Jpeg);
+        assert_eq!(
+            add_textures(&mut b, &[jpeg], &mut budget, "s").unwrap(),
+            [Some(1)]
+        );
+        // Wider than the limit: a warning and no texture.
+        let ids = add_textures(&mut b, &[png(MAX_TEXTURE_SIZE + 1, 1)], &mut budget, "s");
+        assert_eq!(ids.unwrap(), [None]);
+        let s = b.build();
+        assert_eq!(s.textures.len(), 2);
+        assert!(
+            s.warnings[0].contains("each side must be 1 to 16384"),
+            "{:?}",
+            s.warnings
+        );
+        // Over the budget (2048 x 2048 texels, 19 bytes each, in 1 MiB): refused.
+        let mut b = SceneBuilder::new("t");
+        let e = add_textures(&mut b, &[png(2048, 2048)], &mut budget, "scene.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("scene.toml: texture 2048x2048") && e.contains("texture texels"),
+            "{e}"
+        );
+    }
+}
