@@ -117,33 +117,29 @@ impl VertexRecord {
     }
 }
 
+/// `PropertyAccess` setters that hand each value, converted by the closure-like
+/// expression, to `self.set`.
+macro_rules! setters {
+    ($($setter:ident($t:ty) => |$v:ident| $e:expr),* $(,)?) => {
+        $(fn $setter(&mut self, name: &str, $v: $t) -> PropertyAccessResult {
+            self.set(name, $e)
+        })*
+    };
+}
+
 impl PropertyAccess for VertexRecord {
     fn new() -> Self {
         Self([0.0; VERTEX_SLOTS.len()])
     }
-    fn set_char(&mut self, name: &str, value: i8) -> PropertyAccessResult {
-        self.set(name, value.into())
-    }
-    fn set_uchar(&mut self, name: &str, value: u8) -> PropertyAccessResult {
-        self.set(name, value.into())
-    }
-    fn set_short(&mut self, name: &str, value: i16) -> PropertyAccessResult {
-        self.set(name, value.into())
-    }
-    fn set_ushort(&mut self, name: &str, value: u16) -> PropertyAccessResult {
-        self.set(name, value.into())
-    }
-    fn set_int(&mut self, name: &str, value: i32) -> PropertyAccessResult {
-        self.set(name, value.into())
-    }
-    fn set_uint(&mut self, name: &str, value: u32) -> PropertyAccessResult {
-        self.set(name, value.into())
-    }
-    fn set_float(&mut self, name: &str, value: f32) -> PropertyAccessResult {
-        self.set(name, value.into())
-    }
-    fn set_double(&mut self, name: &str, value: f64) -> PropertyAccessResult {
-        self.set(name, value)
+    setters! {
+        set_char(i8) => |v| v.into(),
+        set_uchar(u8) => |v| v.into(),
+        set_short(i16) => |v| v.into(),
+        set_ushort(u16) => |v| v.into(),
+        set_int(i32) => |v| v.into(),
+        set_uint(u32) => |v| v.into(),
+        set_float(f32) => |v| v.into(),
+        set_double(f64) => |v| v,
     }
 }
 
@@ -172,23 +168,13 @@ impl PropertyAccess for FaceRecord {
     fn new() -> Self {
         Self::default()
     }
-    fn set_list_char(&mut self, name: &str, value: Vec<i8>) -> PropertyAccessResult {
-        self.set(name, &value)
-    }
-    fn set_list_uchar(&mut self, name: &str, value: Vec<u8>) -> PropertyAccessResult {
-        self.set(name, &value)
-    }
-    fn set_list_short(&mut self, name: &str, value: Vec<i16>) -> PropertyAccessResult {
-        self.set(name, &value)
-    }
-    fn set_list_ushort(&mut self, name: &str, value: Vec<u16>) -> PropertyAccessResult {
-        self.set(name, &value)
-    }
-    fn set_list_int(&mut self, name: &str, value: Vec<i32>) -> PropertyAccessResult {
-        self.set(name, &value)
-    }
-    fn set_list_uint(&mut self, name: &str, value: Vec<u32>) -> PropertyAccessResult {
-        self.set(name, &value)
+    setters! {
+        set_list_char(Vec<i8>) => |v| &v,
+        set_list_uchar(Vec<u8>) => |v| &v,
+        set_list_short(Vec<i16>) => |v| &v,
+        set_list_ushort(Vec<u16>) => |v| &v,
+        set_list_int(Vec<i32>) => |v| &v,
+        set_list_uint(Vec<u32>) => |v| &v,
     }
 }
 
@@ -268,31 +254,25 @@ fn check_duplicates(header_text: &str, path: &Path) -> Result<(), LoadError> {
     let mut properties: Vec<&str> = Vec::new();
     for (n, line) in header_text.lines().enumerate() {
         let words: Vec<&str> = line.split_whitespace().collect();
-        let twice = match words.as_slice() {
+        let (seen, name, what) = match words.as_slice() {
             ["element", name, ..] => {
                 properties.clear();
-                (elements.contains(name), format!("element '{name}'"))
+                (&mut elements, *name, format!("element '{name}'"))
             }
             ["property", .., name] => {
                 let element = elements.last().copied().unwrap_or_default();
-                (
-                    properties.contains(name),
-                    format!("property '{name}' of element '{element}'"),
-                )
+                let what = format!("property '{name}' of element '{element}'");
+                (&mut properties, *name, what)
             }
             _ => continue,
         };
-        if twice.0 {
+        if seen.contains(&name) {
             return Err(parse_err(
                 path,
-                format!("line {}: {} is declared twice", n + 1, twice.1),
+                format!("line {}: {what} is declared twice", n + 1),
             ));
         }
-        match words.as_slice() {
-            ["element", name, ..] => elements.push(name),
-            [.., name] => properties.push(name),
-            [] => {}
-        }
+        seen.push(name);
     }
     Ok(())
 }
@@ -410,6 +390,22 @@ fn plan(header: &Header, body: u64, path: &Path) -> Result<Plan, LoadError> {
     })
 }
 
+/// Where a record starts: its line (ASCII) or byte offset (binary).
+#[derive(Clone, Copy)]
+enum Place {
+    Line(usize),
+    Byte(usize),
+}
+
+impl std::fmt::Display for Place {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Line(n) => write!(f, "line {n}"),
+            Self::Byte(n) => write!(f, "byte {n}"),
+        }
+    }
+}
+
 /// The payload after the header, read record by record.
 struct Body<'a> {
     rest: &'a [u8],
@@ -422,10 +418,10 @@ struct Body<'a> {
 
 impl Body<'_> {
     /// Where the next record starts, for messages.
-    fn place(&self) -> String {
+    fn place(&self) -> Place {
         match self.encoding {
-            Encoding::Ascii => format!("line {}", self.line),
-            _ => format!("byte {}", self.len - self.rest.len()),
+            Encoding::Ascii => Place::Line(self.line),
+            _ => Place::Byte(self.len - self.rest.len()),
         }
     }
 
@@ -470,7 +466,7 @@ impl Body<'_> {
 
     /// Skips the records of an element raybench does not read; the error is the 0-based
     /// record that failed, its place and why.
-    fn skip(&mut self, def: &ElementDef) -> Result<(), (usize, String, String)> {
+    fn skip(&mut self, def: &ElementDef) -> Result<(), (usize, Place, String)> {
         let fixed: Option<u64> = def
             .properties
             .values()
@@ -685,7 +681,7 @@ fn parse_ply(bytes: &[u8], path: &Path, reserve: Reserve<'_>) -> Result<MeshData
         line: body_line,
         len: bytes.len(),
     };
-    let record_err = |name: &str, i: usize, place: String, why: String| {
+    let record_err = |name: &str, i: usize, place: Place, why: String| {
         parse_err(path, format!("{name} {} ({place}): {why}", i + 1))
     };
     for (name, def) in &header.elements {
@@ -706,7 +702,7 @@ fn parse_ply(bytes: &[u8], path: &Path, reserve: Reserve<'_>) -> Result<MeshData
                     let face = body
                         .read(&parser, def)
                         .and_then(|r| face_indices(r, &plan))
-                        .map_err(|why| record_err(name, i, place.clone(), why))?;
+                        .map_err(|why| record_err(name, i, place, why))?;
                     // A polygon of n vertices becomes n - 2 triangles.
                     triangles += face.len() as u64 - 2;
                     if triangles > MAX_PRIMITIVES as u64 {
