@@ -4,6 +4,7 @@
 //! `raybench compare` and by the cross-backend equivalence tests. The command line itself is
 //! in `main.rs`.
 
+pub mod diff;
 pub mod measure;
 pub mod progress;
 pub mod report;

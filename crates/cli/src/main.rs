@@ -3,6 +3,7 @@
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
+use raybench::diff::{Metric, diff};
 use raybench::measure::{
     Measured, Prepared, explicit_rays, measure, median, median_phases, prepare, prepare_for_mode,
     timed_seconds,
@@ -12,7 +13,7 @@ use raybench::{
     BACKENDS, NOT_BUILT, backend, brute_force_tests, chosen_backends, compare_hits, default_backend,
 };
 use raybench_core::limits::MAX_THREADS;
-use raybench_core::{Mode, RaySet, RenderSettings, Scene, Timings};
+use raybench_core::{CameraOverrides, Mode, RaySet, RenderSettings, Scene, Timings, Vec3};
 use raybench_scene::{BUILTIN_SCENES, assets_dir, generators::GENERATORS};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -47,7 +48,7 @@ fn parse_memory_limit(s: &str) -> Result<MemoryLimit, String> {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Render a scene to a PNG image.
+    /// Render a scene to an image (PNG, OpenEXR or PFM).
     Render(RenderCmd),
     /// Render a scene with several backends, time them and check that they agree.
     Compare(CompareCmd),
@@ -66,6 +67,45 @@ enum Command {
     Report(ReportCmd),
     /// Join the results of report shards into one report.
     Merge(MergeCmd),
+    /// Measure how far image B is from the reference A (PNG, EXR or PFM).
+    Diff(DiffCmd),
+}
+
+#[derive(Args)]
+struct DiffCmd {
+    /// The reference image (.png, .exr or .pfm).
+    a: PathBuf,
+    /// The image compared with it.
+    b: PathBuf,
+    /// Write the error map (error.png) and the FLIP map (flip.png) into this folder.
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Exposure in stops applied to both images before PSNR and FLIP (which compare the
+    /// images as displayed).
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        value_name = "EV",
+        allow_hyphen_values = true
+    )]
+    exposure: f32,
+    /// Exit with status 2 when the metric of --metric exceeds this value (errors exit
+    /// with 1).
+    #[arg(long, value_name = "X")]
+    fail_above: Option<f64>,
+    /// The metric --fail-above tests: flip, mae, max, mse or relmse.
+    #[arg(long, default_value = "flip", value_parser = parse_metric)]
+    metric: Metric,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+fn parse_metric(s: &str) -> Result<Metric, String> {
+    Metric::from_name(s).ok_or_else(|| {
+        let names: Vec<_> = Metric::ALL.iter().map(|(_, n)| *n).collect();
+        format!("unknown metric '{s}' (known: {})", names.join(", "))
+    })
 }
 
 #[derive(Args)]
@@ -168,6 +208,60 @@ impl FrameArgs {
     }
 }
 
+/// Which of the scene's cameras renders, and adjustments to it.
+#[derive(Args, Clone, Default)]
+struct CameraArgs {
+    /// The scene's camera to render, by name or 0-based index (`raybench info` lists
+    /// them; default: the first).
+    #[arg(long, value_name = "NAME|INDEX")]
+    camera: Option<String>,
+    /// Replace the camera's position: `x,y,z`.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
+    look_from: Option<Vec3>,
+    /// Replace the point the camera looks at: `x,y,z`.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
+    look_at: Option<Vec3>,
+    /// Replace the camera's up direction: `x,y,z`.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
+    up: Option<Vec3>,
+    /// Replace the vertical field of view, in degrees (as the scene format's `fov`).
+    #[arg(long, value_name = "DEGREES")]
+    fov: Option<f32>,
+}
+
+impl CameraArgs {
+    /// Picks and adjusts the scene's camera.
+    fn apply(&self, scene: &mut Scene) -> Result<()> {
+        let overrides = CameraOverrides {
+            position: self.look_from,
+            look_at: self.look_at,
+            up: self.up,
+            vfov_degrees: self.fov,
+        };
+        scene
+            .select_camera(self.camera.as_deref(), &overrides)
+            .map_err(anyhow::Error::msg)
+    }
+}
+
+/// `x,y,z` as three finite numbers.
+fn parse_vec3(s: &str) -> Result<Vec3, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let bad = || format!("'{s}' is not three numbers x,y,z (for example 0,1.5,-4)");
+    let [x, y, z] = parts.as_slice() else {
+        return Err(bad());
+    };
+    let v = Vec3::new(
+        x.parse().map_err(|_| bad())?,
+        y.parse().map_err(|_| bad())?,
+        z.parse().map_err(|_| bad())?,
+    );
+    if !v.is_finite() {
+        return Err(format!("'{s}' has a component that is not finite"));
+    }
+    Ok(v)
+}
+
 fn parse_mode(s: &str) -> Result<Mode, String> {
     Mode::from_name(s).ok_or_else(|| {
         let names: Vec<_> = Mode::ALL.iter().map(|m| m.name()).collect();
@@ -184,9 +278,20 @@ struct RenderCmd {
     backend: Option<String>,
     #[command(flatten)]
     frame: FrameArgs,
-    /// Output image (default: SCENE.png).
-    #[arg(long, value_name = "FILE.png")]
+    #[command(flatten)]
+    camera: CameraArgs,
+    /// Output image (default: SCENE.png): `.png` is 8-bit sRGB clamped to [0, 1]; `.exr`
+    /// (OpenEXR, 32-bit float) and `.pfm` hold the unclamped linear radiance.
+    #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
+    /// Scale the written colour by 2^EV (every format; 0 writes the radiance itself).
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        value_name = "EV",
+        allow_hyphen_values = true
+    )]
+    exposure: f32,
     /// Also write a false-colour image of primitive ids.
     #[arg(long, value_name = "FILE.png")]
     ids: Option<PathBuf>,
@@ -202,6 +307,8 @@ struct CompareCmd {
     backends: Option<Vec<String>>,
     #[command(flatten)]
     frame: FrameArgs,
+    #[command(flatten)]
+    camera: CameraArgs,
     /// Ray set: `primary` renders frames; `incoherent` traces width x height seeded random
     /// rays (origins in the scene's box, uniform directions) instead.
     #[arg(long, default_value = "primary", value_parser = parse_ray_set)]
@@ -247,6 +354,8 @@ struct InfoCmd {
     /// Worker threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
+    #[command(flatten)]
+    camera: CameraArgs,
 }
 
 fn main() -> ExitCode {
@@ -315,7 +424,76 @@ fn run(cli: Cli) -> Result<ExitCode> {
             raybench::report::merge(&cmd.dirs, &cmd.out)?;
             Ok(ExitCode::SUCCESS)
         }
+        Command::Diff(cmd) => diff_images(&cmd),
     }
+}
+
+/// `raybench diff`: the measures on stdout, the maps on request, and status 2 when
+/// `--fail-above` is exceeded (errors are 1).
+fn diff_images(cmd: &DiffCmd) -> Result<ExitCode> {
+    if !cmd.exposure.is_finite() || cmd.exposure.abs() > 64.0 {
+        bail!("--exposure {} is outside [-64, 64] stops", cmd.exposure);
+    }
+    if let Some(x) = cmd.fail_above
+        && !x.is_finite()
+    {
+        bail!("--fail-above {x} is not a finite number");
+    }
+    let maps = cmd
+        .out
+        .as_ref()
+        .map(|d| (d.join("error.png"), d.join("flip.png")));
+    if let Some((e, f)) = &maps {
+        if let Some(dir) = &cmd.out {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("cannot create the folder {}", dir.display()))?;
+        }
+        raybench_render::check_png_path(e)?;
+        raybench_render::check_png_path(f)?;
+    }
+    let a = raybench_render::read_linear(&cmd.a)?;
+    let b = raybench_render::read_linear(&cmd.b)?;
+    let (stats, error_map, flip_map) = diff(&a, &b, cmd.exposure)
+        .map_err(|e| anyhow::anyhow!("{} and {}: {e}", cmd.a.display(), cmd.b.display()))?;
+    if cmd.json {
+        println!("{}", serde_json::to_string(&stats)?);
+    } else {
+        println!("size            {} x {}", stats.width, stats.height);
+        println!(
+            "mean            {:.6} (A)  {:.6} (B)",
+            stats.mean_a, stats.mean_b
+        );
+        println!("mean abs error  {:.6}", stats.mean_abs_error);
+        println!("max abs error   {:.6}", stats.max_abs_error);
+        println!("MSE             {:.6e}", stats.mse);
+        println!("relative MSE    {:.6e}", stats.rel_mse);
+        println!(
+            "PSNR            {}",
+            stats
+                .psnr
+                .map_or("inf (identical as displayed)".into(), |p| format!(
+                    "{p:.2} dB"
+                ))
+        );
+        println!("mean FLIP       {:.6}", stats.flip);
+    }
+    if let Some((e, f)) = &maps {
+        error_map.save(e)?;
+        flip_map.save(f)?;
+        eprintln!("wrote {} and {}", e.display(), f.display());
+    }
+    if let Some(limit) = cmd.fail_above {
+        let value = cmd.metric.of(&stats);
+        if value > limit {
+            let name = Metric::ALL
+                .iter()
+                .find(|(m, _)| *m == cmd.metric)
+                .map_or("", |(_, n)| n);
+            eprintln!("{name} {value:.6} is above {limit}");
+            return Ok(ExitCode::from(2));
+        }
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 fn with_threads<T: Send>(
@@ -335,9 +513,10 @@ fn with_threads<T: Send>(
     }
 }
 
-fn load_scene(spec: &str, assets: &Path) -> Result<Arc<Scene>> {
+fn load_scene(spec: &str, assets: &Path, camera: &CameraArgs) -> Result<Arc<Scene>> {
     let start = std::time::Instant::now();
-    let scene = raybench_scene::load(spec, assets)?;
+    let mut scene = raybench_scene::load(spec, assets)?;
+    camera.apply(&mut scene)?;
     eprintln!(
         "loaded {} ({} primitives) in {:.3} s",
         scene.name,
@@ -380,11 +559,14 @@ fn render(cmd: &RenderCmd, assets: &Path) -> Result<ExitCode> {
         PathBuf::from(format!("{stem}.png"))
     });
     // Before loading and rendering: a long render must not be lost to a bad path.
-    raybench_render::check_png_path(&out)?;
+    raybench_render::check_image_path(&out, &raybench_render::ImageFormat::ALL)?;
+    if !cmd.exposure.is_finite() || cmd.exposure.abs() > 64.0 {
+        bail!("--exposure {} is outside [-64, 64] stops", cmd.exposure);
+    }
     if let Some(ids) = &cmd.ids {
         raybench_render::check_png_path(ids)?;
     }
-    let scene = load_scene(&cmd.scene, assets)?;
+    let scene = load_scene(&cmd.scene, assets, &cmd.camera)?;
     check_mode_fits(&scene, settings.mode)?;
     if !scene.volumes.is_empty() && !matches!(settings.mode, Mode::Mip | Mode::Composite) {
         eprintln!(
@@ -423,7 +605,7 @@ fn render(cmd: &RenderCmd, assets: &Path) -> Result<ExitCode> {
     if let Some(line) = phase_line(&p.phases, &frame.timings) {
         eprintln!("{}: {line}", b.name);
     }
-    raybench_render::write_color_png(&frame, &out)?;
+    raybench_render::write_color(&frame, &out, cmd.exposure)?;
     eprintln!("wrote {}", out.display());
     if let Some(ids) = &cmd.ids {
         raybench_render::write_ids_png(&frame, ids)?;
@@ -477,7 +659,7 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
     if cmd.repeat == 0 || cmd.repeat > 10_000 {
         bail!("--repeat must be in 1..=10000");
     }
-    let scene = load_scene(&cmd.scene, assets)?;
+    let scene = load_scene(&cmd.scene, assets, &cmd.camera)?;
     check_mode_fits(&scene, settings.mode)?;
     let work = brute_force_tests(&settings, cmd.rays, scene.geometry.len(), cmd.repeat + 1);
     let chosen = chosen_backends(cmd.backends.as_deref(), work).map_err(anyhow::Error::msg)?;
@@ -791,7 +973,7 @@ fn report(cmd: &ReportCmd, assets: &Path) -> Result<ExitCode> {
 }
 
 fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
-    let scene = load_scene(&cmd.scene, assets)?;
+    let scene = load_scene(&cmd.scene, assets, &cmd.camera)?;
     check_mode_fits(&scene, cmd.mode)?;
     let g = &scene.geometry;
     println!("scene       {}", scene.name);
@@ -803,6 +985,21 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
     println!("objects     {}", scene.objects.len());
     println!("materials   {}", scene.materials.len());
     println!("lights      {}", scene.lights.len());
+    println!("cameras     {}", scene.cameras.len());
+    for (i, c) in scene.cameras.iter().enumerate() {
+        let cam = c.camera;
+        println!(
+            "  {i:<3} {:<20} from [{}, {}, {}] at [{}, {}, {}] fov {}",
+            format!("'{}'", c.name),
+            cam.position.x,
+            cam.position.y,
+            cam.position.z,
+            cam.look_at.x,
+            cam.look_at.y,
+            cam.look_at.z,
+            cam.vfov_degrees
+        );
+    }
     let bb = g.bounds();
     if bb.is_empty() {
         println!("bounds      (none: no bounded primitives)");

@@ -595,16 +595,22 @@ fn bad_options_give_one_line_errors() {
     }
 }
 
-/// `--out` and `--ids` are checked before the scene is even loaded: only `.png` is written,
-/// and the folder must exist.
+/// `--out` and `--ids` are checked before the scene is even loaded: colour is written as
+/// PNG, EXR or PFM, ids as PNG, and the folder must exist.
 #[test]
 fn output_paths_are_checked_before_rendering() {
     let dir = tmp_dir("outpaths");
     let missing = dir.join("no-such-dir/x.png");
     let ok = dir.join("ok.png");
     let cases: [(&[&str], &str); 4] = [
-        (&["--out", "x.exr"], "x.exr: images are written as PNG only"),
-        (&["--out", "x.jpg"], "x.jpg: images are written as PNG only"),
+        (
+            &["--out", "x.tiff"],
+            "x.tiff: images are written as PNG, OpenEXR or PFM only",
+        ),
+        (
+            &["--out", "x.jpg"],
+            "name the file *.png, *.exr or *.pfm (got '.jpg')",
+        ),
         (
             &["--out", missing.to_str().unwrap()],
             "no-such-dir does not exist",
@@ -1281,5 +1287,160 @@ fn readme_bad_input_table_is_true() {
                 || used.contains(&format!(" {name}\n")),
             "fixture {name} is used by no row of the README's table"
         );
+    }
+}
+
+/// Issue 20: `--out` writes unclamped linear radiance as EXR or PFM (scaled by
+/// `--exposure`), and `raybench diff` measures images against each other.
+#[test]
+fn linear_output_and_diff() {
+    let dir = tmp_dir("linear");
+    let path = |n: &str| dir.join(n).to_str().unwrap().to_owned();
+    let render = |out: &str, extra: &[&str]| {
+        let mut args = vec![
+            "render", "spheres", "--width", "32", "--height", "24", "--out", out,
+        ];
+        args.extend_from_slice(extra);
+        let o = raybench(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    render(&path("a.exr"), &[]);
+    render(&path("a.pfm"), &[]);
+    render(&path("a.png"), &[]);
+    render(&path("half.pfm"), &["--exposure", "-1"]);
+    let diff = |args: &[&str]| {
+        let mut all = vec!["diff"];
+        all.extend_from_slice(args);
+        raybench(&all)
+    };
+    let json = |o: &Output| -> serde_json::Value {
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    // EXR and PFM hold the same linear values.
+    let same = json(&diff(&[&path("a.exr"), &path("a.pfm"), "--json"]));
+    assert_eq!(same["max_abs_error"], 0.0);
+    assert!(same["psnr"].is_null());
+    // Exposure -1 halves every value.
+    let half = json(&diff(&[&path("a.exr"), &path("half.pfm"), "--json"]));
+    let (ma, mb) = (
+        half["mean_a"].as_f64().unwrap(),
+        half["mean_b"].as_f64().unwrap(),
+    );
+    assert!((mb - ma / 2.0).abs() < 1e-6 * ma, "{ma} {mb}");
+    assert!(half["flip"].as_f64().unwrap() > 0.0);
+    // The PNG is the clamped, quantised EXR: close, not equal.
+    let png = json(&diff(&[&path("a.exr"), &path("a.png"), "--json"]));
+    assert!(png["mean_abs_error"].as_f64().unwrap() < 0.01, "{png}");
+    // Maps, and --fail-above's status 2.
+    let maps = dir.join("maps");
+    let o = diff(&[
+        &path("a.exr"),
+        &path("half.pfm"),
+        "--out",
+        maps.to_str().unwrap(),
+        "--fail-above",
+        "0.001",
+        "--metric",
+        "mae",
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(String::from_utf8_lossy(&o.stdout).contains("mean FLIP"));
+    for m in ["error.png", "flip.png"] {
+        assert_eq!(&std::fs::read(maps.join(m)).unwrap()[1..4], b"PNG");
+    }
+    let o = diff(&[&path("a.exr"), &path("a.pfm"), "--fail-above", "0"]);
+    assert!(o.status.success());
+    // Bad input: one error line each.
+    let small = path("small.pfm");
+    std::fs::write(&small, b"PF\n1 1\n-1.0\n\0\0\0\0\0\0\0\0\0\0\0\0").unwrap();
+    let bad = write(&dir, "bad.pfm", b"PF\n4 4\n-1.0\n");
+    let cases: [(&[&str], &str); 5] = [
+        (
+            &[&path("a.exr"), &small],
+            "differ in size: 32 x 24 against 1 x 1",
+        ),
+        (&[&path("a.exr"), &bad], "bad.pfm: PFM data holds 0 bytes"),
+        (&[&path("a.exr"), &path("none.exr")], "none.exr"),
+        (&[&path("a.exr"), "x.gif"], "x.gif: unknown image type"),
+        (
+            &[&path("a.exr"), &path("a.pfm"), "--metric", "psnr"],
+            "unknown metric 'psnr'",
+        ),
+    ];
+    for (args, needle) in cases {
+        assert_clean_error(&diff(args), needle);
+    }
+}
+
+/// Issue 20: `--camera` picks one of a scene's cameras by name or index, and the overrides
+/// adjust it; bad choices are one error line.
+#[test]
+fn cameras_are_chosen_and_adjusted() {
+    let dir = tmp_dir("cameras");
+    let scene = write(
+        &dir,
+        "cams.toml",
+        b"[[camera]]\nname = \"front\"\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n\
+          [[camera]]\nname = \"side\"\nposition = [5, 0, 0]\nlook_at = [0, 0, 0]\n\
+          [[object]]\nkind = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n\
+          [[object]]\nkind = \"sphere\"\ncenter = [0, 0, 3]\nradius = 0.5\n",
+    );
+    let ids = |extra: &[&str]| {
+        let out = dir.join("c.png");
+        let id = dir.join("ids.png");
+        let mut args = vec![
+            "render",
+            &scene,
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--out",
+            out.to_str().unwrap(),
+            "--ids",
+            id.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let o = raybench(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read(&id).unwrap()
+    };
+    let front = ids(&[]);
+    assert_eq!(ids(&["--camera", "front"]), front);
+    assert_eq!(ids(&["--camera", "0"]), front);
+    let side = ids(&["--camera", "side"]);
+    assert_ne!(side, front);
+    assert_eq!(ids(&["--camera", "1"]), side);
+    // The overrides move the front camera to the side camera's place.
+    assert_eq!(ids(&["--look-from", "5,0,0"]), side);
+    assert_ne!(ids(&["--fov", "10"]), front);
+    let o = raybench(&["info", &scene, "--backends", "bvh"]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("cameras     2") && text.contains("'side'"),
+        "{text}"
+    );
+    let cases: [(&[&str], &str); 4] = [
+        (
+            &["--camera", "top"],
+            "no camera 'top' (its cameras: 0: 'front', 1: 'side')",
+        ),
+        (
+            &["--look-at", "0,0,5"],
+            "position and look_at are the same point",
+        ),
+        (&["--fov", "190"], "fov 190 is outside (0, 180)"),
+        (&["--up", "1,x,0"], "'1,x,0' is not three numbers"),
+    ];
+    for (extra, needle) in cases {
+        let mut args = vec!["render", &scene, "--width", "8", "--height", "8"];
+        args.extend_from_slice(extra);
+        assert_clean_error(&raybench(&args), needle);
     }
 }

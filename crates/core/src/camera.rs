@@ -17,6 +17,53 @@ pub struct Camera {
     pub vfov_degrees: f32,
 }
 
+/// A camera with the name a scene gives it (`--camera NAME` picks it).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NamedCamera {
+    /// Its name: the scene file's `name`, a glTF camera's name, or a generated one
+    /// (`camera`, `camera 2`, `auto` for the camera framing the geometry).
+    pub name: String,
+    /// The camera.
+    pub camera: Camera,
+}
+
+/// Adjustments to a camera from the command line (`--look-from`, `--look-at`, `--up`,
+/// `--fov`): each one given replaces the camera's own value.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CameraOverrides {
+    /// New eye position.
+    pub position: Option<Vec3>,
+    /// New point at the image centre.
+    pub look_at: Option<Vec3>,
+    /// New up direction.
+    pub up: Option<Vec3>,
+    /// New vertical field of view in degrees.
+    pub vfov_degrees: Option<f32>,
+}
+
+impl CameraOverrides {
+    /// True when nothing is overridden.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        *self == Self::default()
+    }
+
+    /// `camera` with the overridden values replaced, checked.
+    ///
+    /// # Errors
+    /// When the result cannot produce rays ([`Camera::check`] says why).
+    pub fn apply(&self, camera: Camera) -> Result<Camera, String> {
+        let c = Camera {
+            position: self.position.unwrap_or(camera.position),
+            look_at: self.look_at.unwrap_or(camera.look_at),
+            up: self.up.unwrap_or(camera.up),
+            vfov_degrees: self.vfov_degrees.unwrap_or(camera.vfov_degrees),
+        };
+        c.check()?;
+        Ok(c)
+    }
+}
+
 impl Default for Camera {
     fn default() -> Self {
         Self {
@@ -179,5 +226,30 @@ mod tests {
         };
         assert!(!c.is_valid());
         assert!(Camera::framing(Aabb::new(Vec3::ZERO, Vec3::ONE)).is_valid());
+    }
+
+    #[test]
+    fn overrides_replace_only_what_is_given_and_are_checked() {
+        let cam = Camera::default();
+        assert!(CameraOverrides::default().is_empty());
+        assert_eq!(CameraOverrides::default().apply(cam), Ok(cam));
+        let o = CameraOverrides {
+            vfov_degrees: Some(30.0),
+            look_at: Some(Vec3::X),
+            ..Default::default()
+        };
+        let c = o.apply(cam).unwrap();
+        assert_eq!((c.vfov_degrees, c.look_at), (30.0, Vec3::X));
+        assert_eq!((c.position, c.up), (cam.position, cam.up));
+        let bad = CameraOverrides {
+            look_at: Some(cam.position),
+            ..Default::default()
+        };
+        assert!(bad.apply(cam).unwrap_err().contains("same point"));
+        let bad = CameraOverrides {
+            vfov_degrees: Some(180.0),
+            ..Default::default()
+        };
+        assert!(bad.apply(cam).unwrap_err().contains("fov"));
     }
 }

@@ -25,7 +25,7 @@ pub mod voxels;
 
 pub use raybench_geometry::*;
 
-pub use camera::{Camera, CameraRays};
+pub use camera::{Camera, CameraOverrides, CameraRays, NamedCamera};
 pub use emitters::Emitters;
 pub use frame::{Frame, FrameStats, NO_HIT, Timings};
 pub use material::{Checker, Light, Material, MaterialKind};

@@ -5,7 +5,7 @@ use crate::SceneError;
 use crate::Sphere;
 use crate::Triangle;
 use crate::TriangleMesh;
-use crate::camera::Camera;
+use crate::camera::{Camera, CameraOverrides, NamedCamera};
 use crate::emitters::Emitters;
 use crate::limits;
 use crate::material::{Light, Material};
@@ -31,8 +31,12 @@ pub struct ObjectInfo {
 pub struct Scene {
     /// A name for reports.
     pub name: String,
-    /// The camera.
+    /// The camera rendered: the first of [`Scene::cameras`] unless
+    /// [`Scene::select_camera`] chose another or overrides adjusted it.
     pub camera: Camera,
+    /// Every camera the scene defines, in file order; at least one (the camera framing the
+    /// geometry, named `auto`, when the scene has none).
+    pub cameras: Vec<NamedCamera>,
     /// Radiance of rays that hit nothing (linear RGB).
     pub background: Vec3,
     /// Materials; `prim_material` indexes into this.
@@ -56,6 +60,48 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// Makes camera `which` the one rendered: a name from [`Scene::cameras`], else a
+    /// 0-based index into it; then applies `overrides` to it.
+    ///
+    /// # Errors
+    /// When no camera has that name or index (the message lists them), or the adjusted
+    /// camera cannot produce rays.
+    pub fn select_camera(
+        &mut self,
+        which: Option<&str>,
+        overrides: &CameraOverrides,
+    ) -> Result<(), String> {
+        let base = match which {
+            None => self.camera,
+            Some(w) => {
+                let found = self.cameras.iter().find(|c| c.name == w).or_else(|| {
+                    w.trim()
+                        .parse::<usize>()
+                        .ok()
+                        .and_then(|i| self.cameras.get(i))
+                });
+                let Some(found) = found else {
+                    let names: Vec<String> = self
+                        .cameras
+                        .iter()
+                        .enumerate()
+                        .map(|(i, c)| format!("{i}: '{}'", c.name))
+                        .collect();
+                    return Err(format!(
+                        "scene '{}' has no camera '{w}' (its cameras: {})",
+                        self.name,
+                        names.join(", ")
+                    ));
+                };
+                found.camera
+            }
+        };
+        self.camera = overrides
+            .apply(base)
+            .map_err(|e| format!("the adjusted camera cannot render: {e}"))?;
+        Ok(())
+    }
+
     /// The material of primitive `prim`.
     #[inline]
     #[must_use]
@@ -69,7 +115,7 @@ impl Scene {
 #[derive(Clone, Debug)]
 pub struct SceneBuilder {
     name: String,
-    camera: Option<Camera>,
+    cameras: Vec<NamedCamera>,
     background: Vec3,
     materials: Vec<Material>,
     lights: Vec<Light>,
@@ -118,7 +164,7 @@ impl SceneBuilder {
     pub fn new(name: impl Into<String>) -> Self {
         Self {
             name: name.into(),
-            camera: None,
+            cameras: Vec::new(),
             background: Vec3::new(0.05, 0.05, 0.08),
             materials: vec![Material::default()],
             lights: Vec::new(),
@@ -130,13 +176,45 @@ impl SceneBuilder {
         }
     }
 
-    /// Sets the camera; without one, [`SceneBuilder::build`] frames the geometry.
+    /// Adds a camera named `camera` (`camera 2`, ... when that name is taken); the first
+    /// camera added is the one rendered by default. Without any, [`SceneBuilder::build`]
+    /// frames the geometry.
     ///
     /// # Errors
     /// When the camera cannot produce rays ([`Camera::check`] says why).
     pub fn camera(&mut self, camera: Camera) -> Result<&mut Self, SceneError> {
+        self.add_camera(None, camera)
+    }
+
+    /// Adds a camera under `name` (a generated one, `camera` or `camera N`, when `None`).
+    ///
+    /// # Errors
+    /// When the camera cannot produce rays ([`Camera::check`] says why) or the name is
+    /// taken.
+    pub fn add_camera(
+        &mut self,
+        name: Option<&str>,
+        camera: Camera,
+    ) -> Result<&mut Self, SceneError> {
         camera.check().map_err(SceneError::Invalid)?;
-        self.camera = Some(camera);
+        let taken = |n: &str| self.cameras.iter().any(|c| c.name == n);
+        let name = match name {
+            Some(n) if taken(n) => {
+                return Err(SceneError::Invalid(format!("two cameras are named '{n}'")));
+            }
+            Some(n) => n.to_owned(),
+            None => (1..)
+                .map(|i| {
+                    if i == 1 {
+                        "camera".to_owned()
+                    } else {
+                        format!("camera {i}")
+                    }
+                })
+                .find(|n| !taken(n))
+                .unwrap_or_default(),
+        };
+        self.cameras.push(NamedCamera { name, camera });
         Ok(self)
     }
 
@@ -442,11 +520,19 @@ impl SceneBuilder {
             .volumes
             .iter()
             .fold(geometry.bounds(), |b, v| b.union(v.bounds()));
-        let camera = self.camera.unwrap_or_else(|| Camera::framing(framed));
+        let mut cameras = self.cameras;
+        if cameras.is_empty() {
+            cameras.push(NamedCamera {
+                name: "auto".into(),
+                camera: Camera::framing(framed),
+            });
+        }
+        let camera = cameras[0].camera;
         let emitters = Emitters::new(&geometry, &self.prim_material, &self.materials);
         Scene {
             name: self.name,
             camera,
+            cameras,
             background: self.background,
             materials: self.materials,
             lights: self.lights,

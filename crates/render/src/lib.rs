@@ -1,8 +1,9 @@
 //! # raybench-render
 //!
 //! The CPU side of the renderer interface: [`CpuRenderer`], one generic [`Renderer`] over any
-//! [`Accel`], which spreads the core's tile integrators over threads with rayon; and image
-//! output ([`write_color_png`], [`write_ids_png`]).
+//! [`Accel`], which spreads the core's tile integrators over threads with rayon; image
+//! output ([`write_color`]: PNG, OpenEXR, PFM; [`write_ids_png`]) and input
+//! ([`read_linear`], for `raybench diff`).
 //!
 //! **Architecture invariant:** the hot loop is generic over the accelerator
 //! (`render_frame::<A, C>`); dynamic dispatch happens once per frame, at the `Renderer`
@@ -10,11 +11,13 @@
 //! number of threads.
 
 mod output;
+mod read;
 
 pub use output::{
-    OutputError, check_png_path, id_color, partial_path, srgb8, write_atomically, write_color_png,
-    write_ids_png, write_rgb,
+    ImageFormat, OutputError, check_image_path, check_png_path, id_color, partial_path, pfm_bytes,
+    srgb8, write_atomically, write_color, write_color_png, write_ids_png, write_rgb,
 };
+pub use read::{LinearImage, ReadError, parse_pfm, read_linear, srgb_to_linear};
 
 use raybench_core::integrator::{assemble, render_tile, tiles};
 use raybench_core::{

@@ -1,4 +1,5 @@
-//! Writing frames as PNG images.
+//! Writing frames as images: 8-bit sRGB PNG (clamped, for looking at) or unclamped linear
+//! radiance as OpenEXR (32-bit float RGB) or PFM (for measuring).
 
 use raybench_core::{Frame, NO_HIT, Vec3};
 use std::path::{Path, PathBuf};
@@ -6,6 +7,14 @@ use std::path::{Path, PathBuf};
 /// Why an image could not be written.
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
+    /// Writing a file failed.
+    #[error("cannot write {}: {cause}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause (in the message, not a separate `source`).
+        cause: std::io::Error,
+    },
     /// Encoding or writing failed.
     #[error("cannot write {}: {cause}", path.display())]
     Write {
@@ -102,30 +111,90 @@ pub fn write_atomically<E: From<OutputError>>(
     })
 }
 
-/// Checks, before any work, that a PNG image can be written at `path`: its extension is
-/// `.png` (the only format written; a PNG under another name would mislead), it is not a
-/// folder, its folder exists, and a file can be created there (the temporary file
-/// [`partial_path`] is created and removed again), so that a long render is never wasted
-/// on a path that cannot take its result.
+/// The file formats a frame's colour can be written in, chosen by the file's extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// `.png`: 8-bit sRGB, clamped to `[0, 1]` (what people look at).
+    Png,
+    /// `.exr`: OpenEXR, 32-bit float linear RGB, unclamped.
+    Exr,
+    /// `.pfm`: portable float map, 32-bit float linear RGB, unclamped, little endian.
+    Pfm,
+}
+
+impl ImageFormat {
+    /// The format named by `path`'s extension (any case), if it is one of these.
+    #[must_use]
+    pub fn from_path(path: &Path) -> Option<Self> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "png" => Some(Self::Png),
+            "exr" => Some(Self::Exr),
+            "pfm" => Some(Self::Pfm),
+            _ => None,
+        }
+    }
+
+    /// The format's name in messages.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Png => "PNG",
+            Self::Exr => "OpenEXR",
+            Self::Pfm => "PFM",
+        }
+    }
+
+    /// The file names it takes, in messages.
+    #[must_use]
+    pub fn pattern(self) -> &'static str {
+        match self {
+            Self::Png => "*.png",
+            Self::Exr => "*.exr",
+            Self::Pfm => "*.pfm",
+        }
+    }
+
+    /// Every format a frame's colour can be written in.
+    pub const ALL: [Self; 3] = [Self::Png, Self::Exr, Self::Pfm];
+}
+
+/// Checks, before any work, that an image can be written at `path`: its extension is one of
+/// `formats` (a file under another name would mislead), it is not a folder, its folder
+/// exists, and a file can be created there (the temporary file [`partial_path`] is created
+/// and removed again), so that a long render is never wasted on a path that cannot take
+/// its result. Returns the format.
 ///
 /// # Errors
 /// [`OutputError::Path`] saying which of these fails.
-pub fn check_png_path(path: &Path) -> Result<(), OutputError> {
+pub fn check_image_path(path: &Path, formats: &[ImageFormat]) -> Result<ImageFormat, OutputError> {
     let err = |message: String| OutputError::Path {
         path: path.to_owned(),
         message,
     };
-    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
-    if !ext.eq_ignore_ascii_case("png") {
+    let format = ImageFormat::from_path(path).filter(|f| formats.contains(f));
+    let Some(format) = format else {
+        let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
+        let list = |f: &dyn Fn(ImageFormat) -> &'static str| {
+            let names: Vec<&str> = formats.iter().map(|&x| f(x)).collect();
+            match names.split_last() {
+                Some((last, rest)) if !rest.is_empty() => {
+                    format!("{} or {last}", rest.join(", "))
+                }
+                _ => names.concat(),
+            }
+        };
         return Err(err(format!(
-            "images are written as PNG only: name the file *.png (got {})",
+            "images are written as {} only: name the file {} (got {})",
+            list(&|f| f.name()),
+            list(&|f| f.pattern()),
             if ext.is_empty() {
                 "no extension".to_owned()
             } else {
                 format!("'.{ext}'")
             }
         )));
-    }
+    };
     if path.is_dir() {
         return Err(err("is a folder, not a file".into()));
     }
@@ -143,7 +212,15 @@ pub fn check_png_path(path: &Path) -> Result<(), OutputError> {
         .open(&tmp)
         .map_err(|e| err(format!("cannot create a file in {}: {e}", dir.display())))?;
     let _ = std::fs::remove_file(&tmp);
-    Ok(())
+    Ok(format)
+}
+
+/// [`check_image_path`] for a PNG image (the id images, the report's pictures).
+///
+/// # Errors
+/// As [`check_image_path`].
+pub fn check_png_path(path: &Path) -> Result<(), OutputError> {
+    check_image_path(path, &[ImageFormat::Png]).map(|_| ())
 }
 
 /// Writes RGB bytes (`3 * width * height`, row by row) to `path` as a PNG, through
@@ -175,6 +252,63 @@ pub fn write_rgb(path: &Path, width: u32, height: u32, rgb: Vec<u8>) -> Result<(
 pub fn write_color_png(frame: &Frame, path: &Path) -> Result<(), OutputError> {
     let rgb = frame.color.iter().flat_map(|&c| srgb8(c)).collect();
     write_rgb(path, frame.width, frame.height, rgb)
+}
+
+/// Writes the frame's colour times `2^exposure` in the format of `path`'s extension
+/// ([`ImageFormat`]): a clamped sRGB PNG, or unclamped linear radiance as OpenEXR or PFM
+/// (exposure 0 writes the radiance itself).
+///
+/// # Errors
+/// When the extension names no format, or the file cannot be written.
+pub fn write_color(frame: &Frame, path: &Path, exposure: f32) -> Result<(), OutputError> {
+    let scale = exposure.exp2();
+    let scaled = || frame.color.iter().map(move |&c| c * scale);
+    match ImageFormat::from_path(path) {
+        Some(ImageFormat::Png) => {
+            let rgb = scaled().flat_map(srgb8).collect();
+            write_rgb(path, frame.width, frame.height, rgb)
+        }
+        Some(ImageFormat::Exr) => {
+            let data: Vec<f32> = scaled().flat_map(|c| c.to_array()).collect();
+            let img = image::Rgb32FImage::from_raw(frame.width, frame.height, data)
+                .expect("a frame holds width x height colours");
+            write_atomically(path, |tmp| {
+                image::DynamicImage::ImageRgb32F(img)
+                    .save_with_format(tmp, image::ImageFormat::OpenExr)
+                    .map_err(|cause| OutputError::Write {
+                        path: path.to_owned(),
+                        cause,
+                    })
+            })
+        }
+        Some(ImageFormat::Pfm) => {
+            let bytes = pfm_bytes(frame.width, frame.height, &scaled().collect::<Vec<_>>());
+            write_atomically(path, |tmp| {
+                std::fs::write(tmp, &bytes).map_err(|cause| OutputError::Io {
+                    path: path.to_owned(),
+                    cause,
+                })
+            })
+        }
+        None => check_image_path(path, &ImageFormat::ALL).map(|_| ()),
+    }
+}
+
+/// A PFM file: the `PF` header (colour), width and height, scale `-1.0` (little endian),
+/// then the rows bottom to top, three `f32` per pixel.
+#[must_use]
+pub fn pfm_bytes(width: u32, height: u32, color: &[Vec3]) -> Vec<u8> {
+    let mut out = format!("PF\n{width} {height}\n-1.0\n").into_bytes();
+    out.reserve(color.len() * 12);
+    for row in (0..height as usize).rev() {
+        let start = row * width as usize;
+        for c in &color[start..start + width as usize] {
+            for x in c.to_array() {
+                out.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+    }
+    out
 }
 
 /// Writes the frame's primitive ids as a false-colour PNG.

@@ -4,7 +4,7 @@ use crate::error::LoadError;
 use crate::obj::MeshData;
 use base64::Engine as _;
 use glam::{Mat4, Vec3};
-use raybench_core::{Material, TriangleMesh};
+use raybench_core::{Camera, Material, NamedCamera, TriangleMesh};
 use std::path::Path;
 
 fn parse_err(path: &Path, message: impl Into<String>) -> LoadError {
@@ -225,11 +225,50 @@ fn add_node(
             })?;
             add_mesh(path, &mesh, world, buffers, data)?;
         }
+        if let Some(camera) = node.camera() {
+            add_camera(&camera, node.index(), world, data);
+        }
         // Reversed, so that the first child is visited next (node order, as before).
         let children: Vec<gltf::Node> = node.children().collect();
         stack.extend(children.into_iter().rev().map(|c| (c, world)));
     }
     Ok(())
+}
+
+/// Adds the camera of node `node` placed by `world`: glTF cameras look down their local -z
+/// with +y up, and a perspective camera's `yfov` is the vertical field of view in radians
+/// (its aspect ratio is left to the image size). Orthographic cameras and cameras that
+/// cannot produce rays are skipped with a warning; a name used twice gets the node index.
+fn add_camera(camera: &gltf::Camera, node: usize, world: Mat4, data: &mut MeshData) {
+    let label = camera
+        .name()
+        .map_or_else(|| format!("camera {}", camera.index()), str::to_owned);
+    let gltf::camera::Projection::Perspective(p) = camera.projection() else {
+        data.warnings.push(format!(
+            "glTF camera '{label}' (node {node}) is orthographic: skipped (only pinhole cameras \
+             render)"
+        ));
+        return;
+    };
+    let position = world.transform_point3(Vec3::ZERO);
+    let forward = world.transform_vector3(-Vec3::Z).normalize_or_zero();
+    let cam = Camera {
+        position,
+        look_at: position + forward,
+        up: world.transform_vector3(Vec3::Y),
+        vfov_degrees: p.yfov().to_degrees(),
+    };
+    if let Err(e) = cam.check() {
+        data.warnings
+            .push(format!("glTF camera '{label}' (node {node}): {e}: skipped"));
+        return;
+    }
+    let name = if data.cameras.iter().any(|c| c.name == label) {
+        format!("{label} (node {node})")
+    } else {
+        label
+    };
+    data.cameras.push(NamedCamera { name, camera: cam });
 }
 
 /// Refuses accessors the `gltf` crate's readers would panic on: positions must be `f32`

@@ -1,7 +1,7 @@
 //! OBJ+MTL meshes through `tobj`.
 
 use crate::error::LoadError;
-use raybench_core::{Material, MaterialKind, TriangleMesh, Vec2, Vec3};
+use raybench_core::{Material, MaterialKind, NamedCamera, TriangleMesh, Vec2, Vec3};
 use std::path::Path;
 
 /// A loaded mesh with its materials: the shared shape of OBJ and glTF results.
@@ -19,6 +19,8 @@ pub struct MeshData {
     /// Per vertex (indexed like `mesh.positions`), the file's texture coordinates; empty
     /// when the file has none.
     pub uvs: Vec<Vec2>,
+    /// Cameras the file defines (glTF), in node order; a bare mesh scene renders the first.
+    pub cameras: Vec<NamedCamera>,
     /// What is legal but surely not meant (self-intersecting polygons), one sentence each.
     pub warnings: Vec<String>,
 }

@@ -1,13 +1,15 @@
-//! The `[camera]` table of the scene format.
+//! The `[camera]` table, or the `[[camera]]` list, of the scene format.
 
 use super::V3;
 use raybench_core::{Camera, Vec3};
 use serde::Deserialize;
 
-/// The `[camera]` table: a pinhole camera at `position` looking at `look_at`.
+/// A `[camera]` table or one `[[camera]]` entry: a pinhole camera at `position` looking
+/// at `look_at`, optionally named (for `--camera NAME`).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct CameraDesc {
+    pub(super) name: Option<String>,
     position: V3,
     look_at: V3,
     up: Option<V3>,

@@ -155,6 +155,9 @@ pub(crate) fn bare_mesh_scene(path: &Path) -> Result<Scene, LoadError> {
         cause,
     };
     let mut b = crate::lit_builder(&name).map_err(scene_err)?;
+    for c in &data.cameras {
+        b.add_camera(Some(&c.name), c.camera).map_err(scene_err)?;
+    }
     add_mesh_data(&mut b, &name, data, None).map_err(scene_err)?;
     Ok(b.build())
 }

@@ -41,7 +41,8 @@ type V3 = [f32; 3];
 struct SceneFile {
     name: Option<String>,
     background: Option<V3>,
-    camera: Option<camera::CameraDesc>,
+    /// One `[camera]` table or a `[[camera]]` list (told apart in `parse_and_build`).
+    camera: Option<toml::Value>,
     // The arrays of tables are parsed table by table (`table_item`), so that an error
     // names the table, its index, kind and line rather than the array's first table.
     #[serde(default, rename = "material")]
@@ -397,8 +398,36 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
         b.background(Vec3::from(bg))
             .map_err(ctx.scene_err("background"))?;
     }
-    if let Some(c) = &file.camera {
-        b.camera(c.camera()).map_err(ctx.scene_err("camera"))?;
+    match file.camera {
+        None => {}
+        Some(toml::Value::Array(list)) => {
+            for (index, value) in list.into_iter().enumerate() {
+                let toml::Value::Table(table) = value else {
+                    return Err(LoadError::Parse {
+                        path: ctx.file.clone(),
+                        message: format!("camera {}: expected a table", index + 1),
+                    });
+                };
+                let (c, what): (camera::CameraDesc, _) =
+                    table_item(text, "camera", index, table, ctx)?;
+                b.add_camera(c.name.as_deref(), c.camera())
+                    .map_err(ctx.scene_err(&what))?;
+            }
+        }
+        Some(value) => {
+            let c: camera::CameraDesc = value.try_into().map_err(|e| {
+                let line = text
+                    .lines()
+                    .position(|l| l.trim() == "[camera]")
+                    .map_or(String::new(), |i| format!("line {}: ", i + 1));
+                LoadError::Parse {
+                    path: ctx.file.clone(),
+                    message: format!("{line}camera: {}", e.message().trim_end()),
+                }
+            })?;
+            b.add_camera(c.name.as_deref(), c.camera())
+                .map_err(ctx.scene_err("camera"))?;
+        }
     }
     let empty = file.objects.is_empty() && file.volumes.is_empty();
     let mut names: HashMap<String, u32> = HashMap::new();
@@ -556,6 +585,64 @@ mod tests {
                 "{text:?} -> {e}"
             );
         }
+    }
+
+    /// Issue 20: a `[[camera]]` list of named cameras besides the single `[camera]` table;
+    /// the first is rendered, `select_camera` picks another by name or index.
+    #[test]
+    fn camera_lists() {
+        let sphere = "[[object]]\nkind = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n";
+        let one = load(&format!(
+            "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n{sphere}"
+        ))
+        .unwrap();
+        assert_eq!(one.cameras.len(), 1);
+        assert_eq!(one.cameras[0].name, "camera");
+        let mut many = load(&format!(
+            "[[camera]]\nname = \"front\"\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n\
+             [[camera]]\nposition = [5, 0, 0]\nlook_at = [0, 0, 0]\nfov = 30\n\
+             [[camera]]\nname = \"top\"\nposition = [0, 5, 0]\nlook_at = [0, 0, 0]\n\
+             up = [0, 0, -1]\n{sphere}"
+        ))
+        .unwrap();
+        let names: Vec<&str> = many.cameras.iter().map(|c| c.name.as_str()).collect();
+        assert_eq!(names, ["front", "camera", "top"]);
+        assert_eq!(many.camera.position.z, 5.0);
+        let none = raybench_core::CameraOverrides::default();
+        many.select_camera(Some("top"), &none).unwrap();
+        assert_eq!(many.camera.position.y, 5.0);
+        many.select_camera(Some("1"), &none).unwrap();
+        assert_eq!(many.camera.vfov_degrees, 30.0);
+        let e = many.select_camera(Some("side"), &none).unwrap_err();
+        assert!(e.contains("0: 'front', 1: 'camera', 2: 'top'"), "{e}");
+        let e = many.select_camera(Some("7"), &none).unwrap_err();
+        assert!(e.contains("no camera '7'"), "{e}");
+        // Without cameras the framing camera is named `auto`.
+        let auto = load(sphere).unwrap();
+        assert_eq!(auto.cameras[0].name, "auto");
+        // Errors name the entry and its line.
+        let e = load(&format!(
+            "[[camera]]\nname = \"a\"\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n\
+             [[camera]]\nname = \"a\"\nposition = [0, 0, 4]\nlook_at = [0, 0, 0]\n{sphere}"
+        ))
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("line 5: camera 2: two cameras are named 'a'"),
+            "{e}"
+        );
+        let e = load(&format!(
+            "[[camera]]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nfovy = 3\n{sphere}"
+        ))
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("line 4: camera 1: unknown field `fovy`"), "{e}");
+        let e = load(&format!(
+            "\n[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nfovy = 3\n{sphere}"
+        ))
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("line 2: camera: unknown field `fovy`"), "{e}");
     }
 
     #[test]
