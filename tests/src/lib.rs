@@ -153,6 +153,7 @@ pub fn assert_white_furnace(scene: &Arc<Scene>) {
         max_depth: 64,
         seed: 5,
         count: false,
+        ..RenderSettings::default()
     };
     let frame = render_with(BASELINE, scene, &settings, 2);
     let n = frame.color.len() as f64;
@@ -288,6 +289,7 @@ pub fn mode_settings(size: u32, mode: raybench_core::Mode, spp: u32) -> RenderSe
         max_depth: 4,
         seed: 7,
         count: false,
+        ..RenderSettings::default()
     }
 }
 

@@ -10,7 +10,10 @@ use raybench_tests::{BASELINE, load_or_skip, render_with};
 
 #[test]
 fn cornell_box_white_furnace_written_as_exr_agrees_within_one_percent() {
-    let spec = concat!(env!("CARGO_MANIFEST_DIR"), "/../scripts/cornell-furnace.toml");
+    let spec = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../scripts/cornell-furnace.toml"
+    );
     let Some(scene) = load_or_skip(spec) else {
         return;
     };
@@ -21,7 +24,7 @@ fn cornell_box_white_furnace_written_as_exr_agrees_within_one_percent() {
         mode: Mode::Path,
         max_depth: 64,
         seed: 3,
-        count: false,
+        ..RenderSettings::default()
     };
     let frame = render_with(BASELINE, &scene, &settings, 2);
     let dir = std::env::temp_dir().join(format!("raybench-furnace-{}", std::process::id()));
@@ -30,7 +33,10 @@ fn cornell_box_white_furnace_written_as_exr_agrees_within_one_percent() {
     raybench_render::write_color(&frame, &exr, 0.0).unwrap();
     let image = raybench_render::read_linear(&exr).unwrap();
     std::fs::remove_dir_all(&dir).ok();
-    assert_eq!(image.color, frame.color, "EXR holds the linear radiance exactly");
+    assert_eq!(
+        image.color, frame.color,
+        "EXR holds the linear radiance exactly"
+    );
 
     // Pixels are independent estimates; the standard error of their mean follows from
     // their spread.

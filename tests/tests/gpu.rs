@@ -102,6 +102,28 @@ fn kinds_and_modes_without_kernels_are_refused() {
     let sdf = raybench_scene::load("sdf", std::path::Path::new(".")).unwrap();
     let why = raybench_wgpu::check_kinds(&sdf).unwrap_err();
     assert!(why.contains("SDF model"), "{why}");
+    // Lights the path kernel cannot sample: an environment map (every mode: misses read
+    // it), an emissive sphere (path only).
+    let mut b = raybench_core::SceneBuilder::new("lights");
+    let lamp = b
+        .add_material(raybench_core::Material {
+            emission: raybench_core::Vec3::ONE,
+            ..raybench_core::Material::default()
+        })
+        .unwrap();
+    b.add_sphere(
+        raybench_core::Sphere::new(raybench_core::Vec3::ZERO, 1.0),
+        lamp,
+    )
+    .unwrap();
+    let lamp_scene = b.clone().build();
+    assert!(raybench_wgpu::check_kinds(&lamp_scene).is_ok());
+    let why = raybench_wgpu::check_path_emitters(&lamp_scene).unwrap_err();
+    assert!(why.contains("sphere"), "{why}");
+    let env = raybench_core::Environment::new(1, 1, vec![raybench_core::Vec3::ONE], 1.0, 0.0);
+    b.environment(std::sync::Arc::new(env.unwrap()));
+    let why = raybench_wgpu::check_kinds(&b.build()).unwrap_err();
+    assert!(why.contains("environment map"), "{why}");
     if !raybench_tests::gpu::available() {
         return;
     }
@@ -194,6 +216,7 @@ fn samples_split_over_dispatches_accumulate() {
         max_depth: 3,
         seed: 3,
         count: false,
+        ..RenderSettings::default()
     };
     let pixels = u64::from(settings.width * settings.height);
     let plan = raybench_wgpu::plan::frame(

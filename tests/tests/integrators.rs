@@ -58,6 +58,7 @@ fn white_furnace() {
         max_depth: 64,
         seed: 3,
         count: false,
+        ..RenderSettings::default()
     };
     let frame = render_with(raybench_tests::BASELINE, &scene, &settings, 2);
     let (mean, err) = mean_and_error(&frame.color);
@@ -105,6 +106,7 @@ fn inside_a_glowing_sphere() {
         max_depth: depth,
         seed: 11,
         count: false,
+        ..RenderSettings::default()
     };
     let frame = render_with(raybench_tests::BASELINE, &scene, &settings, 2);
     let (mean, err) = mean_and_error(&frame.color);
@@ -140,6 +142,7 @@ fn lambertian_plane_under_uniform_sky() {
         max_depth: 4,
         seed: 0,
         count: false,
+        ..RenderSettings::default()
     };
     let frame = render_with(raybench_tests::ORACLE, &scene, &settings, 1);
     for c in &frame.color {

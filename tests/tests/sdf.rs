@@ -421,6 +421,7 @@ fn whitted_reflection_and_refraction_match_analytic_balls() {
         max_depth: 8,
         seed: 1,
         count: false,
+        ..RenderSettings::default()
     };
     let render = |sdf: bool| {
         raybench_tests::render_with(

@@ -13,7 +13,9 @@ use raybench::{
     BACKENDS, NOT_BUILT, backend, brute_force_tests, chosen_backends, compare_hits, default_backend,
 };
 use raybench_core::limits::MAX_THREADS;
-use raybench_core::{CameraOverrides, Mode, RaySet, RenderSettings, Scene, Timings, Vec3};
+use raybench_core::{
+    CameraOverrides, LightSampling, Mode, RaySet, RenderSettings, Scene, Timings, Vec3,
+};
 use raybench_scene::{BUILTIN_SCENES, assets_dir, generators::GENERATORS};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -189,6 +191,10 @@ struct FrameArgs {
     /// Maximum number of bounces (whitted, path).
     #[arg(long, default_value_t = 5)]
     max_depth: u32,
+    /// How `path` mode reaches emitters: `mis` (next-event estimation and BSDF sampling
+    /// combined) or `bsdf` (BSDF sampling only, to compare).
+    #[arg(long, default_value = "mis", value_parser = parse_light_sampling)]
+    light_sampling: LightSampling,
     /// Worker threads (default: all cores; at most 1024).
     #[arg(long)]
     threads: Option<usize>,
@@ -204,6 +210,7 @@ impl FrameArgs {
             seed: self.seed,
             max_depth: self.max_depth,
             count,
+            light_sampling: self.light_sampling,
         }
     }
 }
@@ -260,6 +267,11 @@ fn parse_vec3(s: &str) -> Result<Vec3, String> {
         return Err(format!("'{s}' has a component that is not finite"));
     }
     Ok(v)
+}
+
+fn parse_light_sampling(s: &str) -> Result<LightSampling, String> {
+    LightSampling::from_name(s)
+        .ok_or_else(|| format!("unknown light sampling '{s}' (known: mis, bsdf)"))
 }
 
 fn parse_mode(s: &str) -> Result<Mode, String> {

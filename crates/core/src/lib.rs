@@ -14,6 +14,7 @@
 
 mod camera;
 mod emitters;
+mod environment;
 mod frame;
 pub mod integrator;
 mod material;
@@ -26,11 +27,12 @@ pub mod voxels;
 pub use raybench_geometry::*;
 
 pub use camera::{Camera, CameraOverrides, CameraRays, NamedCamera};
-pub use emitters::Emitters;
+pub use emitters::{Chosen, Emitters, LightSample};
+pub use environment::{Environment, luminance};
 pub use frame::{Frame, FrameStats, NO_HIT, Timings};
 pub use material::{Checker, Light, Material, MaterialKind};
 pub use ray_sets::RaySet;
-pub use renderer::{Mode, RenderError, RenderSettings, Renderer, TracedRays};
+pub use renderer::{LightSampling, Mode, RenderError, RenderSettings, Renderer, TracedRays};
 pub use scene::{ObjectInfo, Scene, SceneBuilder};
 pub use voxels::{
     Sampling, TransferFunction, TransferPoint, Volume, VolumeData, VolumeParams, VolumeSample,

@@ -98,10 +98,19 @@ pub fn cosine_hemisphere(n: Vec3, u1: f32, u2: f32) -> Vec3 {
 #[inline]
 #[must_use]
 pub fn triangle_point(a: Vec3, b: Vec3, c: Vec3, u1: f32, u2: f32) -> Vec3 {
+    let [w0, w1, w2] = triangle_weights(u1, u2);
+    a * w0 + b * w1 + c * w2
+}
+
+/// The barycentric weights of [`triangle_point`]'s point: `(1 - sqrt(u1), u2 sqrt(u1))` and
+/// the rest; weights 1 and 2 are the point's surface parameters `(u, v)` (as in a hit).
+#[inline]
+#[must_use]
+pub fn triangle_weights(u1: f32, u2: f32) -> [f32; 3] {
     let s = u1.sqrt();
     let w0 = 1.0 - s;
     let w1 = u2 * s;
-    a * w0 + b * w1 + c * (1.0 - w0 - w1)
+    [w0, w1, 1.0 - w0 - w1]
 }
 
 #[cfg(test)]

@@ -58,6 +58,39 @@ impl Mode {
     }
 }
 
+/// How `path` mode reaches light sources (`docs/sampling.md`); point and directional
+/// lights are always sampled directly, as nothing else can reach them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum LightSampling {
+    /// Next-event estimation towards one chosen emitter (or the environment map) combined
+    /// with BSDF sampling by multiple importance sampling (power heuristic).
+    #[default]
+    Mis,
+    /// BSDF sampling only: emission counts when a path happens to hit it (the reference
+    /// estimator the MIS one is compared with).
+    Bsdf,
+}
+
+impl LightSampling {
+    /// Both, in a fixed order.
+    pub const ALL: [Self; 2] = [Self::Mis, Self::Bsdf];
+
+    /// The name used on the command line.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Mis => "mis",
+            Self::Bsdf => "bsdf",
+        }
+    }
+
+    /// The estimator called `name`, if any.
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+}
+
 /// Settings of one frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RenderSettings {
@@ -75,6 +108,8 @@ pub struct RenderSettings {
     pub max_depth: u32,
     /// Whether to count ray/primitive tests and node visits.
     pub count: bool,
+    /// How `path` mode samples emitters.
+    pub light_sampling: LightSampling,
 }
 
 impl Default for RenderSettings {
@@ -87,6 +122,7 @@ impl Default for RenderSettings {
             seed: 0,
             max_depth: 5,
             count: false,
+            light_sampling: LightSampling::Mis,
         }
     }
 }

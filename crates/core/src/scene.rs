@@ -7,6 +7,7 @@ use crate::Triangle;
 use crate::TriangleMesh;
 use crate::camera::{Camera, CameraOverrides, NamedCamera};
 use crate::emitters::Emitters;
+use crate::environment::Environment;
 use crate::limits;
 use crate::material::{Light, Material};
 use crate::voxels::Volume;
@@ -37,8 +38,10 @@ pub struct Scene {
     /// Every camera the scene defines, in file order; at least one (the camera framing the
     /// geometry, named `auto`, when the scene has none).
     pub cameras: Vec<NamedCamera>,
-    /// Radiance of rays that hit nothing (linear RGB).
+    /// Radiance of rays that hit nothing (linear RGB), where there is no environment map.
     pub background: Vec3,
+    /// The environment map that replaces the constant background, if any.
+    pub environment: Option<Arc<Environment>>,
     /// Materials; `prim_material` indexes into this.
     pub materials: Vec<Material>,
     /// Light sources.
@@ -49,7 +52,8 @@ pub struct Scene {
     pub prim_material: Vec<u32>,
     /// The objects, in scene order.
     pub objects: Vec<ObjectInfo>,
-    /// Emissive triangles, for next-event estimation.
+    /// The lights next-event estimation samples: emissive bounded primitives and the
+    /// environment map.
     pub emitters: Emitters,
     /// Voxel volumes, rendered by the modes `mip` and `composite` (not primitives: they
     /// have no ids and acceleration structures never see them).
@@ -108,6 +112,27 @@ impl Scene {
     pub fn material_of(&self, prim: u32) -> &Material {
         &self.materials[self.prim_material[prim as usize] as usize]
     }
+
+    /// The radiance primitive `prim` emits at surface parameters `(u, v)` (a hit's, or a
+    /// sampled light point's; for triangles the barycentric weights of vertices 1 and 2),
+    /// on the front of its geometric normal.
+    #[inline]
+    #[must_use]
+    pub fn emission_at(&self, prim: u32, u: f32, v: f32) -> Vec3 {
+        let _ = (u, v);
+        self.material_of(prim).emission
+    }
+
+    /// The radiance arriving along a ray with direction `dir` that hits nothing: the
+    /// environment map's, or the constant background.
+    #[inline]
+    #[must_use]
+    pub fn background_along(&self, dir: Vec3) -> Vec3 {
+        match &self.environment {
+            Some(env) => env.radiance(dir),
+            None => self.background,
+        }
+    }
 }
 
 /// Builds a [`Scene`], object by object, assigning global primitive ids in call order and
@@ -117,6 +142,7 @@ pub struct SceneBuilder {
     name: String,
     cameras: Vec<NamedCamera>,
     background: Vec3,
+    environment: Option<Arc<Environment>>,
     materials: Vec<Material>,
     lights: Vec<Light>,
     shapes: Vec<Shape>,
@@ -166,6 +192,7 @@ impl SceneBuilder {
             name: name.into(),
             cameras: Vec::new(),
             background: Vec3::new(0.05, 0.05, 0.08),
+            environment: None,
             materials: vec![Material::default()],
             lights: Vec::new(),
             shapes: Vec::new(),
@@ -226,6 +253,13 @@ impl SceneBuilder {
         colour(color, "background")?;
         self.background = color;
         Ok(self)
+    }
+
+    /// Sets an environment map as the background (seen by rays that miss, sampled as a
+    /// light in `path` mode); it replaces the constant background.
+    pub fn environment(&mut self, environment: Arc<Environment>) -> &mut Self {
+        self.environment = Some(environment);
+        self
     }
 
     /// Adds a material and returns its index.
@@ -514,7 +548,7 @@ impl SceneBuilder {
 
     /// Finishes the scene; without a camera, one framing the geometry is chosen.
     #[must_use]
-    pub fn build(self) -> Scene {
+    pub fn build(mut self) -> Scene {
         let geometry = Geometry::new(self.shapes);
         let framed = self
             .volumes
@@ -528,12 +562,24 @@ impl SceneBuilder {
             });
         }
         let camera = cameras[0].camera;
-        let emitters = Emitters::new(&geometry, &self.prim_material, &self.materials);
+        let (emitters, unbounded) = Emitters::new(
+            &geometry,
+            &self.prim_material,
+            &self.materials,
+            self.environment.as_deref(),
+        );
+        if unbounded > 0 {
+            self.warnings.push(format!(
+                "{unbounded} emissive plane(s) are unbounded: path tracing finds their light \
+                 by BSDF sampling only (no next-event estimation), so expect noise"
+            ));
+        }
         Scene {
             name: self.name,
             camera,
             cameras,
             background: self.background,
+            environment: self.environment,
             materials: self.materials,
             lights: self.lights,
             geometry: Arc::new(geometry),
@@ -583,6 +629,30 @@ mod tests {
         assert_eq!(b.primitive_count(), 0);
         b.add_shapes("s", vec![ok.clone(), ok], 0).unwrap();
         assert_eq!(b.primitive_count(), 2);
+    }
+
+    /// Every bounded emitter is a light; an emissive plane is not (it has no bounds) and
+    /// gets a warning.
+    #[test]
+    fn bounded_emitters_are_lights_and_planes_warn() {
+        let mut b = SceneBuilder::new("t");
+        let lamp = b
+            .add_material(Material {
+                emission: Vec3::ONE,
+                ..Material::default()
+            })
+            .unwrap();
+        b.add_sphere(Sphere::new(Vec3::ZERO, 1.0), lamp).unwrap();
+        b.add_sphere(Sphere::new(Vec3::X * 3.0, 1.0), 0).unwrap();
+        b.add_plane(Vec3::ZERO, Vec3::Y, lamp).unwrap();
+        let s = b.build();
+        assert_eq!(s.emitters.ids, vec![0]);
+        assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+        assert!(
+            s.warnings[0].contains("BSDF sampling only"),
+            "{:?}",
+            s.warnings
+        );
     }
 
     /// Issue 18: negative colours, a sphere too small for f32, all-degenerate meshes.

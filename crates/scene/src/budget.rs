@@ -155,7 +155,13 @@ pub(crate) enum Holds {
     Vertices(u64),
     /// Volume voxels.
     Voxels(u64),
+    /// Texels of an environment map.
+    EnvironmentTexels(u64),
 }
+
+/// Bytes per environment-map texel while it loads: the decoded RGBA f32 image (16), the
+/// linear RGB copy (12) and the sampling table (8).
+const ENVIRONMENT_TEXEL_BYTES_ESTIMATE: u64 = 36;
 
 impl Holds {
     /// The estimate in bytes, and the same in words.
@@ -172,6 +178,11 @@ impl Holds {
                 "height-field vertices",
             ),
             Self::Voxels(n) => (n, VOXEL_BYTES_ESTIMATE, "voxels"),
+            Self::EnvironmentTexels(n) => (
+                n,
+                ENVIRONMENT_TEXEL_BYTES_ESTIMATE,
+                "environment-map texels",
+            ),
         };
         (
             n.saturating_mul(each),

@@ -177,14 +177,22 @@ fn size_mismatch(path: &Path, len: u64, count: u64, format: SampleFormat) -> Loa
     )
 }
 
-/// Reads a greyscale (or colour: its luma) 8- or 16-bit PNG as `(width, height, samples)`
-/// with samples in `[0, 1]`, row by row from the top. Images with more than `max_pixels`
-/// pixels are refused from their header, before decoding.
+/// Decodes the image at `path` as `format` (`what` names it in errors: `PNG`), refusing
+/// it from its header when it has more than `max_pixels` pixels, and calling `reserve`
+/// with its pixel count before decoding (the memory budget). Decoding may allocate
+/// `bytes_per_pixel` per pixel twice over (the widest decoded form and a conversion).
 ///
 /// # Errors
-/// [`LoadError::Io`] when unreadable, [`LoadError::Parse`] when not a decodable PNG or too
-/// large.
-pub fn read_png_gray(path: &Path, max_pixels: u64) -> Result<(u32, u32, Vec<f32>), LoadError> {
+/// [`LoadError::Io`] when unreadable, [`LoadError::Parse`] when not decodable as `format`
+/// or too large, and what `reserve` returns.
+pub(crate) fn decode_image(
+    path: &Path,
+    format: image::ImageFormat,
+    what: &str,
+    max_pixels: u64,
+    bytes_per_pixel: u64,
+    reserve: impl FnOnce(u64) -> Result<(), LoadError>,
+) -> Result<image::DynamicImage, LoadError> {
     let parse = |message: String| LoadError::Parse {
         path: path.to_owned(),
         message,
@@ -197,26 +205,41 @@ pub fn read_png_gray(path: &Path, max_pixels: u64) -> Result<(u32, u32, Vec<f32>
     crate::check_regular_file(path)?;
     let open = || -> Result<image::ImageReader<std::io::BufReader<std::fs::File>>, LoadError> {
         let mut r = image::ImageReader::open(path).map_err(io)?;
-        r.set_format(image::ImageFormat::Png);
+        r.set_format(format);
         Ok(r)
     };
     let (w, h) = open()?
         .into_dimensions()
-        .map_err(|e| parse(format!("not a readable PNG: {e}")))?;
+        .map_err(|e| parse(format!("not a readable {what}: {e}")))?;
     let pixels = u64::from(w) * u64::from(h);
     if pixels > max_pixels {
         return Err(parse(format!(
             "{w} x {h} image has {pixels} pixels (limit {max_pixels})"
         )));
     }
+    reserve(pixels)?;
     let mut reader = open()?;
     let mut limits = image::Limits::default();
-    // Room for the decoded image in its widest form (16-bit RGBA) and the conversion.
-    limits.max_alloc = Some(pixels * 8 * 2 + (1 << 20));
+    limits.max_alloc = Some(pixels * bytes_per_pixel * 2 + (1 << 20));
     reader.limits(limits);
-    let img = reader
+    reader
         .decode()
-        .map_err(|e| parse(format!("not a readable PNG: {e}")))?;
+        .map_err(|e| parse(format!("not a readable {what}: {e}")))
+}
+
+/// Reads a greyscale (or colour: its luma) 8- or 16-bit PNG as `(width, height, samples)`
+/// with samples in `[0, 1]`, row by row from the top. Images with more than `max_pixels`
+/// pixels are refused from their header, before decoding.
+///
+/// # Errors
+/// [`LoadError::Io`] when unreadable, [`LoadError::Parse`] when not a decodable PNG or too
+/// large.
+pub fn read_png_gray(path: &Path, max_pixels: u64) -> Result<(u32, u32, Vec<f32>), LoadError> {
+    // Room for the decoded image in its widest form (16-bit RGBA).
+    let img = decode_image(path, image::ImageFormat::Png, "PNG", max_pixels, 8, |_| {
+        Ok(())
+    })?;
+    let (w, h) = (img.width(), img.height());
     let luma = img.into_luma16();
     Ok((
         w,

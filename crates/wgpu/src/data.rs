@@ -5,8 +5,8 @@
 use bytemuck::{Pod, Zeroable};
 use raybench_bvh::Bvh;
 use raybench_core::{
-    CULL_SLACK, CameraRays, FAR_SCALE, Light, MaterialKind, Mode, RenderSettings, Scene, Shape,
-    Vec3,
+    CULL_SLACK, CameraRays, FAR_SCALE, Light, LightSampling, MaterialKind, Mode, RenderSettings,
+    Scene, Shape, Vec3,
 };
 
 use crate::constants::{
@@ -70,16 +70,18 @@ pub struct Params {
     pub light_first: u32,
     /// How many lights.
     pub light_count: u32,
-    /// Total area of the emitters.
-    pub emitter_area: f32,
+    /// Total choice weight of the emitters (area x luminance, `Emitters::total_weight`).
+    pub emitter_weight: f32,
     /// Explicit rays in this dispatch.
     pub ray_count: u32,
     /// [`FAR_SCALE`] of the conservative slab test.
     pub far_scale: f32,
     /// [`CULL_SLACK`] of the early exits.
     pub cull_slack: f32,
+    /// 1 when `path` mode samples the emitters (`LightSampling::Mis` and at least one).
+    pub mis: u32,
     /// Padding.
-    pub pad: [u32; 2],
+    pub pad: u32,
 }
 
 const _: () = assert!(std::mem::size_of::<Params>() == 176);
@@ -172,13 +174,19 @@ fn prim(shape: &Shape, id: u32) -> Option<GpuPrim> {
     })
 }
 
-/// Why the shaders cannot render `scene`, if they cannot: every primitive kind must have a
+/// Why the shaders cannot render `scene`, if they cannot: no environment map, and every
+/// primitive kind must have a
 /// WGSL port (triangles, spheres and planes do; height fields, CSG trees and SDF models do not
 /// yet).
 ///
 /// # Errors
 /// The first primitive kind without a port.
 pub fn check_kinds(scene: &Scene) -> Result<(), String> {
+    if scene.environment.is_some() {
+        return Err(
+            "the GPU kernels have no environment map (render it with a CPU backend)".into(),
+        );
+    }
     match scene
         .geometry
         .shapes()
@@ -187,6 +195,28 @@ pub fn check_kinds(scene: &Scene) -> Result<(), String> {
     {
         Some(s) => Err(format!(
             "the GPU kernels have no {} intersection (render it with a CPU backend)",
+            s.kind().name()
+        )),
+        None => Ok(()),
+    }
+}
+
+/// Whether the GPU's `path` kernel samples every light of `scene`: it ports next-event
+/// estimation for emissive triangles only.
+///
+/// # Errors
+/// The reason it does not (an emissive sphere or other non-triangle emitter).
+pub fn check_path_emitters(scene: &Scene) -> Result<(), String> {
+    match scene
+        .emitters
+        .ids
+        .iter()
+        .map(|&id| scene.geometry.shape(id))
+        .find(|s| !matches!(s, Shape::Triangle(_)))
+    {
+        Some(s) => Err(format!(
+            "the GPU path kernel samples only triangle emitters, and this scene has an emissive \
+             {} (render it with a CPU backend)",
             s.kind().name()
         )),
         None => Ok(()),
@@ -320,7 +350,10 @@ impl SceneData {
             emitter_count: self.emitters.1,
             light_first: self.lights.0,
             light_count: self.lights.1,
-            emitter_area: scene.emitters.total_area(),
+            emitter_weight: scene.emitters.total_weight(),
+            mis: u32::from(
+                settings.light_sampling == LightSampling::Mis && !scene.emitters.ids.is_empty(),
+            ),
             far_scale: FAR_SCALE,
             cull_slack: CULL_SLACK,
             ..Params::default()

@@ -45,11 +45,11 @@ struct Params {
     emitter_count: u32,
     light_first: u32,
     light_count: u32,
-    emitter_area: f32,
+    emitter_weight: f32,
     ray_count: u32,
     far_scale: f32,
     cull_slack: f32,
-    _pad0: u32,
+    mis: u32,
     _pad1: u32,
 }
 
@@ -62,7 +62,7 @@ struct Node {
 }
 
 // 48-byte primitive (`data::GpuPrim`): a.w holds the kind, b.w the primitive id.
-// Triangle: vertices a.xyz, b.xyz, c.xyz (c.w: the area CDF in the emitter list).
+// Triangle: vertices a.xyz, b.xyz, c.xyz (c.w: the weight CDF in the emitter list).
 // Sphere: centre a.xyz, radius c.x. Plane: point a.xyz, unit normal c.xyz.
 struct Prim {
     a: vec4<f32>,
@@ -882,6 +882,29 @@ fn whitted_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
 // ---------------------------------------------------------------------------------------
 // Path tracing (`integrator::path`, estimator in docs/sampling.md).
 
+// `environment::luminance`.
+fn luminance(c: vec3<f32>) -> f32 {
+    return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+}
+
+// `integrator::path::power_heuristic`.
+fn power_heuristic(a: f32, b: f32) -> f32 {
+    if a <= 0.0 {
+        return 0.0;
+    }
+    let r = b / a;
+    return 1.0 / (1.0 + r * r);
+}
+
+// `Emitters::pdf_hit` for a triangle: choice (area x luminance / total) over area, per
+// solid angle at distance^2 `dist2` and cosine `cos_y`.
+fn triangle_light_pdf(le: vec3<f32>, dist2: f32, cos_y: f32) -> f32 {
+    if !(cos_y > 0.0) {
+        return 0.0;
+    }
+    return luminance(le) / params.emitter_weight * dist2 / cos_y;
+}
+
 // `Emitters::pick`: the emitter entry whose CDF interval holds u (binary search).
 fn pick_emitter(u: f32) -> u32 {
     let total = prims[params.emitter_first + params.emitter_count - 1u].c.w;
@@ -918,6 +941,7 @@ fn path_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
         var r = camera_ray(f32(p.x) + jx, f32(p.y) + jy);
         var weight = sample_weight;
         var specular = true;
+        var pdf_bsdf = 0.0;
         for (var depth = 0u; depth <= params.max_depth; depth++) {
             let h = closest(r);
             n_rays += 1u;
@@ -931,8 +955,15 @@ fn path_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
             let front = sf.front;
             let nf = sf.nf;
             let d = sf.d;
-            if front && (specular || !is_emitter(h.id)) {
-                color += weight * m.emission;
+            if front && max3(m.emission) > 0.0 {
+                var w = 1.0;
+                if params.mis != 0u && !specular && is_emitter(h.id) {
+                    let to = at - r.o;
+                    let dist2 = dot(to, to);
+                    let cos_y = abs(dot(nf, d));
+                    w = power_heuristic(pdf_bsdf, triangle_light_pdf(m.emission, dist2, cos_y));
+                }
+                color += weight * w * m.emission;
             }
             if depth == params.max_depth {
                 break;
@@ -960,29 +991,34 @@ fn path_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
                         }
                     }
                 }
-                if params.emitter_count > 0u {
+                if params.mis != 0u {
                     let e = prims[pick_emitter(u_light)];
                     let y = triangle_point(e.a.xyz, e.b.xyz, e.c.xyz, u_point0, u_point1);
                     let origin = offset_ray_origin(at, nf);
                     let to = y - origin;
                     let dist2 = dot(to, to);
-                    let wi = to / sqrt(dist2);
+                    let dist = sqrt(dist2);
+                    let wi = to / dist;
                     let cos_x = dot(nf, wi);
                     // One-sided: the light's front faces the shading point.
                     let light_n = normalize_or(cross(e.b.xyz - e.a.xyz, e.c.xyz - e.a.xyz), vec3<f32>(0.0, 1.0, 0.0));
-                    let cos_y = -dot(light_n, wi);
+                    let cos_y = -dot(light_n, to) / dist;
                     if cos_x > 0.0 && cos_y > 0.0 && dist2 > 0.0 {
                         let le = material_of(bitcast<u32>(e.b.w)).emission;
-                        let value = weight * brdf * le * (cos_x * cos_y / dist2 * params.emitter_area);
+                        let pdf = triangle_light_pdf(le, dist2, cos_y);
+                        let w = power_heuristic(pdf, cos_x * INV_PI);
+                        let value = weight * brdf * le * (cos_x * w / pdf);
                         n_rays += 1u;
-                        if !occluded(make_ray(origin, to, 0.0, SHADOW_SHORTEN)) {
+                        if !occluded(make_ray(origin, wi * dist, 0.0, SHADOW_SHORTEN)) {
                             color += value;
                         }
                     }
                 }
                 weight *= albedo;
                 specular = false;
-                next = ray_new(offset_ray_origin(at, nf), cosine_hemisphere(nf, u_dir0, u_dir1));
+                let dir = cosine_hemisphere(nf, u_dir0, u_dir1);
+                pdf_bsdf = max(dot(nf, dir), 0.0) * INV_PI;
+                next = ray_new(offset_ray_origin(at, nf), dir);
             } else if m.kind == MAT_MIRROR {
                 weight *= m.specular;
                 specular = true;

@@ -26,7 +26,7 @@ mod renderer;
 
 pub use constants::{kernel_source, wgsl_constants};
 pub use context::{AdapterRequest, describe};
-pub use data::check_kinds;
+pub use data::{check_kinds, check_path_emitters};
 pub use renderer::WgpuRenderer;
 
 /// Whether a wgpu adapter can be opened here (`WGPU_BACKEND`, `WGPU_ADAPTER_NAME`), or why

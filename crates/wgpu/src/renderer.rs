@@ -598,6 +598,9 @@ impl Renderer for WgpuRenderer {
         let start = Instant::now();
         let gpu = &p.gpu;
         let entry = entry_point(Some(settings.mode)).map_err(RenderError::Unsupported)?;
+        if settings.mode == Mode::Path {
+            crate::data::check_path_emitters(&p.scene).map_err(RenderError::Unsupported)?;
+        }
         let pipeline = p.kernels.pipeline(gpu, entry, settings.count)?;
         let (w, h) = (settings.width, settings.height);
         let out_size = std::mem::size_of::<GpuOut>() as u64;

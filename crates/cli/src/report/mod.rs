@@ -84,6 +84,7 @@ impl Workload {
             seed: 0,
             max_depth: 5,
             count: false,
+            ..RenderSettings::default()
         }
     }
 

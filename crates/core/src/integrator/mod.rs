@@ -149,7 +149,7 @@ pub fn cast_light(scene: &Scene) -> Vec3 {
 #[must_use]
 pub fn shade_cast(scene: &Scene, light_dir: Vec3, ray: &Ray, hit: Option<&Hit>) -> Vec3 {
     let Some(hit) = hit else {
-        return scene.background;
+        return scene.background_along(ray.dir);
     };
     let m = scene.material_of(hit.prim);
     let view = -ray.dir.normalize_or_zero();

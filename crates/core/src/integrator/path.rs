@@ -1,11 +1,15 @@
 //! Monte Carlo path tracing, bounce by bounce over a whole tile (wavefront).
 //!
-//! Estimator (documented in `docs/sampling.md`): cosine-weighted diffuse bounces; next-event
-//! estimation at diffuse hits towards every point and directional light and towards one
-//! emissive triangle picked by area (no multiple importance sampling); the emission of
-//! triangles that next-event estimation samples is therefore counted only on camera rays and
-//! after specular bounces, while other emitters (spheres, the environment) are counted on
-//! every hit. Perfect mirrors; dielectrics choose reflection or refraction with the Fresnel
+//! Estimator (documented in `docs/sampling.md`): cosine-weighted diffuse bounces; at every
+//! diffuse hit, one shadow ray per point and directional light, and (with
+//! [`LightSampling::Mis`]) next-event estimation towards one light chosen by power (an
+//! emissive bounded primitive or the environment map, `crate::emitters`), combined with the
+//! BSDF-sampled direction by Veach's power heuristic: the emission a path hits after a
+//! diffuse bounce, or the environment it escapes to, is weighted by
+//! `p_bsdf² / (p_bsdf² + p_light²)`, the light sample by `p_light² / (p_light² + p_bsdf²)`.
+//! Camera rays and rays after specular bounces count what they hit fully. With
+//! [`LightSampling::Bsdf`] only the delta lights are sampled and every emission counts on
+//! hit. Perfect mirrors; dielectrics choose reflection or refraction with the Fresnel
 //! probability. Russian roulette from the third bounce on, surviving with the probability
 //! of the last scattering's largest albedo (clamped to `[0.05, 0.95]`). Emitters are
 //! one-sided, as pbrt's diffuse area lights: they emit on the side their geometric normal
@@ -15,11 +19,9 @@ use super::TileOutput;
 use super::wavefront::{Segment, ShadowBatch, Surface, Wavefront};
 use super::whitted::light_ray;
 use crate::Ray;
-use crate::Shape;
 use crate::material::MaterialKind;
-use crate::optics::{
-    cosine_hemisphere, fresnel_dielectric, offset_ray_origin, reflect, refract, triangle_point,
-};
+use crate::optics::{cosine_hemisphere, fresnel_dielectric, offset_ray_origin, reflect, refract};
+use crate::renderer::LightSampling;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::{Accel, Counters};
@@ -30,23 +32,39 @@ use std::f32::consts::FRAC_1_PI;
 pub const ROULETTE_DEPTH: u32 = 3;
 
 /// Random dimensions used per bounce (see `docs/sampling.md`): bounce `b` draws from
-/// dimensions `2 + 8 b ..`, in this order: emitter choice, emitter point (2), direction (2),
-/// reflect-or-refract choice, roulette.
+/// dimensions `2 + 8 b ..`, in this order: light choice, point on the light or direction
+/// of the environment (2), BSDF direction (2), reflect-or-refract choice, roulette.
 pub const DIMENSIONS_PER_BOUNCE: u32 = 8;
 
 /// A path in flight.
 #[derive(Clone, Copy)]
 struct PathState {
     segment: Segment,
-    /// Whether the last scattering was specular (or this is the camera ray): emission of
-    /// sampled emitters is then counted on hit.
+    /// Whether the last scattering was specular (or this is the camera ray): what the ray
+    /// hits then counts fully, as no light sample could have found it.
     specular: bool,
+    /// After a diffuse scattering: the solid-angle density with which the ray's direction
+    /// was sampled (for the MIS weight of the emission it hits).
+    pdf_bsdf: f32,
     sampler: Sampler,
 }
 
-/// Shadow rays towards emissive triangles stop this fraction short of the light, so that
-/// the light's own triangle does not occlude it.
+/// Shadow rays towards sampled light points stop this fraction short of the light, so
+/// that the light's own surface does not occlude it.
 pub const SHADOW_SHORTEN: f32 = 1.0 - 1.0 / 1024.0;
+
+/// Veach's power heuristic (exponent 2) for one sample of each technique: the weight of
+/// the technique with density `a` against the one with density `b`, written as
+/// `1 / (1 + (b / a)²)` so that huge densities (tiny light cones) do not overflow.
+#[inline]
+#[must_use]
+pub fn power_heuristic(a: f32, b: f32) -> f32 {
+    if a <= 0.0 {
+        return 0.0;
+    }
+    let r = b / a;
+    1.0 / (1.0 + r * r)
+}
 
 /// Renders a tile by path tracing (the estimator of this module's documentation).
 pub(super) fn path_tile<A: Accel, C: Counters>(
@@ -56,7 +74,7 @@ pub(super) fn path_tile<A: Accel, C: Counters>(
     let settings = st.settings;
     let sample_weight = Vec3::splat(1.0 / settings.spp as f32);
     let emitters = &scene.emitters;
-    let emitter_area = emitters.total_area();
+    let mis = settings.light_sampling == LightSampling::Mis && !emitters.is_empty();
 
     for s in 0..settings.spp {
         let mut paths: Vec<PathState> = st
@@ -68,6 +86,7 @@ pub(super) fn path_tile<A: Accel, C: Counters>(
                     ray,
                 },
                 specular: true,
+                pdf_bsdf: 0.0,
                 sampler,
             })
             .collect();
@@ -83,6 +102,18 @@ pub(super) fn path_tile<A: Accel, C: Counters>(
             for (path, hit) in paths.iter_mut().zip(&hits) {
                 let seg = path.segment;
                 let px = seg.pixel as usize;
+                // What the ray found counts fully unless a light sample at the previous
+                // (diffuse) vertex could have found it too.
+                let weighted = mis && !path.specular;
+                let Some(hit) = hit else {
+                    let mut w = 1.0;
+                    if weighted && scene.environment.is_some() {
+                        let d = seg.ray.dir.normalize();
+                        w = power_heuristic(path.pdf_bsdf, emitters.pdf_environment(scene, d));
+                    }
+                    st.color[px] += seg.weight * w * scene.background_along(seg.ray.dir);
+                    continue;
+                };
                 let Some(Surface {
                     prim,
                     m,
@@ -90,12 +121,17 @@ pub(super) fn path_tile<A: Accel, C: Counters>(
                     nf,
                     front,
                     d,
-                }) = st.surface(scene, &seg, hit.as_ref())
+                }) = st.surface(scene, &seg, Some(hit))
                 else {
                     continue;
                 };
-                if front && (path.specular || !emitters.contains(prim)) {
-                    st.color[px] += seg.weight * m.emission;
+                if front && m.emission.max_element() > 0.0 {
+                    let mut w = 1.0;
+                    if weighted {
+                        let light = emitters.pdf_hit(scene, seg.ray.origin, prim, p, hit.normal);
+                        w = power_heuristic(path.pdf_bsdf, light);
+                    }
+                    st.color[px] += seg.weight * w * scene.emission_at(prim, hit.u, hit.v);
                 }
                 if depth == settings.max_depth {
                     continue;
@@ -118,33 +154,25 @@ pub(super) fn path_tile<A: Accel, C: Counters>(
                                 shadows.push(ray, px, weight * brdf * irradiance);
                             }
                         }
-                        if let Some(id) = emitters.pick(u_light)
-                            && let Shape::Triangle(tri) = scene.geometry.shape(id)
-                        {
-                            let y =
-                                triangle_point(tri.v[0], tri.v[1], tri.v[2], u_point.0, u_point.1);
-                            let origin = offset_ray_origin(p, nf);
-                            let to = y - origin;
-                            let dist2 = to.length_squared();
-                            let wi = to / dist2.sqrt();
-                            let cos_x = nf.dot(wi);
-                            // One-sided: the light's front faces the shading point.
-                            let cos_y = -tri.normal().dot(wi);
-                            if cos_x > 0.0 && cos_y > 0.0 && dist2 > 0.0 {
-                                let le = scene.material_of(id).emission;
-                                // pdf = 1 / area per unit area; geometry term cos cos / d^2.
-                                let value =
-                                    weight * brdf * le * (cos_x * cos_y / dist2 * emitter_area);
-                                let ray = Ray::with_interval(origin, to, 0.0, SHADOW_SHORTEN);
+                        let origin = offset_ray_origin(p, nf);
+                        if mis && let Some(ls) = emitters.sample(scene, origin, u_light, u_point) {
+                            let cos_x = nf.dot(ls.wi);
+                            if cos_x > 0.0 && ls.pdf > 0.0 && ls.pdf.is_finite() {
+                                let w = power_heuristic(ls.pdf, cos_x * FRAC_1_PI);
+                                let value = weight * brdf * ls.radiance * (cos_x * w / ls.pdf);
+                                let ray = if ls.dist.is_finite() {
+                                    Ray::with_interval(origin, ls.wi * ls.dist, 0.0, SHADOW_SHORTEN)
+                                } else {
+                                    Ray::new(origin, ls.wi)
+                                };
                                 shadows.push(ray, px, value);
                             }
                         }
                         weight *= albedo;
                         path.specular = false;
-                        Ray::new(
-                            offset_ray_origin(p, nf),
-                            cosine_hemisphere(nf, u_dir.0, u_dir.1),
-                        )
+                        let dir = cosine_hemisphere(nf, u_dir.0, u_dir.1);
+                        path.pdf_bsdf = nf.dot(dir).max(0.0) * FRAC_1_PI;
+                        Ray::new(origin, dir)
                     }
                     MaterialKind::Mirror => {
                         weight *= m.specular;

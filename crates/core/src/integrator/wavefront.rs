@@ -123,7 +123,8 @@ impl<'a, A: Accel, C: Counters> Wavefront<'a, A, C> {
     }
 
     /// The surface `seg` hit (`hit`, from [`Self::trace`]), ready to shade; on a miss, adds
-    /// the background, weighted, to the segment's pixel and returns `None`.
+    /// the background (or environment map) seen along the ray, weighted, to the segment's
+    /// pixel and returns `None`.
     pub(super) fn surface<'s>(
         &mut self,
         scene: &'s Scene,
@@ -131,7 +132,7 @@ impl<'a, A: Accel, C: Counters> Wavefront<'a, A, C> {
         hit: Option<&Hit>,
     ) -> Option<Surface<'s>> {
         let Some(hit) = hit else {
-            self.color[seg.pixel as usize] += seg.weight * scene.background;
+            self.color[seg.pixel as usize] += seg.weight * scene.background_along(seg.ray.dir);
             return None;
         };
         let m = scene.material_of(hit.prim);

@@ -9,6 +9,7 @@
 //! file here with its table's struct and its `add`, plus its variant of [`ObjectDesc`] and
 //! the one match arm that calls that `add`.
 
+mod background;
 mod bezier;
 mod camera;
 mod csg;
@@ -40,7 +41,7 @@ type V3 = [f32; 3];
 #[serde(deny_unknown_fields)]
 struct SceneFile {
     name: Option<String>,
-    background: Option<V3>,
+    background: Option<toml::Value>,
     /// One `[camera]` table or a `[[camera]]` list (told apart in `parse_and_build`).
     camera: Option<toml::Value>,
     // The arrays of tables are parsed table by table (`table_item`), so that an error
@@ -395,8 +396,7 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
     let mut budget = Reservation::new()?;
     let mut b = SceneBuilder::new(file.name.as_deref().unwrap_or(ctx.scene));
     if let Some(bg) = file.background {
-        b.background(Vec3::from(bg))
-            .map_err(ctx.scene_err("background"))?;
+        background::add(bg, text, ctx, &mut b, &mut budget)?;
     }
     match file.camera {
         None => {}
