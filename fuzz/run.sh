@@ -4,7 +4,7 @@
 #   cargo install cargo-fuzz --locked          # once
 #   fuzz/run.sh [SECONDS] [TARGET...]          # default: 60 s, every target
 #
-# Targets: scene_toml obj gltf bpt raw_volume (fuzz/fuzz_targets/<name>.rs). cargo fuzz
+# Targets: scene_toml obj gltf ply bpt raw_volume (fuzz/fuzz_targets/<name>.rs). cargo fuzz
 # needs nightly flags (-Zsanitizer): on the stable toolchain they are unlocked with
 # RUSTC_BOOTSTRAP=1. One target by hand:
 #
@@ -24,7 +24,7 @@ secs=${1:-60}
 shift || true
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
-    targets=(scene_toml obj gltf bpt raw_volume)
+    targets=(scene_toml obj gltf ply bpt raw_volume)
 fi
 export RUSTC_BOOTSTRAP=1
 cargo fuzz build

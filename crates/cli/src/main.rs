@@ -283,7 +283,7 @@ fn parse_mode(s: &str) -> Result<Mode, String> {
 
 #[derive(Args)]
 struct RenderCmd {
-    /// Scene: a file (.toml, .obj, .gltf, .glb), a built-in name or a generator (soup:1000).
+    /// Scene: a file (.toml, .obj, .gltf, .glb, .ply), a built-in name or a generator (soup:1000).
     scene: String,
     /// Backend (default: the fastest available).
     #[arg(long)]

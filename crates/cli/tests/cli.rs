@@ -764,6 +764,123 @@ fn bump_bpt(count: u32) -> String {
     s
 }
 
+/// A PLY file renders as a bare scene and as a scene's mesh object, in ASCII and binary;
+/// bad PLY files (out-of-range index, truncated binary data, a header declaring more than
+/// the file holds, no `vertex` element, not PLY at all, over the memory budget) give one
+/// `error:` line naming the file, the place and the cause.
+#[test]
+fn ply_meshes_render_and_bad_ones_give_one_line_errors() {
+    let dir = tmp_dir("ply");
+    let header = |format: &str| {
+        format!(
+            "ply\nformat {format} 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+             property float z\nelement face 2\nproperty list uchar int vertex_indices\n\
+             end_header\n"
+        )
+    };
+    let corners = [
+        [-1.0f32, -1.0, 0.0],
+        [1.0, -1.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+    ];
+    let faces = [[0i32, 1, 2], [0, 1, 3]];
+    let ascii = format!(
+        "{}-1 -1 0\n1 -1 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1 3\n",
+        header("ascii")
+    );
+    let mut binary = header("binary_little_endian").into_bytes();
+    for c in corners.iter().flatten() {
+        binary.extend_from_slice(&c.to_le_bytes());
+    }
+    for f in faces {
+        binary.push(3);
+        for i in f {
+            binary.extend_from_slice(&i.to_le_bytes());
+        }
+    }
+    let out = dir.join("ply.png");
+    let scene = write(
+        &dir,
+        "scene.toml",
+        b"[[object]]\nkind = \"mesh\"\npath = \"binary.ply\"\n\
+          [[object]]\nkind = \"mesh\"\npath = \"ascii.ply\"\ntransform = { translate = [3, 0, 0] }\n",
+    );
+    for spec in [
+        write(&dir, "ascii.ply", ascii.as_bytes()),
+        write(&dir, "binary.ply", &binary),
+        scene,
+    ] {
+        let o = raybench(&[
+            "render",
+            &spec,
+            "--width",
+            "24",
+            "--height",
+            "16",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(
+            o.status.success(),
+            "{spec}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert_eq!(&std::fs::read(&out).unwrap()[1..4], b"PNG");
+        std::fs::remove_file(&out).unwrap();
+    }
+    let truncated = &binary[..binary.len() - 3];
+    let cases = [
+        (
+            write(
+                &dir,
+                "index.ply",
+                ascii.replace("3 0 1 3", "3 0 1 4").as_bytes(),
+            ),
+            "index.ply: face 2 (line 15): vertex index 4 is out of range (the file has 4 vertices)",
+        ),
+        (
+            write(&dir, "truncated.ply", truncated),
+            "truncated.ply: face 2 (byte 230): the file ends inside this record (truncated)",
+        ),
+        (
+            write(
+                &dir,
+                "huge.ply",
+                header("binary_big_endian")
+                    .replace("vertex 4", "vertex 4000000000")
+                    .as_bytes(),
+            ),
+            "huge.ply: the header declares 4000000000 'vertex' records of at least 12 bytes each, \
+             more than the 0 bytes after the header hold",
+        ),
+        (
+            write(
+                &dir,
+                "novertex.ply",
+                ascii.replace("vertex 4", "point 4").as_bytes(),
+            ),
+            "novertex.ply: the header declares no 'vertex' element",
+        ),
+        (
+            write(&dir, "stl.ply", b"solid cube\nfacet normal 0 0 1\n"),
+            "stl.ply: malformed PLY header: line 1: not a PLY file (the first line is not 'ply')",
+        ),
+    ];
+    for (path, needle) in &cases {
+        assert_clean_error(&raybench(&["render", path]), needle);
+    }
+    // The budget is checked against the header's face count before any face is read.
+    let o = raybench(&[
+        "render",
+        &dir.join("binary.ply").to_string_lossy(),
+        "--memory-limit",
+        "1K",
+    ]);
+    assert_clean_error(&o, "binary.ply: needs about 1.2 KiB for 2 primitives");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
 #[test]
 fn bezier_patches_render_directly_and_tessellated() {
     let dir = tmp_dir("bezier");

@@ -1,12 +1,13 @@
 //! # raybench-scene
 //!
 //! Everything that turns a name or a file into a [`Scene`]: the TOML scene format
-//! (`docs/scene-format.md`), OBJ+MTL through `tobj`, glTF 2.0 through `gltf`, seeded procedural
+//! (`docs/scene-format.md`), OBJ+MTL through `tobj`, glTF 2.0 through `gltf`, PLY through
+//! `ply-rs-bw`, seeded procedural
 //! generators (`soup:M`, `spheres:M`, `icosphere:L`, `terrain:N`) and the built-in scenes,
 //! whose TOML sources live in `bench-scenes/` and are embedded in the binary.
 //!
 //! Scene specs resolve in this order: an existing file path (`.toml`, `.obj`, `.gltf`,
-//! `.glb`), a built-in scene name, a generator spec. Mesh files named by scenes are looked
+//! `.glb`, `.ply`), a built-in scene name, a generator spec. Mesh files named by scenes are looked
 //! up relative to the scene file, then in the assets directory ([`assets_dir`]).
 //!
 //! Nothing here panics on bad input: every malformed, truncated or out-of-range file gives a
@@ -21,6 +22,7 @@ pub mod generators;
 mod gltf_loader;
 mod obj;
 pub mod phantom;
+mod ply;
 pub mod samples;
 mod texture;
 mod transform;
@@ -36,6 +38,7 @@ pub use error::LoadError;
 pub use format::{load_scene_str, load_toml_file};
 pub use gltf_loader::{load_gltf_bytes, load_gltf_file};
 pub use obj::{MeshData, load_obj_bytes, load_obj_file};
+pub use ply::{load_ply_bytes, load_ply_file};
 pub use texture::{ImageSource, TextureRef};
 pub use transform::Transform;
 
@@ -170,17 +173,17 @@ pub(crate) fn extension(path: &Path) -> String {
 }
 
 /// Loads a scene file, choosing the format by extension: `.toml` scene files; `.obj`,
-/// `.gltf` and `.glb` meshes get an automatic camera framing their bounding box.
+/// `.gltf`, `.glb` and `.ply` meshes get an automatic camera framing their bounding box.
 ///
 /// # Errors
 /// What the format's loader reports, or an unsupported extension.
 pub fn load_file(path: &Path, assets: &Path) -> Result<Scene, LoadError> {
     match extension(path).as_str() {
         "toml" => load_toml_file(path, assets),
-        "obj" | "gltf" | "glb" => format::bare_mesh_scene(path),
+        "obj" | "gltf" | "glb" | "ply" => format::bare_mesh_scene(path),
         _ => Err(LoadError::Parse {
             path: path.to_owned(),
-            message: "unknown scene file type (expected .toml, .obj, .gltf or .glb)".into(),
+            message: "unknown scene file type (expected .toml, .obj, .gltf, .glb or .ply)".into(),
         }),
     }
 }

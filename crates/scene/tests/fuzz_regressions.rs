@@ -2,7 +2,9 @@
 //! `fuzz/` or while writing them), each fixed in the loader: every one must now give an
 //! error (or load) quickly. Larger inputs live in `tests/fuzz-regressions/`.
 
-use raybench_scene::{LoadError, load_gltf_bytes, load_obj_bytes, load_scene_str, parse_bpt};
+use raybench_scene::{
+    LoadError, load_gltf_bytes, load_obj_bytes, load_ply_bytes, load_scene_str, parse_bpt,
+};
 use std::path::Path;
 
 /// The inputs kept as files, loaded by the loader their extension names.
@@ -12,6 +14,7 @@ fn load_regression_file(path: &Path) -> Result<(), LoadError> {
     match ext {
         "obj" => load_obj_bytes(&bytes, path).map(drop),
         "gltf" | "glb" => load_gltf_bytes(&bytes, path).map(drop),
+        "ply" => load_ply_bytes(&bytes, path).map(drop),
         "bpt" => parse_bpt(&String::from_utf8_lossy(&bytes), path).map(drop),
         "toml" => load_scene_str(
             &String::from_utf8_lossy(&bytes),
@@ -180,7 +183,7 @@ fn obj_coordinate_beyond_the_limit_is_refused() {
 fn fuzz_seeds_load() {
     let seeds = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/seeds");
     let mut n = 0;
-    for target in ["scene_toml", "obj", "gltf", "bpt", "raw_volume"] {
+    for target in ["scene_toml", "obj", "gltf", "ply", "bpt", "raw_volume"] {
         for entry in std::fs::read_dir(seeds.join(target)).unwrap() {
             let path = entry.unwrap().path();
             let bytes = std::fs::read(&path).unwrap();
@@ -192,6 +195,7 @@ fn fuzz_seeds_load() {
                 "gltf" => {
                     load_gltf_bytes(&bytes, &path).map(|m| assert!(!m.mesh.indices.is_empty()))
                 }
+                "ply" => load_ply_bytes(&bytes, &path).map(|m| assert!(!m.mesh.indices.is_empty())),
                 "bpt" => parse_bpt(&text(), &path).map(drop),
                 _ => {
                     // The raw_volume target's layout: three u32 dims, a format byte, samples.

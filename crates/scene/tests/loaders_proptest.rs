@@ -7,14 +7,18 @@
 //! Deterministic: a fixed seed with the ChaCha generator and no failure files, so CI runs
 //! the same cases every time.
 
+#[path = "support/ply_writer.rs"]
+mod ply_writer;
+
 use base64::Engine as _;
+use ply_writer::{Decl, ENCODINGS, Element, Val, header_len, ply};
 use proptest::prelude::*;
 use proptest::test_runner::{RngAlgorithm, RngSeed};
 use raybench_core::limits::{MAX_BEZIER_PATCHES, MAX_PRIMITIVES, MAX_VOLUME_VOXELS};
 use raybench_core::{Affine3A, TransferFunction, Vec3, Volume, VolumeData, VolumeParams};
 use raybench_scene::samples::{RawSamples, SampleFormat, decode_raw};
 use raybench_scene::{
-    LoadError, MeshData, load_gltf_bytes, load_obj_bytes, load_scene_str, parse_bpt,
+    LoadError, MeshData, load_gltf_bytes, load_obj_bytes, load_ply_bytes, load_scene_str, parse_bpt,
 };
 use std::path::Path;
 
@@ -810,6 +814,157 @@ fn raw_volumes() {
     });
     assert!(
         loaded >= CASES / 20,
+        "only {loaded} of {CASES} inputs loaded"
+    );
+}
+
+/// The PLY scalar types.
+const PLY_TYPES: [&str; 8] = [
+    "char", "uchar", "short", "ushort", "int", "uint", "float", "double",
+];
+
+/// A PLY number: in `lo..hi` at level 0; at higher levels sometimes NaN, infinite, huge or
+/// beyond f32 (cast to the property's type by the writer: integers saturate).
+fn ply_num(level: u8, lo: f64, hi: f64) -> BoxedStrategy<f64> {
+    let bad = prop_oneof![
+        Just(f64::NAN),
+        Just(f64::INFINITY),
+        Just(-1e30),
+        Just(1e39),
+        Just(1e300),
+        Just(-1.0),
+        Just(4e9),
+    ];
+    (lo..hi, maybe(level, bad))
+        .prop_map(|(ok, bad)| bad.unwrap_or(ok))
+        .boxed()
+}
+
+/// How a generated PLY file is spoilt after writing, at levels 1 and 2.
+#[derive(Clone, Debug)]
+enum Spoil {
+    /// Cut at this share of its length.
+    Truncate(prop::sample::Index),
+    /// One byte replaced.
+    Byte(prop::sample::Index, u8),
+    /// The first element's declared count changed to this.
+    Count(u64),
+}
+
+/// A PLY file in a random encoding: `n` vertices of a random coordinate type (sometimes
+/// with normals and texture coordinates), faces of three to six corners with random integer
+/// list types, sometimes an ignored element with a list, faces first or last; at levels 1
+/// and 2 bad numbers and indices, and a truncated, altered or miscounted file. With it, the
+/// number of triangles it makes when it loads and is not spoilt.
+fn ply_file() -> impl Strategy<Value = (Vec<u8>, Option<usize>)> {
+    (level(), 3usize..9).prop_flat_map(|(level, n)| {
+        let bad_index = prop_oneof![Just(-1i64), Just(9), Just(1 << 40)];
+        let index = (0..n as u32, maybe(level, bad_index))
+            .prop_map(|(ok, bad)| bad.map_or(f64::from(ok), |b| b as f64));
+        let coordinate = || ply_num(level, -4.0, 4.0);
+        let spoil = prop_oneof![
+            any::<prop::sample::Index>().prop_map(Spoil::Truncate),
+            (any::<prop::sample::Index>(), any::<u8>()).prop_map(|(i, b)| Spoil::Byte(i, b)),
+            prop_oneof![
+                Just(0u64),
+                Just(2),
+                Just(1 << 20),
+                Just(1 << 40),
+                Just(u64::MAX)
+            ]
+            .prop_map(Spoil::Count),
+        ];
+        (
+            (0..3usize, 0..8usize, 0..6usize, 0..6usize),
+            proptest::collection::vec([coordinate(), coordinate(), coordinate()], n),
+            proptest::collection::vec(proptest::collection::vec(index, 3..7), 1..6),
+            (any::<bool>(), any::<bool>(), any::<bool>()),
+            maybe(level, spoil),
+        )
+            .prop_map(|(types, coords, faces, flags, spoil)| {
+                let (enc, coord, count, index) = types;
+                let (attributes, extra, faces_first) = flags;
+                let mut decls: Vec<Decl> = ["x", "y", "z"]
+                    .map(|a| Decl::Scalar(PLY_TYPES[coord], a))
+                    .to_vec();
+                if attributes {
+                    decls.extend(["nx", "ny", "nz", "s", "t"].map(|a| Decl::Scalar("float", a)));
+                }
+                let rows = coords
+                    .iter()
+                    .map(|p| {
+                        let mut row: Vec<Val> = p.iter().map(|&c| Val::N(c)).collect();
+                        if attributes {
+                            row.extend([0.0, 0.0, 1.0, p[0], p[1]].map(Val::N));
+                        }
+                        row
+                    })
+                    .collect();
+                let triangles = faces.iter().map(|f| f.len() - 2).sum();
+                let list = Decl::List(PLY_TYPES[count], PLY_TYPES[index], "vertex_indices");
+                let mut elements = vec![
+                    Element {
+                        name: "vertex",
+                        decls,
+                        rows,
+                    },
+                    Element {
+                        name: "face",
+                        decls: vec![list],
+                        rows: faces.into_iter().map(|f| vec![Val::L(f)]).collect(),
+                    },
+                ];
+                if faces_first {
+                    elements.reverse();
+                }
+                if extra {
+                    let edge = Element {
+                        name: "edge",
+                        decls: vec![Decl::Scalar("int", "a"), Decl::List("uchar", "float", "w")],
+                        rows: vec![vec![Val::N(1.0), Val::L(vec![0.5, 2.0])]; 2],
+                    };
+                    elements.insert(1, edge);
+                }
+                let mut bytes = ply(ENCODINGS[enc], "comment generated\n", &elements);
+                match &spoil {
+                    None => {}
+                    Some(Spoil::Truncate(at)) => bytes.truncate(at.index(bytes.len())),
+                    Some(Spoil::Byte(at, b)) => {
+                        let at = at.index(bytes.len());
+                        bytes[at] = *b;
+                    }
+                    Some(Spoil::Count(c)) => {
+                        let first = &elements[0];
+                        let from = format!("element {} {}\n", first.name, first.rows.len());
+                        let to = format!("element {} {c}\n", first.name);
+                        let end = header_len(&bytes);
+                        let header = String::from_utf8_lossy(&bytes[..end]).replacen(&from, &to, 1);
+                        bytes = [header.as_bytes(), &bytes[end..]].concat();
+                    }
+                }
+                (bytes, spoil.is_none().then_some(triangles))
+            })
+    })
+}
+
+#[test]
+fn ply_files() {
+    let loaded = run_cases(CASES, ply_file(), |(bytes, triangles)| {
+        let loaded = load_ply_bytes(&bytes, Path::new("p.ply"));
+        if let Ok(m) = &loaded {
+            let n = m.mesh.positions.len();
+            prop_assert!(m.normals.is_empty() || m.normals.len() == n);
+            prop_assert!(m.uvs.is_empty() || m.uvs.len() == n);
+            prop_assert!(m.normals.iter().all(|v| v.is_finite()));
+            prop_assert!(m.uvs.iter().all(|v| v.is_finite()));
+            if let Some(t) = triangles {
+                prop_assert_eq!(m.mesh.indices.len(), t);
+            }
+        }
+        check_mesh(loaded)
+    });
+    assert!(
+        loaded >= CASES / 4,
         "only {loaded} of {CASES} inputs loaded"
     );
 }

@@ -1,12 +1,13 @@
 //! The triangle objects of the scene format: `kind = "triangle"` (one, inline),
-//! `kind = "polygons"` (faces of any size, triangulated) and `kind = "mesh"` (an OBJ or
-//! glTF file); and the bare mesh file loaded as a scene of its own.
+//! `kind = "polygons"` (faces of any size, triangulated) and `kind = "mesh"` (an OBJ, glTF
+//! or PLY file); and the bare mesh file loaded as a scene of its own.
 
 use super::{ObjectCx, TransformDesc, V3};
 use crate::budget::{Holds, Reservation};
 use crate::error::LoadError;
 use crate::gltf_loader::load_gltf_file;
 use crate::obj::{MeshData, load_obj_file};
+use crate::ply::{Reserve, load_ply_file_reserving};
 use crate::texture::add_textures;
 use raybench_core::{PolygonMesh, Scene, SceneBuilder, Triangle, Vec3, VertexAttributes};
 use serde::Deserialize;
@@ -94,11 +95,11 @@ impl MeshDesc {
         let err = cx.err();
         let xf = self.transform.checked().map_err(&err)?;
         let path = cx.ctx.resolve(&self.path)?;
-        let mut data = load_mesh_file(&path)?;
-        cx.budget.reserve(
-            Holds::Primitives(data.mesh.indices.len() as u64),
-            &format!("{}: {}: {}", cx.ctx.file.display(), cx.what, path.display()),
-        )?;
+        let context = format!("{}: {}: {}", cx.ctx.file.display(), cx.what, path.display());
+        let budget = &mut *cx.budget;
+        let mut data = load_mesh_file(&path, &mut |n| {
+            budget.reserve(Holds::Primitives(n), &context)
+        })?;
         if !xf.is_identity() {
             let a = xf.affine();
             data.mesh.transform(|v| a.transform_point3(v));
@@ -118,8 +119,28 @@ impl MeshDesc {
     }
 }
 
-fn load_mesh_file(path: &Path) -> Result<MeshData, LoadError> {
-    let data = load_mesh_file_any(path)?;
+/// Loads a mesh file by its extension, reserving its triangles in the memory budget through
+/// `reserve`: a PLY file's before they are allocated (its header declares them), the other
+/// formats' once loaded. A file without triangles is refused.
+fn load_mesh_file(path: &Path, reserve: Reserve<'_>) -> Result<MeshData, LoadError> {
+    let data = match crate::extension(path).as_str() {
+        "ply" => load_ply_file_reserving(path, reserve)?,
+        ext => {
+            let data = match ext {
+                "obj" => load_obj_file(path)?,
+                "gltf" | "glb" => load_gltf_file(path)?,
+                _ => {
+                    return Err(LoadError::Parse {
+                        path: path.to_owned(),
+                        message: "unknown mesh file type (expected .obj, .gltf, .glb or .ply)"
+                            .into(),
+                    });
+                }
+            };
+            reserve(data.mesh.indices.len() as u64)?;
+            data
+        }
+    };
     if data.mesh.indices.is_empty() {
         return Err(LoadError::Parse {
             path: path.to_owned(),
@@ -129,25 +150,13 @@ fn load_mesh_file(path: &Path) -> Result<MeshData, LoadError> {
     Ok(data)
 }
 
-fn load_mesh_file_any(path: &Path) -> Result<MeshData, LoadError> {
-    match crate::extension(path).as_str() {
-        "obj" => load_obj_file(path),
-        "gltf" | "glb" => load_gltf_file(path),
-        _ => Err(LoadError::Parse {
-            path: path.to_owned(),
-            message: "unknown mesh file type (expected .obj, .gltf or .glb)".into(),
-        }),
-    }
-}
-
 /// A scene of one mesh file with a light, a grey-blue background and a camera framing it.
 pub(crate) fn bare_mesh_scene(path: &Path) -> Result<Scene, LoadError> {
-    let data = load_mesh_file(path)?;
     let mut budget = Reservation::new()?;
-    budget.reserve(
-        Holds::Primitives(data.mesh.indices.len() as u64),
-        &path.display().to_string(),
-    )?;
+    let context = path.display().to_string();
+    let data = load_mesh_file(path, &mut |n| {
+        budget.reserve(Holds::Primitives(n), &context)
+    })?;
     let name = path
         .file_stem()
         .and_then(|s| s.to_str())
