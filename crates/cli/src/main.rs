@@ -82,15 +82,8 @@ struct DiffCmd {
     /// Write the error map (error.png) and the FLIP map (flip.png) into this folder.
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
-    /// Exposure in stops applied to both images before PSNR and FLIP (which compare the
-    /// images as displayed).
-    #[arg(
-        long,
-        default_value_t = 0.0,
-        value_name = "EV",
-        allow_hyphen_values = true
-    )]
-    exposure: f32,
+    #[command(flatten)]
+    exposure: Exposure,
     /// Exit with status 2 when the metric of --metric exceeds this value (errors exit
     /// with 1).
     #[arg(long, value_name = "X")]
@@ -101,6 +94,31 @@ struct DiffCmd {
     /// Print one JSON object on stdout.
     #[arg(long)]
     json: bool,
+}
+
+/// `--exposure EV` of `render` and `diff`.
+#[derive(Args)]
+struct Exposure {
+    /// Exposure in stops: colour is scaled by 2^EV (render: what is written, in every
+    /// format, 0 writing the radiance itself; diff: both images before PSNR and FLIP,
+    /// which compare them as displayed).
+    #[arg(
+        long = "exposure",
+        default_value_t = 0.0,
+        value_name = "EV",
+        allow_hyphen_values = true
+    )]
+    ev: f32,
+}
+
+impl Exposure {
+    /// The exposure, checked to lie within [-64, 64] stops.
+    fn checked(&self) -> Result<f32> {
+        if !self.ev.is_finite() || self.ev.abs() > 64.0 {
+            bail!("--exposure {} is outside [-64, 64] stops", self.ev);
+        }
+        Ok(self.ev)
+    }
 }
 
 fn parse_metric(s: &str) -> Result<Metric, String> {
@@ -296,14 +314,8 @@ struct RenderCmd {
     /// (OpenEXR, 32-bit float) and `.pfm` hold the unclamped linear radiance.
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
-    /// Scale the written colour by 2^EV (every format; 0 writes the radiance itself).
-    #[arg(
-        long,
-        default_value_t = 0.0,
-        value_name = "EV",
-        allow_hyphen_values = true
-    )]
-    exposure: f32,
+    #[command(flatten)]
+    exposure: Exposure,
     /// Also write a false-colour image of primitive ids.
     #[arg(long, value_name = "FILE.png")]
     ids: Option<PathBuf>,
@@ -443,9 +455,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
 /// `raybench diff`: the measures on stdout, the maps on request, and status 2 when
 /// `--fail-above` is exceeded (errors are 1).
 fn diff_images(cmd: &DiffCmd) -> Result<ExitCode> {
-    if !cmd.exposure.is_finite() || cmd.exposure.abs() > 64.0 {
-        bail!("--exposure {} is outside [-64, 64] stops", cmd.exposure);
-    }
+    let exposure = cmd.exposure.checked()?;
     if let Some(x) = cmd.fail_above
         && !x.is_finite()
     {
@@ -465,7 +475,7 @@ fn diff_images(cmd: &DiffCmd) -> Result<ExitCode> {
     }
     let a = raybench_render::read_linear(&cmd.a)?;
     let b = raybench_render::read_linear(&cmd.b)?;
-    let (stats, error_map, flip_map) = diff(&a, &b, cmd.exposure)
+    let (stats, error_map, flip_map) = diff(&a, &b, exposure)
         .map_err(|e| anyhow::anyhow!("{} and {}: {e}", cmd.a.display(), cmd.b.display()))?;
     if cmd.json {
         println!("{}", serde_json::to_string(&stats)?);
@@ -572,9 +582,7 @@ fn render(cmd: &RenderCmd, assets: &Path) -> Result<ExitCode> {
     });
     // Before loading and rendering: a long render must not be lost to a bad path.
     raybench_render::check_image_path(&out, &raybench_render::ImageFormat::ALL)?;
-    if !cmd.exposure.is_finite() || cmd.exposure.abs() > 64.0 {
-        bail!("--exposure {} is outside [-64, 64] stops", cmd.exposure);
-    }
+    let exposure = cmd.exposure.checked()?;
     if let Some(ids) = &cmd.ids {
         raybench_render::check_png_path(ids)?;
     }
@@ -617,7 +625,7 @@ fn render(cmd: &RenderCmd, assets: &Path) -> Result<ExitCode> {
     if let Some(line) = phase_line(&p.phases, &frame.timings) {
         eprintln!("{}: {line}", b.name);
     }
-    raybench_render::write_color(&frame, &out, cmd.exposure)?;
+    raybench_render::write_color(&frame, &out, exposure)?;
     eprintln!("wrote {}", out.display());
     if let Some(ids) = &cmd.ids {
         raybench_render::write_ids_png(&frame, ids)?;
