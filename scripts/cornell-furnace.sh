@@ -5,8 +5,10 @@
 # the exact radiance is 1.0 on every pixel), path traced at 256 x 256 with
 # --max-depth 64 and written as OpenEXR, once per seed. The mean of each image, read back
 # from the EXR by `raybench diff`, is one independent estimate; their spread gives the
-# standard error. The script fails unless the grand mean is within 3 standard errors and
-# within 1 % of 1.0.
+# standard error. The script fails unless the grand mean is within 1 % of 1.0; it also
+# prints the deviation in standard errors, which grows with the samples because the depth
+# limit cuts off the light of the paths still inside the box after 64 bounces (about
+# -0.1 %: scripts/cornell-furnace.toml).
 #
 # Usage: scripts/cornell-furnace.sh [RAYBENCH] (default target/release/raybench; needs
 # the shared Cornell box: RAYBENCH_ASSETS or --assets, as for every scene). SEEDS and SPP
@@ -34,8 +36,9 @@ m = [float(x) for x in sys.argv[1:]]
 n = len(m)
 mean = sum(m) / n
 se = math.sqrt(sum((x - mean) ** 2 for x in m) / (n - 1) / n) if n > 1 else float("nan")
-print(f"grand mean {mean:.5f}, standard error {se:.5f} over {n} seeds; exact 1.0")
-ok = abs(mean - 1.0) <= 3 * se and abs(mean - 1.0) <= 0.01
-print("agrees with the analytic radiance" if ok else "DISAGREES with the analytic radiance")
+print(f"grand mean {mean:.5f}, standard error {se:.5f} over {n} seeds; exact 1.0 "
+      f"(deviation {100 * (mean - 1.0):+.3f} %, {(mean - 1.0) / se:+.1f} standard errors)")
+ok = abs(mean - 1.0) <= 0.01
+print("agrees with the analytic radiance within 1 %" if ok else "DISAGREES with the analytic radiance")
 sys.exit(0 if ok else 1)
 PY

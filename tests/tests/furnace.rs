@@ -2,8 +2,10 @@
 //! as a white furnace (`scripts/cornell-furnace.toml`: white diffusers under a background
 //! of radiance 1.0, so the exact radiance is 1.0 on every pixel), path traced with
 //! `--max-depth 64`, written as OpenEXR and read back. The image mean must agree with 1.0
-//! within three standard errors, and the samples are enough for that to be a 1 % bound.
-//! `scripts/cornell-furnace.sh` runs the same check at 256 x 256 outside CI.
+//! within 1 %, with samples enough for three standard errors to be under 1 %. The depth
+//! limit's own bias (the light of paths still inside the box after 64 bounces, about
+//! -0.1 %, measured at 256 x 256 by `scripts/cornell-furnace.sh` outside CI) is well
+//! inside that bound.
 
 use raybench_core::{Mode, RenderSettings};
 use raybench_tests::{BASELINE, load_or_skip, render_with};
@@ -56,7 +58,7 @@ fn cornell_box_white_furnace_written_as_exr_agrees_within_one_percent() {
         "standard error {se}: too few samples for a 1 % bound"
     );
     assert!(
-        (mean - 1.0).abs() <= 3.0 * se,
+        (mean - 1.0).abs() <= 0.01,
         "image mean {mean} +- {se}, exact 1.0"
     );
     assert!(
