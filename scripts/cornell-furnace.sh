@@ -1,14 +1,12 @@
 #!/usr/bin/env bash
 # The path tracer against an analytic reference, at full size (outside CI; the CI test at
-# a small size is `furnace` in tests/tests/): the Cornell box's geometry as a white furnace
-# (scripts/cornell-furnace.toml: every surface a white diffuser, the background 1.0, so
-# the exact radiance is 1.0 on every pixel), path traced at 256 x 256 with
+# a small size is tests/tests/furnace.rs): the Cornell box's geometry as a furnace
+# (scripts/cornell-furnace.toml: every surface albedo 0.5 and emission 0.5, the background
+# 1.0, so the exact radiance is 1.0 on every pixel), path traced at 256 x 256 with
 # --max-depth 64 and written as OpenEXR, once per seed. The mean of each image, read back
 # from the EXR by `raybench diff`, is one independent estimate; their spread gives the
-# standard error. The script fails unless the grand mean is within 1 % of 1.0; it also
-# prints the deviation in standard errors, which grows with the samples because the depth
-# limit cuts off the light of the paths still inside the box after 64 bounces (about
-# -0.1 %: scripts/cornell-furnace.toml).
+# standard error. The script fails unless the grand mean is within 1 % of 1.0, and prints
+# the deviation in standard errors too.
 #
 # Usage: scripts/cornell-furnace.sh [RAYBENCH] (default target/release/raybench; needs
 # the shared Cornell box: RAYBENCH_ASSETS or --assets, as for every scene). SEEDS and SPP

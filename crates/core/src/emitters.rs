@@ -29,6 +29,7 @@ use crate::optics::{basis, triangle_point, triangle_weights};
 use crate::scene::Scene;
 use crate::{Geometry, Ray, Shape, Sphere};
 use glam::Vec3;
+use std::collections::{HashMap, HashSet};
 use std::f32::consts::TAU;
 
 /// The lights that next-event estimation samples: emissive bounded primitives with a
@@ -143,33 +144,93 @@ fn weight(shape: &Shape, emission: Vec3) -> Option<f64> {
     Some(light_area(shape)? * lum)
 }
 
+/// A triangle's vertices as bits, sorted, so that coincident triangles share the key
+/// whatever their winding and first vertex (`-0.0` counted as `0.0`).
+fn triangle_key(v: &[Vec3; 3]) -> [[u32; 3]; 3] {
+    let mut key = v.map(|p| (p + Vec3::ZERO).to_array().map(f32::to_bits));
+    key.sort_unstable();
+    key
+}
+
+/// The emissive triangles among `emissive` (ascending ids) that coincide with a triangle of
+/// a smaller id: every ray that reaches them hits that one instead (equal `t`, the tie
+/// rule), so light sampled on them would be light no path ever sees.
+fn hidden_triangles(geometry: &Geometry, emissive: &[u32]) -> HashSet<u32> {
+    let mut by_key: HashMap<[[u32; 3]; 3], Vec<u32>> = HashMap::new();
+    for &id in emissive {
+        if let Shape::Triangle(t) = geometry.shape(id) {
+            by_key.entry(triangle_key(&t.v)).or_default().push(id);
+        }
+    }
+    let mut hidden = HashSet::new();
+    let Some(&last) = emissive.last() else {
+        return hidden;
+    };
+    // The first triangle met in id order with an emitter's key is the one rays hit.
+    for (id, shape) in geometry.shapes().iter().enumerate().take(last as usize + 1) {
+        if by_key.is_empty() {
+            break;
+        }
+        let Shape::Triangle(t) = shape else { continue };
+        if let Some(emitters) = by_key.remove(&triangle_key(&t.v)) {
+            hidden.extend(emitters.into_iter().filter(|&e| e > id as u32));
+        }
+    }
+    hidden
+}
+
+/// What [`Emitters::new`] leaves out, for the scene's warnings.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LeftOut {
+    /// Emissive primitives without bounds (planes): found by BSDF sampling only.
+    pub unbounded: usize,
+    /// Emissive triangles that coincide with a triangle of a smaller id, which every ray
+    /// hits instead: not lights.
+    pub hidden: usize,
+    /// The first of those hidden triangles.
+    pub first_hidden: Option<u32>,
+}
+
 impl Emitters {
     /// Collects every bounded primitive with non-zero emission and positive area, and the
     /// environment map (weighted with the radius of `geometry`'s bounding sphere). Returns
-    /// also the names of the unbounded emitters' kinds, which are not sampled.
+    /// also what it leaves out: unbounded emitters, and emissive triangles hidden by a
+    /// coincident triangle of a smaller id (the tie rule), which no ray ever sees.
     #[must_use]
     pub fn new(
         geometry: &Geometry,
         prim_material: &[u32],
         materials: &[Material],
         environment: Option<&Environment>,
-    ) -> (Self, usize) {
+    ) -> (Self, LeftOut) {
         let mut ids = Vec::new();
         let mut cdf = Vec::new();
         let mut total = 0.0f64;
-        let mut unbounded = 0;
-        for (id, shape) in geometry.shapes().iter().enumerate() {
-            let m = &materials[prim_material[id] as usize];
-            if m.emission.max_element() <= 0.0 {
+        let mut left_out = LeftOut::default();
+        let emissive: Vec<u32> = (0..geometry.len() as u32)
+            .filter(|&id| {
+                materials[prim_material[id as usize] as usize]
+                    .emission
+                    .max_element()
+                    > 0.0
+            })
+            .collect();
+        let hidden = hidden_triangles(geometry, &emissive);
+        left_out.hidden = hidden.len();
+        left_out.first_hidden = hidden.iter().min().copied();
+        for &id in &emissive {
+            let shape = geometry.shape(id);
+            let m = &materials[prim_material[id as usize] as usize];
+            if shape.bounds().is_none() {
+                left_out.unbounded += 1;
                 continue;
             }
-            if shape.bounds().is_none() {
-                unbounded += 1;
+            if hidden.contains(&id) {
                 continue;
             }
             if let Some(w) = weight(shape, m.emission) {
                 total += w;
-                ids.push(id as u32);
+                ids.push(id);
                 cdf.push(total);
             }
         }
@@ -193,7 +254,7 @@ impl Emitters {
                 cdf,
                 environment,
             },
-            unbounded,
+            left_out,
         )
     }
 
@@ -378,6 +439,32 @@ impl Emitters {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Triangle;
+
+    /// An emissive triangle coinciding with one of a smaller id (whatever its winding or
+    /// first vertex) is never hit, so it is no light; the visible one stays.
+    #[test]
+    fn coincident_emitters_behind_a_smaller_id_are_not_lights() {
+        let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
+        let far = Vec3::Z * 5.0;
+        let shapes = vec![
+            Shape::Triangle(Triangle::new(a, b, c)),
+            Shape::Triangle(Triangle::new(a + far, b + far, c + far)),
+            Shape::Triangle(Triangle::new(c, b, a)),
+            Shape::Triangle(Triangle::new(b + far, c + far, a + far)),
+            Shape::Triangle(Triangle::new(-b, c, a)),
+        ];
+        let geometry = Geometry::new(shapes);
+        let lamp = Material {
+            emission: Vec3::ONE,
+            ..Material::default()
+        };
+        // Triangle 0 is not emissive and hides 2; 1 is emissive and hides 3; 4 is alone.
+        let materials = [Material::default(), lamp];
+        let (e, left) = Emitters::new(&geometry, &[0, 1, 1, 1, 1], &materials, None);
+        assert_eq!(e.ids, vec![1, 4]);
+        assert_eq!((left.hidden, left.first_hidden), (2, Some(2)));
+    }
 
     /// The cone's pdf integrates to one over the cone, and its directions stay inside it.
     #[test]

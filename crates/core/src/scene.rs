@@ -730,16 +730,25 @@ impl SceneBuilder {
             });
         }
         let camera = cameras[0].camera;
-        let (emitters, unbounded) = Emitters::new(
+        let (emitters, left_out) = Emitters::new(
             &geometry,
             &self.prim_material,
             &self.materials,
             self.environment.as_deref(),
         );
-        if unbounded > 0 {
+        if left_out.unbounded > 0 {
             self.warnings.push(format!(
-                "{unbounded} emissive plane(s) are unbounded: path tracing finds their light \
-                 by BSDF sampling only (no next-event estimation), so expect noise"
+                "{} emissive plane(s) are unbounded: path tracing finds their light \
+                 by BSDF sampling only (no next-event estimation), so expect noise",
+                left_out.unbounded
+            ));
+        }
+        if let Some(first) = left_out.first_hidden {
+            self.warnings.push(format!(
+                "{} emissive triangle(s) (the first: primitive {first}) coincide with a \
+                 triangle of a smaller id, which every ray hits instead: they are not sampled \
+                 as lights",
+                left_out.hidden
             ));
         }
         Scene {
