@@ -97,9 +97,17 @@ impl ShadingAttributes {
     #[inline]
     #[must_use]
     pub fn at(&self, prim: u32, u: f32, v: f32) -> AttributesAt {
+        // Scenes without attributes (most benchmark scenes) pay one test per hit: the
+        // lookup itself stays out of line.
         if self.ranges.is_empty() {
             return AttributesAt::default();
         }
+        self.lookup(prim, u, v)
+    }
+
+    /// [`Self::at`] for scenes that have attributes.
+    #[inline(never)]
+    fn lookup(&self, prim: u32, u: f32, v: f32) -> AttributesAt {
         let i = self.ranges.partition_point(|r| r.first <= prim);
         let Some(r) = i.checked_sub(1).map(|i| &self.ranges[i]) else {
             return AttributesAt::default();

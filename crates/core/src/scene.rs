@@ -137,7 +137,7 @@ impl Scene {
     }
 
     /// Texture `t` at `uv`, or 1 without texture (a factor to multiply with).
-    #[inline]
+    #[inline(always)]
     fn texel(&self, t: Option<u32>, uv: Option<Vec2>) -> Vec3 {
         match (t, uv) {
             (Some(t), Some(uv)) => self.textures[t as usize].sample(uv),
@@ -147,8 +147,10 @@ impl Scene {
 
     /// The shading normal, colour and emission at `hit`, whose point is `p`. The vertex
     /// normals are interpolated with the hit's barycentric weights `u`, `v` and flipped,
-    /// when they disagree with the winding, to the geometric normal's side.
-    #[inline]
+    /// when they disagree with the winding, to the geometric normal's side. Inlined into
+    /// every shader, so that what a shader leaves unused is not computed (out of line, the
+    /// record's trip through the stack cost ray casting 4 to 11 % of whole frames).
+    #[inline(always)]
     #[must_use]
     pub fn shading(&self, hit: &Hit, p: Vec3) -> SurfaceShading {
         let m = self.material_of(hit.prim);
