@@ -3,8 +3,8 @@
 //! [`MAX_DIMENSION`] before pixels are allocated.
 
 use crate::output::ImageFormat;
-use raybench_core::Vec3;
 use raybench_core::limits::MAX_DIMENSION;
+use raybench_core::{Vec3, srgb_to_linear};
 use std::path::{Path, PathBuf};
 
 /// A linear RGB image, row by row from the top.
@@ -26,17 +26,6 @@ pub struct ReadError {
     pub path: PathBuf,
     /// What is wrong, in words.
     pub message: String,
-}
-
-/// The linear value of an 8-bit sRGB code (the inverse of [`crate::srgb8`] up to rounding).
-#[must_use]
-pub fn srgb_to_linear(code: u8) -> f32 {
-    let s = f32::from(code) / 255.0;
-    if s <= 0.040_45 {
-        s / 12.92
-    } else {
-        ((s + 0.055) / 1.055).powf(2.4)
-    }
 }
 
 /// Reads `path` (`.png`, `.exr` or `.pfm`) as linear RGB.
@@ -73,7 +62,7 @@ pub fn read_linear(path: &Path) -> Result<LinearImage, ReadError> {
             let color = if format == ImageFormat::Png {
                 img.to_rgb8()
                     .pixels()
-                    .map(|p| Vec3::from_array(p.0.map(srgb_to_linear)))
+                    .map(|p| Vec3::from_array(p.0.map(|c| srgb_to_linear(f32::from(c) / 255.0))))
                     .collect()
             } else {
                 img.to_rgb32f()
@@ -187,7 +176,7 @@ mod tests {
     #[test]
     fn srgb_round_trip() {
         for code in [0u8, 1, 10, 100, 188, 254, 255] {
-            let back = crate::srgb8(Vec3::splat(srgb_to_linear(code)));
+            let back = crate::srgb8(Vec3::splat(srgb_to_linear(f32::from(code) / 255.0)));
             assert_eq!(back[0], code);
         }
     }

@@ -177,6 +177,42 @@ fn size_mismatch(path: &Path, len: u64, count: u64, format: SampleFormat) -> Loa
     )
 }
 
+/// Why [`decode_checked`] gave no image.
+pub(crate) enum DecodeError {
+    /// The header or the pixels cannot be decoded (the decoder's words).
+    Unreadable(String),
+    /// The size check refused the image (its words).
+    Refused(String),
+    /// Opening the image, or the memory budget, failed: passed on as it is.
+    Fatal(LoadError),
+}
+
+/// Decodes an image in two passes, the one way every image a scene names is read: its
+/// header's size goes to `check` and its pixel count to `reserve` (the memory budget)
+/// before any pixel is decoded, then the pixels are decoded under an allocation limit of
+/// `alloc_bytes_per_pixel` per pixel. `open` gives a reader at the image's start (it is
+/// called twice).
+pub(crate) fn decode_checked<R: std::io::BufRead + std::io::Seek>(
+    open: impl Fn() -> Result<image::ImageReader<R>, DecodeError>,
+    check: impl FnOnce(u32, u32) -> Result<(), String>,
+    reserve: impl FnOnce(u64) -> Result<(), LoadError>,
+    alloc_bytes_per_pixel: u64,
+) -> Result<image::DynamicImage, DecodeError> {
+    let (w, h) = open()?
+        .into_dimensions()
+        .map_err(|e| DecodeError::Unreadable(e.to_string()))?;
+    check(w, h).map_err(DecodeError::Refused)?;
+    let pixels = u64::from(w) * u64::from(h);
+    reserve(pixels).map_err(DecodeError::Fatal)?;
+    let mut reader = open()?;
+    let mut limits = image::Limits::default();
+    limits.max_alloc = Some(pixels * alloc_bytes_per_pixel + (1 << 20));
+    reader.limits(limits);
+    reader
+        .decode()
+        .map_err(|e| DecodeError::Unreadable(e.to_string()))
+}
+
 /// Decodes the image at `path` as `format` (`what` names it in errors: `PNG`), refusing
 /// it from its header when it has more than `max_pixels` pixels, and calling `reserve`
 /// with its pixel count before decoding (the memory budget). Decoding may allocate
@@ -197,34 +233,32 @@ pub(crate) fn decode_image(
         path: path.to_owned(),
         message,
     };
-    let io = |cause| LoadError::Io {
-        path: path.to_owned(),
-        cause,
-    };
     // A FIFO would block the reader.
     crate::check_regular_file(path)?;
-    let open = || -> Result<image::ImageReader<std::io::BufReader<std::fs::File>>, LoadError> {
-        let mut r = image::ImageReader::open(path).map_err(io)?;
+    let open = || {
+        let mut r = image::ImageReader::open(path).map_err(|cause| {
+            DecodeError::Fatal(LoadError::Io {
+                path: path.to_owned(),
+                cause,
+            })
+        })?;
         r.set_format(format);
         Ok(r)
     };
-    let (w, h) = open()?
-        .into_dimensions()
-        .map_err(|e| parse(format!("not a readable {what}: {e}")))?;
-    let pixels = u64::from(w) * u64::from(h);
-    if pixels > max_pixels {
-        return Err(parse(format!(
-            "{w} x {h} image has {pixels} pixels (limit {max_pixels})"
-        )));
-    }
-    reserve(pixels)?;
-    let mut reader = open()?;
-    let mut limits = image::Limits::default();
-    limits.max_alloc = Some(pixels * bytes_per_pixel * 2 + (1 << 20));
-    reader.limits(limits);
-    reader
-        .decode()
-        .map_err(|e| parse(format!("not a readable {what}: {e}")))
+    let check = |w: u32, h: u32| {
+        let pixels = u64::from(w) * u64::from(h);
+        if pixels > max_pixels {
+            return Err(format!(
+                "{w} x {h} image has {pixels} pixels (limit {max_pixels})"
+            ));
+        }
+        Ok(())
+    };
+    decode_checked(open, check, reserve, 2 * bytes_per_pixel).map_err(|e| match e {
+        DecodeError::Unreadable(m) => parse(format!("not a readable {what}: {m}")),
+        DecodeError::Refused(m) => parse(m),
+        DecodeError::Fatal(e) => e,
+    })
 }
 
 /// Reads a greyscale (or colour: its luma) 8- or 16-bit PNG as `(width, height, samples)`

@@ -6,6 +6,7 @@
 
 use crate::budget::{Holds, Reservation};
 use crate::error::LoadError;
+use crate::samples::{DecodeError, decode_checked};
 use raybench_core::{MAX_TEXTURE_SIZE, SceneBuilder, Texture, Wrap};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -63,12 +64,7 @@ fn decode(
     budget: &mut Reservation,
     context: &str,
 ) -> Result<Result<Texture, String>, LoadError> {
-    use std::io::{BufRead, Cursor, Read as _, Seek};
-    fn reader<R: BufRead + Seek>(r: R) -> Result<image::ImageReader<R>, String> {
-        image::ImageReader::new(r)
-            .with_guessed_format()
-            .map_err(|e| e.to_string())
-    }
+    use std::io::{Cursor, Read as _};
     let bytes: Arc<[u8]> = match &tex.source {
         ImageSource::Bytes { bytes, .. } => Arc::clone(bytes),
         ImageSource::File(path) => {
@@ -95,41 +91,41 @@ fn decode(
             }
         }
     };
-    let dims = reader(Cursor::new(&bytes[..])).and_then(|r| {
+    let open = || {
+        let r = image::ImageReader::new(Cursor::new(&bytes[..]))
+            .with_guessed_format()
+            .map_err(|e| DecodeError::Unreadable(e.to_string()))?;
         if r.format().is_none() {
-            return Err("not a PNG or JPEG image".into());
+            return Err(DecodeError::Unreadable("not a PNG or JPEG image".into()));
         }
-        r.into_dimensions().map_err(|e| e.to_string())
-    });
-    let (w, h) = match dims {
-        Ok(d) => d,
-        Err(why) => return Ok(Err(why)),
+        Ok(r)
     };
-    if w == 0 || h == 0 || w > MAX_TEXTURE_SIZE || h > MAX_TEXTURE_SIZE {
-        return Ok(Err(format!(
-            "{w} x {h} texels (each side must be 1 to {MAX_TEXTURE_SIZE})"
-        )));
-    }
-    let texels = u64::from(w) * u64::from(h);
-    budget.reserve(
-        Holds::Texels(texels),
-        &format!("{context}: texture {}", tex.name),
-    )?;
-    let decoded = reader(Cursor::new(&bytes[..])).and_then(|mut r| {
-        let mut limits = image::Limits::default();
-        // The widest decoded form (16-bit RGBA) and the 8-bit RGB copy.
-        limits.max_alloc = Some(texels * 11 + (1 << 20));
-        r.limits(limits);
-        r.decode().map_err(|e| e.to_string())
-    });
-    Ok(match decoded {
-        Ok(img) => {
-            let rgb = img.into_rgb8();
-            Texture::from_srgb8(tex.name.clone(), w, h, rgb.as_raw(), tex.wrap)
-                .map_err(|e| e.to_string())
+    let check = |w: u32, h: u32| {
+        if w == 0 || h == 0 || w > MAX_TEXTURE_SIZE || h > MAX_TEXTURE_SIZE {
+            return Err(format!(
+                "{w} x {h} texels (each side must be 1 to {MAX_TEXTURE_SIZE})"
+            ));
         }
-        Err(why) => Err(why),
-    })
+        Ok(())
+    };
+    let reserve = |texels| {
+        budget.reserve(
+            Holds::Texels(texels),
+            &format!("{context}: texture {}", tex.name),
+        )
+    };
+    // The widest decoded form (16-bit RGBA) and the 8-bit RGB copy: 11 bytes a texel.
+    let img = match decode_checked(open, check, reserve, 11) {
+        Ok(img) => img,
+        Err(DecodeError::Unreadable(why) | DecodeError::Refused(why)) => return Ok(Err(why)),
+        Err(DecodeError::Fatal(e)) => return Err(e),
+    };
+    let rgb = img.into_rgb8();
+    let (w, h) = rgb.dimensions();
+    Ok(
+        Texture::from_srgb8(tex.name.clone(), w, h, rgb.as_raw(), tex.wrap)
+            .map_err(|e| e.to_string()),
+    )
 }
 
 /// Adds the textures `refs` to the scene (each decoded once per scene: a texture already
