@@ -110,12 +110,23 @@ fn decades(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo, if hi > lo { hi } else { lo * 10.0 })
 }
 
+/// How a log-log chart joins its points.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Join {
+    /// Each series a polyline through its points (scaling fits).
+    Lines,
+    /// Points only (one structure or preset per point: quality against time, build
+    /// against trace).
+    Points,
+}
+
 fn log_log_on<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     title: &str,
     x_label: &str,
     y_label: &str,
     series: &[Series],
+    join: Join,
 ) -> DrawResult {
     root.fill(&WHITE).map_err(err)?;
     let (x0, x1) = decades(series.iter().flat_map(|s| s.points.iter().map(|p| p.0)));
@@ -144,16 +155,24 @@ fn log_log_on<DB: DrawingBackend>(
             .copied()
             .filter(|(x, y)| *x > 0.0 && *y > 0.0)
             .collect();
-        chart
-            .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
-            .map_err(err)?
-            .label(s.label.clone())
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-            });
-        chart
-            .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
-            .map_err(err)?;
+        if join == Join::Lines {
+            chart
+                .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
+                .map_err(err)?
+                .label(s.label.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                });
+            chart
+                .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
+                .map_err(err)?;
+        } else {
+            chart
+                .draw_series(pts.iter().map(|&p| Circle::new(p, 5, color.filled())))
+                .map_err(err)?
+                .label(s.label.clone())
+                .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
+        }
     }
     legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
     root.present().map_err(err)
@@ -187,8 +206,27 @@ pub fn log_log(
 ) -> Result<[String; 2], String> {
     both(
         stem,
-        |root| log_log_on(root, title, x_label, y_label, series),
-        |root| log_log_on(root, title, x_label, y_label, series),
+        |root| log_log_on(root, title, x_label, y_label, series, Join::Lines),
+        |root| log_log_on(root, title, x_label, y_label, series, Join::Lines),
+    )
+}
+
+/// A log-log scatter chart: each series its own colour, its points unjoined (one point per
+/// structure, preset or scene); returns the SVG and PNG file names.
+///
+/// # Errors
+/// When no font is available or a file cannot be written.
+pub fn scatter(
+    stem: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+) -> Result<[String; 2], String> {
+    both(
+        stem,
+        |root| log_log_on(root, title, x_label, y_label, series, Join::Points),
+        |root| log_log_on(root, title, x_label, y_label, series, Join::Points),
     )
 }
 

@@ -46,6 +46,9 @@ pub fn charts(results: &Results, dir: &Path) -> Charts {
             Plot::Categories(names, series) => {
                 charts::categories(&stem, &chart.title, &chart.y_label, names, series)
             }
+            Plot::Scatter(series) => {
+                charts::scatter(&stem, &chart.title, &chart.x_label, &chart.y_label, series)
+            }
         };
         match drawn {
             Ok([svg, png]) => out.drawn.push((

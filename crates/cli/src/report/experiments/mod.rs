@@ -73,6 +73,8 @@ pub(super) enum Plot {
     /// Bars per named category, one per series, on a log axis
     /// ([`super::charts::categories`]); `None` leaves a gap.
     Categories(Vec<String>, Vec<(String, Vec<Option<f64>>)>),
+    /// Unjoined points on log-log axes, one colour per series ([`super::charts::scatter`]).
+    Scatter(Vec<Series>),
 }
 
 /// One part of the report: it splits into units (shards run whole units), plans and runs
