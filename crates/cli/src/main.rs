@@ -229,6 +229,8 @@ impl FrameArgs {
             max_depth: self.max_depth,
             count,
             light_sampling: self.light_sampling,
+            // --camera selects the scene's camera when loading (overrides apply to it).
+            camera: None,
         }
     }
 }

@@ -110,6 +110,11 @@ pub struct RenderSettings {
     pub count: bool,
     /// How `path` mode samples emitters.
     pub light_sampling: LightSampling,
+    /// Which of the scene's cameras renders the frame, by index into
+    /// [`crate::Scene::cameras`]; `None`: [`crate::Scene::camera`] (the one selected when
+    /// loading, overrides applied). One prepared structure serves every camera
+    /// ([`crate::Scene::view`]).
+    pub camera: Option<u32>,
 }
 
 impl Default for RenderSettings {
@@ -123,6 +128,7 @@ impl Default for RenderSettings {
             max_depth: 5,
             count: false,
             light_sampling: LightSampling::Mis,
+            camera: None,
         }
     }
 }

@@ -42,11 +42,12 @@ pub fn render_frame<A: Accel>(
     settings: &RenderSettings,
 ) -> Result<Frame, RenderError> {
     settings.validate()?;
+    let view = scene.view(settings)?;
     let start = Instant::now();
     let mut frame = if settings.count {
-        render_counted::<A, RayCounters>(scene, accel, settings)
+        render_counted::<A, RayCounters>(scene, view, accel, settings)
     } else {
-        render_counted::<A, NoCounters>(scene, accel, settings)
+        render_counted::<A, NoCounters>(scene, view, accel, settings)
     };
     frame.timings.push("render", start.elapsed().as_secs_f64());
     Ok(frame)
@@ -54,10 +55,11 @@ pub fn render_frame<A: Accel>(
 
 fn render_counted<A: Accel, C: Counters>(
     scene: &Scene,
+    view: &raybench_core::Camera,
     accel: &A,
     settings: &RenderSettings,
 ) -> Frame {
-    let camera = scene.camera.rays(settings.width, settings.height);
+    let camera = view.rays(settings.width, settings.height);
     let outputs: Vec<_> = tiles(settings.width, settings.height, TILE_SIZE)
         .into_par_iter()
         .map(|tile| render_tile::<A, C>(scene, accel, &camera, settings, tile))

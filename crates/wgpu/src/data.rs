@@ -5,8 +5,8 @@
 use bytemuck::{Pod, Zeroable};
 use raybench_bvh::Bvh;
 use raybench_core::{
-    CULL_SLACK, CameraRays, FAR_SCALE, Light, LightSampling, MaterialKind, Mode, RenderSettings,
-    Scene, Shape, Vec3,
+    CULL_SLACK, CameraRays, FAR_SCALE, Light, LightSampling, MaterialKind, Mode, RenderError,
+    RenderSettings, Scene, Shape, Vec3,
 };
 
 use crate::constants::{
@@ -325,10 +325,12 @@ impl SceneData {
 
     /// The parameters every dispatch of a frame shares; the caller fills in the band,
     /// region and sample range.
-    #[must_use]
-    pub fn params(&self, scene: &Scene, settings: &RenderSettings) -> Params {
-        let camera: CameraRays = scene.camera.rays(settings.width, settings.height);
-        Params {
+    ///
+    /// # Errors
+    /// When `settings` names a camera the scene does not have ([`Scene::view`]).
+    pub fn params(&self, scene: &Scene, settings: &RenderSettings) -> Result<Params, RenderError> {
+        let camera: CameraRays = scene.view(settings)?.rays(settings.width, settings.height);
+        Ok(Params {
             origin: camera.origin.into(),
             inv_width: camera.inv_width,
             forward: camera.forward.into(),
@@ -357,7 +359,7 @@ impl SceneData {
             far_scale: FAR_SCALE,
             cull_slack: CULL_SLACK,
             ..Params::default()
-        }
+        })
     }
 }
 

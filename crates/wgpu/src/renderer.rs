@@ -628,7 +628,7 @@ impl Renderer for WgpuRenderer {
 
         // Upload: one parameter slot per dispatch.
         let upload_start = Instant::now();
-        let base = p.data.params(&p.scene, settings);
+        let base = p.data.params(&p.scene, settings)?;
         let mut params = Vec::new();
         for b in &bands {
             for d in &b.dispatches {
@@ -753,7 +753,7 @@ impl Renderer for WgpuRenderer {
             .max(1) as usize;
 
         let upload_start = Instant::now();
-        let base = p.data.params(&p.scene, &RenderSettings::default());
+        let base = p.data.params(&p.scene, &RenderSettings::default())?;
         let chunks: Vec<&[Ray]> = rays.chunks(chunk).collect();
         let params: Vec<Params> = chunks
             .iter()
