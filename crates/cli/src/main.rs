@@ -69,6 +69,9 @@ enum Command {
     Report(ReportCmd),
     /// Join the results of report shards into one report.
     Merge(MergeCmd),
+    /// Set a report's results beside an earlier one's: per workload the speed ratio and
+    /// whether it exceeds the noise of both runs.
+    CompareResults(CompareResultsCmd),
     /// Measure how far image B is from the reference A (PNG, EXR or PFM).
     Diff(DiffCmd),
 }
@@ -164,6 +167,10 @@ struct ReportCmd {
     /// Worker threads (default: all cores; at most 1024).
     #[arg(long)]
     threads: Option<usize>,
+    /// An earlier report (its folder or its results.json) to set this run beside: REPORT.md
+    /// gains a "Before and after" section (as `compare-results` prints).
+    #[arg(long, value_name = "DIR")]
+    baseline: Option<PathBuf>,
 }
 
 fn parse_shard(s: &str) -> Result<(u32, u32), String> {
@@ -187,6 +194,17 @@ struct MergeCmd {
     /// Output folder of the merged report.
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
+}
+
+#[derive(Args)]
+struct CompareResultsCmd {
+    /// The earlier run: a report folder or its results.json.
+    before: PathBuf,
+    /// The newer run.
+    after: PathBuf,
+    /// Print the comparison as JSON instead of markdown.
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(Args, Clone)]
@@ -448,6 +466,25 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Report(cmd) => with_threads(cmd.threads, || report(&cmd, &assets)),
         Command::Merge(cmd) => {
             raybench::report::merge(&cmd.dirs, &cmd.out)?;
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::CompareResults(cmd) => {
+            use raybench::report::baseline;
+            let before = baseline::read(&cmd.before)?;
+            let after = baseline::read(&cmd.after)?;
+            let c = baseline::compare(&before, &after);
+            if cmd.json {
+                println!("{}", serde_json::to_string_pretty(&c)?);
+            } else {
+                print!(
+                    "{}",
+                    baseline::markdown(
+                        &c,
+                        &cmd.before.display().to_string(),
+                        &cmd.after.display().to_string()
+                    )
+                );
+            }
             Ok(ExitCode::SUCCESS)
         }
         Command::Diff(cmd) => diff_images(&cmd),
@@ -976,6 +1013,7 @@ fn report(cmd: &ReportCmd, assets: &Path) -> Result<ExitCode> {
         assets: assets.to_path_buf(),
         threads: rayon::current_num_threads(),
         command: std::env::args().collect::<Vec<_>>().join(" "),
+        baseline: cmd.baseline.clone(),
     };
     let results = raybench::report::run(&opts)?;
     let failed: Vec<String> = results

@@ -37,6 +37,7 @@ pub fn explicit_rays(
 }
 
 /// One measured workload: per-ray ids and `t`, rays traced, counters, seconds.
+#[derive(Clone)]
 pub struct Measured {
     /// Primitive id per ray or pixel ([`NO_HIT`] for misses).
     pub ids: Vec<u32>,

@@ -394,3 +394,134 @@ fn a_scaling_experiment_runs_and_is_written() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A scene with two cameras: every run covers both (its rays are theirs together), each
+/// camera's figures are recorded and tabulated, the verdict opens the report, and a run set
+/// beside itself (`compare-results`, `--baseline`) finds its workloads in both runs.
+#[test]
+fn several_cameras_verdict_and_baseline() {
+    let dir = tmp_dir("cameras");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("two-views.toml");
+    std::fs::write(
+        &scene,
+        r#"name = "two-views"
+[[camera]]
+name = "front"
+position = [0, 1, 6]
+look_at = [0, 0.5, 0]
+[[camera]]
+name = "top"
+position = [0, 8, 0.5]
+look_at = [0, 0, 0]
+[[light]]
+kind = "point"
+position = [2, 5, 3]
+intensity = [20, 20, 20]
+[[object]]
+kind = "sphere"
+center = [0, 0.5, 0]
+radius = 1
+[[object]]
+kind = "sphere"
+center = [1.5, 0.3, 1]
+radius = 0.4
+[[object]]
+kind = "plane"
+point = [0, -0.5, 0]
+normal = [0, 1, 0]
+"#,
+    )
+    .unwrap();
+    let out_dir = dir.join("run");
+    let report = |out: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "report",
+            "--scenes",
+            scene.to_str().unwrap(),
+            "--backends",
+            "naive,bvh",
+            "--modes",
+            "cast",
+            "--size",
+            "24",
+            "--repeat",
+            "2",
+            "--no-scaling",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        raybench(&args)
+    };
+    let out = report(&out_dir, &[]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = results(&out_dir);
+    let runs = r["runs"].as_array().unwrap();
+    for run in runs {
+        let cameras = run["cameras"].as_array();
+        if run["ray_set"] == "incoherent" {
+            // The random rays do not start at a camera: measured once.
+            assert!(cameras.is_none(), "{run}");
+            continue;
+        }
+        let cameras = cameras.expect("both cameras recorded");
+        let names: Vec<&str> = cameras
+            .iter()
+            .map(|c| c["name"].as_str().unwrap())
+            .collect();
+        assert_eq!(names, ["front", "top"], "{run}");
+        let rays: u64 = cameras.iter().map(|c| c["rays"].as_u64().unwrap()).sum();
+        assert_eq!(run["rays"].as_u64().unwrap(), rays);
+        assert_eq!(rays, 2 * 24 * 24);
+        if run["backend"] == "bvh" {
+            assert!(cameras.iter().all(|c| c["identical"] == true), "{run}");
+        }
+    }
+    let md = std::fs::read_to_string(out_dir.join("REPORT.md")).unwrap();
+    assert!(md.find("## Verdict").unwrap() < md.find("## How to read").unwrap());
+    assert!(md.contains("Each of the scene's 2 cameras"), "{md}");
+    assert!(md.contains("| `front` | `top` |"), "{md}");
+    assert!(md.contains("bit-identical in 2 of 2 workloads"), "{md}");
+
+    // The run beside itself: every workload in both, none faster or slower.
+    let out = raybench(&[
+        "compare-results",
+        out_dir.to_str().unwrap(),
+        out_dir.join("results.json").to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(out.status.success());
+    let c: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let changes = c["changes"].as_array().unwrap();
+    assert_eq!(changes.len(), runs.len());
+    assert!(
+        changes
+            .iter()
+            .all(|x| x["verdict"] == "within noise" && x["ratio"] == 1.0)
+    );
+    // --baseline adds the section to a new run's report.
+    let second = dir.join("second");
+    let out = report(&second, &["--baseline", out_dir.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let md = std::fs::read_to_string(second.join("REPORT.md")).unwrap();
+    assert!(md.contains("## Before and after"), "{md}");
+    assert!(md.contains("4 workloads in both"), "{md}");
+    // A missing baseline fails before measuring anything.
+    let out = report(&dir.join("third"), &["--baseline", "/nonexistent-raybench"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.starts_with("error:"),
+        "{stderr}"
+    );
+    assert!(!dir.join("third").join("results.json").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}

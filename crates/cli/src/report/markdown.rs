@@ -16,6 +16,12 @@ pub struct Charts {
     pub problem: Option<String>,
 }
 
+/// The mark of a noisy measurement in a table (a spread between the fastest and the slowest
+/// repetition above [`super::results::NOISY_SPREAD`]), empty otherwise.
+pub(super) fn noisy_mark(t: &super::results::Timing) -> &'static str {
+    if t.noisy() { " †" } else { "" }
+}
+
 /// The backends of `runs`, in order of first appearance.
 pub(super) fn backends_in(runs: &[&Run]) -> Vec<String> {
     let mut seen = Vec::new();
@@ -104,6 +110,8 @@ pub fn report(results: &Results, charts: &Charts) -> String {
             sh.command
         );
     }
+    super::verdict::write(results, &mut s);
+    let _ = writeln!(s, "## How to read this report\n");
     let _ = writeln!(
         s,
         "Every backend renders the same scenes with the same settings. Times are the median of \
@@ -118,8 +126,14 @@ pub fn report(results: &Results, charts: &Charts) -> String {
          primitive at the same distance, within 1e-4 relative: coincident surfaces, where each \
          library breaks the tie its own way) as matches, with a mean FLIP error of at most \
          {PEER_MAX_FLIP}. PSNR is of the 8-bit sRGB images (`inf`: identical); FLIP is NVIDIA's \
-         perceptual difference (0 = indistinguishable).\n",
-        PEER_MIN_ID_MATCH * 100.0
+         perceptual difference (0 = indistinguishable). **†** marks a noisy time: its timed \
+         repetitions spread by more than {:.0}% (slowest over fastest); compare such figures \
+         with care. A scene with several cameras renders every one of them in each \
+         repetition: its time is that of all its cameras, its Mrays/s their rays over it (so \
+         the average over the cameras, weighted by time), and a table per workload gives each \
+         camera's own figure.\n",
+        PEER_MIN_ID_MATCH * 100.0,
+        super::results::NOISY_SPREAD * 100.0
     );
     if let Some(p) = &charts.problem {
         let _ = writeln!(s, "> Charts: {p}\n");

@@ -3,12 +3,14 @@
 //! images and `results.json` into one folder. `raybench merge` joins the results of
 //! shards (parts of the matrix run on several machines or at several times).
 
+pub mod baseline;
 pub mod charts;
 mod experiments;
 pub mod images;
 pub mod machine;
 mod markdown;
 pub mod results;
+mod verdict;
 
 use crate::measure::{Measured, measure};
 use crate::progress::Progress;
@@ -51,6 +53,8 @@ pub struct Options {
     pub threads: usize,
     /// The command line, for the record.
     pub command: String,
+    /// An earlier report (folder or `results.json`) to compare with ([`baseline`]).
+    pub baseline: Option<PathBuf>,
 }
 
 /// Naive's estimated ray/primitive tests per workload above which it is left out (it is
@@ -147,6 +151,12 @@ pub fn run(opts: &Options) -> Result<Results> {
             experiments().join(", ")
         );
     }
+    // Read the baseline first: a bad path should fail before the measuring, not after.
+    let before = opts
+        .baseline
+        .as_deref()
+        .map(|p| baseline::read(p).map(|r| (r, p.display().to_string())))
+        .transpose()?;
     let modes = opts.modes.clone().unwrap_or_else(|| Mode::ALL.to_vec());
     let ctx = Ctx {
         opts,
@@ -217,6 +227,18 @@ pub fn run(opts: &Options) -> Result<Results> {
     results.shards[0].wall_seconds = wall.elapsed().as_secs_f64();
     results.fit();
     write(&results, &opts.out)?;
+    if let Some((before, name)) = &before {
+        let section = baseline::markdown(
+            &baseline::compare(before, &results),
+            name,
+            &opts.out.display().to_string(),
+        );
+        print!("{section}");
+        let path = opts.out.join("REPORT.md");
+        let report = std::fs::read_to_string(&path)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        write_text(&path, &(report + "\n" + &section))?;
+    }
     Ok(results)
 }
 
@@ -364,12 +386,21 @@ impl Ctx<'_> {
         w: &Workload,
         rays: Option<&[raybench_core::Ray]>,
     ) -> Result<Measurement> {
-        let settings = w.settings();
-        let warm = measure(r, &settings, rays, true)?;
+        self.measure_settings(r, &w.settings(), rays)
+    }
+
+    /// [`Ctx::measure`] with explicit settings (a camera chosen).
+    fn measure_settings(
+        &self,
+        r: &dyn Renderer,
+        settings: &RenderSettings,
+        rays: Option<&[raybench_core::Ray]>,
+    ) -> Result<Measurement> {
+        let warm = measure(r, settings, rays, true)?;
         let mut samples = Vec::new();
         let mut phases = Vec::new();
         for _ in 0..self.repeat {
-            let m = measure(r, &settings, rays, false)?;
+            let m = measure(r, settings, rays, false)?;
             samples.push(m.seconds);
             phases.push(m.phases);
         }
@@ -378,6 +409,89 @@ impl Ctx<'_> {
             timing: Timing::of(samples),
             phases: crate::measure::median_phases(&phases),
         })
+    }
+
+    /// [`Ctx::measure`] from each of `views` (indices into the scene's cameras; `None`: the
+    /// scene's camera), with the rays of each view: the measurement of every view, and
+    /// their sum ([`Measurement::sum`]).
+    fn measure_views(
+        &self,
+        r: &dyn Renderer,
+        w: &Workload,
+        views: &[(Option<u32>, Option<Vec<raybench_core::Ray>>)],
+    ) -> Result<(Measurement, Vec<Measurement>)> {
+        let each: Vec<Measurement> = views
+            .iter()
+            .map(|(camera, rays)| {
+                let settings = RenderSettings {
+                    camera: *camera,
+                    ..w.settings()
+                };
+                self.measure_settings(r, &settings, rays.as_deref())
+            })
+            .collect::<Result<_>>()?;
+        Ok((Measurement::sum(&each), each))
+    }
+}
+
+impl Measurement {
+    /// Several cameras' measurements of one workload as one: the warm-ups' ids, `t` and
+    /// colours concatenated in camera order, their rays and counters summed; the `i`-th
+    /// timed repetition is the sum of every camera's `i`-th (so its median is the time to
+    /// render every camera once), and each phase's median is summed likewise.
+    fn sum(each: &[Measurement]) -> Measurement {
+        if let [one] = each {
+            return Measurement {
+                warm: one.warm.clone(),
+                timing: one.timing.clone(),
+                phases: one.phases.clone(),
+            };
+        }
+        let mut warm = Measured {
+            ids: Vec::new(),
+            t: Vec::new(),
+            rays: 0,
+            counters: None,
+            seconds: 0.0,
+            phases: raybench_core::Timings::default(),
+            color: None,
+        };
+        let mut phases = raybench_core::Timings::default();
+        let reps = each
+            .iter()
+            .map(|m| m.timing.samples.len())
+            .min()
+            .unwrap_or(0);
+        let mut samples = vec![0.0; reps];
+        for m in each {
+            warm.ids.extend_from_slice(&m.warm.ids);
+            warm.t.extend_from_slice(&m.warm.t);
+            warm.rays += m.warm.rays;
+            warm.seconds += m.warm.seconds;
+            if let Some(c) = &m.warm.counters {
+                use raybench_core::Counters as _;
+                warm.counters
+                    .get_or_insert_with(raybench_core::RayCounters::default)
+                    .merge(c);
+            }
+            if let Some(c) = &m.warm.color {
+                warm.color.get_or_insert_with(Vec::new).extend_from_slice(c);
+            }
+            for (i, s) in samples.iter_mut().enumerate() {
+                *s += m.timing.samples[i];
+            }
+            for (name, secs) in &m.phases.0 {
+                match phases.0.iter_mut().find(|(n, _)| n == name) {
+                    Some((_, total)) => *total += secs,
+                    None => phases.push(name.clone(), *secs),
+                }
+            }
+        }
+        Measurement {
+            warm,
+            timing: Timing::of(samples),
+            phases,
+        }
     }
 }
 

@@ -115,7 +115,27 @@ pub struct Timing {
     pub samples: Vec<f64>,
 }
 
+/// The spread of timed repetitions, `(max - min) / min`, above which a measurement is
+/// flagged as noisy in the report.
+pub const NOISY_SPREAD: f64 = 0.10;
+
 impl Timing {
+    /// `(max - min) / min` of the repetitions (0 for one repetition).
+    #[must_use]
+    pub fn spread(&self) -> f64 {
+        if self.min > 0.0 && self.max.is_finite() {
+            (self.max - self.min) / self.min
+        } else {
+            0.0
+        }
+    }
+
+    /// Whether the repetitions spread by more than [`NOISY_SPREAD`].
+    #[must_use]
+    pub fn noisy(&self) -> bool {
+        self.spread() > NOISY_SPREAD
+    }
+
     /// The timing of `samples` (at least one).
     #[must_use]
     pub fn of(samples: Vec<f64>) -> Self {
@@ -222,6 +242,28 @@ pub struct Run {
     /// (the whole call). Empty for CPU backends.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub phases: BTreeMap<String, f64>,
+    /// Each camera, for a scene with several (empty otherwise): the run's own figures are
+    /// then over every camera (`seconds` the time to render all of them once, `mrays_per_s`
+    /// their rays over that time, the equality over all their pixels) and these are each
+    /// camera's own.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub cameras: Vec<CameraRun>,
+}
+
+/// One camera of a [`Run`] over a scene with several cameras.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct CameraRun {
+    /// The camera's name in the scene (`raybench info` lists them).
+    pub name: String,
+    /// This camera's timed repetitions.
+    pub seconds: Timing,
+    /// Rays traced per repetition.
+    pub rays: u64,
+    /// Rays per second over the median time, in millions.
+    pub mrays_per_s: f64,
+    /// Ids, `t` and colours bit-identical to the reference backend's from the same camera
+    /// (`null` for the reference itself).
+    pub identical: Option<bool>,
 }
 
 impl Run {

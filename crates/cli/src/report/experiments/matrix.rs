@@ -6,8 +6,8 @@ use super::{Chart, Experiment, Planned, Plot};
 use crate::measure::{Measured, explicit_rays, prepare};
 use crate::progress::Progress;
 use crate::report::images::{self, Rgb8};
-use crate::report::markdown::{backends_in, bytes, opt};
-use crate::report::results::{Equality, Images, Results, Run};
+use crate::report::markdown::{backends_in, bytes, noisy_mark, opt};
+use crate::report::results::{CameraRun, Equality, Images, Results, Run};
 use crate::report::{Ctx, PEER_MAX_FLIP, PEER_MIN_ID_MATCH, Workload, file_safe, skip};
 use crate::{Backend, Roles, compare_hits};
 use anyhow::Result;
@@ -146,9 +146,13 @@ impl Experiment for Matrix {
                             .find(|r| r.scene == *sc && &r.backend == b)
                             .map_or("-".into(), |r| {
                                 let fail = r.equality.as_ref().is_some_and(|e| !e.pass);
+                                let noise = r.seconds.as_ref().map_or("", noisy_mark);
                                 match r.mrays_per_s {
                                     Some(v) => {
-                                        format!("{v:.2}{}", if fail { " (differs)" } else { "" })
+                                        format!(
+                                            "{v:.2}{noise}{}",
+                                            if fail { " (differs)" } else { "" }
+                                        )
                                     }
                                     None => r.status.clone(),
                                 }
@@ -316,8 +320,11 @@ impl Experiment for Matrix {
                     opt(r.build_seconds, |v| format!("{v:.3}")),
                     r.memory_bytes.map_or("-".into(), bytes),
                     r.seconds.as_ref().map_or("-".into(), |t| format!(
-                        "{:.4} [{:.4}-{:.4}]",
-                        t.median, t.min, t.max
+                        "{:.4} [{:.4}-{:.4}]{}",
+                        t.median,
+                        t.min,
+                        t.max,
+                        noisy_mark(t)
                     )),
                     opt(r.mrays_per_s, |v| format!("{v:.3}")),
                     opt(r.tests_per_ray, |v| format!("{v:.1}")),
@@ -339,6 +346,7 @@ impl Experiment for Matrix {
                 );
             }
             let _ = writeln!(s);
+            write_cameras(&runs, s);
             let mut pictures = Vec::new();
             for r in &runs {
                 if let Some(c) = &r.images.color {
@@ -458,12 +466,32 @@ fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<R
         return Ok(Vec::new());
     }
 
-    let explicit: Vec<Option<Vec<raybench_core::Ray>>> = workloads
+    // Every camera of a scene that has several, for the workloads whose rays start at the
+    // camera (the incoherent rays do not depend on it); the scene's camera otherwise.
+    let views = |w: &Workload| -> Vec<Option<u32>> {
+        if scene.cameras.len() > 1 && w.rays != RaySet::Incoherent {
+            (0..scene.cameras.len() as u32).map(Some).collect()
+        } else {
+            vec![None]
+        }
+    };
+    // The explicit rays of each workload and camera, generated once for every backend.
+    let explicit: Vec<Vec<(Option<u32>, Option<Vec<raybench_core::Ray>>)>> = workloads
         .iter()
-        .map(|w| explicit_rays(w.rays, scene, &w.settings()))
+        .map(|w| {
+            views(w)
+                .into_iter()
+                .map(|camera| {
+                    let settings = raybench_core::RenderSettings {
+                        camera,
+                        ..w.settings()
+                    };
+                    Ok((camera, explicit_rays(w.rays, scene, &settings)?))
+                })
+                .collect::<Result<Vec<_>>>()
+        })
         .collect::<Result<_>>()?;
-    let mut reference: Vec<Option<(Measured, Option<Rgb8>)>> =
-        workloads.iter().map(|_| None).collect();
+    let mut reference: Vec<Option<Reference>> = workloads.iter().map(|_| None).collect();
     let mut runs = Vec::new();
     for b in order {
         progress.begin(format!("{} {}: build", scene.name, b.name));
@@ -494,6 +522,7 @@ fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<R
                 equality: None,
                 images: Images::default(),
                 phases: BTreeMap::new(),
+                cameras: Vec::new(),
             };
             let checked = match &prepared {
                 Ok(p) => p.renderer.supports_mode(w.mode).map(|()| p),
@@ -516,7 +545,7 @@ fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<R
                 }
             };
             progress.begin(format!("{} {} {}", scene.name, w.key(), b.name));
-            let m = ctx.measure(r.as_ref(), w, explicit[wi].as_deref())?;
+            let (m, each) = ctx.measure_views(r.as_ref(), w, &explicit[wi])?;
             run.build_seconds = Some(build);
             // Phases only for backends that have more than build and render (a GPU).
             if prepare_phases.0.len() > 1 || m.phases.0.len() > 1 {
@@ -544,7 +573,8 @@ fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<R
                     (c.node_visits > 0).then(|| c.node_visits as f64 / rays as f64);
             }
             run.seconds = Some(m.timing);
-            let image = m
+            // The images are the first camera's.
+            let image = each[0]
                 .warm
                 .color
                 .as_ref()
@@ -573,20 +603,24 @@ fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<R
                         flip_mean: image.as_ref().map(|_| 0.0),
                         pass: true,
                     });
-                    reference[wi] = Some((m.warm, image));
+                    run.cameras = camera_runs(scene, &explicit[wi], &each, None);
+                    reference[wi] = Some(Reference {
+                        all: m.warm,
+                        each: each.into_iter().map(|m| m.warm).collect(),
+                        image,
+                    });
                 }
-                Some((ref_m, ref_img)) => {
+                Some(rf) => {
                     run.equality = Some(equality(
                         ctx,
                         b,
-                        ref_m,
-                        ref_img.as_ref(),
-                        &m.warm,
-                        image.as_ref(),
+                        (&rf.all, &rf.each[0], rf.image.as_ref()),
+                        (&m.warm, &each[0].warm, image.as_ref()),
                         w,
                         &stem,
                         &mut run.images,
                     )?);
+                    run.cameras = camera_runs(scene, &explicit[wi], &each, Some(&rf.each));
                 }
             }
             progress.step(&format!(
@@ -604,27 +638,22 @@ fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<R
 
 /// How a backend's measurement compares with the reference's, writing the images of a
 /// difference.
-#[allow(clippy::too_many_arguments)]
+///
+/// `reference` and `measured` are each `(every camera, the first camera, its image)`: the
+/// figures are over every camera, the images and maps the first camera's.
 fn equality(
     ctx: &Ctx,
     b: &Backend,
-    ref_m: &Measured,
-    ref_img: Option<&Rgb8>,
-    m: &Measured,
-    img: Option<&Rgb8>,
+    reference: (&Measured, &Measured, Option<&Rgb8>),
+    measured: (&Measured, &Measured, Option<&Rgb8>),
     w: &Workload,
     stem: &str,
     files: &mut Images,
 ) -> Result<Equality> {
+    let (ref_m, ref_first, ref_img) = reference;
+    let (m, first, img) = measured;
     let c = compare_hits(&ref_m.ids, &ref_m.t, &m.ids, &m.t);
-    let same_color = match (&ref_m.color, &m.color) {
-        (Some(a), Some(b)) => a
-            .iter()
-            .zip(b)
-            .all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits)),
-        _ => true,
-    };
-    let identical = c.is_exact() && same_color;
+    let identical = c.is_exact() && same_colors(ref_m, m);
     let (mut psnr, mut flip) = (None, None);
     if let (Some(ri), Some(ti)) = (ref_img, img) {
         psnr = images::psnr(ri, ti);
@@ -635,7 +664,7 @@ fn equality(
             ti.save(&ctx.opts.out.join(&color))?;
             files.color = Some(color);
             let ids = format!("images/{stem}-ids-diff.png");
-            images::ids_diff(w.width, w.height, &ref_m.ids, &m.ids, Some(ri))
+            images::ids_diff(w.width, w.height, &ref_first.ids, &first.ids, Some(ri))
                 .save(&ctx.opts.out.join(&ids))?;
             files.ids_diff = Some(ids);
             let fl = format!("images/{stem}-flip.png");
@@ -663,4 +692,110 @@ fn equality(
         flip_mean: flip,
         pass,
     })
+}
+
+/// The reference backend's measurement of one workload: over every camera, each camera's,
+/// and the first camera's image.
+struct Reference {
+    all: Measured,
+    each: Vec<Measured>,
+    image: Option<Rgb8>,
+}
+
+/// Whether two measurements' colours are bit-identical (true without colours).
+fn same_colors(a: &Measured, b: &Measured) -> bool {
+    match (&a.color, &b.color) {
+        (Some(a), Some(b)) => {
+            a.len() == b.len()
+                && a.iter()
+                    .zip(b)
+                    .all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits))
+        }
+        _ => true,
+    }
+}
+
+/// Each camera's figures for a scene with several cameras (empty for one view), compared
+/// with the reference's same camera (`None`: this is the reference).
+fn camera_runs(
+    scene: &Scene,
+    views: &[(Option<u32>, Option<Vec<raybench_core::Ray>>)],
+    each: &[crate::report::Measurement],
+    reference: Option<&[Measured]>,
+) -> Vec<CameraRun> {
+    if views.len() < 2 {
+        return Vec::new();
+    }
+    views
+        .iter()
+        .zip(each)
+        .enumerate()
+        .map(|(i, ((camera, _), m))| CameraRun {
+            name: camera
+                .and_then(|c| scene.cameras.get(c as usize))
+                .map_or_else(|| "camera".into(), |c| c.name.clone()),
+            seconds: m.timing.clone(),
+            rays: m.warm.rays,
+            mrays_per_s: m.warm.rays as f64 / m.timing.median.max(1e-12) / 1e6,
+            identical: reference.map(|rf| {
+                compare_hits(&rf[i].ids, &rf[i].t, &m.warm.ids, &m.warm.t).is_exact()
+                    && same_colors(&rf[i], &m.warm)
+            }),
+        })
+        .collect()
+}
+
+/// For a scene with several cameras, each camera's throughput per backend (the table above
+/// is over all of them).
+fn write_cameras(runs: &[&Run], s: &mut String) {
+    let Some(names) = runs
+        .iter()
+        .find(|r| !r.cameras.is_empty())
+        .map(|r| r.cameras.iter().map(|c| c.name.clone()).collect::<Vec<_>>())
+    else {
+        return;
+    };
+    let _ = writeln!(
+        s,
+        "Each of the scene's {} cameras (the figures above are over all of them: the time \
+         to render every camera once, and their rays over it), Mrays/s:\n",
+        names.len()
+    );
+    let _ = writeln!(
+        s,
+        "| backend | {} | identical per camera |",
+        names
+            .iter()
+            .map(|n| format!("`{n}`"))
+            .collect::<Vec<_>>()
+            .join(" | ")
+    );
+    let _ = writeln!(s, "|---|{}---|", "---:|".repeat(names.len()));
+    for r in runs.iter().filter(|r| !r.cameras.is_empty()) {
+        let speeds: Vec<String> = r
+            .cameras
+            .iter()
+            .map(|c| format!("{:.3}{}", c.mrays_per_s, noisy_mark(&c.seconds)))
+            .collect();
+        let identical = if r.cameras.iter().all(|c| c.identical.is_none()) {
+            "reference".to_string()
+        } else {
+            r.cameras
+                .iter()
+                .map(|c| match c.identical {
+                    Some(true) => "yes",
+                    Some(false) => "no",
+                    None => "-",
+                })
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let _ = writeln!(
+            s,
+            "| {} | {} | {identical} |",
+            r.backend,
+            speeds.join(" | ")
+        );
+    }
+    let _ = writeln!(s);
 }

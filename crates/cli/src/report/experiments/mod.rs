@@ -553,6 +553,7 @@ mod tests {
             assets: std::env::temp_dir(),
             threads: 1,
             command: String::new(),
+            baseline: None,
         };
         let chosen: Vec<&'static Backend> = crate::BACKENDS.iter().collect();
         let ctx = Ctx {
