@@ -222,7 +222,7 @@ fn trace_counted<A: Accel, C: Counters>(accel: &A, rays: &[Ray]) -> (Vec<Option<
 #[cfg(test)]
 mod tests {
     use super::*;
-    use raybench_core::{NO_HIT, SceneBuilder, Sphere, Vec3};
+    use raybench_core::{Camera, NO_HIT, SceneBuilder, Sphere, Vec3};
     use raybench_naive::NaiveAccel;
 
     fn scene() -> Arc<Scene> {
@@ -267,6 +267,61 @@ mod tests {
         assert_eq!(frames[0].stats.rays, rays);
         assert_eq!(frames[0].stats.counters.unwrap().prim_tests, rays);
         assert!(frames[0].ids.contains(&0) && frames[0].ids.contains(&NO_HIT));
+    }
+
+    /// `RenderSettings::camera` renders the prepared scene from another of its cameras: the
+    /// same frame as a scene whose camera was that one, and an index out of range is an
+    /// invalid setting.
+    #[test]
+    fn any_camera_of_the_prepared_scene_renders() {
+        let two = |first: usize| {
+            let cams = [
+                Camera {
+                    position: Vec3::new(0.0, 0.0, 5.0),
+                    look_at: Vec3::ZERO,
+                    up: Vec3::Y,
+                    vfov_degrees: 40.0,
+                },
+                Camera {
+                    position: Vec3::new(3.0, 4.0, 0.5),
+                    look_at: Vec3::new(0.5, 0.0, 0.0),
+                    up: Vec3::Y,
+                    vfov_degrees: 50.0,
+                },
+            ];
+            let mut b = SceneBuilder::new("two cameras");
+            b.add_sphere(Sphere::new(Vec3::ZERO, 1.0), 0).unwrap();
+            b.add_sphere(Sphere::new(Vec3::new(1.5, 0.0, 0.0), 0.5), 0)
+                .unwrap();
+            for i in [first, 1 - first] {
+                b.add_camera(Some(&format!("c{i}")), cams[i]).unwrap();
+            }
+            Arc::new(b.build())
+        };
+        let settings = |camera| RenderSettings {
+            width: 19,
+            height: 17,
+            camera,
+            ..Default::default()
+        };
+        let mut r = CpuRenderer::<NaiveAccel>::with_default_build("naive", "test");
+        r.prepare(&two(0)).unwrap();
+        let mut other = CpuRenderer::<NaiveAccel>::with_default_build("naive", "test");
+        other.prepare(&two(1)).unwrap();
+        let from_second = r.render(&settings(Some(1))).unwrap();
+        let second_first = other.render(&settings(None)).unwrap();
+        assert_eq!(from_second.ids, second_first.ids);
+        assert_eq!(from_second.t, second_first.t);
+        assert_eq!(from_second.color, second_first.color);
+        assert_ne!(from_second.ids, r.render(&settings(Some(0))).unwrap().ids);
+        assert_eq!(
+            r.render(&settings(None)).unwrap().ids,
+            r.render(&settings(Some(0))).unwrap().ids
+        );
+        assert!(matches!(
+            r.render(&settings(Some(2))),
+            Err(RenderError::InvalidSettings(m)) if m.contains("2 camera(s)")
+        ));
     }
 
     #[test]
