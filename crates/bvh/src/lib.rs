@@ -24,7 +24,7 @@ pub use node::Node;
 pub use obvhs_adapter::ObvhsAccel;
 pub use params::BvhParams;
 
-use raybench_geometry::Geometry;
+use raybench_geometry::{CostConstants, Geometry, TreeView};
 use std::sync::Arc;
 
 /// The workspace's own BVH2.
@@ -88,30 +88,36 @@ impl Bvh {
     /// parameters) times the probability that such a ray hits its box (its surface area over
     /// the root's), every leaf its primitive count times that probability.
     /// Lower is better; compare trees over the same primitives. 0 when the tree is empty or
-    /// its root box has no (or an infinite) area.
+    /// its root box has no (or an infinite) area. It is [`TreeView::sah_cost`] of
+    /// [`Bvh::tree_view`]: with the default `C_t` of 1, the `SAH` of `raybench info`.
     #[must_use]
     pub fn sah_cost(&self) -> f64 {
-        let Some(root) = self.nodes.first() else {
-            return 0.0;
-        };
-        let root_area = f64::from(root.aabb().surface_area());
-        if root_area <= 0.0 || !root_area.is_finite() {
-            return 0.0;
+        self.tree_view().sah_cost(CostConstants {
+            traversal: f64::from(self.params.traversal_cost),
+            intersection: 1.0,
+        })
+    }
+
+    /// The tree as the quality metrics see it ([`raybench_geometry::quality`]): every node
+    /// with its box, leaves with their primitive ids.
+    #[must_use]
+    pub fn tree_view(&self) -> TreeView {
+        fn add(nodes: &[Node], ids: &[u32], i: usize, view: &mut TreeView) -> u32 {
+            let n = &nodes[i];
+            if n.is_leaf() {
+                let first = n.first_or_right as usize;
+                view.leaf(n.aabb(), &ids[first..first + n.count as usize])
+            } else {
+                let l = add(nodes, ids, i + 1, view);
+                let r = add(nodes, ids, n.first_or_right as usize, view);
+                view.interior(n.aabb(), &[l, r])
+            }
         }
-        let traversal = f64::from(self.params.traversal_cost);
-        let sum: f64 = self
-            .nodes
-            .iter()
-            .map(|n| {
-                let weight = if n.is_leaf() {
-                    f64::from(n.count)
-                } else {
-                    traversal
-                };
-                weight * f64::from(n.aabb().surface_area())
-            })
-            .sum();
-        sum / root_area
+        let mut view = TreeView::new();
+        if !self.nodes.is_empty() {
+            add(&self.nodes, &self.prim_ids, 0, &mut view);
+        }
+        view
     }
 
     /// Checks the structure's invariants: every bounded primitive in exactly one leaf and no
@@ -334,6 +340,37 @@ mod tests {
             "{}",
             bvh.sah_cost()
         );
+    }
+
+    #[test]
+    fn tree_views_hold_every_primitive_once() {
+        use raybench_geometry::{QualityParams, StructureQuality};
+        for (name, g) in geometries() {
+            let bvh = Bvh::build_with(Arc::clone(&g), BvhParams::medium());
+            let view = bvh.tree_view();
+            view.check_leaves(&g)
+                .unwrap_or_else(|e| panic!("{name} bvh: {e}"));
+            assert_eq!(view.len(), bvh.nodes().len(), "{name}");
+            let Some(StructureQuality::Tree(q)) = bvh.quality(&QualityParams::default()) else {
+                panic!("{name}: the BVH is a tree");
+            };
+            // C_t of the medium preset is 1: the figure `info` shows is `sah_cost`.
+            assert_eq!(q.sah, bvh.sah_cost(), "{name}");
+            assert_eq!(q.max_depth as usize, bvh.depth(), "{name}");
+            let obvhs = ObvhsAccel::build(Arc::clone(&g));
+            obvhs
+                .tree_view()
+                .check_leaves(&g)
+                .unwrap_or_else(|e| panic!("{name} obvhs: {e}"));
+            if !g.is_empty() {
+                let Some(StructureQuality::Tree(o)) = obvhs.quality(&QualityParams::default())
+                else {
+                    panic!("{name}: the CWBVH is a tree");
+                };
+                assert!(o.sah.is_finite() && o.sah > 0.0, "{name}: {o:?}");
+                assert!(o.epo.mean.is_finite() && o.epo.mean >= 0.0, "{name}: {o:?}");
+            }
+        }
     }
 
     #[test]

@@ -43,7 +43,10 @@ use obvhs::BvhBuildParams;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::RayHit;
 use raybench_geometry::traverse;
-use raybench_geometry::{Accel, AccelStats, Counters, Geometry, Hit, Ray, cull_bound};
+use raybench_geometry::{
+    Aabb, Accel, AccelStats, Counters, Geometry, Hit, QualityParams, Ray, StructureQuality,
+    TreeView, cull_bound,
+};
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -147,6 +150,54 @@ impl ObvhsAccel {
         }
     }
 
+    /// The CWBVH as the quality metrics see it: every wide node an interior node, every
+    /// leaf child slot a leaf, each with the box obvhs's traversal tests: the child's
+    /// quantised box decoded (`CwBvhNode::child_aabb`) and scaled back to the scene's
+    /// coordinates (by a power of two, exactly). The root's box is the scene's padded box
+    /// (`total_aabb`), which obvhs never tests. obvhs's BVH2 before the conversion is not
+    /// kept.
+    #[must_use]
+    pub fn tree_view(&self) -> TreeView {
+        let mut view = TreeView::new();
+        if !self.bvh.nodes.is_empty() {
+            let root = &self.bvh.total_aabb;
+            let bounds = self.unscaled(root.min, root.max);
+            self.view_node(0, bounds, &mut view);
+        }
+        view
+    }
+
+    /// A box of obvhs's scaled copy in the scene's coordinates.
+    fn unscaled(&self, min: Vec3A, max: Vec3A) -> Aabb {
+        Aabb::new(
+            glam::Vec3::from(min) / self.scale,
+            glam::Vec3::from(max) / self.scale,
+        )
+    }
+
+    /// Adds wide node `index` (with box `bounds`) and its subtree to `view`.
+    fn view_node(&self, index: usize, bounds: Aabb, view: &mut TreeView) -> u32 {
+        let node = &self.bvh.nodes[index];
+        let mut children = Vec::with_capacity(8);
+        for slot in 0..8 {
+            if node.is_child_empty(slot) {
+                continue;
+            }
+            let b = node.child_aabb(slot);
+            let b = self.unscaled(b.min, b.max);
+            children.push(if node.is_leaf(slot) {
+                let (start, count) = node.child_primitives(slot);
+                let ids: Vec<u32> = (start..start + count)
+                    .map(|i| self.ids[i as usize])
+                    .collect();
+                view.leaf(b, &ids)
+            } else {
+                self.view_node(node.child_node_index(slot) as usize, b, view)
+            });
+        }
+        view.interior(bounds, &children)
+    }
+
     /// Whether the ray starts too far from the scene for obvhs's rounding
     /// ([`FAR_ORIGIN`]).
     fn too_far(&self, ray: &Ray) -> bool {
@@ -245,5 +296,12 @@ impl Accel for ObvhsAccel {
                 + std::mem::size_of_val(self.ids.as_slice()),
             counts: vec![("cwbvh8 nodes", self.bvh.nodes.len() as u64)],
         }
+    }
+
+    fn quality(&self, params: &QualityParams) -> Option<StructureQuality> {
+        let q = self
+            .tree_view()
+            .quality(&self.geometry, params, self.stats().memory_bytes);
+        Some(StructureQuality::Tree(q))
     }
 }

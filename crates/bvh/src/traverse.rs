@@ -4,7 +4,10 @@ use crate::Bvh;
 use crate::Node;
 use crate::build::MAX_DEPTH;
 use raybench_geometry::traverse::{self, AnyHit, Closest};
-use raybench_geometry::{Accel, AccelStats, Counters, Geometry, Hit, NodeStack, Ray, SlabRay};
+use raybench_geometry::{
+    Accel, AccelStats, Counters, Geometry, Hit, NodeStack, QualityParams, Ray, SlabRay,
+    StructureQuality,
+};
 use std::sync::Arc;
 
 /// Traversal stack: one entry per level plus the far children pushed on the way down.
@@ -38,6 +41,13 @@ impl Accel for Bvh {
                 ("depth", self.depth() as u64),
             ],
         }
+    }
+
+    fn quality(&self, params: &QualityParams) -> Option<StructureQuality> {
+        let q = self
+            .tree_view()
+            .quality(&self.geometry, params, self.stats().memory_bytes);
+        Some(StructureQuality::Tree(q))
     }
 }
 

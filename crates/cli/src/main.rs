@@ -9,12 +9,14 @@ use raybench::measure::{
     timed_seconds,
 };
 use raybench::progress::Progress;
+use raybench::report::results::{GRID_COLUMNS, Quality, TREE_COLUMNS};
 use raybench::{
     BACKENDS, NOT_BUILT, backend, brute_force_tests, chosen_backends, compare_hits, default_backend,
 };
 use raybench_core::limits::MAX_THREADS;
 use raybench_core::{
-    CameraOverrides, LightSampling, Mode, RaySet, RenderSettings, Scene, Timings, Vec3,
+    CameraOverrides, LightSampling, Mode, QualityParams, RaySet, RenderSettings, Scene, Timings,
+    Vec3,
 };
 use raybench_scene::{BUILTIN_SCENES, assets_dir, generators::GENERATORS};
 use serde::Serialize;
@@ -398,6 +400,9 @@ struct InfoCmd {
     /// Worker threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
+    /// Points sampled for each structure's EPO (end-point overlap).
+    #[arg(long, default_value_t = raybench_core::quality::DEFAULT_EPO_SAMPLES)]
+    epo_samples: u32,
     #[command(flatten)]
     camera: CameraArgs,
 }
@@ -1094,12 +1099,18 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
         "{:<16} {:>10} {:>14} {:>9} {:>10} {:>10}  structure",
         "backend", "build s", "memory bytes", "rays/px", "tests/ray", "visits/ray"
     );
+    let params = QualityParams {
+        epo_samples: cmd.epo_samples,
+        ..QualityParams::default()
+    };
+    let mut qualities = Vec::new();
     for b in chosen {
         match prepare_for_mode(b, &scene, settings.mode) {
             Err(reason) => println!("{:<16} unavailable: {reason}", b.name),
             Ok(Prepared {
                 renderer: r, build, ..
             }) => {
+                qualities.push((b.name, r.quality(&params).as_ref().map(Quality::from)));
                 let s = r.structure().unwrap_or_default();
                 let counts: Vec<String> =
                     s.counts.iter().map(|(k, v)| format!("{k}={v}")).collect();
@@ -1123,5 +1134,67 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
             }
         }
     }
+    print_quality(&qualities, &params);
     Ok(ExitCode::SUCCESS)
+}
+
+/// `raybench info`'s structure quality: one table for trees, one for grids, then the
+/// structures that cannot be read and the backends without one.
+fn print_quality(qualities: &[(&str, Option<Quality>)], params: &QualityParams) {
+    println!(
+        "quality     SAH cost and EPO with C_t = {}, C_i = {}; EPO from {} points sampled by area \
+         on triangles and spheres, +- its standard error",
+        params.costs.traversal, params.costs.intersection, params.epo_samples
+    );
+    let table = |headers: [&str; 7], rows: Vec<(&str, [String; 7])>| {
+        if rows.is_empty() {
+            return;
+        }
+        println!(
+            "{:<16} {:>10} {:>16} {:>9} {:>9} {:>14} {:>10}  {}",
+            "backend",
+            headers[0],
+            headers[1],
+            headers[2],
+            headers[3],
+            headers[4],
+            headers[5],
+            headers[6]
+        );
+        for (name, c) in rows {
+            println!(
+                "{name:<16} {:>10} {:>16} {:>9} {:>9} {:>14} {:>10}  {}",
+                c[0], c[1], c[2], c[3], c[4], c[5], c[6]
+            );
+        }
+    };
+    let rows = |f: fn(&Quality) -> Option<[String; 7]>| {
+        qualities
+            .iter()
+            .filter_map(|(name, q)| Some((*name, f(q.as_ref()?)?)))
+            .collect::<Vec<_>>()
+    };
+    table(TREE_COLUMNS, rows(Quality::tree_columns));
+    table(GRID_COLUMNS, rows(Quality::grid_columns));
+    for (name, q) in qualities {
+        match q {
+            Some(Quality::NotReadable { reason }) => {
+                println!("{name:<16} not readable: {reason}");
+            }
+            None => println!("{name:<16} no structure"),
+            Some(_) => {}
+        }
+    }
+    let excluded = qualities.iter().find_map(|(_, q)| match q {
+        Some(Quality::Tree {
+            epo_excluded_primitives,
+            ..
+        }) => Some(*epo_excluded_primitives),
+        _ => None,
+    });
+    if let Some(n @ 1..) = excluded {
+        println!(
+            "            EPO leaves out {n} bounded primitives that are neither triangles nor spheres"
+        );
+    }
 }

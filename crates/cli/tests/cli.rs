@@ -262,6 +262,51 @@ fn listing_commands() {
 }
 
 #[test]
+fn info_prints_structure_quality() {
+    let o = raybench(&[
+        "info",
+        "soup:500",
+        "--backends",
+        "naive,bvh,packet,grid,grid2",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--epo-samples",
+        "256",
+    ]);
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(s.contains("C_t = 1, C_i = 1; EPO from 256 points"), "{s}");
+    let line = |prefix: &str| {
+        s.lines()
+            .filter(|l| l.starts_with(prefix))
+            .map(str::to_string)
+            .collect::<Vec<_>>()
+    };
+    // Headers of the trees' and the grids' tables, then a row per structure.
+    assert_eq!(line("backend").len(), 3, "{s}");
+    assert!(line("backend")[1].contains("SAH") && line("backend")[1].contains("EPO ± error"));
+    assert!(line("backend")[2].contains("fill") && line("backend")[2].contains("refs/prim"));
+    for tree in ["bvh ", "packet "] {
+        let rows = line(tree);
+        let row = rows.last().unwrap_or_else(|| panic!("no {tree}row: {s}"));
+        let sah: f64 = row.split_whitespace().nth(1).unwrap().parse().unwrap();
+        assert!(sah > 1.0, "{row}");
+        assert!(row.contains(" ± "), "{row}");
+    }
+    for grid in ["grid ", "grid2 "] {
+        assert!(line(grid).last().is_some_and(|r| r.contains('%')), "{s}");
+    }
+    assert!(
+        line("naive")
+            .last()
+            .is_some_and(|r| r.contains("no structure")),
+        "{s}"
+    );
+}
+
+#[test]
 fn bad_files_give_one_line_errors() {
     let dir = tmp_dir("bad");
     let missing_buffer = format!(

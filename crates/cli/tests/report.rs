@@ -74,6 +74,20 @@ fn report_writes_markdown_json_images_and_charts() {
         if run["ray_set"] == "primary" {
             assert!(eq["flip_mean"].as_f64() == Some(0.0), "{run}");
         }
+        // Structure quality: trees for bvh and packet, none for naive.
+        let q = &run["quality"];
+        if run["backend"] == "naive" {
+            assert!(q.is_null(), "{run}");
+        } else {
+            assert_eq!(q["kind"], "tree", "{run}");
+            assert_eq!(
+                (q["c_t"].as_f64(), q["c_i"].as_f64()),
+                (Some(1.0), Some(1.0))
+            );
+            assert!(q["sah"].as_f64().unwrap() > 1.0, "{run}");
+            assert!(q["epo"].as_f64().unwrap() >= 0.0, "{run}");
+            assert_eq!(q["leaf_sizes"].as_array().unwrap().len(), 7, "{run}");
+        }
     }
     // The reference's images exist; identical backends write none.
     for run in runs {
@@ -88,6 +102,12 @@ fn report_writes_markdown_json_images_and_charts() {
     let md = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
     assert!(md.starts_with("# raybench report"));
     assert!(md.contains("## Summary") && md.contains("### cornell-box"));
+    assert!(md.contains("## Structure quality"), "{md}");
+    assert!(md.contains("| cornell-box | packet | "), "{md}");
+    assert!(
+        md.contains("the tree with the lowest SAH cost was the fastest in"),
+        "{md}"
+    );
     // Charts need a font; CI installs one (fonts-dejavu-core).
     if md.contains("> Charts:") {
         assert!(
@@ -100,6 +120,12 @@ fn report_writes_markdown_json_images_and_charts() {
                 dir.join(format!("charts/throughput-cast-primary.{ext}"))
                     .is_file()
             );
+            for chart in ["sah", "epo"] {
+                for set in ["primary", "incoherent"] {
+                    let file = format!("charts/quality-{chart}-cast-{set}.{ext}");
+                    assert!(dir.join(&file).is_file(), "{file}");
+                }
+            }
         }
     }
     let _ = std::fs::remove_dir_all(&dir);

@@ -94,6 +94,10 @@ const ALLOWED: &[(&str, &str)] = &[
         "a million-triangle case on chosen structures (a subset, for time) and Embree's watertight mode",
     ),
     (
+        "tests/tests/quality.rs",
+        "each tree's own view (raybench-bvh, obvhs's adapter, the bvh crate, packet) is its subject",
+    ),
+    (
         "tests/tests/tidy.rs",
         "the crate-graph checks name the backend crates' folders",
     ),

@@ -5,7 +5,7 @@ use crate::Ray;
 use crate::frame::{Frame, Timings};
 use crate::limits;
 use crate::scene::Scene;
-use crate::{AccelStats, BatchTracer, RayCounters};
+use crate::{AccelStats, BatchTracer, QualityParams, RayCounters, StructureQuality};
 use std::fmt;
 use std::sync::Arc;
 
@@ -272,6 +272,13 @@ pub trait Renderer: Send + Sync {
 
     /// Statistics of the prepared structure, if any.
     fn structure(&self) -> Option<AccelStats>;
+
+    /// The prepared structure's quality figures ([`crate::Accel::quality`]): `None` before
+    /// `prepare` and for backends without a readable structure. Samples points for the EPO:
+    /// once per prepared scene, not per frame.
+    fn quality(&self, _params: &QualityParams) -> Option<StructureQuality> {
+        None
+    }
 
     /// The prepared CPU structure's batch entry points, for timing ray batches without
     /// frames (`tests/benches/peers.rs`); `None` before `prepare` and for backends that are

@@ -4,6 +4,7 @@
 use crate::counters::{Counters, NoCounters, RayCounters};
 use crate::geometry::Geometry;
 use crate::hit::Hit;
+use crate::quality::{QualityParams, StructureQuality};
 use crate::ray::Ray;
 use std::sync::Arc;
 
@@ -83,6 +84,14 @@ pub trait Accel: Send + Sync + Sized + 'static {
 
     /// Size and node or cell counts of the structure.
     fn stats(&self) -> AccelStats;
+
+    /// The structure's quality figures ([`crate::quality`]): SAH cost, EPO, leaves and depth
+    /// of a tree, cell and list statistics of a grid, or why it cannot be read. `None` for a
+    /// strategy without a structure (naive). Samples points for the EPO: call it once per
+    /// build, not per frame.
+    fn quality(&self, _params: &QualityParams) -> Option<StructureQuality> {
+        None
+    }
 }
 
 /// The batch entry points of an [`Accel`] behind a trait object, for harnesses that pick a

@@ -35,6 +35,7 @@ pub mod limits;
 mod mesh;
 mod optree;
 mod plane;
+pub mod quality;
 pub mod random_rays;
 mod ray;
 pub mod sampling;
@@ -61,6 +62,10 @@ pub use mesh::{
     triangulate_polygon,
 };
 pub use plane::Plane;
+pub use quality::{
+    CostConstants, Epo, GridQuality, QualityParams, SizeHistogram, StructureQuality, TreeQuality,
+    TreeView,
+};
 pub use ray::Ray;
 pub use sdf::{March, Sdf, SdfNode, SdfOp, SdfParams, SdfPrimitive};
 pub use sphere::Sphere;

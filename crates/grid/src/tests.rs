@@ -230,3 +230,45 @@ fn empty_and_flat_grids() {
     );
     assert_eq!(hit.map(|h| h.t), Some(1.0));
 }
+
+#[test]
+fn quality_counts_every_list() {
+    use raybench_geometry::StructureQuality;
+    let grid = soup_grid(2000);
+    let Some(StructureQuality::Grid(q)) = grid.quality(&Default::default()) else {
+        panic!("a grid's quality is a grid's");
+    };
+    let [nx, ny, nz] = grid.resolution();
+    assert_eq!(q.cells, u64::from(nx * ny * nz));
+    assert_eq!(q.references, grid.ids.len() as u64);
+    assert_eq!(q.primitives, 2000);
+    assert!(q.references >= 2000 && q.fill() > 0.0 && q.fill() <= 1.0);
+    assert_eq!(q.list_lengths.0.iter().sum::<u64>(), q.non_empty_cells);
+    // The two-level grid over the soup and a cluster of 300 small triangles (dense cells):
+    // top cells without a sub-grid plus the sub-grids' cells.
+    let mut shapes = grid.geometry.shapes().to_vec();
+    shapes.extend((0..300).map(|i| {
+        let o = Vec3::splat(0.001 * i as f32);
+        Shape::Triangle(Triangle::new(o, o + Vec3::X * 0.01, o + Vec3::Y * 0.01))
+    }));
+    let two = TwoLevelGrid::build_with(
+        Arc::new(Geometry::new(shapes)),
+        crate::TwoLevelParams::default(),
+    );
+    let Some(StructureQuality::Grid(q2)) = two.quality(&Default::default()) else {
+        panic!("a grid's quality is a grid's");
+    };
+    let count = |name: &str| {
+        two.stats()
+            .counts
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map(|(_, v)| *v)
+            .unwrap()
+    };
+    let (subs, sub_cells) = (count("sub-grids"), count("sub-grid cells"));
+    assert!(subs > 0, "the cluster makes dense cells");
+    let top = count("nx") * count("ny") * count("nz");
+    assert_eq!(q2.cells, top - subs + sub_cells);
+    assert_eq!(q2.primitives, 2300);
+}

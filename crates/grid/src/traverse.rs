@@ -3,7 +3,10 @@
 
 use crate::{FAR_ORIGIN, Grid, GridParams, MAILBOX};
 use raybench_geometry::traverse::{self, AnyHit, Closest};
-use raybench_geometry::{Accel, AccelStats, Counters, Geometry, Hit, Ray, SlabRay};
+use raybench_geometry::{
+    Accel, AccelStats, Counters, Geometry, GridQuality, Hit, QualityParams, Ray, SlabRay,
+    StructureQuality,
+};
 use std::ops::ControlFlow;
 use std::sync::Arc;
 
@@ -143,9 +146,23 @@ impl Accel for Grid {
             ],
         }
     }
+
+    fn quality(&self, _params: &QualityParams) -> Option<StructureQuality> {
+        // A grid has no costs to weigh and nothing to sample: the parameters do not apply.
+        Some(StructureQuality::Grid(GridQuality::from_lists(
+            self.list_lengths(),
+            self.geometry.bounded().len() as u64,
+            self.stats().memory_bytes,
+        )))
+    }
 }
 
 impl Grid {
+    /// The length of every cell's list, cell after cell.
+    pub(crate) fn list_lengths(&self) -> impl Iterator<Item = u64> + '_ {
+        self.offsets.windows(2).map(|w| u64::from(w[1] - w[0]))
+    }
+
     /// The closest-hit walk: every cell's list (mailboxed), stopping only when the best hit
     /// lies before the current cell's exit (with the contract's slack).
     fn walk_closest<C: Counters>(&self, q: &mut Closest<'_, C>) {

@@ -4,7 +4,10 @@
 use crate::traverse::Mailbox;
 use crate::{Grid, GridParams};
 use raybench_geometry::traverse;
-use raybench_geometry::{Aabb, Accel, AccelStats, Counters, Geometry, Hit, Ray, Vec3};
+use raybench_geometry::{
+    Aabb, Accel, AccelStats, Counters, Geometry, GridQuality, Hit, QualityParams, Ray,
+    StructureQuality, Vec3,
+};
 use std::sync::Arc;
 
 /// Parameters of the two-level grid.
@@ -168,5 +171,22 @@ impl Accel for TwoLevelGrid {
             self.subs.iter().map(|g| (g.offsets.len() - 1) as u64).sum(),
         ));
         s
+    }
+
+    /// The lists a ray tests: the top cells without a sub-grid, and every sub-grid's cells.
+    fn quality(&self, _params: &QualityParams) -> Option<StructureQuality> {
+        // A grid has no costs to weigh and nothing to sample: the parameters do not apply.
+        let top = self
+            .top
+            .list_lengths()
+            .zip(&self.sub_of)
+            .filter(|(_, sub)| **sub == u32::MAX)
+            .map(|(n, _)| n);
+        let subs = self.subs.iter().flat_map(Grid::list_lengths);
+        Some(StructureQuality::Grid(GridQuality::from_lists(
+            top.chain(subs),
+            self.top.geometry.bounded().len() as u64,
+            self.stats().memory_bytes,
+        )))
     }
 }

@@ -21,7 +21,7 @@
 //! [`MIXED_BIT`] and test them with the core's scalar routine.
 
 use raybench_bvh::{Bvh, Node};
-use raybench_geometry::{Aabb, Geometry, Shape};
+use raybench_geometry::{Aabb, Geometry, Shape, TreeView};
 
 /// Children per wide node.
 pub(crate) const WIDE: usize = 8;
@@ -219,6 +219,47 @@ impl Layout {
             .unwrap_or(0) as u64
     }
 
+    /// The BVH8 as the quality metrics see it: wide nodes as interior nodes, each occupied
+    /// slot's box as its child's box, leaves with the primitive ids of their blocks. The
+    /// root's box is the union of its children's.
+    pub fn tree_view(&self) -> TreeView {
+        let mut view = TreeView::new();
+        if !self.wide.is_empty() {
+            self.view_node(0, None, &mut view);
+        }
+        view
+    }
+
+    /// Adds wide node `index` (with box `bounds`, or its children's union) to `view`.
+    fn view_node(&self, index: usize, bounds: Option<Aabb>, view: &mut TreeView) -> u32 {
+        let node = &self.wide[index];
+        let mut children = Vec::with_capacity(WIDE);
+        let mut union = Aabb::EMPTY;
+        for slot in 0..WIDE {
+            let child = node.child[slot];
+            if child == EMPTY_CHILD {
+                continue;
+            }
+            let b = Aabb::new(
+                std::array::from_fn::<f32, 3, _>(|axis| node.min[axis][slot]).into(),
+                std::array::from_fn::<f32, 3, _>(|axis| node.max[axis][slot]).into(),
+            );
+            union = union.union(b);
+            children.push(if child & LEAF_BIT != 0 {
+                let leaf = LeafRef::decode(child);
+                let ids: Vec<u32> = self.blocks[leaf.first..leaf.first + leaf.blocks]
+                    .iter()
+                    .flat_map(|block| block.id)
+                    .filter(|&id| id != u32::MAX)
+                    .collect();
+                view.leaf(b, &ids)
+            } else {
+                self.view_node(child as usize, Some(b), view)
+            });
+        }
+        view.interior(bounds.unwrap_or(union), &children)
+    }
+
     /// Bytes held (not counting the shared geometry).
     pub fn memory_bytes(&self) -> usize {
         self.wide.len() * std::mem::size_of::<WideNode>()
@@ -413,5 +454,48 @@ impl Builder<'_> {
             mixed,
         }
         .encode()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use raybench_bvh::BvhParams;
+    use raybench_geometry::{Sphere, Vec3};
+    use raybench_scene::generators;
+    use std::sync::Arc;
+
+    #[test]
+    fn tree_view_holds_every_primitive_once() {
+        let soup = Geometry::new(
+            generators::soup(3000, 5)
+                .triangles()
+                .map(Shape::Triangle)
+                .collect(),
+        );
+        // Triangles and spheres mixed, and 100 coincident triangles (one leaf of many).
+        let mut mixed: Vec<Shape> = generators::icosphere(2)
+            .triangles()
+            .map(Shape::Triangle)
+            .collect();
+        mixed.extend((0..50).map(|i| Shape::Sphere(Sphere::new(Vec3::splat(i as f32), 0.5))));
+        let point = raybench_geometry::Triangle::new(Vec3::ONE, Vec3::ONE, Vec3::ONE);
+        mixed.extend(std::iter::repeat_n(Shape::Triangle(point), 100));
+        for g in [soup, Geometry::new(mixed), Geometry::default()] {
+            let g = Arc::new(g);
+            let bvh = Bvh::build_with(Arc::clone(&g), BvhParams::default());
+            let layout = Layout::new(&bvh, &g);
+            let view = layout.tree_view();
+            view.check_leaves(&g).unwrap();
+            assert_eq!(view.is_empty(), g.is_empty());
+            if !g.is_empty() {
+                let q = view.quality(&g, &Default::default(), layout.memory_bytes());
+                assert!(q.sah.is_finite() && q.sah > 0.0, "{q:?}");
+                assert!(q.epo.mean.is_finite() && q.epo.mean > 0.0, "{q:?}");
+                assert_eq!(q.leaves, layout.leaves as u64);
+                // The wide tree is no deeper than the binary one it was collapsed from.
+                assert!(q.max_depth as usize <= bvh.depth(), "{q:?}");
+            }
+        }
     }
 }

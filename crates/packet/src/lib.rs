@@ -41,7 +41,9 @@ mod tri;
 
 use layout::Layout;
 use raybench_bvh::{Bvh, BvhParams};
-use raybench_geometry::{Accel, AccelStats, Counters, Geometry, Hit, PrimHit, Ray};
+use raybench_geometry::{
+    Accel, AccelStats, Counters, Geometry, Hit, PrimHit, QualityParams, Ray, StructureQuality,
+};
 use simd::{Lanes, Portable};
 use std::sync::{Arc, OnceLock};
 
@@ -463,5 +465,15 @@ impl Accel for PacketAccel {
                 ("packet rays", self.packet_size() as u64),
             ],
         }
+    }
+
+    /// The BVH8's figures: leaves are runs of blocks of four triangles, and a leaf's
+    /// `C_i` cost counts its primitives, not its blocks.
+    fn quality(&self, params: &QualityParams) -> Option<StructureQuality> {
+        let q = self
+            .layout
+            .tree_view()
+            .quality(&self.geometry, params, self.layout.memory_bytes());
+        Some(StructureQuality::Tree(q))
     }
 }

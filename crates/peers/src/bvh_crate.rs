@@ -4,7 +4,10 @@ use bvh::aabb::{Aabb as CrateAabb, Bounded};
 use bvh::bounding_hierarchy::{BHShape, BoundingHierarchy};
 use bvh::bvh::{Bvh as CrateBvh, BvhNode};
 use raybench_geometry::traverse::{self, AnyHit, Closest};
-use raybench_geometry::{Accel, AccelStats, Counters, Geometry, Hit, Ray};
+use raybench_geometry::{
+    Aabb, Accel, AccelStats, Counters, Geometry, Hit, QualityParams, Ray, StructureQuality,
+    TreeView, Vec3,
+};
 use std::sync::Arc;
 
 /// A bounded primitive as the `bvh` crate's builder wants it: its box and a slot for its
@@ -84,6 +87,42 @@ impl BvhCrateAccel {
             bvh,
             geometry,
             all_bounded,
+        }
+    }
+
+    /// The crate's tree as the quality metrics see it: its nodes, each with the box its
+    /// parent stores for it (the crate keeps no box for the root: its box is the scene's
+    /// bounded primitives' box), and one primitive per leaf.
+    #[must_use]
+    pub fn tree_view(&self) -> TreeView {
+        let mut view = TreeView::new();
+        if !self.bvh.nodes.is_empty() {
+            self.view_node(0, self.geometry.bounds(), &mut view);
+        }
+        view
+    }
+
+    /// Adds node `index` (with box `bounds`) and its subtree to `view`.
+    fn view_node(&self, index: usize, bounds: Aabb, view: &mut TreeView) -> u32 {
+        let to_aabb = |b: &CrateAabb<f32, 3>| {
+            Aabb::new(
+                Vec3::new(b.min[0], b.min[1], b.min[2]),
+                Vec3::new(b.max[0], b.max[1], b.max[2]),
+            )
+        };
+        match &self.bvh.nodes[index] {
+            BvhNode::Leaf { shape_index, .. } => view.leaf(bounds, &[self.id(*shape_index)]),
+            BvhNode::Node {
+                child_l_index,
+                child_l_aabb,
+                child_r_index,
+                child_r_aabb,
+                ..
+            } => {
+                let l = self.view_node(*child_l_index, to_aabb(child_l_aabb), view);
+                let r = self.view_node(*child_r_index, to_aabb(child_r_aabb), view);
+                view.interior(bounds, &[l, r])
+            }
         }
     }
 
@@ -269,5 +308,12 @@ impl Accel for BvhCrateAccel {
             memory_bytes: std::mem::size_of_val(nodes.as_slice()),
             counts: vec![("nodes", nodes.len() as u64), ("leaves", leaves as u64)],
         }
+    }
+
+    fn quality(&self, params: &QualityParams) -> Option<StructureQuality> {
+        let q = self
+            .tree_view()
+            .quality(&self.geometry, params, self.stats().memory_bytes);
+        Some(StructureQuality::Tree(q))
     }
 }

@@ -20,7 +20,8 @@ use embree::sys::{
     rtcReleaseScene, rtcSetNewGeometryBuffer, rtcSetSceneFlags,
 };
 use raybench_geometry::{
-    Accel, AccelStats, Counters, Geometry, Hit, PrimHit, PrimitiveKind, Ray, Shape, keep_closer,
+    Accel, AccelStats, Counters, Geometry, Hit, PrimHit, PrimitiveKind, QualityParams, Ray, Shape,
+    StructureQuality, keep_closer,
 };
 use std::sync::{Arc, OnceLock};
 
@@ -631,6 +632,10 @@ packet_kernels!(
     rtcOccluded8
 );
 
+/// Why [`Accel::quality`] has no figures for Embree: its BVH is built and held inside the
+/// library, and Embree 3's API reads back no node (only `rtcGetSceneBounds`).
+const NOT_READABLE: &str = "Embree's BVH lives inside the library; its API reads back no node";
+
 /// Embree 3 with single rays (backend `embree`): one triangle mesh holding the scene's
 /// triangles, built by `rtcCommitScene` with Embree's defaults (medium quality) in
 /// [`EmbreeMode::Robust`] ([`EmbreeAccel::build_with_mode`] picks the mode), traced
@@ -739,6 +744,10 @@ impl Accel for EmbreeAccel {
     fn stats(&self) -> AccelStats {
         self.0.stats()
     }
+
+    fn quality(&self, _params: &QualityParams) -> Option<StructureQuality> {
+        Some(StructureQuality::NotReadable(NOT_READABLE))
+    }
 }
 
 impl Accel for EmbreePacketAccel {
@@ -785,5 +794,9 @@ impl Accel for EmbreePacketAccel {
         let mut s = self.inner.stats();
         s.counts.push(("packet width", self.width as u64));
         s
+    }
+
+    fn quality(&self, _params: &QualityParams) -> Option<StructureQuality> {
+        Some(StructureQuality::NotReadable(NOT_READABLE))
     }
 }

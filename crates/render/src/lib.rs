@@ -21,8 +21,8 @@ pub use read::{LinearImage, ReadError, parse_pfm, read_linear};
 
 use raybench_core::integrator::{assemble, render_tile, tiles};
 use raybench_core::{
-    Accel, AccelStats, BatchTracer, Counters, Frame, Geometry, Hit, NoCounters, Ray, RayCounters,
-    RenderError, RenderSettings, Renderer, Scene, Timings,
+    Accel, AccelStats, BatchTracer, Counters, Frame, Geometry, Hit, NoCounters, QualityParams, Ray,
+    RayCounters, RenderError, RenderSettings, Renderer, Scene, StructureQuality, Timings,
 };
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -179,6 +179,10 @@ impl<A: Accel> Renderer for CpuRenderer<A> {
 
     fn batch_tracer(&self) -> Option<&dyn BatchTracer> {
         self.accel().map(|a| a as &dyn BatchTracer)
+    }
+
+    fn quality(&self, params: &QualityParams) -> Option<StructureQuality> {
+        self.accel().and_then(|a| a.quality(params))
     }
 
     fn trace_rays(

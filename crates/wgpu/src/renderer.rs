@@ -5,8 +5,9 @@ use crate::data::{GpuOut, GpuRay, Params, SceneData, check_kinds, entry_point};
 use crate::plan;
 use raybench_bvh::Bvh;
 use raybench_core::{
-    Accel, AccelStats, Frame, FrameStats, Hit, Mode, NO_HIT, PrimHit, Ray, RayCounters,
-    RenderError, RenderSettings, Renderer, Scene, Timings, TracedRays, Vec3, limits,
+    Accel, AccelStats, Frame, FrameStats, Hit, Mode, NO_HIT, PrimHit, QualityParams, Ray,
+    RayCounters, RenderError, RenderSettings, Renderer, Scene, StructureQuality, Timings,
+    TracedRays, Vec3, limits,
 };
 use std::collections::HashMap;
 use std::num::NonZeroU64;
@@ -133,6 +134,8 @@ struct Prepared {
     scene: Arc<Scene>,
     data: SceneData,
     stats: AccelStats,
+    /// The BVH2 the buffers were filled from, kept for [`Renderer::quality`].
+    bvh: Bvh,
     nodes: wgpu::Buffer,
     prims: wgpu::Buffer,
     prim_info: wgpu::Buffer,
@@ -594,6 +597,7 @@ impl Renderer for WgpuRenderer {
             scene: Arc::clone(scene),
             data,
             stats,
+            bvh,
             nodes,
             prims,
             prim_info,
@@ -721,6 +725,18 @@ impl Renderer for WgpuRenderer {
 
     fn structure(&self) -> Option<AccelStats> {
         self.prepared.as_ref().map(|p| p.stats.clone())
+    }
+
+    /// The CPU-built BVH2's figures (the GPU walks the same tree), bytes per primitive
+    /// counting the uploaded buffers.
+    fn quality(&self, params: &QualityParams) -> Option<StructureQuality> {
+        self.prepared.as_ref().map(|p| {
+            StructureQuality::Tree(p.bvh.tree_view().quality(
+                &p.scene.geometry,
+                params,
+                p.stats.memory_bytes,
+            ))
+        })
     }
 
     fn trace_rays(

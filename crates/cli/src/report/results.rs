@@ -248,6 +248,11 @@ pub struct Run {
     /// camera's own.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub cameras: Vec<CameraRun>,
+    /// The prepared structure's quality figures (the same for every workload of the backend
+    /// on the scene: computed once after the build). Absent for backends without a
+    /// structure and in files written before it was added.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub quality: Option<Quality>,
 }
 
 /// One camera of a [`Run`] over a scene with several cameras.
@@ -264,6 +269,199 @@ pub struct CameraRun {
     /// Ids, `t` and colours bit-identical to the reference backend's from the same camera
     /// (`null` for the reference itself).
     pub identical: Option<bool>,
+}
+
+/// A structure's quality figures ([`raybench_core::StructureQuality`]), by kind.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(tag = "kind", rename_all = "kebab-case")]
+pub enum Quality {
+    /// A tree of boxes.
+    Tree {
+        /// `C_t`, the cost of an interior node in `sah` and `epo`.
+        c_t: f64,
+        /// `C_i`, the cost of a primitive test in `sah` and `epo`.
+        c_i: f64,
+        /// The SAH cost.
+        sah: f64,
+        /// The EPO estimate (mean over the sampled points).
+        epo: f64,
+        /// Its standard error.
+        epo_std_error: f64,
+        /// Points sampled for it.
+        epo_samples: u32,
+        /// Bounded primitives left out of the sampling (neither triangles nor spheres).
+        epo_excluded_primitives: u64,
+        /// Interior nodes.
+        interior_nodes: u64,
+        /// Leaves.
+        leaves: u64,
+        /// Leaves with 1, 2, 3, 4, 5-8, 9-16 and more than 16 primitives.
+        leaf_sizes: [u64; 7],
+        /// Nodes on the longest root-to-leaf path.
+        max_depth: u32,
+        /// Mean depth of the leaves (the root at depth 1).
+        mean_leaf_depth: f64,
+        /// Primitive references over all leaves.
+        references: u64,
+        /// Structure bytes per bounded primitive.
+        bytes_per_primitive: f64,
+    },
+    /// A uniform or two-level grid.
+    Grid {
+        /// Cells whose lists rays test.
+        cells: u64,
+        /// Cells with a non-empty list.
+        non_empty_cells: u64,
+        /// Primitive references over all lists.
+        references: u64,
+        /// Bounded primitives.
+        primitives: u64,
+        /// The longest list.
+        max_list: u64,
+        /// Non-empty lists of 1, 2, 3, 4, 5-8, 9-16 and more than 16 references.
+        list_lengths: [u64; 7],
+        /// Structure bytes per bounded primitive.
+        bytes_per_primitive: f64,
+    },
+    /// A structure whose nodes cannot be read (Embree).
+    NotReadable {
+        /// Why.
+        reason: String,
+    },
+}
+
+/// Column headers of [`Quality::tree_columns`].
+pub const TREE_COLUMNS: [&str; 7] = [
+    "SAH",
+    "EPO ± error",
+    "leaves",
+    "interior",
+    "depth max/mean",
+    "bytes/prim",
+    "primitives per leaf",
+];
+
+/// Column headers of [`Quality::grid_columns`].
+pub const GRID_COLUMNS: [&str; 7] = [
+    "cells",
+    "fill",
+    "refs/prim",
+    "list mean",
+    "list max",
+    "bytes/prim",
+    "list lengths",
+];
+
+impl Quality {
+    /// A tree's figures as table cells (headers [`TREE_COLUMNS`]), for `raybench info` and
+    /// `REPORT.md`.
+    #[must_use]
+    pub fn tree_columns(&self) -> Option<[String; 7]> {
+        let Self::Tree {
+            sah,
+            epo,
+            epo_std_error,
+            leaves,
+            interior_nodes,
+            leaf_sizes,
+            max_depth,
+            mean_leaf_depth,
+            bytes_per_primitive,
+            ..
+        } = self
+        else {
+            return None;
+        };
+        Some([
+            format!("{sah:.2}"),
+            format!("{epo:.2} ± {epo_std_error:.2}"),
+            leaves.to_string(),
+            interior_nodes.to_string(),
+            format!("{max_depth}/{mean_leaf_depth:.1}"),
+            format!("{bytes_per_primitive:.1}"),
+            raybench_core::SizeHistogram(*leaf_sizes).describe(),
+        ])
+    }
+
+    /// A grid's figures as table cells (headers [`GRID_COLUMNS`]).
+    #[must_use]
+    pub fn grid_columns(&self) -> Option<[String; 7]> {
+        let Self::Grid {
+            cells,
+            non_empty_cells,
+            references,
+            primitives,
+            max_list,
+            list_lengths,
+            bytes_per_primitive,
+        } = *self
+        else {
+            return None;
+        };
+        let g = raybench_core::GridQuality {
+            cells,
+            non_empty_cells,
+            references,
+            primitives,
+            max_list,
+            list_lengths: raybench_core::SizeHistogram(list_lengths),
+            bytes_per_primitive,
+        };
+        Some([
+            cells.to_string(),
+            format!("{:.1}%", 100.0 * g.fill()),
+            format!("{:.2}", g.references_per_primitive()),
+            format!("{:.2}", g.mean_list()),
+            max_list.to_string(),
+            format!("{bytes_per_primitive:.1}"),
+            g.list_lengths.describe(),
+        ])
+    }
+
+    /// The SAH cost and the EPO of a tree.
+    #[must_use]
+    pub fn sah_epo(&self) -> Option<(f64, f64)> {
+        match self {
+            Self::Tree { sah, epo, .. } => Some((*sah, *epo)),
+            _ => None,
+        }
+    }
+}
+
+impl From<&raybench_core::StructureQuality> for Quality {
+    fn from(q: &raybench_core::StructureQuality) -> Self {
+        use raybench_core::StructureQuality as Q;
+        match q {
+            Q::Tree(t) => Self::Tree {
+                c_t: t.costs.traversal,
+                c_i: t.costs.intersection,
+                sah: t.sah,
+                epo: t.epo.mean,
+                epo_std_error: t.epo.std_error,
+                epo_samples: t.epo.samples,
+                epo_excluded_primitives: t.epo.excluded_primitives,
+                interior_nodes: t.interior_nodes,
+                leaves: t.leaves,
+                leaf_sizes: t.leaf_sizes.0,
+                max_depth: t.max_depth,
+                mean_leaf_depth: t.mean_leaf_depth,
+                references: t.references,
+                bytes_per_primitive: t.bytes_per_primitive,
+            },
+            Q::Grid(g) => Self::Grid {
+                cells: g.cells,
+                non_empty_cells: g.non_empty_cells,
+                references: g.references,
+                primitives: g.primitives,
+                max_list: g.max_list,
+                list_lengths: g.list_lengths.0,
+                bytes_per_primitive: g.bytes_per_primitive,
+            },
+            Q::NotReadable(reason) => Self::NotReadable {
+                reason: (*reason).to_string(),
+            },
+        }
+    }
 }
 
 impl Run {

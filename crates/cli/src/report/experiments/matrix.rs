@@ -7,11 +7,11 @@ use crate::measure::{Measured, explicit_rays, prepare};
 use crate::progress::Progress;
 use crate::report::images::{self, Rgb8};
 use crate::report::markdown::{backends_in, bytes, noisy_mark, opt};
-use crate::report::results::{CameraRun, Equality, Images, Results, Run};
+use crate::report::results::{CameraRun, Equality, Images, Quality, Results, Run};
 use crate::report::{Ctx, PEER_MAX_FLIP, PEER_MIN_ID_MATCH, Workload, file_safe, skip};
 use crate::{Backend, Roles, compare_hits};
 use anyhow::Result;
-use raybench_core::{Mode, RaySet, Scene};
+use raybench_core::{Mode, QualityParams, RaySet, Scene};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::sync::Arc;
@@ -109,7 +109,7 @@ impl Experiment for Matrix {
                 plot: Plot::Categories(scenes, series),
             });
         }
-
+        out.extend(super::quality::charts(results));
         out
     }
 
@@ -195,6 +195,8 @@ impl Experiment for Matrix {
                 let _ = writeln!(s);
             }
         }
+
+        super::quality::write(results, s);
 
         // Phases of backends on another device (the GPU).
         let phased: Vec<&Run> = results
@@ -496,6 +498,13 @@ fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<R
     for b in order {
         progress.begin(format!("{} {}: build", scene.name, b.name));
         let prepared = prepare(b, scene);
+        // Once per backend and scene: the EPO's samples are bounded (4096 points).
+        let quality = prepared.as_ref().ok().and_then(|p| {
+            p.renderer
+                .quality(&QualityParams::default())
+                .as_ref()
+                .map(Quality::from)
+        });
         for (wi, w) in workloads.iter().enumerate() {
             let mut run = Run {
                 shard: 0,
@@ -523,6 +532,7 @@ fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<R
                 images: Images::default(),
                 phases: BTreeMap::new(),
                 cameras: Vec::new(),
+                quality: None,
             };
             let checked = match &prepared {
                 Ok(p) => p.renderer.supports_mode(w.mode).map(|()| p),
@@ -547,6 +557,7 @@ fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<R
             progress.begin(format!("{} {} {}", scene.name, w.key(), b.name));
             let (m, each) = ctx.measure_views(r.as_ref(), w, &explicit[wi])?;
             run.build_seconds = Some(build);
+            run.quality.clone_from(&quality);
             // Phases only for backends that have more than build and render (a GPU).
             if prepare_phases.0.len() > 1 || m.phases.0.len() > 1 {
                 run.phases = prepare_phases

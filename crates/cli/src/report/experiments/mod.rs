@@ -11,6 +11,7 @@ mod heightfield;
 mod matrix;
 mod pixels;
 mod primitives;
+mod quality;
 mod spp;
 
 use super::charts::Series;
