@@ -317,6 +317,10 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Results> {
     Ok(merged)
 }
 
+/// The cameras a workload is measured from, each with its explicit rays (`None` for a
+/// rendered frame): indices into the scene's cameras, `None` for the scene's camera.
+type Views = [(Option<u32>, Option<Vec<raybench_core::Ray>>)];
+
 /// A loaded scene, or why it is skipped.
 type Loaded = Result<Arc<Scene>, String>;
 
@@ -418,7 +422,7 @@ impl Ctx<'_> {
         &self,
         r: &dyn Renderer,
         w: &Workload,
-        views: &[(Option<u32>, Option<Vec<raybench_core::Ray>>)],
+        views: &Views,
     ) -> Result<(Measurement, Vec<Measurement>)> {
         let each: Vec<Measurement> = views
             .iter()

@@ -8,7 +8,7 @@ use crate::progress::Progress;
 use crate::report::images::{self, Rgb8};
 use crate::report::markdown::{backends_in, bytes, noisy_mark, opt};
 use crate::report::results::{CameraRun, Equality, Images, Quality, Results, Run};
-use crate::report::{Ctx, PEER_MAX_FLIP, PEER_MIN_ID_MATCH, Workload, file_safe, skip};
+use crate::report::{Ctx, PEER_MAX_FLIP, PEER_MIN_ID_MATCH, Views, Workload, file_safe, skip};
 use crate::{Backend, Roles, compare_hits};
 use anyhow::Result;
 use raybench_core::{Mode, QualityParams, RaySet, Scene};
@@ -478,7 +478,7 @@ fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<R
         }
     };
     // The explicit rays of each workload and camera, generated once for every backend.
-    let explicit: Vec<Vec<(Option<u32>, Option<Vec<raybench_core::Ray>>)>> = workloads
+    let explicit: Vec<Box<Views>> = workloads
         .iter()
         .map(|w| {
             views(w)
@@ -490,7 +490,7 @@ fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<R
                     };
                     Ok((camera, explicit_rays(w.rays, scene, &settings)?))
                 })
-                .collect::<Result<Vec<_>>>()
+                .collect::<Result<Box<Views>>>()
         })
         .collect::<Result<_>>()?;
     let mut reference: Vec<Option<Reference>> = workloads.iter().map(|_| None).collect();
@@ -730,7 +730,7 @@ fn same_colors(a: &Measured, b: &Measured) -> bool {
 /// with the reference's same camera (`None`: this is the reference).
 fn camera_runs(
     scene: &Scene,
-    views: &[(Option<u32>, Option<Vec<raybench_core::Ray>>)],
+    views: &Views,
     each: &[crate::report::Measurement],
     reference: Option<&[Measured]>,
 ) -> Vec<CameraRun> {
