@@ -194,6 +194,22 @@ impl<A: Accel> Renderer for CpuRenderer<A> {
             (trace_counted::<A, NoCounters>(accel, rays).0, None)
         })
     }
+
+    /// Any hits through the structure's `occluded_batch`, in parallel chunks like
+    /// [`Renderer::trace_rays`].
+    fn occlude_rays(
+        &self,
+        rays: &[Ray],
+        count: bool,
+    ) -> Result<(Vec<bool>, Option<RayCounters>), RenderError> {
+        let (_, accel) = self.prepared.as_ref().ok_or(RenderError::NotPrepared)?;
+        Ok(if count {
+            let (occluded, c) = occlude_counted::<A, RayCounters>(accel, rays);
+            (occluded, Some(c))
+        } else {
+            (occlude_counted::<A, NoCounters>(accel, rays).0, None)
+        })
+    }
 }
 
 /// Rays per batch in [`trace_counted`].
@@ -202,13 +218,29 @@ const RAY_CHUNK: usize = 256;
 /// Traces `rays` in parallel chunks through the batch entry point; counters are summed in
 /// chunk order.
 fn trace_counted<A: Accel, C: Counters>(accel: &A, rays: &[Ray]) -> (Vec<Option<Hit>>, C) {
-    let mut hits = vec![None; rays.len()];
-    let counters: Vec<C> = hits
+    in_chunks(rays, None, |r, out, c| accel.intersect_batch(r, out, c))
+}
+
+/// [`trace_counted`] for any-hit queries, through the batch entry point `occluded_batch`.
+fn occlude_counted<A: Accel, C: Counters>(accel: &A, rays: &[Ray]) -> (Vec<bool>, C) {
+    in_chunks(rays, false, |r, out, c| accel.occluded_batch(r, out, c))
+}
+
+/// Runs `batch` over [`RAY_CHUNK`]-ray chunks of `rays` in parallel, each writing its
+/// chunk of the answers (initially `empty`); the counters are summed in chunk order, so
+/// they do not depend on the thread count.
+fn in_chunks<T: Clone + Send, C: Counters>(
+    rays: &[Ray],
+    empty: T,
+    batch: impl Fn(&[Ray], &mut [T], &mut C) + Sync,
+) -> (Vec<T>, C) {
+    let mut answers = vec![empty; rays.len()];
+    let counters: Vec<C> = answers
         .par_chunks_mut(RAY_CHUNK)
         .zip(rays.par_chunks(RAY_CHUNK))
         .map(|(out, rays)| {
             let mut c = C::default();
-            accel.intersect_batch(rays, out, &mut c);
+            batch(rays, out, &mut c);
             c
         })
         .collect();
@@ -216,7 +248,7 @@ fn trace_counted<A: Accel, C: Counters>(accel: &A, rays: &[Ray]) -> (Vec<Option<
     for c in &counters {
         total.merge(c);
     }
-    (hits, total)
+    (answers, total)
 }
 
 #[cfg(test)]
@@ -267,6 +299,42 @@ mod tests {
         assert_eq!(frames[0].stats.rays, rays);
         assert_eq!(frames[0].stats.counters.unwrap().prim_tests, rays);
         assert!(frames[0].ids.contains(&0) && frames[0].ids.contains(&NO_HIT));
+    }
+
+    #[test]
+    fn any_hits_agree_with_closest_hits_on_any_thread_count() {
+        let mut r = CpuRenderer::<NaiveAccel>::with_default_build("naive", "test");
+        assert_eq!(r.occlude_rays(&[], false), Err(RenderError::NotPrepared));
+        r.prepare(&scene()).unwrap();
+        // Rays through the sphere, clipped before it, and past it: 1000 of them, so that
+        // the work spreads over several chunks.
+        let rays: Vec<Ray> = (0..1000)
+            .map(|i| {
+                let x = (i % 40) as f32 * 0.07 - 1.4;
+                let t_max = if i % 3 == 0 { 1.5 } else { f32::INFINITY };
+                Ray::with_interval(Vec3::new(x, 0.1, 3.0), -Vec3::Z, 0.0, t_max)
+            })
+            .collect();
+        let (hits, _) = r.trace_rays(&rays, false).unwrap();
+        let expected: Vec<bool> = hits.iter().map(Option::is_some).collect();
+        assert!(expected.contains(&true) && expected.contains(&false));
+        let answers: Vec<_> = [1, 3]
+            .iter()
+            .map(|&n| {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(n)
+                    .build()
+                    .unwrap();
+                pool.install(|| r.occlude_rays(&rays, true).unwrap())
+            })
+            .collect();
+        for (occluded, counters) in &answers {
+            assert_eq!(occluded, &expected);
+            assert_eq!(counters, &answers[0].1);
+        }
+        let (occluded, counters, timings) = r.occlude_rays_timed(&rays, false).unwrap();
+        assert_eq!((occluded, counters), (expected, None));
+        assert!(timings.get("render").is_some());
     }
 
     #[test]
