@@ -45,6 +45,10 @@ pub struct Options {
     pub scaling: bool,
     /// Which scaling experiments (default: all of [`experiments()`]).
     pub experiments: Option<Vec<String>>,
+    /// The ray sets of the ray-casting workloads (default: every set, [`RaySet::ALL`]).
+    pub ray_sets: Option<Vec<RaySet>>,
+    /// Ambient-occlusion rays per primary hit of the `ao` workloads.
+    pub ao_rays: u32,
     /// Assets folder.
     pub assets: PathBuf,
     /// Worker threads.
@@ -146,6 +150,10 @@ pub fn run(opts: &Options) -> Result<Results> {
             "unknown experiment '{unknown}' (known: {})",
             experiments().join(", ")
         );
+    }
+    let max_ao = raybench_core::ray_sets::MAX_AO_RAYS;
+    if !(1..=max_ao).contains(&opts.ao_rays) {
+        bail!("--ao-rays {} must be in 1..={max_ao}", opts.ao_rays);
     }
     let modes = opts.modes.clone().unwrap_or_else(|| Mode::ALL.to_vec());
     let ctx = Ctx {
@@ -362,7 +370,7 @@ impl Ctx<'_> {
         &self,
         r: &dyn Renderer,
         w: &Workload,
-        rays: Option<&[raybench_core::Ray]>,
+        rays: Option<&crate::measure::RayBatch>,
     ) -> Result<Measurement> {
         let settings = w.settings();
         let warm = measure(r, &settings, rays, true)?;

@@ -3,7 +3,7 @@
 //! phases and per-scene tables.
 
 use super::{Chart, Experiment, Planned, Plot};
-use crate::measure::{Measured, explicit_rays, prepare};
+use crate::measure::{Measured, RayBatch, explicit_rays, prepare};
 use crate::progress::Progress;
 use crate::report::images::{self, Rgb8};
 use crate::report::markdown::{backends_in, bytes, opt};
@@ -11,6 +11,7 @@ use crate::report::results::{Equality, Images, Results, Run};
 use crate::report::{Ctx, PEER_MAX_FLIP, PEER_MIN_ID_MATCH, Workload, file_safe, skip};
 use crate::{Backend, Roles, compare_hits};
 use anyhow::Result;
+use raybench_core::ray_sets::DerivedParams;
 use raybench_core::{Mode, RaySet, Scene};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -279,10 +280,18 @@ impl Experiment for Matrix {
                 let _ = writeln!(s, "### {scene} ({prims} primitives)\n");
                 last_scene.clone_from(scene);
             }
-            let what = if set == "primary" {
-                format!("{w} x {h}, {spp} spp")
-            } else {
-                format!("{} random rays", u64::from(*w) * u64::from(*h))
+            let what = match set.as_str() {
+                "primary" => format!("{w} x {h}, {spp} spp"),
+                "incoherent" => format!("{} random rays", u64::from(*w) * u64::from(*h)),
+                _ => format!(
+                    "{} {} rays from the primary hits of {w} x {h} pixels",
+                    runs.iter().find_map(|r| r.rays).unwrap_or(0),
+                    if RaySet::from_name(set).is_some_and(RaySet::any_hit) {
+                        "any-hit"
+                    } else {
+                        "closest-hit"
+                    }
+                ),
             };
             let reference = runs.first().map_or("-", |r| r.reference.as_str());
             let _ = writeln!(
@@ -364,7 +373,9 @@ impl Experiment for Matrix {
     }
 }
 
-/// The workloads of a scene: ray casting (camera and incoherent rays) everywhere; Whitted
+/// The workloads of a scene: ray casting with every ray set of `--rays` (camera,
+/// incoherent, shadow, ambient-occlusion and diffuse rays; `cast-shadow` and so on)
+/// everywhere; Whitted
 /// and path tracing where its built-in `[benchmark]` table asks for them (lights to shadow
 /// and mirrors to follow; scenes built for path tracing); the volume modes where there are
 /// volumes.
@@ -379,8 +390,11 @@ fn workloads(ctx: &Ctx, scene: &Scene) -> Vec<Workload> {
         spp: 1,
     };
     if ctx.modes.contains(&Mode::Cast) {
-        w.push(cast(RaySet::Primary));
-        w.push(cast(RaySet::Incoherent));
+        let sets = ctx.opts.ray_sets.as_deref().unwrap_or(&RaySet::ALL);
+        // In the order of `RaySet::ALL`, whatever the order asked.
+        for set in RaySet::ALL.into_iter().filter(|s| sets.contains(s)) {
+            w.push(cast(set));
+        }
     }
     let asks = |mode: Mode| {
         ctx.modes.contains(&mode)
@@ -458,9 +472,13 @@ fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<R
         return Ok(Vec::new());
     }
 
-    let explicit: Vec<Option<Vec<raybench_core::Ray>>> = workloads
+    let params = DerivedParams {
+        ao_rays: ctx.opts.ao_rays,
+        ..DerivedParams::default()
+    };
+    let explicit: Vec<Option<RayBatch>> = workloads
         .iter()
-        .map(|w| explicit_rays(w.rays, scene, &w.settings()))
+        .map(|w| explicit_rays(w.rays, scene, &w.settings(), &params))
         .collect::<Result<_>>()?;
     let mut reference: Vec<Option<(Measured, Option<Rgb8>)>> =
         workloads.iter().map(|_| None).collect();
@@ -516,7 +534,7 @@ fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<R
                 }
             };
             progress.begin(format!("{} {} {}", scene.name, w.key(), b.name));
-            let m = ctx.measure(r.as_ref(), w, explicit[wi].as_deref())?;
+            let m = ctx.measure(r.as_ref(), w, explicit[wi].as_ref())?;
             run.build_seconds = Some(build);
             // Phases only for backends that have more than build and render (a GPU).
             if prepare_phases.0.len() > 1 || m.phases.0.len() > 1 {
