@@ -100,6 +100,18 @@ const SHADOW_DIMENSION: u32 = 0;
 const AO_DIMENSION: u32 = 3;
 const DIFFUSE_DIMENSION: u32 = 5;
 
+/// Derived rays ignore hits closer than this fraction of the largest coordinate magnitude
+/// (of the scene's bounding box and of the hit point): `t_min = 2^-16 x scale`, in scene
+/// units. The origin offset ([`offset_ray_origin`]) is a few ulps of the hit point's own
+/// coordinates, but the watertight triangle test's `t` has an absolute error of a few ulps
+/// of the triangle's coordinates relative to the origin: a ray leaving a large floor near
+/// `y = 0` at a grazing angle along `x` found its own triangle at `t = 0` to `5e-5` in a
+/// scene whose coordinates reach a few hundred (`teapot-stadium`), a hit outside the
+/// triangle's box, which naive reports and the BVHs' box tests cull. Hits that close are
+/// rounding, not geometry; leaving them out makes the sets the same query for every
+/// exact backend.
+pub const SELF_HIT_FRACTION: f32 = 1.0 / 65_536.0;
+
 /// Parameters of the derived ray sets.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DerivedParams {
@@ -178,11 +190,13 @@ impl std::error::Error for DerivedError {}
 /// primary ray came from; misses generate nothing. The rays come out hit by hit, in the
 /// order of `primary`, and within a hit in the order below. Random numbers are
 /// [`Sampler`]`::new(i, sample, params.seed)` at fixed dimensions, so the set is a pure
-/// function of its inputs.
+/// function of its inputs. Every ray ignores hits closer than [`SELF_HIT_FRACTION`] of the
+/// largest coordinate magnitude of the scene and of the hit point (its `t_min`): rounding
+/// of the surface it leaves. The `t` ranges below start there.
 ///
 /// - `shadow` (any hit): one ray to every light of `scene.lights`, whether or not it lies
 ///   behind the surface (a light behind it is blocked by the surface itself): to a point
-///   light parametrised from the origin to the light, `t` in `[0, SHADOW_SHORTEN]`; along
+///   light parametrised from the origin to the light, `t` up to [`SHADOW_SHORTEN`]; along
 ///   a directional light, `t` unbounded. Then, when the scene has emitters (emissive
 ///   primitives or an environment map), one light sample of [`crate::Emitters::sample`]
 ///   (the light chosen by power, a point or direction on it), as path tracing's
@@ -190,8 +204,8 @@ impl std::error::Error for DerivedError {}
 ///   of it, towards the environment unbounded; none where that sample finds nothing (the
 ///   chosen emitter faces away). Sample 0, dimensions 0..3.
 /// - `ao` (any hit): `params.ao_rays` cosine-distributed directions about the normal
-///   (sample `k` for the `k`-th, dimensions 3..5), `t` in `[0, params.ao_distance x
-///   diagonal]` where `diagonal` is the length of the scene's bounding box' diagonal
+///   (sample `k` for the `k`-th, dimensions 3..5), `t` up to `params.ao_distance x
+///   diagonal` where `diagonal` is the length of the scene's bounding box' diagonal
 ///   (unbounded when the box is empty or infinite: only planes).
 /// - `diffuse` (closest hit): one cosine-distributed direction (sample 0, dimensions
 ///   5..7), `t` unbounded.
@@ -239,14 +253,19 @@ pub fn derived(
     if count > limits::MAX_EXPLICIT_RAYS {
         return Err(DerivedError::TooManyRays { set, count });
     }
-    let ao_t_max = {
-        let b = scene.geometry.bounds();
-        let diagonal = b.extent().length();
-        if b.is_empty() || !diagonal.is_finite() {
-            f32::INFINITY
-        } else {
-            params.ao_distance * diagonal
-        }
+    let bounds = scene.geometry.bounds();
+    let bounded = !bounds.is_empty() && bounds.extent().length().is_finite();
+    let ao_t_max = if bounded {
+        params.ao_distance * bounds.extent().length()
+    } else {
+        f32::INFINITY
+    };
+    // The largest coordinate magnitude of the scene: the scale of the triangle test's
+    // rounding (see SELF_HIT_FRACTION).
+    let scale = if bounded {
+        bounds.min.abs().max(bounds.max.abs()).max_element()
+    } else {
+        0.0
     };
     let mut out = Vec::with_capacity(count as usize);
     for (i, (ray, hit)) in primary.iter().zip(hits).enumerate() {
@@ -259,37 +278,55 @@ pub fn derived(
             -hit.normal
         };
         let origin = offset_ray_origin(p, n);
+        let start = Start {
+            origin,
+            t_min: SELF_HIT_FRACTION * scale.max(p.abs().max_element()),
+        };
         let pixel = i as u32;
         match set {
-            RaySet::Shadow => shadow_rays(scene, origin, pixel, params.seed, &mut out),
+            RaySet::Shadow => shadow_rays(scene, start, pixel, params.seed, &mut out),
             RaySet::Ao => {
                 for k in 0..params.ao_rays {
                     let mut s = Sampler::new(pixel, k, params.seed);
                     s.set_dimension(AO_DIMENSION);
                     let (u1, u2) = s.next_2d();
                     let dir = cosine_hemisphere(n, u1, u2);
-                    out.push(Ray::with_interval(origin, dir, 0.0, ao_t_max));
+                    out.push(start.ray(dir, ao_t_max));
                 }
             }
             _ => {
                 let mut s = Sampler::new(pixel, 0, params.seed);
                 s.set_dimension(DIFFUSE_DIMENSION);
                 let (u1, u2) = s.next_2d();
-                out.push(Ray::new(origin, cosine_hemisphere(n, u1, u2)));
+                out.push(start.ray(cosine_hemisphere(n, u1, u2), f32::INFINITY));
             }
         }
     }
     Ok(out)
 }
 
+/// Where a hit's rays start: the offset origin, and the distance (in scene units) under
+/// which hits are not counted.
+#[derive(Clone, Copy)]
+struct Start {
+    origin: Vec3,
+    t_min: f32,
+}
+
+impl Start {
+    /// The ray along `dir` (any length) over `[t_min / |dir|, t_max]`.
+    fn ray(self, dir: Vec3, t_max: f32) -> Ray {
+        Ray::with_interval(self.origin, dir, self.t_min / dir.length(), t_max)
+    }
+}
+
 /// The shadow rays of one hit (see [`derived`]).
-fn shadow_rays(scene: &Scene, origin: Vec3, pixel: u32, seed: u32, out: &mut Vec<Ray>) {
+fn shadow_rays(scene: &Scene, start: Start, pixel: u32, seed: u32, out: &mut Vec<Ray>) {
+    let origin = start.origin;
     for light in &scene.lights {
         out.push(match *light {
-            Light::Point { position, .. } => {
-                Ray::with_interval(origin, position - origin, 0.0, SHADOW_SHORTEN)
-            }
-            Light::Directional { direction, .. } => Ray::new(origin, -direction),
+            Light::Point { position, .. } => start.ray(position - origin, SHADOW_SHORTEN),
+            Light::Directional { direction, .. } => start.ray(-direction, f32::INFINITY),
         });
     }
     if scene.emitters.is_empty() {
@@ -301,9 +338,9 @@ fn shadow_rays(scene: &Scene, origin: Vec3, pixel: u32, seed: u32, out: &mut Vec
     let u_point = s.next_2d();
     if let Some(ls) = scene.emitters.sample(scene, origin, u_light, u_point) {
         out.push(if ls.dist.is_finite() {
-            Ray::with_interval(origin, ls.wi * ls.dist, 0.0, SHADOW_SHORTEN)
+            start.ray(ls.wi * ls.dist, SHADOW_SHORTEN)
         } else {
-            Ray::new(origin, ls.wi)
+            start.ray(ls.wi, f32::INFINITY)
         });
     }
 }
@@ -445,6 +482,12 @@ mod tests {
             let n = hits[if k < 4 { 0 } else { 2 }].unwrap().normal;
             assert!(r.dir.dot(n) > 0.0, "ao ray {k} below the surface");
             assert_eq!(r.t_max, AO_DISTANCE * diagonal);
+            // The scene reaches 4 (the emitter's height): 4 x 2^-16, along unit directions.
+            assert!(
+                (r.t_min - 4.0 * SELF_HIT_FRACTION).abs() < 1e-9,
+                "{}",
+                r.t_min
+            );
         }
         let diffuse = derived(RaySet::Diffuse, &scene, &rays, &hits, &p).unwrap();
         assert_eq!(diffuse.len(), 2);
