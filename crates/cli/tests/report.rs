@@ -156,7 +156,7 @@ fn shards_split_by_scene_and_merge_back() {
     assert_eq!(r["shards"].as_array().unwrap().len(), 2);
     assert_eq!(r["shards"][1]["index"], 2);
     let runs = r["runs"].as_array().unwrap();
-    assert_eq!(runs.len(), (3 + 4) * 3);
+    assert_eq!(runs.len(), (6 + 7) * 3);
     assert!(
         runs.iter()
             .any(|r| r["scene"] == "cornell-box" && r["shard"] == 1)
