@@ -166,7 +166,7 @@ fn check_header(path: &Path, h: Option<&[u8]>, len: u64) -> Result<(u64, bool), 
     }
     let expected = HEADER_BYTES + count * RAY_BYTES;
     if len != expected {
-        let whole = (len.saturating_sub(HEADER_BYTES)) / RAY_BYTES;
+        let whole = len.saturating_sub(HEADER_BYTES) / RAY_BYTES;
         let cause = if len < expected {
             format!(
                 "the file ends inside record {whole} (0-based): the header says {count} rays \
