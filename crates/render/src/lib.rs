@@ -187,12 +187,11 @@ impl<A: Accel> Renderer for CpuRenderer<A> {
         count: bool,
     ) -> Result<(Vec<Option<Hit>>, Option<RayCounters>), RenderError> {
         let (_, accel) = self.prepared.as_ref().ok_or(RenderError::NotPrepared)?;
-        Ok(if count {
-            let (hits, c) = trace_counted::<A, RayCounters>(accel, rays);
-            (hits, Some(c))
-        } else {
-            (trace_counted::<A, NoCounters>(accel, rays).0, None)
-        })
+        Ok(counted_if(
+            count,
+            || trace_counted(accel, rays),
+            || trace_counted(accel, rays),
+        ))
     }
 
     /// Any hits through the structure's `occluded_batch`, in parallel chunks like
@@ -203,12 +202,26 @@ impl<A: Accel> Renderer for CpuRenderer<A> {
         count: bool,
     ) -> Result<(Vec<bool>, Option<RayCounters>), RenderError> {
         let (_, accel) = self.prepared.as_ref().ok_or(RenderError::NotPrepared)?;
-        Ok(if count {
-            let (occluded, c) = occlude_counted::<A, RayCounters>(accel, rays);
-            (occluded, Some(c))
-        } else {
-            (occlude_counted::<A, NoCounters>(accel, rays).0, None)
-        })
+        Ok(counted_if(
+            count,
+            || occlude_counted(accel, rays),
+            || occlude_counted(accel, rays),
+        ))
+    }
+}
+
+/// The answers of `counted` with its counters when `count` is set, else those of `plain`
+/// (the same work, instantiated with [`NoCounters`], which count nothing for free).
+fn counted_if<T>(
+    count: bool,
+    counted: impl FnOnce() -> (T, RayCounters),
+    plain: impl FnOnce() -> (T, NoCounters),
+) -> (T, Option<RayCounters>) {
+    if count {
+        let (answers, c) = counted();
+        (answers, Some(c))
+    } else {
+        (plain().0, None)
     }
 }
 
@@ -257,6 +270,15 @@ mod tests {
     use raybench_core::{NO_HIT, SceneBuilder, Sphere, Vec3};
     use raybench_naive::NaiveAccel;
 
+    /// `f` on a pool of `n` threads.
+    fn on_threads<T: Send>(n: usize, f: impl FnOnce() -> T + Send) -> T {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .unwrap();
+        pool.install(f)
+    }
+
     fn scene() -> Arc<Scene> {
         let mut b = SceneBuilder::new("test");
         b.add_sphere(Sphere::new(Vec3::ZERO, 1.0), 0).unwrap();
@@ -280,13 +302,7 @@ mod tests {
         };
         let frames: Vec<Frame> = [1, 2, 5]
             .iter()
-            .map(|&n| {
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(n)
-                    .build()
-                    .unwrap();
-                pool.install(|| r.render(&settings).unwrap())
-            })
+            .map(|&n| on_threads(n, || r.render(&settings).unwrap()))
             .collect();
         for f in &frames[1..] {
             assert_eq!(f.color, frames[0].color);
@@ -320,13 +336,7 @@ mod tests {
         assert!(expected.contains(&true) && expected.contains(&false));
         let answers: Vec<_> = [1, 3]
             .iter()
-            .map(|&n| {
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(n)
-                    .build()
-                    .unwrap();
-                pool.install(|| r.occlude_rays(&rays, true).unwrap())
-            })
+            .map(|&n| on_threads(n, || r.occlude_rays(&rays, true).unwrap()))
             .collect();
         for (occluded, counters) in &answers {
             assert_eq!(occluded, &expected);
