@@ -29,7 +29,15 @@
 //!   the order the renderer traces them (16 x 16 tiles of 4 x 4 pixel blocks,
 //!   [`raybench_core::ray_sets::primary_tiled`]);
 //! - `trace/<backend>/<scene>/incoherent`: 65,536 seeded random rays inside the scene's
-//!   bounding box ([`raybench_core::ray_sets::incoherent`], seed 1).
+//!   bounding box ([`raybench_core::ray_sets::incoherent`], seed 1);
+//! - with `RAYBENCH_RAY_SETS=primary,incoherent,shadow,ao,diffuse` (or `all`; default
+//!   `primary,incoherent`, to keep the suite's run time), also
+//!   `trace/<backend>/<scene>/shadow`, `ao` and `diffuse`: the sets derived from `bvh`'s
+//!   hits of the primary rays ([`raybench_core::ray_sets::derived`], default parameters;
+//!   `docs/rays-format.md`), the any-hit sets `shadow` and `ao` through
+//!   [`Accel::occluded_batch`];
+//! - with `RAYBENCH_RAYS_FILE=FILE`, also `trace/<backend>/<scene>/file`: the rays of a ray
+//!   file (`raybench rays export`), any hits when its flag says so.
 //!
 //! Trace benchmarks run on the calling thread and report throughput in rays (criterion's
 //! `elem/s`); the peers other than `embree-packet` trace single rays one after the other.
@@ -70,7 +78,7 @@ use criterion::{
 };
 use obvhs::bvh2::Bvh2;
 use raybench_bvh::{Bvh, BvhParams, ObvhsAccel};
-use raybench_core::{Accel, Geometry, NoCounters, Ray, Scene, Shape, Triangle, ray_sets};
+use raybench_core::{Accel, Geometry, NoCounters, Ray, RaySet, Scene, Shape, Triangle, ray_sets};
 use raybench_grid::{Grid, GridParams, TwoLevelGrid, TwoLevelParams};
 use raybench_packet::{PacketAccel, PacketParams};
 use raybench_peers::BvhCrateAccel;
@@ -114,7 +122,8 @@ fn triangles(g: &Geometry) -> Option<Vec<Triangle>> {
 struct Prepared {
     name: &'static str,
     scene: Scene,
-    ray_sets: [(&'static str, Vec<Ray>); 2],
+    /// Name, rays, and whether they ask for any hit.
+    ray_sets: Vec<(&'static str, Vec<Ray>, bool)>,
     tris: Option<Vec<Triangle>>,
     bvh: Bvh,
     obvhs: ObvhsAccel,
@@ -152,22 +161,8 @@ fn prepare(name: &'static str) -> Option<Prepared> {
         Err(e) => panic!("cannot load scene {name}: {e}"),
     };
     let g = scene.geometry.clone();
-    let ray_sets = [
-        (
-            "primary",
-            ray_sets::primary_tiled(
-                &scene.camera,
-                PRIMARY_SIZE,
-                PRIMARY_SIZE,
-                raybench_render::TILE_SIZE,
-            ),
-        ),
-        (
-            "incoherent",
-            ray_sets::incoherent(g.bounds(), INCOHERENT_COUNT, INCOHERENT_SEED),
-        ),
-    ];
     let (bvh, t_bvh) = timed(|| Bvh::build_with(g.clone(), BvhParams::default()));
+    let ray_sets = chosen_ray_sets(&scene, &bvh);
     let (obvhs, t_obvhs) = timed(|| ObvhsAccel::build(g.clone()));
     let (grid, t_grid) = timed(|| Grid::build_with(g.clone(), GridParams::default()));
     let (grid2, t_grid2) = timed(|| TwoLevelGrid::build_with(g.clone(), TwoLevelParams::default()));
@@ -241,11 +236,64 @@ fn prepare(name: &'static str) -> Option<Prepared> {
     })
 }
 
+/// The ray sets of `RAYBENCH_RAY_SETS` (default `primary,incoherent`; `all`), the derived
+/// ones from `bvh`'s primary hits, then the rays of `RAYBENCH_RAYS_FILE` when it is set.
+///
+/// # Panics
+/// On an unknown set name or a bad ray file (the message says which).
+fn chosen_ray_sets(scene: &Scene, bvh: &Bvh) -> Vec<(&'static str, Vec<Ray>, bool)> {
+    let wanted: Vec<RaySet> = match std::env::var("RAYBENCH_RAY_SETS") {
+        Ok(v) if v.trim() == "all" => RaySet::ALL.to_vec(),
+        Ok(v) => v
+            .split(',')
+            .map(|n| {
+                RaySet::from_name(n.trim())
+                    .unwrap_or_else(|| panic!("RAYBENCH_RAY_SETS: unknown ray set '{n}'"))
+            })
+            .collect(),
+        Err(_) => vec![RaySet::Primary, RaySet::Incoherent],
+    };
+    let primary = ray_sets::primary_tiled(
+        &scene.camera,
+        PRIMARY_SIZE,
+        PRIMARY_SIZE,
+        raybench_render::TILE_SIZE,
+    );
+    let primary_hits = batch(bvh, &primary);
+    let mut sets: Vec<(&'static str, Vec<Ray>, bool)> = RaySet::ALL
+        .into_iter()
+        .filter(|s| wanted.contains(s))
+        .map(|set| {
+            let rays = match set {
+                RaySet::Primary => primary.clone(),
+                RaySet::Incoherent => {
+                    ray_sets::incoherent(scene.geometry.bounds(), INCOHERENT_COUNT, INCOHERENT_SEED)
+                }
+                _ => ray_sets::derived(
+                    set,
+                    scene,
+                    &primary,
+                    &primary_hits,
+                    &ray_sets::DerivedParams::default(),
+                )
+                .unwrap_or_else(|e| panic!("{} rays: {e}", set.name())),
+            };
+            (set.name(), rays, set.any_hit())
+        })
+        .collect();
+    if let Some(path) = std::env::var_os("RAYBENCH_RAYS_FILE") {
+        let file = raybench::rays_file::read(std::path::Path::new(&path))
+            .unwrap_or_else(|e| panic!("RAYBENCH_RAYS_FILE: {e}"));
+        sets.push(("file", file.rays, file.any_hit));
+    }
+    sets
+}
+
 /// Checks, outside any timing, that every backend and peer finds the same primitives as
 /// `bvh` (all of them on `obvhs`, at least [`MIN_AGREEMENT`] of the primary rays on the
 /// peers; ties may legitimately go another way there), and prints the agreement.
 fn check_agreement(p: &Prepared) {
-    for (set, rays) in &p.ray_sets {
+    for (set, rays, _) in &p.ray_sets {
         let reference: Vec<Option<(u32, f32)>> = rays
             .iter()
             .map(|r| p.bvh.intersect(r, &mut NoCounters).map(|h| (h.prim, h.t)))
@@ -464,9 +512,13 @@ fn bench_trace(c: &mut Criterion, p: &Prepared) {
     // An iteration traces every ray of a set (tens of milliseconds): a fixed iteration count
     // per sample keeps 10 samples within the measurement time.
     group.sampling_mode(SamplingMode::Flat);
-    for (set, rays) in &p.ray_sets {
+    for (set, rays, any_hit) in &p.ray_sets {
         group.throughput(Throughput::Elements(rays.len() as u64));
         let id = |backend: &str| BenchmarkId::new(backend, format!("{}/{set}", p.name));
+        if *any_hit {
+            bench_occlusion(&mut group, p, rays, &id);
+            continue;
+        }
         let mut hits = vec![None; rays.len()];
 
         group.bench_function(id("bvh"), |b| {
@@ -518,6 +570,58 @@ fn bench_trace(c: &mut Criterion, p: &Prepared) {
         }
     }
     group.finish();
+}
+
+/// The any-hit benchmarks of one ray set: every backend and peer through
+/// [`Accel::occluded_batch`] in batches of [`BATCH`] rays.
+fn bench_occlusion(
+    group: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    p: &Prepared,
+    rays: &[Ray],
+    id: &dyn Fn(&str) -> BenchmarkId,
+) {
+    let mut occluded = vec![false; rays.len()];
+    let mut run = |name: &str, occlude: &dyn Fn(&[Ray], &mut [bool])| {
+        group.bench_function(id(name), |b| {
+            b.iter(|| {
+                for (r, o) in black_box(rays)
+                    .chunks(BATCH)
+                    .zip(occluded.chunks_mut(BATCH))
+                {
+                    occlude(r, o);
+                }
+                black_box(&occluded);
+            });
+        });
+    };
+    run("bvh", &|r, o| p.bvh.occluded_batch(r, o, &mut NoCounters));
+    run("packet", &|r, o| {
+        p.packet.occluded_batch(r, o, &mut NoCounters)
+    });
+    run("obvhs", &|r, o| {
+        p.obvhs.occluded_batch(r, o, &mut NoCounters)
+    });
+    run("grid2", &|r, o| {
+        p.grid2.occluded_batch(r, o, &mut NoCounters)
+    });
+    run("grid", &|r, o| p.grid.occluded_batch(r, o, &mut NoCounters));
+    run("bvh-crate", &|r, o| {
+        p.bvh_crate.occluded_batch(r, o, &mut NoCounters)
+    });
+    #[cfg(feature = "embree")]
+    if let Some((single, packets)) = &p.embree {
+        run("embree", &|r, o| {
+            single.occluded_batch(r, o, &mut NoCounters)
+        });
+        run("embree-packet", &|r, o| {
+            packets.occluded_batch(r, o, &mut NoCounters)
+        });
+    }
+    if let Some(obvhs_peer) = &p.obvhs_peer {
+        run("obvhs-bvh2", &|r, o| {
+            obvhs_peer.occluded_batch(r, o, &mut NoCounters)
+        });
+    }
 }
 
 fn benches_all(c: &mut Criterion) {

@@ -206,7 +206,8 @@ pub fn assert_same_ray_hits(what: &str, reference: &[Option<Hit>], hits: &[Optio
 /// The one equivalence check: renders `scene` with naive on one thread (the reference) and
 /// with each of `backends` on several threads, and asserts bit-identical ids and `t`; then
 /// the same for `size * size` seeded incoherent rays (origins inside the scene's box, so
-/// many start inside nodes and next to surfaces).
+/// many start inside nodes and next to surfaces), and for the derived sets of a
+/// `size / 2` square image ([`check_derived`]: shadow, ambient-occlusion and diffuse rays).
 /// Also asserts naive's exact counter (`rays * M` closest-hit tests). Skips (or fails under
 /// CI) when the scene's meshes are absent.
 ///
@@ -261,6 +262,94 @@ pub fn check(backends: &[&str], scene: &str, size: u32) {
             &reference_rays,
             &hits,
         );
+    }
+    check_derived(backends, scene, &scene_data, (size / 2).max(1));
+}
+
+/// A ray's stored fields as bits (rays compare so even where a cached value is NaN).
+fn ray_bits(r: &Ray) -> ([u32; 3], [u32; 3], u32, u32) {
+    (
+        r.origin.to_array().map(f32::to_bits),
+        r.dir.to_array().map(f32::to_bits),
+        r.t_min.to_bits(),
+        r.t_max.to_bits(),
+    )
+}
+
+/// The derived ray sets (`shadow`, `ao`, `diffuse`: [`ray_sets::derived`]) of a
+/// `size x size` image of `scene`: generated from naive's primary hits (tile order), the
+/// same rays, bit for bit, when generated from each backend's own primary hits; then the
+/// closest-hit set traced with bit-identical ids and `t`, and the any-hit sets answered
+/// with the same booleans, by every backend (naive's any hits being its closest hits'
+/// `is_some`). Counters: naive's closest-hit tests are exactly `rays x M`.
+///
+/// # Panics
+/// When a backend differs from the reference.
+pub fn check_derived(backends: &[&str], scene: &str, scene_data: &Arc<Scene>, size: u32) {
+    use raybench_core::ray_sets::{self, DerivedParams};
+    let settings = RenderSettings {
+        width: size,
+        height: size,
+        ..RenderSettings::default()
+    };
+    let camera = scene_data.view(&settings).expect("the scene's camera");
+    let primary = ray_sets::primary_tiled(camera, size, size, raybench_render::TILE_SIZE);
+    let params = DerivedParams::default();
+    let derived_sets: Vec<raybench_core::RaySet> = raybench_core::RaySet::ALL
+        .into_iter()
+        .filter(|s| s.is_derived())
+        .collect();
+    let oracle = prepared(ORACLE, scene_data);
+    let (primary_hits, _) = oracle.trace_rays(&primary, false).unwrap();
+    let m = scene_data.geometry.len() as u64;
+    let mut reference = Vec::new();
+    for &set in &derived_sets {
+        let rays = ray_sets::derived(set, scene_data, &primary, &primary_hits, &params)
+            .unwrap_or_else(|e| panic!("{scene}, {} rays: {e}", set.name()));
+        let (closest, counters) = oracle.trace_rays(&rays, true).unwrap();
+        assert_eq!(
+            counters.unwrap().prim_tests,
+            rays.len() as u64 * m,
+            "naive must test every primitive for every {} ray",
+            set.name()
+        );
+        let (occluded, _) = oracle.occlude_rays(&rays, true).unwrap();
+        let blocked: Vec<bool> = closest.iter().map(Option::is_some).collect();
+        assert_eq!(
+            occluded,
+            blocked,
+            "{scene}: naive's any hits, {} rays",
+            set.name()
+        );
+        reference.push((set, rays, closest, occluded));
+    }
+    for &name in backends {
+        let r = prepared(name, scene_data);
+        let (hits, _) = r.trace_rays(&primary, false).unwrap();
+        for (set, rays, closest, occluded) in &reference {
+            let what = format!("{name} on {scene}, {} rays", set.name());
+            let own = ray_sets::derived(*set, scene_data, &primary, &hits, &params).unwrap();
+            assert!(
+                own.len() == rays.len()
+                    && own
+                        .iter()
+                        .zip(rays)
+                        .all(|(a, b)| ray_bits(a) == ray_bits(b)),
+                "{what}: generated from {name}'s primary hits, the set differs"
+            );
+            if set.any_hit() {
+                let (answers, _) = r.occlude_rays(rays, false).unwrap();
+                if let Some(i) = (0..rays.len()).find(|&i| answers[i] != occluded[i]) {
+                    panic!(
+                        "{what}: ray {i}: naive occluded {}, backend {}",
+                        occluded[i], answers[i]
+                    );
+                }
+            } else {
+                let (answers, _) = r.trace_rays(rays, false).unwrap();
+                assert_same_ray_hits(&what, closest, &answers);
+            }
+        }
     }
 }
 

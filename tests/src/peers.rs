@@ -4,8 +4,10 @@
 //! Per mesh (icosphere 81,920 triangles, soup 100,000, terrain 1,002,528) and contestant:
 //! the build (best of `repeat`, all cores), then for each ray set (primary: the scene
 //! camera's `N x N` rays in the renderer's tile order; incoherent: seeded random rays in the
-//! mesh's box) the closest hits (`intersect_batch`) and the any hits (`occluded_batch` on
-//! the same rays ending at half of `bvh`'s closest hit; misses keep their `t_max`), each
+//! mesh's box; shadow, ao and diffuse: derived from `bvh`'s primary hits by
+//! [`ray_sets::derived`]; or the rays of `--rays-file`) the closest hits (`intersect_batch`)
+//! and the any hits (`occluded_batch`: the any-hit sets' own rays, the others' rays ending
+//! at half of `bvh`'s closest hit, where misses keep their `t_max`), each
 //! timed on 1 thread and on all cores (a local rayon pool over `chunk`-ray batches; best of
 //! `repeat`), after one untimed pass on all cores that counts node visits and primitive
 //! tests (contestants that count) and the rays whose answer differs from `bvh`'s.
@@ -53,8 +55,15 @@ pub struct Options {
     pub primary_size: u32,
     /// Incoherent rays per mesh.
     pub incoherent_rays: usize,
-    /// Seed of the incoherent rays.
+    /// Seed of the incoherent rays (and of the derived sets' random numbers).
     pub seed: u32,
+    /// The ray sets to trace (`--sets`; default: every set, [`RaySet::ALL`]).
+    pub sets: Vec<RaySet>,
+    /// Ambient-occlusion rays per primary hit of the `ao` set.
+    pub ao_rays: u32,
+    /// A ray file replayed instead of the ray sets (`--rays-file`, docs/rays-format.md):
+    /// one set named `file`, closest hits, and any hits as its flag says.
+    pub rays_file: Option<PathBuf>,
     /// Rays per batch call.
     pub chunk: usize,
     /// Timed runs per figure and builds per contestant (the best is kept).
@@ -88,6 +97,10 @@ options:
   --quick               256 x 256 primary rays and 65,536 incoherent rays per mesh
   --size N              primary rays: an N x N image (default 1024)
   --rays N              incoherent rays per mesh (default 1048576)
+  --sets A,B            ray sets: primary, incoherent, shadow, ao, diffuse (default: all;
+                        shadow, ao and diffuse start from the primary rays' hits)
+  --ao-rays N           ambient-occlusion rays per primary hit (default 4)
+  --rays-file FILE      replay a ray file (raybench rays export) instead of the sets
   --meshes A,B          sphere, soup, terrain (default: all three), or scene specs
   --contestants A,B     only these (see --list); `bvh` is always built as the reference
   --repeat N            timed runs per figure and builds, best kept (default 3)
@@ -123,6 +136,9 @@ impl Options {
             primary_size: 1024,
             incoherent_rays: 1 << 20,
             seed: 1,
+            sets: RaySet::ALL.to_vec(),
+            ao_rays: ray_sets::DEFAULT_AO_RAYS,
+            rays_file: None,
             chunk: 1024,
             repeat: 3,
             threads: std::thread::available_parallelism().map_or(1, std::num::NonZero::get),
@@ -176,6 +192,28 @@ impl Options {
                 "--chunk" => o.chunk = positive("--chunk", value("--chunk")?)?,
                 "--threads" => o.threads = positive("--threads", value("--threads")?)?,
                 "--json" => o.json = PathBuf::from(value("--json")?),
+                "--rays-file" => o.rays_file = Some(PathBuf::from(value("--rays-file")?)),
+                "--ao-rays" => {
+                    let n = positive("--ao-rays", value("--ao-rays")?)?;
+                    o.ao_rays = u32::try_from(n)
+                        .ok()
+                        .filter(|&n| n <= ray_sets::MAX_AO_RAYS)
+                        .ok_or_else(|| {
+                            format!("--ao-rays: {n} is above {}", ray_sets::MAX_AO_RAYS)
+                        })?;
+                }
+                "--sets" => {
+                    o.sets = list(value("--sets")?)
+                        .iter()
+                        .map(|n| {
+                            RaySet::from_name(n)
+                                .ok_or_else(|| format!("--sets: unknown ray set '{n}'"))
+                        })
+                        .collect::<Result<_, _>>()?;
+                    if o.sets.is_empty() {
+                        return Err("--sets: empty list".into());
+                    }
+                }
                 "--meshes" => {
                     let names = list(value("--meshes")?);
                     if names.is_empty() {
@@ -234,12 +272,13 @@ impl Options {
 
 /// One ray set of a mesh with the reference's answers.
 pub struct RaySetWork {
-    /// Which set.
-    pub set: RaySet,
+    /// The set's name (`primary`, ..., or `file` for `--rays-file`).
+    pub name: &'static str,
     /// The rays, for closest hits.
     pub rays: Vec<Ray>,
-    /// The same rays ending at [`SHADOW_FRACTION`] of the reference's closest hit (misses
-    /// keep their `t_max`), for any hits.
+    /// For any hits: an any-hit set's own rays (`shadow`, `ao`, an any-hit file); else
+    /// the rays ending at [`SHADOW_FRACTION`] of the reference's closest hit (misses keep
+    /// their `t_max`).
     pub shadow: Vec<Ray>,
     /// The reference's primitive per ray.
     pub closest: Vec<Option<u32>>,
@@ -260,20 +299,41 @@ pub struct Workload {
 }
 
 /// The rays of `set` for `scene`: primary rays in the renderer's tile order
-/// ([`ray_sets::primary_tiled`]) or seeded incoherent rays ([`ray_sets::incoherent`]).
-#[must_use]
-pub fn ray_set(scene: &Scene, set: RaySet, o: &Options) -> Vec<Ray> {
-    match set {
-        RaySet::Primary => ray_sets::primary_tiled(
+/// ([`ray_sets::primary_tiled`]), seeded incoherent rays ([`ray_sets::incoherent`]), or a
+/// set derived from `primary_hits`, the reference's closest hits of the primary rays
+/// ([`ray_sets::derived`], seed and `--ao-rays` of `o`; unused for the other sets).
+///
+/// # Errors
+/// A derived set over the ray limit, or hits that are not the primary rays'.
+pub fn ray_set(
+    scene: &Scene,
+    set: RaySet,
+    o: &Options,
+    primary_hits: &[Option<Hit>],
+) -> Result<Vec<Ray>, String> {
+    let primary = || {
+        ray_sets::primary_tiled(
             &scene.camera,
             o.primary_size,
             o.primary_size,
             raybench_render::TILE_SIZE,
-        ),
+        )
+    };
+    Ok(match set {
+        RaySet::Primary => primary(),
         RaySet::Incoherent => {
             ray_sets::incoherent(scene.geometry.bounds(), o.incoherent_rays, o.seed)
         }
-    }
+        _ => {
+            let params = ray_sets::DerivedParams {
+                ao_rays: o.ao_rays,
+                seed: o.seed,
+                ..ray_sets::DerivedParams::default()
+            };
+            ray_sets::derived(set, scene, &primary(), primary_hits, &params)
+                .map_err(|e| e.to_string())?
+        }
+    })
 }
 
 /// `rays` ending at [`SHADOW_FRACTION`] of `closest`'s `t` (unchanged where it is `None`).
@@ -434,19 +494,40 @@ impl Workload {
             .expect("bvh is registered");
         let (r, _) = build(&reference, &scene, pool, 1)?;
         let tracer = r.batch_tracer().expect("bvh is a CPU structure");
-        let sets = RaySet::ALL
+        let mut sources: Vec<(&'static str, Vec<Ray>, bool)> = Vec::new();
+        if let Some(path) = &o.rays_file {
+            let file = raybench::rays_file::read(path).map_err(|e| e.to_string())?;
+            sources.push(("file", file.rays, file.any_hit));
+        } else {
+            let primary_hits = if o.sets.iter().any(|s| s.is_derived()) {
+                let primary = ray_set(&scene, RaySet::Primary, o, &[])?;
+                pool.install(|| closest_pass(tracer, &primary, o.chunk, false))
+                    .answers
+            } else {
+                Vec::new()
+            };
+            for &set in RaySet::ALL.iter().filter(|s| o.sets.contains(s)) {
+                let rays = ray_set(&scene, set, o, &primary_hits)
+                    .map_err(|e| format!("mesh {name} ({spec}): {e}"))?;
+                sources.push((set.name(), rays, set.any_hit()));
+            }
+        }
+        let sets = sources
             .into_iter()
-            .map(|set| {
-                let rays = ray_set(&scene, set, o);
+            .map(|(name, rays, any_hit)| {
                 let hits = pool
                     .install(|| closest_pass(tracer, &rays, o.chunk, false))
                     .answers;
-                let shadow = shadow_rays(&rays, &hits);
+                let shadow = if any_hit {
+                    rays.clone()
+                } else {
+                    shadow_rays(&rays, &hits)
+                };
                 let occluded = pool
                     .install(|| any_pass(tracer, &shadow, o.chunk, false))
                     .answers;
                 RaySetWork {
-                    set,
+                    name,
                     closest: hits.iter().map(|h| h.map(|h| h.prim)).collect(),
                     rays,
                     shadow,
@@ -526,7 +607,7 @@ fn measure(
         }
         std::hint::black_box((&hits, &occluded));
         ray_sets.push(SetReport {
-            name: s.set.name(),
+            name: s.name,
             closest: QueryReport {
                 runs: closest_runs,
                 differ: differ_closest,
@@ -611,7 +692,7 @@ pub fn run(
                 .sets
                 .iter()
                 .map(|s| RaySetInfo {
-                    name: s.set.name(),
+                    name: s.name,
                     rays: s.rays.len(),
                     hits: s.closest.iter().filter(|h| h.is_some()).count(),
                 })

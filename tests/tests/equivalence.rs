@@ -1,5 +1,7 @@
 //! Every raybench CPU backend against the naive oracle: bit-identical primitive ids and `t`
-//! on every built-in scene and on rays aimed at shared edges and vertices.
+//! on every built-in scene (camera rays, incoherent rays and the derived `diffuse` rays;
+//! the any-hit `shadow` and `ao` rays compared on their boolean: `raybench_tests::check`)
+//! and on rays aimed at shared edges and vertices.
 //!
 //! A new backend registered as exact (`raybench::Roles::EXACT`) joins by itself:
 //! `raybench_tests::EXACT_BACKENDS` is read from the registry.

@@ -51,6 +51,18 @@ fn defaults_are_the_peers_workload() {
     assert_eq!((s.primary_size, s.incoherent_rays), (64, 100));
     assert_eq!(parse(&["--help"]), Ok(Command::Help));
     assert_eq!(parse(&["--list"]), Ok(Command::List));
+    assert_eq!(o.sets, RaySet::ALL);
+    let d = options(&[
+        "--sets",
+        "ao,primary",
+        "--ao-rays",
+        "2",
+        "--rays-file",
+        "x.rays",
+    ]);
+    assert_eq!(d.sets, [RaySet::Ao, RaySet::Primary]);
+    assert_eq!(d.ao_rays, 2);
+    assert_eq!(d.rays_file.as_deref(), Some(std::path::Path::new("x.rays")));
     assert_eq!(options(&["--threads", "1"]).thread_counts(), [1]);
     assert_eq!(options(&["--threads", "3"]).thread_counts(), [1, 3]);
 }
@@ -66,6 +78,9 @@ fn bad_options_are_refused_with_a_reason() {
         (&["--size"], "--size needs a value"),
         (&["--size", "20000"], "--size: 20000 is above 16384"),
         (&["--meshes", ","], "--meshes: empty list"),
+        (&["--sets", ","], "--sets: empty list"),
+        (&["--sets", "primary,up"], "--sets: unknown ray set 'up'"),
+        (&["--ao-rays", "5000"], "--ao-rays: 5000 is above 1024"),
         (
             &["--frobnicate"],
             "unknown option '--frobnicate' (see --help)",
@@ -112,11 +127,12 @@ fn contestants_are_the_exact_registry_backends_then_the_peers() {
 fn ray_sets_are_deterministic_and_shadow_rays_end_at_half_the_hit() {
     let o = options(&["--size", "16", "--rays", "500"]);
     let scene = raybench_scene::load("icosphere:2", &raybench_scene::assets_dir(None)).unwrap();
-    let primary = peers::ray_set(&scene, RaySet::Primary, &o);
-    let incoherent = peers::ray_set(&scene, RaySet::Incoherent, &o);
+    let set = |s| peers::ray_set(&scene, s, &o, &[]).unwrap();
+    let primary = set(RaySet::Primary);
+    let incoherent = set(RaySet::Incoherent);
     assert_eq!((primary.len(), incoherent.len()), (256, 500));
-    assert_eq!(primary, peers::ray_set(&scene, RaySet::Primary, &o));
-    assert_eq!(incoherent, peers::ray_set(&scene, RaySet::Incoherent, &o));
+    assert_eq!(primary, set(RaySet::Primary));
+    assert_eq!(incoherent, set(RaySet::Incoherent));
     let hit = raybench_core::Hit {
         t: 3.0,
         prim: 0,
@@ -174,9 +190,15 @@ fn tiny_run_measures_every_contestant_and_writes_json() {
                 assert_ne!(c.kind, Kind::Peer, "{}: {}", c.name, s.reason);
             }
         }
-        let rays: Vec<_> = m.ray_sets.iter().map(|s| (s.name, s.rays)).collect();
-        assert_eq!(rays, [("primary", 576), ("incoherent", 2000)]);
-        assert!(m.ray_sets.iter().all(|s| s.hits > 0), "{}", m.name);
+        let names: Vec<_> = m.ray_sets.iter().map(|s| s.name).collect();
+        assert_eq!(names, ["primary", "incoherent", "shadow", "ao", "diffuse"]);
+        assert_eq!((m.ray_sets[0].rays, m.ray_sets[1].rays), (576, 2000));
+        // The derived sets: one shadow ray (the generators' directional light) and one
+        // diffuse ray per primary hit, four ambient-occlusion rays.
+        let primary_hits = m.ray_sets[0].hits;
+        let derived: Vec<_> = m.ray_sets[2..].iter().map(|s| s.rays).collect();
+        assert_eq!(derived, [primary_hits, 4 * primary_hits, primary_hits]);
+        assert!(m.ray_sets[..2].iter().all(|s| s.hits > 0), "{}", m.name);
         // Embree runs wherever the feature is on (CI installs it).
         let embree = ran.contains(&"embree1-default") && ran.contains(&"embree1-robust");
         assert_eq!(embree, cfg!(feature = "embree"));
@@ -225,4 +247,31 @@ fn tiny_run_measures_every_contestant_and_writes_json() {
             > 0.0
     );
     assert!(json["machine"]["cpu"].is_string());
+}
+
+/// `--rays-file` replaces the ray sets with a file's rays: one set named `file`, its any
+/// hits on the file's own rays when its flag says so.
+#[test]
+fn a_ray_file_replays_in_place_of_the_sets() {
+    let dir = std::env::temp_dir().join(format!("raybench-peer-file-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("primary.rays");
+    let mut o = options(&["--size", "8", "--repeat", "1", "--threads", "1"]);
+    let scene = raybench_scene::load("icosphere:2", &raybench_scene::assets_dir(None)).unwrap();
+    let rays = peers::ray_set(&scene, RaySet::Primary, &o, &[]).unwrap();
+    raybench::rays_file::write(&path, &rays, true).unwrap();
+    o.rays_file = Some(path);
+    o.meshes = vec![("ico".into(), "icosphere:2".into())];
+    o.contestants = Some(vec!["bvh".into()]);
+    o.json = dir.join("peers.json");
+    let report = peers::run(&o, |_| Ok(())).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    let m = &report.meshes[0];
+    let sets: Vec<_> = m.ray_sets.iter().map(|s| (s.name, s.rays)).collect();
+    assert_eq!(sets, [("file", 64)]);
+    let bvh = &m.contestants[0];
+    assert_eq!(
+        (bvh.ray_sets[0].closest.differ, bvh.ray_sets[0].any.differ),
+        (0, 0)
+    );
 }

@@ -7,6 +7,7 @@
 pub mod diff;
 pub mod measure;
 pub mod progress;
+pub mod rays_file;
 pub mod report;
 
 /// The version and the source revision it was built from (`0.1.0 (3f2a9c1)`; `unknown`
@@ -501,7 +502,8 @@ pub fn rays_per_sample(mode: Mode) -> f64 {
 
 /// Estimated ray/primitive tests of a brute-force backend (every ray tests every one of
 /// `prims` primitives) over `frames` frames of `settings` (primary rays) or `frames`
-/// passes over `width x height` explicit rays (incoherent).
+/// passes over explicit rays: `width x height` incoherent or diffuse rays, twice that many
+/// shadow rays, the default `--ao-rays` times as many ambient-occlusion rays.
 #[must_use]
 pub fn brute_force_tests(
     settings: &RenderSettings,
@@ -512,7 +514,10 @@ pub fn brute_force_tests(
     let pixels = f64::from(settings.width) * f64::from(settings.height);
     let per_frame = match rays {
         RaySet::Primary => pixels * f64::from(settings.spp) * rays_per_sample(settings.mode),
-        RaySet::Incoherent => pixels,
+        RaySet::Incoherent | RaySet::Diffuse => pixels,
+        // One light and one emitter sample per hit, at most one hit per pixel.
+        RaySet::Shadow => 2.0 * pixels,
+        RaySet::Ao => f64::from(raybench_core::ray_sets::DEFAULT_AO_RAYS) * pixels,
     };
     per_frame * prims as f64 * f64::from(frames)
 }

@@ -5,8 +5,8 @@ use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
 use raybench::diff::{Metric, diff};
 use raybench::measure::{
-    Measured, Prepared, explicit_rays, measure, median, median_phases, prepare, prepare_for_mode,
-    timed_seconds,
+    Measured, Prepared, RayBatch, explicit_rays, measure, median, median_phases, prepare,
+    prepare_for_mode, primary_rays, timed_seconds,
 };
 use raybench::progress::Progress;
 use raybench::report::results::{GRID_COLUMNS, Quality, TREE_COLUMNS};
@@ -14,6 +14,7 @@ use raybench::{
     BACKENDS, NOT_BUILT, backend, brute_force_tests, chosen_backends, compare_hits, default_backend,
 };
 use raybench_core::limits::MAX_THREADS;
+use raybench_core::ray_sets::{DEFAULT_AO_RAYS, DerivedParams};
 use raybench_core::{
     CameraOverrides, LightSampling, Mode, QualityParams, RaySet, RenderSettings, Scene, Timings,
     Vec3,
@@ -76,6 +77,101 @@ enum Command {
     CompareResults(CompareResultsCmd),
     /// Measure how far image B is from the reference A (PNG, EXR or PFM).
     Diff(DiffCmd),
+    /// Ray files (docs/rays-format.md): write a ray set for other tools to replay.
+    #[command(subcommand)]
+    Rays(RaysCmd),
+}
+
+#[derive(Subcommand)]
+enum RaysCmd {
+    /// Write a ray set of a scene to a ray file (`--rays-file` replays it).
+    Export(ExportCmd),
+}
+
+#[derive(Args)]
+struct ExportCmd {
+    /// Scene (as for render).
+    scene: String,
+    /// Ray set: primary (in the renderer's tile order), incoherent, shadow, ao or diffuse.
+    #[arg(long, default_value = "primary", value_parser = parse_ray_set)]
+    rays: RaySet,
+    /// The ray file to write (replaced).
+    #[arg(long, value_name = "FILE")]
+    out: PathBuf,
+    /// Image width (primary rays; width x height incoherent rays).
+    #[arg(long, default_value_t = 512)]
+    width: u32,
+    /// Image height.
+    #[arg(long, default_value_t = 512)]
+    height: u32,
+    /// Seed of the derived sets' random numbers.
+    #[arg(long, default_value_t = 0)]
+    seed: u32,
+    /// Ambient-occlusion rays per primary hit (--rays ao).
+    #[arg(long, default_value_t = DEFAULT_AO_RAYS, value_name = "N")]
+    ao_rays: u32,
+    #[command(flatten)]
+    camera: CameraArgs,
+}
+
+/// The rays a measurement traces: a ray set, or a ray file's rays.
+#[derive(Args, Clone)]
+struct RaysArgs {
+    /// Ray set: `primary` renders frames; the others trace explicit rays: `incoherent`
+    /// (width x height seeded random rays: origins in the scene's box, uniform directions),
+    /// `shadow` (any hit: from each primary hit to each light and one sampled emitter
+    /// point), `ao` (any hit: --ao-rays cosine rays per primary hit, a tenth of the scene's
+    /// diagonal long), `diffuse` (one cosine bounce per primary hit).
+    #[arg(long, default_value = "primary", value_parser = parse_ray_set)]
+    rays: RaySet,
+    /// Replay the rays of a ray file (`raybench rays export`, docs/rays-format.md) instead
+    /// of a ray set: any hit or closest hit as the file's flag says.
+    #[arg(long, value_name = "FILE", conflicts_with = "rays")]
+    rays_file: Option<PathBuf>,
+    /// Ambient-occlusion rays per primary hit (--rays ao).
+    #[arg(long, default_value_t = DEFAULT_AO_RAYS, value_name = "N")]
+    ao_rays: u32,
+}
+
+impl RaysArgs {
+    /// The workload's name (`shadow`, or `file:NAME`) and its explicit rays (`None`:
+    /// frames).
+    fn batch(
+        &self,
+        scene: &Arc<Scene>,
+        settings: &RenderSettings,
+    ) -> Result<(String, Option<RayBatch>)> {
+        if let Some(path) = &self.rays_file {
+            let file = raybench::rays_file::read(path)?;
+            let name = path.file_name().map_or_else(
+                || path.display().to_string(),
+                |n| n.to_string_lossy().into_owned(),
+            );
+            return Ok((format!("file:{name}"), Some(RayBatch::from_file(file))));
+        }
+        let params = DerivedParams {
+            ao_rays: self.ao_rays,
+            seed: settings.seed,
+            ..DerivedParams::default()
+        };
+        let batch = explicit_rays(self.rays, scene, settings, &params)?;
+        Ok((self.rays.name().to_owned(), batch))
+    }
+
+    /// Estimated tests of a brute-force backend ([`brute_force_tests`]; a file's rays as
+    /// they are).
+    fn work(
+        &self,
+        batch: Option<&RayBatch>,
+        settings: &RenderSettings,
+        prims: usize,
+        frames: u32,
+    ) -> f64 {
+        match (&self.rays_file, batch) {
+            (Some(_), Some(b)) => b.rays.len() as f64 * prims as f64 * f64::from(frames),
+            _ => brute_force_tests(settings, self.rays, prims, frames),
+        }
+    }
 }
 
 #[derive(Args)]
@@ -173,6 +269,13 @@ struct ReportCmd {
     /// gains a "Before and after" section (as `compare-results` prints).
     #[arg(long, value_name = "DIR")]
     baseline: Option<PathBuf>,
+    /// Comma-separated ray sets of the ray-casting workloads (primary, incoherent, shadow,
+    /// ao, diffuse; default: all).
+    #[arg(long, value_delimiter = ',', value_parser = parse_ray_set, value_name = "SET,...")]
+    rays: Option<Vec<RaySet>>,
+    /// Ambient-occlusion rays per primary hit of the `ao` workloads.
+    #[arg(long, default_value_t = DEFAULT_AO_RAYS, value_name = "N")]
+    ao_rays: u32,
 }
 
 fn parse_shard(s: &str) -> Result<(u32, u32), String> {
@@ -355,10 +458,8 @@ struct CompareCmd {
     frame: FrameArgs,
     #[command(flatten)]
     camera: CameraArgs,
-    /// Ray set: `primary` renders frames; `incoherent` traces width x height seeded random
-    /// rays (origins in the scene's box, uniform directions) instead.
-    #[arg(long, default_value = "primary", value_parser = parse_ray_set)]
-    rays: RaySet,
+    #[command(flatten)]
+    rays: RaysArgs,
     /// Timed repetitions after one warm-up; the median is reported.
     #[arg(long, default_value_t = 3)]
     repeat: u32,
@@ -368,8 +469,10 @@ struct CompareCmd {
 }
 
 fn parse_ray_set(s: &str) -> Result<RaySet, String> {
-    RaySet::from_name(s)
-        .ok_or_else(|| format!("unknown ray set '{s}' (known: primary, incoherent)"))
+    RaySet::from_name(s).ok_or_else(|| {
+        let names: Vec<_> = RaySet::ALL.iter().map(|r| r.name()).collect();
+        format!("unknown ray set '{s}' (known: {})", names.join(", "))
+    })
 }
 
 #[derive(Args)]
@@ -379,9 +482,9 @@ struct InfoCmd {
     /// Comma-separated backends (default: all available).
     #[arg(long, value_delimiter = ',')]
     backends: Option<Vec<String>>,
-    /// Ray set whose work per ray is shown (primary or incoherent).
-    #[arg(long, default_value = "primary", value_parser = parse_ray_set)]
-    rays: RaySet,
+    /// The probe's rays, whose work per ray is shown.
+    #[command(flatten)]
+    rays: RaysArgs,
     /// Width of the probe image (or width x height incoherent rays).
     #[arg(long, default_value_t = 128)]
     width: u32,
@@ -493,6 +596,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Command::Diff(cmd) => diff_images(&cmd),
+        Command::Rays(RaysCmd::Export(cmd)) => export_rays(&cmd, &assets),
     }
 }
 
@@ -687,7 +791,7 @@ struct CompareRow {
     reason: Option<String>,
     scene: String,
     mode: &'static str,
-    ray_set: &'static str,
+    ray_set: String,
     width: u32,
     height: u32,
     spp: u32,
@@ -725,13 +829,18 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
     }
     let scene = load_scene(&cmd.scene, assets, &cmd.camera)?;
     check_mode_fits(&scene, settings.mode)?;
-    let work = brute_force_tests(&settings, cmd.rays, scene.geometry.len(), cmd.repeat + 1);
+    let (ray_set, rays) = cmd.rays.batch(&scene, &settings)?;
+    let work = cmd.rays.work(
+        rays.as_ref(),
+        &settings,
+        scene.geometry.len(),
+        cmd.repeat + 1,
+    );
     let chosen = chosen_backends(cmd.backends.as_deref(), work).map_err(anyhow::Error::msg)?;
     if chosen.is_empty() {
         bail!("no backend to compare");
     }
 
-    let rays = explicit_rays(cmd.rays, &scene, &settings)?;
     let mut rows = Vec::new();
     let mut reference: Option<Measured> = None;
     let mut disagree = false;
@@ -745,7 +854,7 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
             reason: None,
             scene: scene.name.clone(),
             mode: settings.mode.name(),
-            ray_set: cmd.rays.name(),
+            ray_set: ray_set.clone(),
             width: settings.width,
             height: settings.height,
             spp: settings.spp,
@@ -781,13 +890,13 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
         ));
         // The warm-up is counted and is what gets compared; timed runs count nothing.
         progress.begin(format!("{}: counted warm-up", b.name));
-        let warm = measure(r.as_ref(), &settings, rays.as_deref(), true)?;
+        let warm = measure(r.as_ref(), &settings, rays.as_ref(), true)?;
         progress.done();
         let mut times = Vec::new();
         let mut phases = Vec::new();
         for k in 1..=cmd.repeat {
             progress.begin(format!("{}: timed run {k}/{}", b.name, cmd.repeat));
-            let m = measure(r.as_ref(), &settings, rays.as_deref(), false)?;
+            let m = measure(r.as_ref(), &settings, rays.as_ref(), false)?;
             progress.done();
             times.push(m.seconds);
             phases.push(m.phases);
@@ -1015,6 +1124,8 @@ fn report(cmd: &ReportCmd, assets: &Path) -> Result<ExitCode> {
         repeat: cmd.repeat,
         scaling: !cmd.no_scaling,
         experiments: cmd.experiments.clone(),
+        ray_sets: cmd.rays.clone(),
+        ao_rays: cmd.ao_rays,
         assets: assets.to_path_buf(),
         threads: rayon::current_num_threads(),
         command: std::env::args().collect::<Vec<_>>().join(" "),
@@ -1083,17 +1194,22 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
         ..RenderSettings::default()
     };
     settings.validate()?;
-    let probe = explicit_rays(cmd.rays, &scene, &settings)?;
+    let (ray_set, probe) = cmd.rays.batch(&scene, &settings)?;
     println!(
-        "probe       {} rays, {}x{}, mode {}, {} spp, max depth {}",
-        cmd.rays.name(),
+        "probe       {} rays{}, {}x{}, mode {}, {} spp, max depth {}",
+        ray_set,
+        probe.as_ref().map_or(String::new(), |b| format!(
+            " ({} {} rays)",
+            b.rays.len(),
+            if b.any_hit { "any-hit" } else { "closest-hit" }
+        )),
         cmd.width,
         cmd.height,
         cmd.mode.name(),
         cmd.spp,
         cmd.max_depth
     );
-    let work = brute_force_tests(&settings, cmd.rays, g.len(), 1);
+    let work = cmd.rays.work(probe.as_ref(), &settings, g.len(), 1);
     let chosen = chosen_backends(cmd.backends.as_deref(), work).map_err(anyhow::Error::msg)?;
     println!(
         "{:<16} {:>10} {:>14} {:>9} {:>10} {:>10}  structure",
@@ -1114,7 +1230,7 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
                 let s = r.structure().unwrap_or_default();
                 let counts: Vec<String> =
                     s.counts.iter().map(|(k, v)| format!("{k}={v}")).collect();
-                let m = measure(r.as_ref(), &settings, probe.as_deref(), true)?;
+                let m = measure(r.as_ref(), &settings, probe.as_ref(), true)?;
                 let per_ray = |v: u64| format!("{:.2}", v as f64 / m.rays.max(1) as f64);
                 let pixels = f64::from(cmd.width) * f64::from(cmd.height);
                 println!(
@@ -1197,4 +1313,39 @@ fn print_quality(qualities: &[(&str, Option<Quality>)], params: &QualityParams) 
             "            EPO leaves out {n} bounded primitives that are neither triangles nor spheres"
         );
     }
+}
+
+/// `raybench rays export`: the rays of a set written to a ray file.
+fn export_rays(cmd: &ExportCmd, assets: &Path) -> Result<ExitCode> {
+    let settings = RenderSettings {
+        width: cmd.width,
+        height: cmd.height,
+        seed: cmd.seed,
+        ..RenderSettings::default()
+    };
+    settings.validate()?;
+    let scene = load_scene(&cmd.scene, assets, &cmd.camera)?;
+    let params = DerivedParams {
+        ao_rays: cmd.ao_rays,
+        seed: cmd.seed,
+        ..DerivedParams::default()
+    };
+    let rays = match explicit_rays(cmd.rays, &scene, &settings, &params)? {
+        Some(batch) => batch.rays,
+        None => primary_rays(&scene, &settings)?,
+    };
+    raybench::rays_file::write(&cmd.out, &rays, cmd.rays.any_hit())?;
+    eprintln!(
+        "wrote {} {} rays ({}) of {} to {}",
+        rays.len(),
+        cmd.rays.name(),
+        if cmd.rays.any_hit() {
+            "any hit"
+        } else {
+            "closest hit"
+        },
+        scene.name,
+        cmd.out.display()
+    );
+    Ok(ExitCode::SUCCESS)
 }

@@ -1,47 +1,135 @@
 //! Measuring one workload with one backend: the shared core of `compare`, `info` and
 //! `report`.
 
-use crate::Backend;
-use anyhow::{Result, bail};
+use crate::{Backend, Roles};
+use anyhow::{Result, anyhow, bail};
+use raybench_core::ray_sets::{self, DerivedParams};
 use raybench_core::{
     NO_HIT, Ray, RayCounters, RaySet, RenderSettings, Renderer, Scene, Timings, limits,
 };
+use raybench_render::TILE_SIZE;
 use std::sync::Arc;
 
 /// Seed of the incoherent ray set (the same rays in every run and in the benches).
 pub const INCOHERENT_SEED: u32 = 1;
 
-/// The rays a ray set traces explicitly: `None` for primary rays (frames are rendered),
-/// `width x height` seeded incoherent rays otherwise.
+/// The id [`measure`] records for an any-hit ray that is occluded (with `t` = 0); a ray
+/// that is not gets [`NO_HIT`] and infinity, so that [`crate::compare_hits`] compares
+/// any-hit answers on their boolean.
+pub const OCCLUDED: u32 = 0;
+
+/// Rays traced explicitly (not as frames), and the query they ask for.
+#[derive(Clone, Debug)]
+pub struct RayBatch {
+    /// The rays.
+    pub rays: Vec<Ray>,
+    /// Any hit ([`Renderer::occlude_rays_timed`]) rather than the closest hit
+    /// ([`Renderer::trace_rays_timed`]).
+    pub any_hit: bool,
+}
+
+impl RayBatch {
+    /// The rays of a ray file (`docs/rays-format.md`), with its any-hit flag.
+    #[must_use]
+    pub fn from_file(file: crate::rays_file::RayFile) -> Self {
+        Self {
+            rays: file.rays,
+            any_hit: file.any_hit,
+        }
+    }
+}
+
+/// The rays a ray set traces explicitly: `None` for primary rays (frames are rendered);
+/// `width x height` seeded incoherent rays; or a set derived from the primary hits
+/// ([`derived_rays`], traced once with the baseline backend).
 ///
 /// # Errors
-/// When the ray count exceeds [`limits::MAX_EXPLICIT_RAYS`].
+/// When the ray count exceeds [`limits::MAX_EXPLICIT_RAYS`], or the primary rays cannot be
+/// traced.
 pub fn explicit_rays(
     set: RaySet,
-    scene: &Scene,
+    scene: &Arc<Scene>,
     settings: &RenderSettings,
-) -> Result<Option<Vec<Ray>>> {
+    params: &DerivedParams,
+) -> Result<Option<RayBatch>> {
     let count = u64::from(settings.width) * u64::from(settings.height);
-    match set {
-        RaySet::Primary => Ok(None),
+    let rays = match set {
+        RaySet::Primary => return Ok(None),
         RaySet::Incoherent if count > limits::MAX_EXPLICIT_RAYS => bail!(
             "{count} incoherent rays exceed the limit of {} (use a smaller --width x --height)",
             limits::MAX_EXPLICIT_RAYS
         ),
-        RaySet::Incoherent => Ok(Some(raybench_core::ray_sets::incoherent(
+        RaySet::Incoherent => raybench_core::ray_sets::incoherent(
             scene.geometry.bounds(),
             count as usize,
             INCOHERENT_SEED,
-        ))),
+        ),
+        _ => {
+            let baseline = crate::with_role(Roles::BASELINE)
+                .ok_or_else(|| anyhow!("no baseline backend to trace the primary rays"))?;
+            derived_rays(set, scene, settings, params, baseline)?
+        }
+    };
+    Ok(Some(RayBatch {
+        rays,
+        any_hit: set.any_hit(),
+    }))
+}
+
+/// The rays of the derived set `set` (`shadow`, `ao`, `diffuse`): the [`primary_rays`]
+/// traced with `tracer` (any exact backend gives the same hits, so the same set), then
+/// [`ray_sets::derived`] with seed `params.seed`.
+///
+/// # Errors
+/// Too many primary or derived rays, a backend that cannot run or trace, bad parameters.
+pub fn derived_rays(
+    set: RaySet,
+    scene: &Arc<Scene>,
+    settings: &RenderSettings,
+    params: &DerivedParams,
+    tracer: &Backend,
+) -> Result<Vec<Ray>> {
+    let primary = primary_rays(scene, settings)?;
+    let p = prepare(tracer, scene).map_err(|reason| {
+        anyhow!(
+            "cannot trace the primary rays of the {} set with {}: {reason}",
+            set.name(),
+            tracer.name
+        )
+    })?;
+    let (hits, _) = p.renderer.trace_rays(&primary, false)?;
+    Ok(ray_sets::derived(set, scene, &primary, &hits, params)?)
+}
+
+/// The camera's `width x height` primary rays ([`settings`'s camera](Scene::view)) in the
+/// order the integrators trace them: [`ray_sets::primary_tiled`] with [`TILE_SIZE`] tiles.
+///
+/// # Errors
+/// More than [`limits::MAX_EXPLICIT_RAYS`] rays, or a camera the scene does not have.
+pub fn primary_rays(scene: &Scene, settings: &RenderSettings) -> Result<Vec<Ray>> {
+    let count = u64::from(settings.width) * u64::from(settings.height);
+    if count > limits::MAX_EXPLICIT_RAYS {
+        bail!(
+            "{count} primary rays exceed the limit of {} (use a smaller --width x --height)",
+            limits::MAX_EXPLICIT_RAYS
+        );
     }
+    let camera = scene.view(settings)?;
+    Ok(ray_sets::primary_tiled(
+        camera,
+        settings.width,
+        settings.height,
+        TILE_SIZE,
+    ))
 }
 
 /// One measured workload: per-ray ids and `t`, rays traced, counters, seconds.
 #[derive(Clone)]
 pub struct Measured {
-    /// Primitive id per ray or pixel ([`NO_HIT`] for misses).
+    /// Primitive id per ray or pixel ([`NO_HIT`] for misses); for any-hit rays
+    /// [`OCCLUDED`] or [`NO_HIT`].
     pub ids: Vec<u32>,
-    /// `t` per ray or pixel (infinity for misses).
+    /// `t` per ray or pixel (infinity for misses; 0 for occluded any-hit rays).
     pub t: Vec<f32>,
     /// Rays traced.
     pub rays: u64,
@@ -57,46 +145,59 @@ pub struct Measured {
     pub color: Option<Vec<raybench_core::Vec3>>,
 }
 
-/// Renders a frame (primary rays) or traces the given rays (incoherent) once.
+/// Renders a frame (primary rays) or traces the given rays once: closest hits, or any
+/// hits for an any-hit batch.
 ///
 /// # Errors
 /// When rendering or tracing fails.
 pub fn measure(
     r: &dyn Renderer,
     settings: &RenderSettings,
-    rays: Option<&[Ray]>,
+    rays: Option<&RayBatch>,
     count: bool,
 ) -> Result<Measured> {
     let settings = RenderSettings { count, ..*settings };
-    match rays {
-        None => {
-            let f = r.render(&settings)?;
-            Ok(Measured {
-                seconds: timed_seconds(&f.timings),
-                phases: f.timings,
-                rays: f.stats.rays,
-                counters: f.stats.counters,
-                ids: f.ids,
-                t: f.t,
-                color: Some(f.color),
-            })
-        }
-        Some(rays) => {
-            let (hits, counters, phases) = r.trace_rays_timed(rays, count)?;
-            Ok(Measured {
-                seconds: timed_seconds(&phases),
-                phases,
-                ids: hits.iter().map(|h| h.map_or(NO_HIT, |h| h.prim)).collect(),
-                t: hits
-                    .iter()
-                    .map(|h| h.map_or(f32::INFINITY, |h| h.t))
-                    .collect(),
-                rays: rays.len() as u64,
-                counters,
-                color: None,
-            })
-        }
-    }
+    let Some(batch) = rays else {
+        let f = r.render(&settings)?;
+        return Ok(Measured {
+            seconds: timed_seconds(&f.timings),
+            phases: f.timings,
+            rays: f.stats.rays,
+            counters: f.stats.counters,
+            ids: f.ids,
+            t: f.t,
+            color: Some(f.color),
+        });
+    };
+    let (ids, t, counters, phases) = if batch.any_hit {
+        let (occluded, counters, phases) = r.occlude_rays_timed(&batch.rays, count)?;
+        let ids = occluded
+            .iter()
+            .map(|&o| if o { OCCLUDED } else { NO_HIT })
+            .collect();
+        let t = occluded
+            .iter()
+            .map(|&o| if o { 0.0 } else { f32::INFINITY })
+            .collect();
+        (ids, t, counters, phases)
+    } else {
+        let (hits, counters, phases) = r.trace_rays_timed(&batch.rays, count)?;
+        let ids = hits.iter().map(|h| h.map_or(NO_HIT, |h| h.prim)).collect();
+        let t = hits
+            .iter()
+            .map(|h| h.map_or(f32::INFINITY, |h| h.t))
+            .collect();
+        (ids, t, counters, phases)
+    };
+    Ok(Measured {
+        seconds: timed_seconds(&phases),
+        phases,
+        ids,
+        t,
+        rays: batch.rays.len() as u64,
+        counters,
+        color: None,
+    })
 }
 
 /// The seconds a measurement reports: phase `gpu` (execution on the device) when the
@@ -178,5 +279,114 @@ pub fn median(mut v: Vec<f64>) -> f64 {
         v[n / 2]
     } else {
         0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use raybench_core::{Camera, Light, Material, SceneBuilder, Sphere, Vec3};
+
+    /// Spheres on a large floor sphere in front of the default camera, a point light and an
+    /// emissive sphere above: every derived set has rays, some blocked, some not.
+    fn scene() -> Arc<Scene> {
+        let mut b = SceneBuilder::new("derived");
+        b.camera(Camera::default()).unwrap();
+        let white = b.add_material(Material::default()).unwrap();
+        let lamp = b
+            .add_material(Material {
+                emission: Vec3::splat(4.0),
+                ..Material::default()
+            })
+            .unwrap();
+        b.add_sphere(Sphere::new(Vec3::new(0.0, -101.0, 0.0), 100.0), white)
+            .unwrap();
+        for i in 0..5 {
+            let x = i as f32 * 0.8 - 1.6;
+            b.add_sphere(Sphere::new(Vec3::new(x, -0.6, (i % 2) as f32), 0.4), white)
+                .unwrap();
+        }
+        b.add_sphere(Sphere::new(Vec3::new(0.5, 2.5, 0.0), 0.5), lamp)
+            .unwrap();
+        b.add_light(Light::Point {
+            position: Vec3::new(-2.0, 3.0, 2.0),
+            intensity: Vec3::ONE,
+        })
+        .unwrap();
+        Arc::new(b.build())
+    }
+
+    fn settings() -> RenderSettings {
+        RenderSettings {
+            width: 24,
+            height: 18,
+            ..RenderSettings::default()
+        }
+    }
+
+    /// Every exact backend traces the same primary hits, so the derived sets do not depend
+    /// on which one traced them: naive's and bvh's are the same rays, bit for bit.
+    #[test]
+    fn derived_sets_are_the_same_from_every_exact_backend() {
+        let scene = scene();
+        let oracle = crate::with_role(Roles::ORACLE).unwrap();
+        let baseline = crate::with_role(Roles::BASELINE).unwrap();
+        assert_ne!(oracle.name, baseline.name);
+        let params = DerivedParams::default();
+        for set in [RaySet::Shadow, RaySet::Ao, RaySet::Diffuse] {
+            let a = derived_rays(set, &scene, &settings(), &params, oracle).unwrap();
+            let b = derived_rays(set, &scene, &settings(), &params, baseline).unwrap();
+            assert!(!a.is_empty(), "{}", set.name());
+            assert_eq!(a, b, "{}", set.name());
+            let batch = explicit_rays(set, &scene, &settings(), &params)
+                .unwrap()
+                .unwrap();
+            assert_eq!(batch.rays, a);
+            assert_eq!(batch.any_hit, set.any_hit());
+        }
+        assert!(
+            explicit_rays(RaySet::Primary, &scene, &settings(), &params)
+                .unwrap()
+                .is_none()
+        );
+    }
+
+    /// Any-hit answers are recorded as [`OCCLUDED`] / [`NO_HIT`], equal to whether the
+    /// closest-hit query hits, and counted.
+    #[test]
+    fn any_hit_measurements_agree_with_closest_hits() {
+        let scene = scene();
+        let params = DerivedParams::default();
+        let baseline = crate::with_role(Roles::BASELINE).unwrap();
+        let p = prepare(baseline, &scene).unwrap();
+        for set in [RaySet::Shadow, RaySet::Ao] {
+            let batch = explicit_rays(set, &scene, &settings(), &params)
+                .unwrap()
+                .unwrap();
+            let any = measure(p.renderer.as_ref(), &settings(), Some(&batch), true).unwrap();
+            let closest = RayBatch {
+                any_hit: false,
+                ..batch.clone()
+            };
+            let all = measure(p.renderer.as_ref(), &settings(), Some(&closest), true).unwrap();
+            assert_eq!(any.rays, batch.rays.len() as u64);
+            let expected: Vec<u32> = all
+                .ids
+                .iter()
+                .map(|&id| if id == NO_HIT { NO_HIT } else { OCCLUDED })
+                .collect();
+            assert_eq!(any.ids, expected, "{}", set.name());
+            let blocked = any.ids.iter().filter(|&&id| id == OCCLUDED).count();
+            assert!(
+                blocked > 0 && blocked < any.ids.len(),
+                "{}: {blocked} of {} blocked",
+                set.name(),
+                any.ids.len()
+            );
+            let c = crate::compare_hits(&any.ids, &any.t, &expected, &any.t);
+            assert!(c.is_exact());
+            let counters = any.counters.unwrap();
+            assert!(counters.prim_tests > 0 && counters.node_visits > 0);
+        }
     }
 }

@@ -158,6 +158,88 @@ fn compare_incoherent_rays_with_every_backend() {
     }
 }
 
+/// Issue 21: the derived ray sets through `compare` (any-hit sets compared on their
+/// boolean), and each exported to a ray file and replayed with `--rays-file`: the same
+/// rays, so the same ray counts, work per ray and agreement; `info` probes a ray file.
+#[test]
+fn derived_ray_sets_export_and_replay() {
+    let dir = tmp_dir("rays");
+    let size = ["--width", "32", "--height", "24"];
+    let compare = |source: &[&str]| -> Vec<serde_json::Value> {
+        let mut args = vec!["compare", "spheres", "--repeat", "1", "--json"];
+        args.extend_from_slice(&size);
+        args.extend_from_slice(source);
+        let o = raybench(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        v.as_array().unwrap().clone()
+    };
+    for (set, any_hit) in [("shadow", true), ("ao", true), ("diffuse", false)] {
+        let file = dir.join(format!("{set}.rays"));
+        let file = file.to_str().unwrap();
+        let mut args = vec!["rays", "export", "spheres", "--rays", set, "--out", file];
+        args.extend_from_slice(&size);
+        let o = raybench(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let bytes = std::fs::read(file).unwrap();
+        assert_eq!(&bytes[..8], b"RAYBENCH");
+        assert_eq!(bytes[20], u8::from(any_hit), "{set}: the any-hit flag");
+        let by_set = compare(&["--rays", set]);
+        let by_file = compare(&["--rays-file", file]);
+        assert_eq!(by_set.len(), by_file.len());
+        let mut compared = 0;
+        for (a, b) in by_set.iter().zip(&by_file) {
+            assert_eq!(a["backend"], b["backend"]);
+            if a["available"] == false {
+                continue;
+            }
+            let rays = a["rays"].as_u64().unwrap();
+            assert!(rays > 0, "{set}: {a}");
+            assert_eq!(bytes.len() as u64, 24 + 32 * rays, "{set}: the file's size");
+            assert_eq!(a["ray_set"], set);
+            assert_eq!(b["ray_set"], format!("file:{set}.rays"));
+            for k in ["rays", "tests_per_ray", "id_match", "hit_mismatch"] {
+                assert_eq!(a[k], b[k], "{set}: {k} of {}", a["backend"]);
+            }
+            if raybench::backend(a["backend"].as_str().unwrap())
+                .unwrap()
+                .exact()
+            {
+                assert_eq!(a["id_match"], 1.0, "{a}");
+                compared += 1;
+            }
+        }
+        assert!(compared >= 2, "{set}: {compared} exact backends compared");
+        let o = raybench(&["info", "spheres", "--rays-file", file]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        let kind = if any_hit { "any-hit" } else { "closest-hit" };
+        assert!(
+            stdout.contains(&format!("file:{set}.rays rays (")),
+            "{stdout}"
+        );
+        assert!(stdout.contains(kind), "{stdout}");
+    }
+    // A ray file and a ray set are exclusive; a bad file names itself and the byte.
+    let o = raybench(&[
+        "compare",
+        "spheres",
+        "--rays",
+        "ao",
+        "--rays-file",
+        "x.rays",
+    ]);
+    assert_clean_error(&o, "cannot be used with");
+    let bad = write(
+        &dir,
+        "magic.rays",
+        b"RAYBENCX\x01\0\0\0\0\0\0\0\0\0\0\0\0\0\0\0",
+    );
+    let o = raybench(&["compare", "spheres", "--rays-file", &bad]);
+    assert_clean_error(&o, "magic.rays: byte 0: not a ray file");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn volume_modes_render_the_phantom_and_height_fields_and_csg_render() {
     let dir = tmp_dir("volumes");

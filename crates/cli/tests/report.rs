@@ -58,8 +58,20 @@ fn report_writes_markdown_json_images_and_charts() {
     assert!(machine["cpu"].as_str().is_some_and(|s| !s.is_empty()));
     assert!(machine["isa"].as_str().unwrap().contains("lanes"));
     let runs = r["runs"].as_array().unwrap();
-    // spheres: cast primary + incoherent + whitted; cornell-box: the same + path.
-    assert_eq!(runs.len(), (3 + 4) * 3);
+    // spheres: cast with the five ray sets + whitted; cornell-box: the same + path.
+    assert_eq!(runs.len(), (6 + 7) * 3);
+    // Every ray set ran on both scenes, with rays: the Cornell box, lit by its emissive
+    // quad alone, has shadow rays too.
+    for set in ["primary", "incoherent", "shadow", "ao", "diffuse"] {
+        for scene in ["spheres", "cornell-box"] {
+            assert!(
+                runs.iter().any(|r| r["ray_set"] == set
+                    && r["scene"] == scene
+                    && r["rays"].as_u64().is_some_and(|n| n > 0)),
+                "no {set} rays on {scene}"
+            );
+        }
+    }
     for run in runs {
         assert_eq!(run["status"], "ok", "{run}");
         assert_eq!(run["reference"], "naive");
@@ -96,7 +108,7 @@ fn report_writes_markdown_json_images_and_charts() {
                 assert_eq!(run["backend"], "naive");
                 assert!(dir.join(img).is_file(), "{img}");
             }
-            None => assert!(run["backend"] != "naive" || run["ray_set"] == "incoherent"),
+            None => assert!(run["backend"] != "naive" || run["ray_set"] != "primary"),
         }
     }
     let md = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
@@ -170,7 +182,7 @@ fn shards_split_by_scene_and_merge_back() {
     assert_eq!(r["shards"].as_array().unwrap().len(), 2);
     assert_eq!(r["shards"][1]["index"], 2);
     let runs = r["runs"].as_array().unwrap();
-    assert_eq!(runs.len(), (3 + 4) * 3);
+    assert_eq!(runs.len(), (6 + 7) * 3);
     assert!(
         runs.iter()
             .any(|r| r["scene"] == "cornell-box" && r["shard"] == 1)
@@ -243,6 +255,8 @@ fn bad_report_options_are_refused_cleanly() {
         ],
         vec!["report", "--size", "5", "--out", d],
         vec!["report", "--modes", "raster", "--out", d],
+        vec!["report", "--rays", "sideways", "--out", d],
+        vec!["report", "--ao-rays", "0", "--out", d],
         vec!["merge", "/nonexistent-raybench-dir", "--out", d],
     ] {
         let out = raybench(&args);

@@ -212,6 +212,10 @@ impl std::error::Error for RenderError {}
 /// when counted, and the timing phases.
 pub type TracedRays = (Vec<Option<Hit>>, Option<RayCounters>, Timings);
 
+/// What [`Renderer::occlude_rays_timed`] returns: per ray whether anything lies in its
+/// interval, the work counters when counted, and the timing phases.
+pub type OccludedRays = (Vec<bool>, Option<RayCounters>, Timings);
+
 /// A frame-level renderer: one backend, prepared once for a scene, then rendering any number
 /// of frames. The harness picks renderers by name (`Box<dyn Renderer>`); the CPU backends
 /// share one generic implementation over [`crate::Accel`].
@@ -315,5 +319,41 @@ pub trait Renderer: Send + Sync {
         let mut timings = Timings::default();
         timings.push("render", start.elapsed().as_secs_f64());
         Ok((hits, counters, timings))
+    }
+
+    /// Any-hit queries (shadow and ambient-occlusion rays): per ray, whether any primitive
+    /// is hit within its `[t_min, t_max]`, with the work counters when `count` is set and
+    /// the backend counts. The answer must equal `trace_rays(..)[i].is_some()` for every
+    /// ray; only the work may differ (an any-hit walk stops at the first hit it finds).
+    ///
+    /// The default is exactly that: [`Renderer::trace_rays`] and `is_some()`, correct for
+    /// any backend (the GPU answers through its explicit-ray closest-hit kernel), with the
+    /// closest-hit work counted. A CPU backend overrides it with its structure's
+    /// `occluded_batch`.
+    ///
+    /// # Errors
+    /// As [`Renderer::trace_rays`].
+    fn occlude_rays(
+        &self,
+        rays: &[Ray],
+        count: bool,
+    ) -> Result<(Vec<bool>, Option<RayCounters>), RenderError> {
+        let (hits, counters) = self.trace_rays(rays, count)?;
+        Ok((hits.iter().map(Option::is_some).collect(), counters))
+    }
+
+    /// [`Renderer::occlude_rays`] with the timing of its phases, as
+    /// [`Renderer::trace_rays_timed`]. The default times the whole call as `render`; a
+    /// backend on another device that answers through [`Renderer::trace_rays_timed`]
+    /// overrides it to keep its phases.
+    ///
+    /// # Errors
+    /// As [`Renderer::trace_rays`].
+    fn occlude_rays_timed(&self, rays: &[Ray], count: bool) -> Result<OccludedRays, RenderError> {
+        let start = std::time::Instant::now();
+        let (occluded, counters) = self.occlude_rays(rays, count)?;
+        let mut timings = Timings::default();
+        timings.push("render", start.elapsed().as_secs_f64());
+        Ok((occluded, counters, timings))
     }
 }

@@ -191,12 +191,41 @@ impl<A: Accel> Renderer for CpuRenderer<A> {
         count: bool,
     ) -> Result<(Vec<Option<Hit>>, Option<RayCounters>), RenderError> {
         let (_, accel) = self.prepared.as_ref().ok_or(RenderError::NotPrepared)?;
-        Ok(if count {
-            let (hits, c) = trace_counted::<A, RayCounters>(accel, rays);
-            (hits, Some(c))
-        } else {
-            (trace_counted::<A, NoCounters>(accel, rays).0, None)
-        })
+        Ok(counted_if(
+            count,
+            || trace_counted(accel, rays),
+            || trace_counted(accel, rays),
+        ))
+    }
+
+    /// Any hits through the structure's `occluded_batch`, in parallel chunks like
+    /// [`Renderer::trace_rays`].
+    fn occlude_rays(
+        &self,
+        rays: &[Ray],
+        count: bool,
+    ) -> Result<(Vec<bool>, Option<RayCounters>), RenderError> {
+        let (_, accel) = self.prepared.as_ref().ok_or(RenderError::NotPrepared)?;
+        Ok(counted_if(
+            count,
+            || occlude_counted(accel, rays),
+            || occlude_counted(accel, rays),
+        ))
+    }
+}
+
+/// The answers of `counted` with its counters when `count` is set, else those of `plain`
+/// (the same work, instantiated with [`NoCounters`], which count nothing for free).
+fn counted_if<T>(
+    count: bool,
+    counted: impl FnOnce() -> (T, RayCounters),
+    plain: impl FnOnce() -> (T, NoCounters),
+) -> (T, Option<RayCounters>) {
+    if count {
+        let (answers, c) = counted();
+        (answers, Some(c))
+    } else {
+        (plain().0, None)
     }
 }
 
@@ -206,13 +235,29 @@ const RAY_CHUNK: usize = 256;
 /// Traces `rays` in parallel chunks through the batch entry point; counters are summed in
 /// chunk order.
 fn trace_counted<A: Accel, C: Counters>(accel: &A, rays: &[Ray]) -> (Vec<Option<Hit>>, C) {
-    let mut hits = vec![None; rays.len()];
-    let counters: Vec<C> = hits
+    in_chunks(rays, None, |r, out, c| accel.intersect_batch(r, out, c))
+}
+
+/// [`trace_counted`] for any-hit queries, through the batch entry point `occluded_batch`.
+fn occlude_counted<A: Accel, C: Counters>(accel: &A, rays: &[Ray]) -> (Vec<bool>, C) {
+    in_chunks(rays, false, |r, out, c| accel.occluded_batch(r, out, c))
+}
+
+/// Runs `batch` over [`RAY_CHUNK`]-ray chunks of `rays` in parallel, each writing its
+/// chunk of the answers (initially `empty`); the counters are summed in chunk order, so
+/// they do not depend on the thread count.
+fn in_chunks<T: Clone + Send, C: Counters>(
+    rays: &[Ray],
+    empty: T,
+    batch: impl Fn(&[Ray], &mut [T], &mut C) + Sync,
+) -> (Vec<T>, C) {
+    let mut answers = vec![empty; rays.len()];
+    let counters: Vec<C> = answers
         .par_chunks_mut(RAY_CHUNK)
         .zip(rays.par_chunks(RAY_CHUNK))
         .map(|(out, rays)| {
             let mut c = C::default();
-            accel.intersect_batch(rays, out, &mut c);
+            batch(rays, out, &mut c);
             c
         })
         .collect();
@@ -220,7 +265,7 @@ fn trace_counted<A: Accel, C: Counters>(accel: &A, rays: &[Ray]) -> (Vec<Option<
     for c in &counters {
         total.merge(c);
     }
-    (hits, total)
+    (answers, total)
 }
 
 #[cfg(test)]
@@ -228,6 +273,15 @@ mod tests {
     use super::*;
     use raybench_core::{Camera, NO_HIT, SceneBuilder, Sphere, Vec3};
     use raybench_naive::NaiveAccel;
+
+    /// `f` on a pool of `n` threads.
+    fn on_threads<T: Send>(n: usize, f: impl FnOnce() -> T + Send) -> T {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .unwrap();
+        pool.install(f)
+    }
 
     fn scene() -> Arc<Scene> {
         let mut b = SceneBuilder::new("test");
@@ -252,13 +306,7 @@ mod tests {
         };
         let frames: Vec<Frame> = [1, 2, 5]
             .iter()
-            .map(|&n| {
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(n)
-                    .build()
-                    .unwrap();
-                pool.install(|| r.render(&settings).unwrap())
-            })
+            .map(|&n| on_threads(n, || r.render(&settings).unwrap()))
             .collect();
         for f in &frames[1..] {
             assert_eq!(f.color, frames[0].color);
@@ -326,6 +374,36 @@ mod tests {
             r.render(&settings(Some(2))),
             Err(RenderError::InvalidSettings(m)) if m.contains("2 camera(s)")
         ));
+    }
+
+    #[test]
+    fn any_hits_agree_with_closest_hits_on_any_thread_count() {
+        let mut r = CpuRenderer::<NaiveAccel>::with_default_build("naive", "test");
+        assert_eq!(r.occlude_rays(&[], false), Err(RenderError::NotPrepared));
+        r.prepare(&scene()).unwrap();
+        // Rays through the sphere, clipped before it, and past it: 1000 of them, so that
+        // the work spreads over several chunks.
+        let rays: Vec<Ray> = (0..1000)
+            .map(|i| {
+                let x = (i % 40) as f32 * 0.07 - 1.4;
+                let t_max = if i % 3 == 0 { 1.5 } else { f32::INFINITY };
+                Ray::with_interval(Vec3::new(x, 0.1, 3.0), -Vec3::Z, 0.0, t_max)
+            })
+            .collect();
+        let (hits, _) = r.trace_rays(&rays, false).unwrap();
+        let expected: Vec<bool> = hits.iter().map(Option::is_some).collect();
+        assert!(expected.contains(&true) && expected.contains(&false));
+        let answers: Vec<_> = [1, 3]
+            .iter()
+            .map(|&n| on_threads(n, || r.occlude_rays(&rays, true).unwrap()))
+            .collect();
+        for (occluded, counters) in &answers {
+            assert_eq!(occluded, &expected);
+            assert_eq!(counters, &answers[0].1);
+        }
+        let (occluded, counters, timings) = r.occlude_rays_timed(&rays, false).unwrap();
+        assert_eq!((occluded, counters), (expected, None));
+        assert!(timings.get("render").is_some());
     }
 
     #[test]

@@ -5,8 +5,8 @@ use crate::data::{GpuOut, GpuRay, Params, SceneData, check_kinds, entry_point};
 use crate::plan;
 use raybench_bvh::Bvh;
 use raybench_core::{
-    Accel, AccelStats, Frame, FrameStats, Hit, Mode, NO_HIT, PrimHit, QualityParams, Ray,
-    RayCounters, RenderError, RenderSettings, Renderer, Scene, StructureQuality, Timings,
+    Accel, AccelStats, Frame, FrameStats, Hit, Mode, NO_HIT, OccludedRays, PrimHit, QualityParams,
+    Ray, RayCounters, RenderError, RenderSettings, Renderer, Scene, StructureQuality, Timings,
     TracedRays, Vec3, limits,
 };
 use std::collections::HashMap;
@@ -745,6 +745,17 @@ impl Renderer for WgpuRenderer {
         count: bool,
     ) -> Result<(Vec<Option<Hit>>, Option<RayCounters>), RenderError> {
         self.trace_rays_timed(rays, count).map(|(h, c, _)| (h, c))
+    }
+
+    /// Any hit through the explicit-ray closest-hit kernel (`is_some()`), keeping its
+    /// `upload`, `gpu` and `readback` phases.
+    fn occlude_rays_timed(&self, rays: &[Ray], count: bool) -> Result<OccludedRays, RenderError> {
+        let (hits, counters, timings) = self.trace_rays_timed(rays, count)?;
+        Ok((
+            hits.iter().map(Option::is_some).collect(),
+            counters,
+            timings,
+        ))
     }
 
     fn trace_rays_timed(&self, rays: &[Ray], count: bool) -> Result<TracedRays, RenderError> {

@@ -100,7 +100,7 @@ pub struct MeshReport {
 /// A ray set of a mesh.
 #[derive(Clone, Debug, Serialize)]
 pub struct RaySetInfo {
-    /// `primary` or `incoherent`.
+    /// `primary`, `incoherent`, `shadow`, `ao`, `diffuse`, or `file` (`--rays-file`).
     pub name: &'static str,
     /// Ray count.
     pub rays: usize,
@@ -135,11 +135,12 @@ pub struct ContestantReport {
 /// One contestant on one ray set.
 #[derive(Clone, Debug, Serialize)]
 pub struct SetReport {
-    /// `primary` or `incoherent`.
+    /// `primary`, `incoherent`, `shadow`, `ao`, `diffuse`, or `file` (`--rays-file`).
     pub name: &'static str,
     /// Closest hits (`intersect_batch`).
     pub closest: QueryReport,
-    /// Any hit (`occluded_batch`) on the shadow rays.
+    /// Any hit (`occluded_batch`): an any-hit set's own rays, else the rays ending at
+    /// [`crate::peers::SHADOW_FRACTION`] of `bvh`'s closest hit.
     pub any: QueryReport,
 }
 
@@ -190,17 +191,18 @@ pub enum Query {
 }
 
 /// The Embree contestants a query's throughput is compared with, with their column
-/// headings: primary closest hits against the 16-wide packets, incoherent closest hits
-/// against single rays in both modes, any hits against `rtcOccluded1` in robust mode (the
-/// targets of issue 17).
+/// headings: primary closest hits against the 16-wide packets, the closest hits of every
+/// other set (incoherent, diffuse, a ray file's) against single rays in both modes, any
+/// hits against `rtcOccluded1` in robust mode (the targets of issue 17). `set` is a ray
+/// set's name.
 #[must_use]
-pub fn references(set: RaySet, query: Query) -> &'static [(&'static str, &'static str)] {
+pub fn references(set: &str, query: Query) -> &'static [(&'static str, &'static str)] {
     match (set, query) {
-        (RaySet::Primary, Query::Closest) => &[
+        (_, Query::Closest) if set == RaySet::Primary.name() => &[
             (PACKET_ROBUST, "vs E16 robust"),
             (PACKET_DEFAULT, "vs E16 default"),
         ],
-        (RaySet::Incoherent, Query::Closest) => &[
+        (_, Query::Closest) => &[
             (SINGLE_ROBUST, "vs E1 robust"),
             (SINGLE_DEFAULT, "vs E1 default"),
         ],
@@ -246,11 +248,11 @@ impl MeshReport {
         for c in &mut self.contestants {
             c.build_vs_embree = build_ref.map(|b| c.build_s / b);
             for s in &mut c.ray_sets {
-                let set = RaySet::from_name(s.name).expect("a known ray set");
+                let name = s.name;
                 for (query, q) in [(Query::Closest, &mut s.closest), (Query::Any, &mut s.any)] {
                     q.ratios.clear();
-                    for &(reference, _) in references(set, query) {
-                        let Some(r) = find(reference).and_then(|r| r.query(s.name, query)) else {
+                    for &(reference, _) in references(name, query) {
+                        let Some(r) = find(reference).and_then(|r| r.query(name, query)) else {
                             continue;
                         };
                         for run in &q.runs {
@@ -374,7 +376,6 @@ impl Report {
                 out.push('\n');
             }
             for set in &m.ray_sets {
-                let rs = RaySet::from_name(set.name).expect("a known ray set");
                 let _ = writeln!(
                     out,
                     "\n{} {}: {} rays, {} hit; Mrays/s and ratios at {t_label} threads\n",
@@ -383,12 +384,12 @@ impl Report {
                 let mut head = String::from("| contestant | closest |");
                 let mut rule = String::from("|---|---:|");
                 let closest_refs = if embree {
-                    references(rs, Query::Closest)
+                    references(set.name, Query::Closest)
                 } else {
                     &[]
                 };
                 let any_refs = if embree {
-                    references(rs, Query::Any)
+                    references(set.name, Query::Any)
                 } else {
                     &[]
                 };

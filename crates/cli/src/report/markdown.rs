@@ -118,7 +118,12 @@ pub fn report(results: &Results, charts: &Charts) -> String {
          the timed repetitions after one counted warm-up (min-max in brackets); build time is \
          separate. **Mrays/s** counts every ray traced (camera, secondary, shadow) over the \
          median time; **tests/ray** and **visits/ray** are ray/primitive tests and node or cell \
-         visits per ray, counted in the warm-up. **Equality** compares each backend with the \
+         visits per ray, counted in the warm-up. Ray casting runs on several ray sets: \
+         `primary` (camera rays, as frames), `incoherent` (seeded random rays in the scene's \
+         box), and, derived from the primary hits and the same for every backend, `shadow` (any \
+         hit, to every light and one sampled emitter point), `ao` (any hit, cosine rays a tenth \
+         of the scene's diagonal long) and `diffuse` (one cosine bounce, closest hit); any-hit \
+         sets are compared on whether each ray is blocked. **Equality** compares each backend with the \
          reference backend of its scene (naive where it fits its time budget, else bvh, which \
          the test suite checks against naive on every built-in scene). **Pass**: a raybench CPU \
          backend (bound by the equivalence contract) must be bit-identical (ids, `t`, colours); \

@@ -47,6 +47,10 @@ pub struct Options {
     pub scaling: bool,
     /// Which scaling experiments (default: all of [`experiments()`]).
     pub experiments: Option<Vec<String>>,
+    /// The ray sets of the ray-casting workloads (default: every set, [`RaySet::ALL`]).
+    pub ray_sets: Option<Vec<RaySet>>,
+    /// Ambient-occlusion rays per primary hit of the `ao` workloads.
+    pub ao_rays: u32,
     /// Assets folder.
     pub assets: PathBuf,
     /// Worker threads.
@@ -157,6 +161,10 @@ pub fn run(opts: &Options) -> Result<Results> {
         .as_deref()
         .map(|p| baseline::read(p).map(|r| (r, p.display().to_string())))
         .transpose()?;
+    let max_ao = raybench_core::ray_sets::MAX_AO_RAYS;
+    if !(1..=max_ao).contains(&opts.ao_rays) {
+        bail!("--ao-rays {} must be in 1..={max_ao}", opts.ao_rays);
+    }
     let modes = opts.modes.clone().unwrap_or_else(|| Mode::ALL.to_vec());
     let ctx = Ctx {
         opts,
@@ -319,7 +327,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Results> {
 
 /// The cameras a workload is measured from, each with its explicit rays (`None` for a
 /// rendered frame): indices into the scene's cameras, `None` for the scene's camera.
-type Views = [(Option<u32>, Option<Vec<raybench_core::Ray>>)];
+type Views = [(Option<u32>, Option<crate::measure::RayBatch>)];
 
 /// A loaded scene, or why it is skipped.
 type Loaded = Result<Arc<Scene>, String>;
@@ -388,7 +396,7 @@ impl Ctx<'_> {
         &self,
         r: &dyn Renderer,
         w: &Workload,
-        rays: Option<&[raybench_core::Ray]>,
+        rays: Option<&crate::measure::RayBatch>,
     ) -> Result<Measurement> {
         self.measure_settings(r, &w.settings(), rays)
     }
@@ -398,7 +406,7 @@ impl Ctx<'_> {
         &self,
         r: &dyn Renderer,
         settings: &RenderSettings,
-        rays: Option<&[raybench_core::Ray]>,
+        rays: Option<&crate::measure::RayBatch>,
     ) -> Result<Measurement> {
         let warm = measure(r, settings, rays, true)?;
         let mut samples = Vec::new();
@@ -431,7 +439,7 @@ impl Ctx<'_> {
                     camera: *camera,
                     ..w.settings()
                 };
-                self.measure_settings(r, &settings, rays.as_deref())
+                self.measure_settings(r, &settings, rays.as_ref())
             })
             .collect::<Result<_>>()?;
         Ok((Measurement::sum(&each), each))

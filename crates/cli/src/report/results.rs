@@ -198,9 +198,11 @@ pub struct Run {
     pub primitives: u64,
     /// Integrator (`cast`, `whitted`, `path`, `mip`, `composite`).
     pub mode: String,
-    /// `primary` (frames) or `incoherent` (explicit random rays).
+    /// `primary` (frames), `incoherent` (explicit random rays), or a set derived from the
+    /// primary hits: `shadow`, `ao` (any hit) or `diffuse`.
     pub ray_set: String,
-    /// Image width (or rays = width x height for incoherent sets).
+    /// Image width (or rays = width x height for incoherent sets; the derived sets start
+    /// from width x height primary rays).
     pub width: u32,
     /// Image height.
     pub height: u32,

@@ -11,6 +11,7 @@ use crate::report::results::{CameraRun, Equality, Images, Quality, Results, Run}
 use crate::report::{Ctx, PEER_MAX_FLIP, PEER_MIN_ID_MATCH, Views, Workload, file_safe, skip};
 use crate::{Backend, Roles, compare_hits};
 use anyhow::Result;
+use raybench_core::ray_sets::DerivedParams;
 use raybench_core::{Mode, QualityParams, RaySet, Scene};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -285,10 +286,18 @@ impl Experiment for Matrix {
                 let _ = writeln!(s, "### {scene} ({prims} primitives)\n");
                 last_scene.clone_from(scene);
             }
-            let what = if set == "primary" {
-                format!("{w} x {h}, {spp} spp")
-            } else {
-                format!("{} random rays", u64::from(*w) * u64::from(*h))
+            let what = match set.as_str() {
+                "primary" => format!("{w} x {h}, {spp} spp"),
+                "incoherent" => format!("{} random rays", u64::from(*w) * u64::from(*h)),
+                _ => format!(
+                    "{} {} rays from the primary hits of {w} x {h} pixels",
+                    runs.iter().find_map(|r| r.rays).unwrap_or(0),
+                    if RaySet::from_name(set).is_some_and(RaySet::any_hit) {
+                        "any-hit"
+                    } else {
+                        "closest-hit"
+                    }
+                ),
             };
             let reference = runs.first().map_or("-", |r| r.reference.as_str());
             let _ = writeln!(
@@ -374,7 +383,9 @@ impl Experiment for Matrix {
     }
 }
 
-/// The workloads of a scene: ray casting (camera and incoherent rays) everywhere; Whitted
+/// The workloads of a scene: ray casting with every ray set of `--rays` (camera,
+/// incoherent, shadow, ambient-occlusion and diffuse rays; `cast-shadow` and so on)
+/// everywhere; Whitted
 /// and path tracing where its built-in `[benchmark]` table asks for them (lights to shadow
 /// and mirrors to follow; scenes built for path tracing); the volume modes where there are
 /// volumes.
@@ -389,8 +400,11 @@ fn workloads(ctx: &Ctx, scene: &Scene) -> Vec<Workload> {
         spp: 1,
     };
     if ctx.modes.contains(&Mode::Cast) {
-        w.push(cast(RaySet::Primary));
-        w.push(cast(RaySet::Incoherent));
+        let sets = ctx.opts.ray_sets.as_deref().unwrap_or(&RaySet::ALL);
+        // In the order of `RaySet::ALL`, whatever the order asked.
+        for set in RaySet::ALL.into_iter().filter(|s| sets.contains(s)) {
+            w.push(cast(set));
+        }
     }
     let asks = |mode: Mode| {
         ctx.modes.contains(&mode)
@@ -468,6 +482,10 @@ fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<R
         return Ok(Vec::new());
     }
 
+    let params = DerivedParams {
+        ao_rays: ctx.opts.ao_rays,
+        ..DerivedParams::default()
+    };
     // Every camera of a scene that has several, for the workloads whose rays start at the
     // camera (the incoherent rays do not depend on it); the scene's camera otherwise.
     let views = |w: &Workload| -> Vec<Option<u32>> {
@@ -488,7 +506,7 @@ fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<R
                         camera,
                         ..w.settings()
                     };
-                    Ok((camera, explicit_rays(w.rays, scene, &settings)?))
+                    Ok((camera, explicit_rays(w.rays, scene, &settings, &params)?))
                 })
                 .collect::<Result<Box<Views>>>()
         })

@@ -551,6 +551,8 @@ mod tests {
             repeat: None,
             scaling: true,
             experiments: None,
+            ray_sets: None,
+            ao_rays: raybench_core::ray_sets::DEFAULT_AO_RAYS,
             assets: std::env::temp_dir(),
             threads: 1,
             command: String::new(),
