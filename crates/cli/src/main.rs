@@ -276,6 +276,10 @@ struct ReportCmd {
     /// Ambient-occlusion rays per primary hit of the `ao` workloads.
     #[arg(long, default_value_t = DEFAULT_AO_RAYS, value_name = "N")]
     ao_rays: u32,
+    /// Replay a ray file (`raybench rays export`, docs/rays-format.md) on every scene as
+    /// the workload `cast-file` (the only ray-casting workload unless --rays names sets).
+    #[arg(long, value_name = "FILE")]
+    rays_file: Option<PathBuf>,
 }
 
 fn parse_shard(s: &str) -> Result<(u32, u32), String> {
@@ -1126,6 +1130,7 @@ fn report(cmd: &ReportCmd, assets: &Path) -> Result<ExitCode> {
         experiments: cmd.experiments.clone(),
         ray_sets: cmd.rays.clone(),
         ao_rays: cmd.ao_rays,
+        rays_file: cmd.rays_file.clone(),
         assets: assets.to_path_buf(),
         threads: rayon::current_num_threads(),
         command: std::env::args().collect::<Vec<_>>().join(" "),

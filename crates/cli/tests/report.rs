@@ -517,7 +517,12 @@ normal = [0, 1, 0]
         assert_eq!(names, ["front", "top"], "{run}");
         let rays: u64 = cameras.iter().map(|c| c["rays"].as_u64().unwrap()).sum();
         assert_eq!(run["rays"].as_u64().unwrap(), rays);
-        assert_eq!(rays, 2 * 24 * 24);
+        if run["ray_set"] == "primary" {
+            assert_eq!(rays, 2 * 24 * 24);
+        } else {
+            // Derived from both cameras' primary hits.
+            assert!(rays > 0 && cameras.iter().all(|c| c["rays"].as_u64() > Some(0)));
+        }
         if run["backend"] == "bvh" {
             assert!(cameras.iter().all(|c| c["identical"] == true), "{run}");
         }
@@ -526,7 +531,7 @@ normal = [0, 1, 0]
     assert!(md.find("## Verdict").unwrap() < md.find("## How to read").unwrap());
     assert!(md.contains("Each of the scene's 2 cameras"), "{md}");
     assert!(md.contains("| `front` | `top` |"), "{md}");
-    assert!(md.contains("bit-identical in 2 of 2 workloads"), "{md}");
+    assert!(md.contains("bit-identical in 5 of 5 workloads"), "{md}");
 
     // The run beside itself: every workload in both, none faster or slower.
     let out = raybench(&[
@@ -554,7 +559,7 @@ normal = [0, 1, 0]
     );
     let md = std::fs::read_to_string(second.join("REPORT.md")).unwrap();
     assert!(md.contains("## Before and after"), "{md}");
-    assert!(md.contains("4 workloads in both"), "{md}");
+    assert!(md.contains("10 workloads in both"), "{md}");
     // A missing baseline fails before measuring anything.
     let out = report(&dir.join("third"), &["--baseline", "/nonexistent-raybench"]);
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -563,5 +568,102 @@ normal = [0, 1, 0]
         "{stderr}"
     );
     assert!(!dir.join("third").join("results.json").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `report --rays-file` replays an exported ray set on the scene as the workload
+/// `cast-file`, alone unless `--rays` names sets too, every backend on the same rays.
+#[test]
+fn report_replays_a_ray_file() {
+    let dir = tmp_dir("replay");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("ao.rays");
+    let out = raybench(&[
+        "rays",
+        "export",
+        "spheres",
+        "--rays",
+        "ao",
+        "--width",
+        "20",
+        "--height",
+        "20",
+        "--out",
+        file.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // Header: 8-byte magic, version, count (docs/rays-format.md).
+    let bytes = std::fs::read(&file).unwrap();
+    let count = u64::from_le_bytes(bytes[12..20].try_into().unwrap());
+    assert!(count > 0);
+    for (extra, sets) in [
+        (vec![], vec!["file"]),
+        (vec!["--rays", "primary"], vec!["primary", "file"]),
+    ] {
+        let run_dir = dir.join(format!("run-{}", sets.len()));
+        let mut args = vec![
+            "report",
+            "--scenes",
+            "spheres",
+            "--backends",
+            "naive,bvh",
+            "--modes",
+            "cast",
+            "--size",
+            "16",
+            "--repeat",
+            "1",
+            "--no-scaling",
+            "--rays-file",
+            file.to_str().unwrap(),
+            "--out",
+            run_dir.to_str().unwrap(),
+        ];
+        args.extend_from_slice(&extra);
+        let out = raybench(&args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let r = results(&run_dir);
+        let runs = r["runs"].as_array().unwrap();
+        let got: Vec<&str> = runs
+            .iter()
+            .filter(|r| r["backend"] == "bvh")
+            .map(|r| r["ray_set"].as_str().unwrap())
+            .collect();
+        assert_eq!(got, sets);
+        for run in runs.iter().filter(|r| r["ray_set"] == "file") {
+            assert_eq!(run["rays"].as_u64(), Some(count), "{run}");
+            assert_eq!(run["equality"]["identical"], true, "{run}");
+        }
+        let md = std::fs::read_to_string(run_dir.join("REPORT.md")).unwrap();
+        assert!(md.contains("replayed from the run's ray file"), "{md}");
+    }
+    // A bad ray file fails before anything is measured, with one error line.
+    std::fs::write(dir.join("bad.rays"), b"RAYBENCH").unwrap();
+    let out = raybench(&[
+        "report",
+        "--scenes",
+        "spheres",
+        "--no-scaling",
+        "--rays-file",
+        dir.join("bad.rays").to_str().unwrap(),
+        "--out",
+        dir.join("bad").to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert_eq!(
+        stderr.lines().filter(|l| l.starts_with("error:")).count(),
+        1,
+        "{stderr}"
+    );
+    assert!(!dir.join("bad").join("results.json").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -51,6 +51,9 @@ pub struct Options {
     pub ray_sets: Option<Vec<RaySet>>,
     /// Ambient-occlusion rays per primary hit of the `ao` workloads.
     pub ao_rays: u32,
+    /// A ray file (`docs/rays-format.md`) every scene of the matrix also traces, as the
+    /// ray-casting workload `cast-file` (alone unless `ray_sets` names sets too).
+    pub rays_file: Option<PathBuf>,
     /// Assets folder.
     pub assets: PathBuf,
     /// Worker threads.
@@ -80,6 +83,8 @@ struct Workload {
     width: u32,
     height: u32,
     spp: u32,
+    /// Traces the rays of the run's ray file ([`Options::rays_file`]) instead of `rays`.
+    replay: bool,
 }
 
 impl Workload {
@@ -97,7 +102,16 @@ impl Workload {
     }
 
     fn key(&self) -> String {
-        format!("{}-{}", self.mode.name(), self.rays.name())
+        format!("{}-{}", self.mode.name(), self.ray_set())
+    }
+
+    /// The name of its rays in `results.json`: the ray set's, or `file` for a replay.
+    fn ray_set(&self) -> &'static str {
+        if self.replay {
+            "file"
+        } else {
+            self.rays.name()
+        }
     }
 }
 
@@ -166,8 +180,15 @@ pub fn run(opts: &Options) -> Result<Results> {
         bail!("--ao-rays {} must be in 1..={max_ao}", opts.ao_rays);
     }
     let modes = opts.modes.clone().unwrap_or_else(|| Mode::ALL.to_vec());
+    // The ray file too, before any measuring.
+    let replay = opts
+        .rays_file
+        .as_deref()
+        .map(|p| crate::rays_file::read(p).map(crate::measure::RayBatch::from_file))
+        .transpose()?;
     let ctx = Ctx {
         opts,
+        replay,
         chosen: &chosen,
         modes: &modes,
         size,
@@ -363,6 +384,8 @@ fn skip(results: &mut Results, kind: &str, name: &str, status: &str, reason: Str
 /// What every experiment of one run shares: the options and what was made of them.
 struct Ctx<'a> {
     opts: &'a Options,
+    /// The rays of [`Options::rays_file`], read once.
+    replay: Option<crate::measure::RayBatch>,
     chosen: &'a [&'static Backend],
     modes: &'a [Mode],
     size: u32,
@@ -388,7 +411,13 @@ impl Ctx<'_> {
     /// Whether a brute-force backend stays within its budget on `w` over a scene of `prims`
     /// primitives.
     fn naive_fits(&self, w: &Workload, prims: usize) -> bool {
-        crate::brute_force_tests(&w.settings(), w.rays, prims, self.repeat + 1) <= self.budget
+        let tests = match (&self.replay, w.replay) {
+            (Some(batch), true) => {
+                batch.rays.len() as f64 * prims as f64 * f64::from(self.repeat + 1)
+            }
+            _ => crate::brute_force_tests(&w.settings(), w.rays, prims, self.repeat + 1),
+        };
+        tests <= self.budget
     }
 
     /// Warm-up (counted, kept for the comparison) and timed repetitions.

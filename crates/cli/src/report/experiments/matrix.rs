@@ -289,6 +289,10 @@ impl Experiment for Matrix {
             let what = match set.as_str() {
                 "primary" => format!("{w} x {h}, {spp} spp"),
                 "incoherent" => format!("{} random rays", u64::from(*w) * u64::from(*h)),
+                "file" => format!(
+                    "{} rays replayed from the run's ray file (`--rays-file`)",
+                    runs.iter().find_map(|r| r.rays).unwrap_or(0)
+                ),
                 _ => format!(
                     "{} {} rays from the primary hits of {w} x {h} pixels",
                     runs.iter().find_map(|r| r.rays).unwrap_or(0),
@@ -398,12 +402,26 @@ fn workloads(ctx: &Ctx, scene: &Scene) -> Vec<Workload> {
         width: s,
         height: s,
         spp: 1,
+        replay: false,
     };
     if ctx.modes.contains(&Mode::Cast) {
-        let sets = ctx.opts.ray_sets.as_deref().unwrap_or(&RaySet::ALL);
+        // A ray file alone, unless sets are named too.
+        let default: &[RaySet] = if ctx.replay.is_some() {
+            &[]
+        } else {
+            &RaySet::ALL
+        };
+        let sets = ctx.opts.ray_sets.as_deref().unwrap_or(default);
         // In the order of `RaySet::ALL`, whatever the order asked.
         for set in RaySet::ALL.into_iter().filter(|s| sets.contains(s)) {
             w.push(cast(set));
+        }
+        if ctx.replay.is_some() {
+            // Its own rays: `rays` only names the kind for the brute-force estimate.
+            w.push(Workload {
+                replay: true,
+                ..cast(RaySet::Incoherent)
+            });
         }
     }
     let asks = |mode: Mode| {
@@ -441,6 +459,7 @@ fn workloads(ctx: &Ctx, scene: &Scene) -> Vec<Workload> {
             width: side,
             height: side,
             spp,
+            replay: false,
         });
     }
     w
@@ -489,7 +508,7 @@ fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<R
     // Every camera of a scene that has several, for the workloads whose rays start at the
     // camera (the incoherent rays do not depend on it); the scene's camera otherwise.
     let views = |w: &Workload| -> Vec<Option<u32>> {
-        if scene.cameras.len() > 1 && w.rays != RaySet::Incoherent {
+        if scene.cameras.len() > 1 && w.rays != RaySet::Incoherent && !w.replay {
             (0..scene.cameras.len() as u32).map(Some).collect()
         } else {
             vec![None]
@@ -506,7 +525,11 @@ fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<R
                         camera,
                         ..w.settings()
                     };
-                    Ok((camera, explicit_rays(w.rays, scene, &settings, &params)?))
+                    let rays = match (&ctx.replay, w.replay) {
+                        (Some(batch), true) => Some(batch.clone()),
+                        _ => explicit_rays(w.rays, scene, &settings, &params)?,
+                    };
+                    Ok((camera, rays))
                 })
                 .collect::<Result<Box<Views>>>()
         })
@@ -529,7 +552,7 @@ fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<R
                 scene: scene.name.clone(),
                 primitives: prims as u64,
                 mode: w.mode.name().into(),
-                ray_set: w.rays.name().into(),
+                ray_set: w.ray_set().into(),
                 width: w.width,
                 height: w.height,
                 spp: w.spp,

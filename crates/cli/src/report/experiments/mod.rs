@@ -296,6 +296,7 @@ fn square(width: u32, spp: u32, mode: Mode) -> Workload {
         width,
         height: width,
         spp,
+        replay: false,
     }
 }
 
@@ -557,10 +558,12 @@ mod tests {
             threads: 1,
             command: String::new(),
             baseline: None,
+            rays_file: None,
         };
         let chosen: Vec<&'static Backend> = crate::BACKENDS.iter().collect();
         let ctx = Ctx {
             opts: &opts,
+            replay: None,
             chosen: &chosen,
             modes: &Mode::ALL,
             size: 64,
