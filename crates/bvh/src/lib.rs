@@ -21,10 +21,10 @@ mod params;
 mod traverse;
 
 pub use node::Node;
-pub use obvhs_adapter::ObvhsAccel;
 /// obvhs's build parameters and their presets (`fastest_build()` .. `very_slow_build()`),
 /// for [`ObvhsAccel::build_with`].
 pub use obvhs::BvhBuildParams as ObvhsBuildParams;
+pub use obvhs_adapter::ObvhsAccel;
 pub use params::BvhParams;
 
 use raybench_geometry::Geometry;

@@ -963,6 +963,12 @@ fn backends(json: bool) -> Result<ExitCode> {
     if json {
         println!("{}", serde_json::to_string_pretty(&rows)?);
     } else {
+        let width = rows
+            .iter()
+            .map(|r| r.name.len() + 2)
+            .max()
+            .unwrap_or(0)
+            .max(16);
         let mut presets_begun = false;
         for r in rows {
             if r.preset_of.is_some() && !presets_begun {
@@ -981,9 +987,9 @@ fn backends(json: bool) -> Result<ExitCode> {
             } else {
                 format!("unavailable ({})", r.reason.unwrap_or_default())
             };
-            println!("{name:<16} {:<12} {}", state, r.description);
+            println!("{name:<width$} {:<12} {}", state, r.description);
             if let Some(d) = &r.device {
-                println!("{:<16} {:<12} device: {d}", "", "");
+                println!("{:<width$} {:<12} device: {d}", "", "");
             }
         }
     }

@@ -82,9 +82,7 @@ macro_rules! embree_preset {
                         CpuRenderer::<EmbreeAccel>::new(
                             concat!("embree:", $preset),
                             $description,
-                            Box::new(|g| {
-                                EmbreeAccel::build_with(g, EmbreeMode::Robust, $quality)
-                            }),
+                            Box::new(|g| EmbreeAccel::build_with(g, EmbreeMode::Robust, $quality)),
                         )
                         .with_availability(embree_availability)
                         .with_support_check(embree_supports)
@@ -288,24 +286,26 @@ pub fn presets_of(name: &str) -> impl Iterator<Item = &'static Preset> + '_ {
 /// without presets (listing those with), or an unknown preset (listing the backend's).
 pub fn preset_backend(spec: &str) -> Option<Result<&'static Backend, String>> {
     let (name, preset) = spec.split_once(':')?;
-    Some(if let Some(p) = presets_of(name).find(|p| p.preset == preset) {
-        Ok(&p.entry)
-    } else if let Err(e) = crate::backend(name) {
-        Err(e)
-    } else if presets_of(name).next().is_none() {
-        let mut with: Vec<&str> = PRESETS.iter().map(|p| p.backend).collect();
-        with.dedup();
-        Err(format!(
-            "backend '{name}' has no build presets (backends with presets: {})",
-            with.join(", ")
-        ))
-    } else {
-        let known: Vec<&str> = presets_of(name).map(|p| p.preset).collect();
-        Err(format!(
-            "unknown preset '{preset}' of backend '{name}' (known: {})",
-            known.join(", ")
-        ))
-    })
+    Some(
+        if let Some(p) = presets_of(name).find(|p| p.preset == preset) {
+            Ok(&p.entry)
+        } else if let Err(e) = crate::backend(name) {
+            Err(e)
+        } else if presets_of(name).next().is_none() {
+            let mut with: Vec<&str> = PRESETS.iter().map(|p| p.backend).collect();
+            with.dedup();
+            Err(format!(
+                "backend '{name}' has no build presets (backends with presets: {})",
+                with.join(", ")
+            ))
+        } else {
+            let known: Vec<&str> = presets_of(name).map(|p| p.preset).collect();
+            Err(format!(
+                "unknown preset '{preset}' of backend '{name}' (known: {})",
+                known.join(", ")
+            ))
+        },
+    )
 }
 
 #[cfg(test)]
@@ -357,7 +357,9 @@ mod tests {
         );
         let e = crate::backend("naive:fast").unwrap_err();
         assert!(
-            e.starts_with("backend 'naive' has no build presets (backends with presets: bvh, obvhs"),
+            e.starts_with(
+                "backend 'naive' has no build presets (backends with presets: bvh, obvhs"
+            ),
             "{e}"
         );
         let e = crate::backend("nothing:fast").unwrap_err();

@@ -402,7 +402,10 @@ fn a_scaling_experiment_runs_and_is_written() {
 fn the_presets_experiment_runs_and_is_written() {
     let assets = std::env::var("RAYBENCH_ASSETS").unwrap_or_default();
     let needed = ["bunny/stanford-bunny.obj", "sponza-dabrovic/sponza.obj"];
-    if let Some(missing) = needed.iter().find(|f| !Path::new(&assets).join(f).is_file()) {
+    if let Some(missing) = needed
+        .iter()
+        .find(|f| !Path::new(&assets).join(f).is_file())
+    {
         assert!(
             std::env::var("CI").as_deref() != Ok("true"),
             "CI=true but {missing} is missing"
@@ -444,7 +447,10 @@ fn the_presets_experiment_runs_and_is_written() {
         assert!(p["memory_bytes"].as_u64().unwrap() > 0, "{p}");
         assert_eq!(p["rays"], 256);
     }
-    for (series, backend) in [("bunny primary", "bvh:fast"), ("sponza incoherent", "bvh:quality")] {
+    for (series, backend) in [
+        ("bunny primary", "bvh:fast"),
+        ("sponza incoherent", "bvh:quality"),
+    ] {
         assert!(
             points
                 .iter()
@@ -455,7 +461,10 @@ fn the_presets_experiment_runs_and_is_written() {
     // One point per series and backend: no fits.
     assert!(r["fits"].as_array().unwrap().is_empty());
     let md = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
-    assert!(md.contains("## Build presets: build time against trace time"), "{md}");
+    assert!(
+        md.contains("## Build presets: build time against trace time"),
+        "{md}"
+    );
     assert!(md.contains("| bunny | bvh:fast |"), "{md}");
     assert!(md.contains("| bunny | bvh | "), "{md}");
     if !md.contains("> Charts:") {

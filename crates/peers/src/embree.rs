@@ -13,11 +13,12 @@
 #![allow(unsafe_code)]
 
 use embree::sys::{
-    RTCBufferType, RTCBuildQuality, RTCDevice, RTCDeviceProperty, RTCError, RTCFormat, RTCGeometryType, RTCHit,
-    RTCIntersectContext, RTCIntersectContextFlags, RTCRay, RTCRayHit, RTCScene, RTCSceneFlags,
-    rtcAttachGeometry, rtcCommitGeometry, rtcCommitScene, rtcGetDeviceError, rtcGetDeviceProperty,
-    rtcIntersect1, rtcNewDevice, rtcNewGeometry, rtcNewScene, rtcOccluded1, rtcReleaseGeometry,
-    rtcReleaseScene, rtcSetGeometryBuildQuality, rtcSetNewGeometryBuffer, rtcSetSceneBuildQuality, rtcSetSceneFlags,
+    RTCBufferType, RTCBuildQuality, RTCDevice, RTCDeviceProperty, RTCError, RTCFormat,
+    RTCGeometryType, RTCHit, RTCIntersectContext, RTCIntersectContextFlags, RTCRay, RTCRayHit,
+    RTCScene, RTCSceneFlags, rtcAttachGeometry, rtcCommitGeometry, rtcCommitScene,
+    rtcGetDeviceError, rtcGetDeviceProperty, rtcIntersect1, rtcNewDevice, rtcNewGeometry,
+    rtcNewScene, rtcOccluded1, rtcReleaseGeometry, rtcReleaseScene, rtcSetGeometryBuildQuality,
+    rtcSetNewGeometryBuffer, rtcSetSceneBuildQuality, rtcSetSceneFlags,
 };
 use raybench_geometry::{
     Accel, AccelStats, Counters, Geometry, Hit, PrimHit, PrimitiveKind, Ray, Shape, keep_closer,
@@ -268,8 +269,7 @@ impl Inner {
                 _ => side.push(id),
             }
         }
-        let scene =
-            (!ids.is_empty()).then(|| Self::embree_scene(&geometry, &ids, mode, quality));
+        let scene = (!ids.is_empty()).then(|| Self::embree_scene(&geometry, &ids, mode, quality));
         Self {
             geometry,
             scene,
@@ -449,7 +449,10 @@ impl Inner {
                 ("embree triangles", n as u64),
                 ("side primitives", self.side.len() as u64),
                 ("robust mode", u64::from(self.mode == EmbreeMode::Robust)),
-                ("build quality (0 low, 1 medium, 2 high)", self.quality as u64),
+                (
+                    "build quality (0 low, 1 medium, 2 high)",
+                    self.quality as u64,
+                ),
             ],
         }
     }

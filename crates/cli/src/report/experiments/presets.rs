@@ -228,7 +228,13 @@ impl Experiment for Presets {
         if !skipped.is_empty() {
             skipped.dedup();
             let status = if ran { "partial" } else { "skipped" };
-            skip(results, "experiment", self.name(), status, skipped.join("; "));
+            skip(
+                results,
+                "experiment",
+                self.name(),
+                status,
+                skipped.join("; "),
+            );
         }
         Ok(())
     }
@@ -343,8 +349,9 @@ impl Experiment for Presets {
                 let best = list.iter().min_by(|a, b| a.2.total_cmp(&b.2));
                 let even = match (first, best) {
                     (Some(f), Some(b)) if f.0 == b.0 => "none: it is also fastest to trace".into(),
-                    (Some(f), Some(b)) => break_even((f.1, f.2), (b.1, b.2))
-                        .map_or("-".into(), |k| format!("{k:.1}")),
+                    (Some(f), Some(b)) => {
+                        break_even((f.1, f.2), (b.1, b.2)).map_or("-".into(), |k| format!("{k:.1}"))
+                    }
                     _ => "-".into(),
                 };
                 let _ = writeln!(
