@@ -15,8 +15,6 @@
 
 pub mod contestants;
 pub mod report;
-#[cfg(feature = "tinybvh")]
-pub mod tinybvh;
 
 use contestants::Contestant;
 use raybench_core::{Hit, Ray, RayCounters, RaySet, Renderer, Scene, ray_sets};
@@ -371,19 +369,16 @@ fn sum(parts: &[RayCounters]) -> RayCounters {
 }
 
 /// Best of `repeat` timings of `f` on `pool`, seconds.
-fn best_of(pool: &ThreadPool, repeat: usize, f: impl FnMut() + Send) -> f64 {
-    pool.install(|| best_time(repeat, f))
-}
-
-/// Best of `repeat` timings of `f` on the calling thread, seconds.
-fn best_time(repeat: usize, mut f: impl FnMut()) -> f64 {
-    (0..repeat)
-        .map(|_| {
-            let start = Instant::now();
-            f();
-            start.elapsed().as_secs_f64()
-        })
-        .fold(f64::INFINITY, f64::min)
+fn best_of(pool: &ThreadPool, repeat: usize, mut f: impl FnMut() + Send) -> f64 {
+    pool.install(|| {
+        (0..repeat)
+            .map(|_| {
+                let start = Instant::now();
+                f();
+                start.elapsed().as_secs_f64()
+            })
+            .fold(f64::INFINITY, f64::min)
+    })
 }
 
 /// A rayon pool of `threads` workers.
@@ -405,13 +400,7 @@ fn build(
     pool: &ThreadPool,
     repeat: usize,
 ) -> Result<(Box<dyn Renderer>, f64), String> {
-    let contestants::Make::Renderer(make) = c.make else {
-        return Err(format!(
-            "{} is a one-thread contestant, not a renderer",
-            c.name
-        ));
-    };
-    let mut r = make();
+    let mut r = (c.make)();
     r.availability()?;
     r.supports(scene)?;
     let mut best = f64::INFINITY;
@@ -487,9 +476,6 @@ fn measure(
     o: &Options,
     pools: &[(usize, ThreadPool)],
 ) -> Result<ContestantReport, String> {
-    if let contestants::Make::OneThread(one) = c.make {
-        return one(w, o);
-    }
     let all = &pools.last().expect("at least one pool").1;
     let (r, build_s) = build(c, &w.scene, all, o.repeat)?;
     let tracer = r.batch_tracer().ok_or("not a CPU structure")?;

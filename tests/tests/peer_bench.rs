@@ -4,7 +4,7 @@
 //! its command line, defaults (the workload of `../shared/PEERS.md`) and ray sets.
 
 use raybench_core::RaySet;
-use raybench_tests::peers::contestants::{self, Kind, Make};
+use raybench_tests::peers::contestants::{self, Kind};
 use raybench_tests::peers::{self, Command, Options};
 
 fn parse(args: &[&str]) -> Result<Command, String> {
@@ -102,19 +102,7 @@ fn contestants_are_the_exact_registry_backends_then_the_peers() {
         peers.starts_with(&["bvh-crate", "obvhs-bvh2", "obvhs-cwbvh"]),
         "{peers:?}"
     );
-    // tinybvh's BVH2 by both builders, and its BVH8_CPU where AVX2 is compiled in.
-    let tinybvh = if cfg!(feature = "tinybvh") {
-        2 + usize::from(cfg!(target_feature = "avx2"))
-    } else {
-        0
-    };
-    let embree = if cfg!(feature = "embree") { 4 } else { 0 };
-    assert_eq!(peers.len(), 3 + embree + tinybvh, "{peers:?}");
-    let one_thread = all
-        .iter()
-        .filter(|c| matches!(c.make, Make::OneThread(_)))
-        .count();
-    assert_eq!(one_thread, tinybvh);
+    assert_eq!(peers.len(), if cfg!(feature = "embree") { 7 } else { 3 });
     let picked = contestants::select(&["obvhs-bvh2".into(), "bvh".into()]).unwrap();
     let names: Vec<_> = picked.iter().map(|c| c.name).collect();
     assert_eq!(names, ["bvh", "obvhs-bvh2"]);
@@ -193,16 +181,11 @@ fn tiny_run_measures_every_contestant_and_writes_json() {
         let embree = ran.contains(&"embree1-default") && ran.contains(&"embree1-robust");
         assert_eq!(embree, cfg!(feature = "embree"));
         for c in &m.contestants {
-            // One-thread contestants (tinybvh's structures are not Send) run on 1 thread.
-            let one_thread = all
-                .iter()
-                .any(|a| a.name == c.name && matches!(a.make, Make::OneThread(_)));
-            let expected: &[usize] = if one_thread { &[1] } else { &[1, 2] };
             for s in &c.ray_sets {
                 let n = m.ray_sets.iter().find(|i| i.name == s.name).unwrap().rays;
                 for q in [&s.closest, &s.any] {
                     let threads: Vec<_> = q.runs.iter().map(|r| r.threads).collect();
-                    assert_eq!(threads, expected, "{}", c.name);
+                    assert_eq!(threads, [1, 2]);
                     assert!(q.runs.iter().all(|r| r.mrays.is_finite() && r.mrays > 0.0));
                     match c.kind {
                         Kind::Raybench => {
@@ -215,7 +198,7 @@ fn tiny_run_measures_every_contestant_and_writes_json() {
                     }
                     // One ratio per Embree reference and thread count.
                     assert_eq!(q.ratios.is_empty(), !embree, "{}", c.name);
-                    assert_eq!(q.ratios.len() % expected.len(), 0);
+                    assert_eq!(q.ratios.len() % 2, 0);
                 }
             }
             assert_eq!(c.build_vs_embree.is_some(), embree);

@@ -20,23 +20,7 @@ pub enum Kind {
     Peer,
 }
 
-/// How a contestant is made and measured.
-#[derive(Clone, Copy, Debug)]
-pub enum Make {
-    /// A fresh, unprepared renderer, whose batch tracer is timed on 1 thread and on all
-    /// cores.
-    Renderer(fn() -> Box<dyn Renderer>),
-    /// A structure that cannot be shared between threads (tinybvh's: C++ objects neither
-    /// `Send` nor `Sync`): one function builds it and traces the workload one ray at a
-    /// time on the calling thread, so its figures are on 1 thread only.
-    OneThread(OneThread),
-}
-
-/// A one-thread contestant's measurement of a workload (build, then every ray set).
-pub type OneThread =
-    fn(&super::Workload, &super::Options) -> Result<super::report::ContestantReport, String>;
-
-/// One contestant: a name, what it is, and how to make and measure it.
+/// One contestant: a name, what it is, and how to make its unprepared renderer.
 #[derive(Clone, Copy, Debug)]
 pub struct Contestant {
     /// The name in the tables, in the JSON and in `--contestants`.
@@ -45,8 +29,8 @@ pub struct Contestant {
     pub kind: Kind,
     /// One line of description.
     pub description: &'static str,
-    /// How it is made and measured.
-    pub make: Make,
+    /// Makes a fresh, unprepared renderer.
+    pub make: fn() -> Box<dyn Renderer>,
 }
 
 /// Every contestant, in table order: the registry's exact CPU backends except the brute
@@ -61,7 +45,7 @@ pub fn all() -> Vec<Contestant> {
             name: b.name,
             kind: Kind::Raybench,
             description: b.description,
-            make: Make::Renderer(b.make),
+            make: b.make,
         })
         .chain(PEERS.iter().copied())
         .collect()
@@ -108,76 +92,47 @@ pub const PEERS: &[Contestant] = &[
         name: "bvh-crate",
         kind: Kind::Peer,
         description: "svenstaro's bvh crate: its tree, a stack traversal, raybench's triangle test (registered backend bvh-crate)",
-        make: Make::Renderer(|| registered("bvh-crate")),
+        make: || registered("bvh-crate"),
     },
     Contestant {
         name: "obvhs-bvh2",
         kind: Kind::Peer,
         description: OBVHS_BVH2,
-        make: Make::Renderer(|| obvhs_renderer::<Bvh2>(OBVHS_BVH2)),
+        make: || obvhs_renderer::<Bvh2>(OBVHS_BVH2),
     },
     Contestant {
         name: "obvhs-cwbvh",
         kind: Kind::Peer,
         description: OBVHS_CWBVH,
-        make: Make::Renderer(|| obvhs_renderer::<CwBvh>(OBVHS_CWBVH)),
+        make: || obvhs_renderer::<CwBvh>(OBVHS_CWBVH),
     },
     #[cfg(feature = "embree")]
     Contestant {
         name: embree::SINGLE_ROBUST,
         kind: Kind::Peer,
         description: "Embree 3, robust mode, rtcIntersect1 / rtcOccluded1 per ray (registered backend embree)",
-        make: Make::Renderer(|| {
-            embree::single(embree::SINGLE_ROBUST, raybench_peers::EmbreeMode::Robust)
-        }),
+        make: || embree::single(embree::SINGLE_ROBUST, raybench_peers::EmbreeMode::Robust),
     },
     #[cfg(feature = "embree")]
     Contestant {
         name: embree::SINGLE_DEFAULT,
         kind: Kind::Peer,
         description: "Embree 3, default mode (not watertight), rtcIntersect1 / rtcOccluded1 per ray",
-        make: Make::Renderer(|| {
-            embree::single(embree::SINGLE_DEFAULT, raybench_peers::EmbreeMode::Default)
-        }),
+        make: || embree::single(embree::SINGLE_DEFAULT, raybench_peers::EmbreeMode::Default),
     },
     #[cfg(feature = "embree")]
     Contestant {
         name: embree::PACKET_ROBUST,
         kind: Kind::Peer,
         description: "Embree 3, robust mode, rtcIntersect16 / rtcOccluded16 on consecutive rays (registered backend embree-packet)",
-        make: Make::Renderer(|| {
-            embree::packet(embree::PACKET_ROBUST, raybench_peers::EmbreeMode::Robust)
-        }),
+        make: || embree::packet(embree::PACKET_ROBUST, raybench_peers::EmbreeMode::Robust),
     },
     #[cfg(feature = "embree")]
     Contestant {
         name: embree::PACKET_DEFAULT,
         kind: Kind::Peer,
         description: "Embree 3, default mode (not watertight), rtcIntersect16 / rtcOccluded16 on consecutive rays",
-        make: Make::Renderer(|| {
-            embree::packet(embree::PACKET_DEFAULT, raybench_peers::EmbreeMode::Default)
-        }),
-    },
-    #[cfg(feature = "tinybvh")]
-    Contestant {
-        name: super::tinybvh::BVH2,
-        kind: Kind::Peer,
-        description: "tinybvh 1.6.8 via tinybvh-rs: BVH (Wald BVH2) by BVH::Build, BVH::Intersect per ray, 1 thread; any hit = closest hit on the shortened ray",
-        make: Make::OneThread(super::tinybvh::bvh2_fast),
-    },
-    #[cfg(feature = "tinybvh")]
-    Contestant {
-        name: super::tinybvh::BVH2_HQ,
-        kind: Kind::Peer,
-        description: "tinybvh 1.6.8 via tinybvh-rs: BVH by BVH::BuildHQ (spatial splits), BVH::Intersect per ray, 1 thread; any hit = closest hit on the shortened ray",
-        make: Make::OneThread(super::tinybvh::bvh2_hq),
-    },
-    #[cfg(all(feature = "tinybvh", target_feature = "avx2"))]
-    Contestant {
-        name: super::tinybvh::BVH8_CPU,
-        kind: Kind::Peer,
-        description: "tinybvh 1.6.8 via tinybvh-rs: BVH8_CPU (from BVH::Build, leaves of 4, MBVH8), its AVX2 Intersect per ray, 1 thread; any hit = closest hit on the shortened ray",
-        make: Make::OneThread(super::tinybvh::bvh8_cpu),
+        make: || embree::packet(embree::PACKET_DEFAULT, raybench_peers::EmbreeMode::Default),
     },
 ];
 
