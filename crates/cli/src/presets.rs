@@ -246,21 +246,21 @@ pub const PRESETS: &[Preset] = &[
         "low",
         false,
         EmbreeQuality::Low,
-        "peer: Embree 3, rtcIntersect1, RTC_BUILD_QUALITY_LOW (Morton build)"
+        "peer: Embree 3, rtcIntersect1, RTC_BUILD_QUALITY_LOW (its fastest, lower-quality build)"
     ),
     #[cfg(feature = "embree")]
     embree_preset!(
         "medium",
         true,
         EmbreeQuality::Medium,
-        "peer: Embree 3, rtcIntersect1, RTC_BUILD_QUALITY_MEDIUM (binned SAH; the default)"
+        "peer: Embree 3, rtcIntersect1, RTC_BUILD_QUALITY_MEDIUM (its default)"
     ),
     #[cfg(feature = "embree")]
     embree_preset!(
         "high",
         false,
         EmbreeQuality::High,
-        "peer: Embree 3, rtcIntersect1, RTC_BUILD_QUALITY_HIGH (SAH with spatial splits)"
+        "peer: Embree 3, rtcIntersect1, RTC_BUILD_QUALITY_HIGH (spatial splits for triangles)"
     ),
 ];
 

@@ -78,11 +78,13 @@ impl EmbreeMode {
 /// `embree:high` of the registry.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum EmbreeQuality {
-    /// `RTC_BUILD_QUALITY_LOW`: Embree's fastest build (Morton codes), for dynamic scenes.
+    /// `RTC_BUILD_QUALITY_LOW`: Embree's fastest, lower-quality build (meant for dynamic
+    /// scenes).
     Low,
     /// `RTC_BUILD_QUALITY_MEDIUM`: Embree's default (binned SAH), what the backends use.
     Medium,
-    /// `RTC_BUILD_QUALITY_HIGH`: the best trees (SAH with spatial splits), slowest build.
+    /// `RTC_BUILD_QUALITY_HIGH`: higher-quality trees (spatial splits for triangles), the
+    /// slowest build.
     High,
 }
 

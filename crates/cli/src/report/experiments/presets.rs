@@ -301,7 +301,9 @@ impl Experiment for Presets {
              (median). Memory: primitives plus structure (Embree's own BVH is not counted). \
              Time to an image is `build + k x frame` with the camera-ray frame; the \
              break-even is the frame count after which the backend's fastest-tracing preset \
-             overtakes the one fastest to a first image.\n"
+             overtakes the one fastest to a first image. One run on a shared machine: a \
+             difference of a few per cent between presets is within its noise (the \
+             matrix's min-max spreads show how much).\n"
         );
         let _ = writeln!(
             s,
