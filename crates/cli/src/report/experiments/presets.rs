@@ -1,6 +1,7 @@
 //! Experiment `presets`: every builder preset of the chosen backends
-//! ([`crate::presets::PRESETS`]) on the scenes whose `[benchmark]` table names it (and, in
-//! the full run, a generated triangle soup): build time (median of the run's repetitions)
+//! ([`crate::presets::PRESETS`]) on the scene whose `[benchmark]` table names it (the bunny;
+//! a built-in scene names each experiment once) and, in the full run, a generated triangle
+//! soup: build time (median of the run's repetitions)
 //! against the trace time of camera rays and of incoherent rays, the structure's memory,
 //! and the time to an image, `build + k x frame` for k = 1, 16 and 256 frames, with the
 //! frame count at which a slower-building, faster-tracing preset pays for its build.
