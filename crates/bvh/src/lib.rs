@@ -21,6 +21,9 @@ mod params;
 mod traverse;
 
 pub use node::Node;
+/// obvhs's build parameters and their presets (`fastest_build()` .. `very_slow_build()`),
+/// for [`ObvhsAccel::build_with`].
+pub use obvhs::BvhBuildParams as ObvhsBuildParams;
 pub use obvhs_adapter::ObvhsAccel;
 pub use params::BvhParams;
 

@@ -92,8 +92,8 @@ impl std::fmt::Debug for ObvhsAccel {
 }
 
 impl ObvhsAccel {
-    /// Builds with obvhs's `medium_build` preset (PLOC, reinsertion, up to 3 primitives
-    /// per leaf).
+    /// Builds with obvhs's parameters `params` ([`Accel::build`]: its `medium_build` preset,
+    /// PLOC, reinsertion, up to 3 primitives per leaf).
     #[must_use]
     pub fn build_with(geometry: Arc<Geometry>, params: BvhBuildParams) -> Self {
         let bounds = geometry.bounds();

@@ -6,6 +6,7 @@
 
 pub mod diff;
 pub mod measure;
+pub mod presets;
 pub mod progress;
 pub mod rays_file;
 pub mod report;
@@ -193,13 +194,15 @@ const fn same(a: &[u8], b: &[u8]) -> bool {
     true
 }
 
-/// The roles of the backend called `name`, built ([`BACKENDS`]) or not ([`NOT_BUILT`]).
+/// The roles of the backend called `name`, built ([`BACKENDS`], [`presets::PRESETS`]) or
+/// not ([`NOT_BUILT`]).
 #[must_use]
 pub fn roles_of(name: &str) -> Option<Roles> {
     BACKENDS
         .iter()
         .find(|b| b.name == name)
         .map(|b| b.roles)
+        .or_else(|| backend(name).ok().map(|b| b.roles))
         .or_else(|| NOT_BUILT.iter().find(|n| n.name == name).map(|n| n.roles))
 }
 
@@ -475,11 +478,14 @@ const EMBREE_NEEDS: &str = "the system library libembree3; Debian: apt install l
 /// Backends in order of preference for `render` without `--backend` (fastest first).
 pub const PREFERENCE: &[&str] = &["packet", "bvh", "obvhs", "grid2", "grid", "naive"];
 
-/// The backend called `name`.
+/// The backend called `name`, or the preset `BACKEND:PRESET` ([`presets::PRESETS`]).
 ///
 /// # Errors
-/// A message listing the known backends.
+/// A message listing the known backends (or the backend's known presets).
 pub fn backend(name: &str) -> Result<&'static Backend, String> {
+    if let Some(preset) = presets::preset_backend(name) {
+        return preset;
+    }
     BACKENDS.iter().find(|b| b.name == name).ok_or_else(|| {
         if let Some(n) = NOT_BUILT.iter().find(|n| n.name == name) {
             return format!("backend '{name}' is {}", n.reason());

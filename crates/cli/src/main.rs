@@ -59,7 +59,8 @@ enum Command {
     Compare(CompareCmd),
     /// List the built-in scenes and generators.
     Scenes,
-    /// List the backends and whether they are available here.
+    /// List the backends, their build presets (BACKEND:PRESET) and whether they are
+    /// available here.
     Backends {
         /// One JSON array on stdout.
         #[arg(long)]
@@ -238,7 +239,8 @@ struct ReportCmd {
     /// Comma-separated scenes (default: the built-in list; see the README).
     #[arg(long, value_delimiter = ',')]
     scenes: Option<Vec<String>>,
-    /// Comma-separated backends (default: every backend but the pinned variants).
+    /// Comma-separated backends, or build presets as BACKEND:PRESET (default: every backend
+    /// but the pinned variants).
     #[arg(long, value_delimiter = ',')]
     backends: Option<Vec<String>>,
     /// Comma-separated modes (cast, whitted, path, mip, composite; default: all).
@@ -432,7 +434,7 @@ fn parse_mode(s: &str) -> Result<Mode, String> {
 struct RenderCmd {
     /// Scene: a file (.toml, .obj, .gltf, .glb, .ply), a built-in name or a generator (soup:1000).
     scene: String,
-    /// Backend (default: the fastest available).
+    /// Backend, or a build preset as BACKEND:PRESET (default: the fastest available).
     #[arg(long)]
     backend: Option<String>,
     #[command(flatten)]
@@ -454,8 +456,9 @@ struct RenderCmd {
 struct CompareCmd {
     /// Scene (as for render).
     scene: String,
-    /// Comma-separated backends, the first being the reference (default: every available
-    /// backend, naive first when it finishes in reasonable time).
+    /// Comma-separated backends or BACKEND:PRESET build presets, the first being the
+    /// reference (default: every available backend, naive first when it finishes in
+    /// reasonable time).
     #[arg(long, value_delimiter = ',')]
     backends: Option<Vec<String>>,
     #[command(flatten)]
@@ -483,7 +486,7 @@ fn parse_ray_set(s: &str) -> Result<RaySet, String> {
 struct InfoCmd {
     /// Scene (as for render).
     scene: String,
-    /// Comma-separated backends (default: all available).
+    /// Comma-separated backends or BACKEND:PRESET build presets (default: all available).
     #[arg(long, value_delimiter = ',')]
     backends: Option<Vec<String>>,
     /// The probe's rays, whose work per ray is shown.
@@ -1064,6 +1067,12 @@ fn scenes(assets: &Path) -> Result<ExitCode> {
 #[derive(Serialize)]
 struct BackendRow {
     name: &'static str,
+    /// For a build preset (`bvh:fast`): the backend it builds, and whether it is that
+    /// backend's default.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    preset_of: Option<&'static str>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    default_preset: Option<bool>,
     available: bool,
     reason: Option<String>,
     exact: bool,
@@ -1075,11 +1084,13 @@ struct BackendRow {
 }
 
 fn backends(json: bool) -> Result<ExitCode> {
-    let built = BACKENDS.iter().map(|b| {
+    let row = |b: &'static raybench::Backend, preset: Option<(&'static str, bool)>| {
         let r = (b.make)();
         let avail = r.availability();
         BackendRow {
             name: b.name,
+            preset_of: preset.map(|p| p.0),
+            default_preset: preset.map(|p| p.1),
             available: avail.is_ok(),
             reason: avail.err(),
             exact: b.exact(),
@@ -1087,9 +1098,15 @@ fn backends(json: bool) -> Result<ExitCode> {
             description: b.description,
             device: r.device(),
         }
-    });
+    };
+    let built = BACKENDS.iter().map(|b| row(b, None));
+    let presets = raybench::presets::PRESETS
+        .iter()
+        .map(|p| row(&p.entry, Some((p.backend, p.default))));
     let not_built = NOT_BUILT.iter().map(|n| BackendRow {
         name: n.name,
+        preset_of: None,
+        default_preset: None,
         available: false,
         reason: Some(n.reason()),
         exact: false,
@@ -1097,19 +1114,37 @@ fn backends(json: bool) -> Result<ExitCode> {
         description: n.description,
         device: None,
     });
-    let rows: Vec<BackendRow> = built.chain(not_built).collect();
+    let rows: Vec<BackendRow> = built.chain(not_built).chain(presets).collect();
     if json {
         println!("{}", serde_json::to_string_pretty(&rows)?);
     } else {
+        let width = rows
+            .iter()
+            .map(|r| r.name.len() + 2)
+            .max()
+            .unwrap_or(0)
+            .max(16);
+        let mut presets_begun = false;
         for r in rows {
+            if r.preset_of.is_some() && !presets_begun {
+                presets_begun = true;
+                println!(
+                    "\nBuild presets (name them as BACKEND:PRESET wherever a backend is taken; \
+                     * = the backend's default):"
+                );
+            }
+            let name = match r.default_preset {
+                Some(true) => format!("{}*", r.name),
+                _ => r.name.to_string(),
+            };
             let state = if r.available {
                 "available".to_string()
             } else {
                 format!("unavailable ({})", r.reason.unwrap_or_default())
             };
-            println!("{:<16} {:<12} {}", r.name, state, r.description);
+            println!("{name:<width$} {:<12} {}", state, r.description);
             if let Some(d) = &r.device {
-                println!("{:<16} {:<12} device: {d}", "", "");
+                println!("{:<width$} {:<12} device: {d}", "", "");
             }
         }
     }

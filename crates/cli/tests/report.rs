@@ -667,3 +667,82 @@ fn report_replays_a_ray_file() {
     assert!(!dir.join("bad").join("results.json").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The `presets` experiment end to end on the scene whose `[benchmark]` table names it (the
+/// bunny), with two presets named as `BACKEND:PRESET`: a build time, a camera-ray and an
+/// incoherent point per preset, its tables and charts.
+#[test]
+fn the_presets_experiment_runs_and_is_written() {
+    let assets = std::env::var("RAYBENCH_ASSETS").unwrap_or_default();
+    if !Path::new(&assets)
+        .join("bunny/stanford-bunny.obj")
+        .is_file()
+    {
+        assert!(
+            std::env::var("CI").as_deref() != Ok("true"),
+            "CI=true but the bunny is missing"
+        );
+        eprintln!("SKIPPED: the bunny is not in RAYBENCH_ASSETS");
+        return;
+    }
+    let dir = tmp_dir("presets");
+    let out = raybench(&[
+        "report",
+        "--quick",
+        "--scenes",
+        "spheres",
+        "--modes",
+        "cast",
+        "--backends",
+        "bvh:fast,bvh:quality",
+        "--size",
+        "16",
+        "--repeat",
+        "1",
+        "--experiments",
+        "presets",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = results(&dir);
+    let points = r["scaling"].as_array().unwrap();
+    // --quick: the bunny alone; two presets, two ray sets.
+    assert_eq!(points.len(), 4, "{points:?}");
+    for p in points {
+        assert_eq!(p["experiment"], "presets");
+        assert!(p["build_seconds"].as_f64().unwrap() > 0.0, "{p}");
+        assert!(p["memory_bytes"].as_u64().unwrap() > 0, "{p}");
+        assert_eq!(p["rays"], 256);
+    }
+    for (series, backend) in [
+        ("bunny primary", "bvh:fast"),
+        ("bunny incoherent", "bvh:quality"),
+    ] {
+        assert!(
+            points
+                .iter()
+                .any(|p| p["series"] == series && p["backend"] == backend),
+            "{series} {backend}"
+        );
+    }
+    // One point per series and backend: no fits.
+    assert!(r["fits"].as_array().unwrap().is_empty());
+    let md = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
+    assert!(
+        md.contains("## Build presets: build time against trace time"),
+        "{md}"
+    );
+    assert!(md.contains("| bunny | bvh:fast |"), "{md}");
+    assert!(md.contains("| bunny | bvh | "), "{md}");
+    if !md.contains("> Charts:") {
+        for chart in ["presets-bunny-primary", "presets-bunny-time-to-image"] {
+            assert!(md.contains(&format!("charts/{chart}.png")), "{md}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

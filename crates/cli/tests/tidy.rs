@@ -24,6 +24,10 @@ const ALLOWED: &[(&str, &str)] = &[
         "crates/cli/src/lib.rs",
         "the registry: the one place that maps names and roles to backends",
     ),
+    (
+        "crates/cli/src/presets.rs",
+        "the registry's builder presets: each backend's named build parameters",
+    ),
     ("crates/bvh/", "a backend crate: it names itself"),
     ("crates/grid/", "a backend crate: it names itself"),
     (

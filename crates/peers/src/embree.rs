@@ -13,11 +13,12 @@
 #![allow(unsafe_code)]
 
 use embree::sys::{
-    RTCBufferType, RTCDevice, RTCDeviceProperty, RTCError, RTCFormat, RTCGeometryType, RTCHit,
-    RTCIntersectContext, RTCIntersectContextFlags, RTCRay, RTCRayHit, RTCScene, RTCSceneFlags,
-    rtcAttachGeometry, rtcCommitGeometry, rtcCommitScene, rtcGetDeviceError, rtcGetDeviceProperty,
-    rtcIntersect1, rtcNewDevice, rtcNewGeometry, rtcNewScene, rtcOccluded1, rtcReleaseGeometry,
-    rtcReleaseScene, rtcSetNewGeometryBuffer, rtcSetSceneFlags,
+    RTCBufferType, RTCBuildQuality, RTCDevice, RTCDeviceProperty, RTCError, RTCFormat,
+    RTCGeometryType, RTCHit, RTCIntersectContext, RTCIntersectContextFlags, RTCRay, RTCRayHit,
+    RTCScene, RTCSceneFlags, rtcAttachGeometry, rtcCommitGeometry, rtcCommitScene,
+    rtcGetDeviceError, rtcGetDeviceProperty, rtcIntersect1, rtcNewDevice, rtcNewGeometry,
+    rtcNewScene, rtcOccluded1, rtcReleaseGeometry, rtcReleaseScene, rtcSetGeometryBuildQuality,
+    rtcSetNewGeometryBuffer, rtcSetSceneBuildQuality, rtcSetSceneFlags,
 };
 use raybench_geometry::{
     Accel, AccelStats, Counters, Geometry, Hit, PrimHit, PrimitiveKind, QualityParams, Ray, Shape,
@@ -69,6 +70,44 @@ impl EmbreeMode {
         match self {
             Self::Robust => RTCSceneFlags::ROBUST,
             Self::Default => RTCSceneFlags::NONE,
+        }
+    }
+}
+
+/// Embree's build quality (`rtcSetSceneBuildQuality`, and the mesh's
+/// `rtcSetGeometryBuildQuality`): the builder presets `embree:low`, `embree:medium`,
+/// `embree:high` of the registry.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum EmbreeQuality {
+    /// `RTC_BUILD_QUALITY_LOW`: Embree's fastest, lower-quality build (meant for dynamic
+    /// scenes).
+    Low,
+    /// `RTC_BUILD_QUALITY_MEDIUM`: Embree's default (binned SAH), what the backends use.
+    Medium,
+    /// `RTC_BUILD_QUALITY_HIGH`: higher-quality trees (spatial splits for triangles), the
+    /// slowest build.
+    High,
+}
+
+impl EmbreeQuality {
+    /// The three qualities, fastest build first.
+    pub const ALL: [Self; 3] = [Self::Low, Self::Medium, Self::High];
+
+    /// `"low"`, `"medium"` or `"high"`.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Low => "low",
+            Self::Medium => "medium",
+            Self::High => "high",
+        }
+    }
+
+    fn rtc(self) -> RTCBuildQuality {
+        match self {
+            Self::Low => RTCBuildQuality::LOW,
+            Self::Medium => RTCBuildQuality::MEDIUM,
+            Self::High => RTCBuildQuality::HIGH,
         }
     }
 }
@@ -212,6 +251,8 @@ struct Inner {
     side: Vec<u32>,
     /// The scene mode Embree's scene was built with.
     mode: EmbreeMode,
+    /// The build quality it was built with.
+    quality: EmbreeQuality,
 }
 
 /// Panics with Embree's last error on this thread, if any, naming what was being done.
@@ -222,7 +263,7 @@ fn check(device: RTCDevice, what: &str) {
 }
 
 impl Inner {
-    fn build(geometry: Arc<Geometry>, mode: EmbreeMode) -> Self {
+    fn build(geometry: Arc<Geometry>, mode: EmbreeMode, quality: EmbreeQuality) -> Self {
         let mut ids = Vec::new();
         let mut side = Vec::new();
         for &id in geometry.bounded() {
@@ -231,30 +272,42 @@ impl Inner {
                 _ => side.push(id),
             }
         }
-        let scene = (!ids.is_empty()).then(|| Self::embree_scene(&geometry, &ids, mode));
+        let scene = (!ids.is_empty()).then(|| Self::embree_scene(&geometry, &ids, mode, quality));
         Self {
             geometry,
             scene,
             ids,
             side,
             mode,
+            quality,
         }
     }
 
     /// One Embree triangle mesh with the triangles `ids` of `geometry` (three vertices of
-    /// their own each: raybench stores triangles, not indexed meshes), committed in `mode`.
-    fn embree_scene(geometry: &Geometry, ids: &[u32], mode: EmbreeMode) -> SceneHandle {
+    /// their own each: raybench stores triangles, not indexed meshes), committed in `mode`
+    /// at build quality `quality`.
+    fn embree_scene(
+        geometry: &Geometry,
+        ids: &[u32],
+        mode: EmbreeMode,
+        quality: EmbreeQuality,
+    ) -> SceneHandle {
         let device = device().unwrap_or_else(|e| panic!("Embree is unavailable: {e}"));
         let n = ids.len();
         // SAFETY: `device` is valid; a failure (null scene) is caught by `check` before use.
         let scene = unsafe { rtcNewScene(device) };
         check(device, "create a scene");
         // SAFETY: `scene` is a valid, uncommitted scene.
-        unsafe { rtcSetSceneFlags(scene, mode.flags()) };
+        unsafe {
+            rtcSetSceneFlags(scene, mode.flags());
+            rtcSetSceneBuildQuality(scene, quality.rtc());
+        }
         let scene = SceneHandle(scene);
         // SAFETY: as above.
         let mesh = unsafe { rtcNewGeometry(device, RTCGeometryType::TRIANGLE) };
         check(device, "create a triangle mesh");
+        // SAFETY: `mesh` is a valid, uncommitted triangle geometry.
+        unsafe { rtcSetGeometryBuildQuality(mesh, quality.rtc()) };
         // SAFETY: `mesh` is a valid triangle geometry; Embree allocates the buffers (padded
         // for its vector loads) with the given stride and count and returns their data.
         let (vertices, indices) = unsafe {
@@ -399,6 +452,10 @@ impl Inner {
                 ("embree triangles", n as u64),
                 ("side primitives", self.side.len() as u64),
                 ("robust mode", u64::from(self.mode == EmbreeMode::Robust)),
+                (
+                    "build quality (0 low, 1 medium, 2 high)",
+                    self.quality as u64,
+                ),
             ],
         }
     }
@@ -671,7 +728,23 @@ impl EmbreeAccel {
     /// As [`Accel::build`].
     #[must_use]
     pub fn build_with_mode(geometry: Arc<Geometry>, mode: EmbreeMode) -> Self {
-        Self(Inner::build(geometry, mode))
+        Self::build_with(geometry, mode, EmbreeQuality::Medium)
+    }
+
+    /// The structure over `geometry`, built in `mode` at build quality `quality` (the
+    /// registry's presets `embree:low`, `embree:medium`, `embree:high`).
+    ///
+    /// # Panics
+    /// As [`Accel::build`].
+    #[must_use]
+    pub fn build_with(geometry: Arc<Geometry>, mode: EmbreeMode, quality: EmbreeQuality) -> Self {
+        Self(Inner::build(geometry, mode, quality))
+    }
+
+    /// The build quality.
+    #[must_use]
+    pub fn quality(&self) -> EmbreeQuality {
+        self.0.quality
     }
 
     /// The scene mode.
@@ -704,7 +777,7 @@ impl EmbreePacketAccel {
             "Embree packets hold 8 or 16 rays"
         );
         Self {
-            inner: Inner::build(geometry, mode),
+            inner: Inner::build(geometry, mode, EmbreeQuality::Medium),
             width,
         }
     }

@@ -24,6 +24,7 @@ mod embree;
 pub use bvh_crate::BvhCrateAccel;
 #[cfg(feature = "embree")]
 pub use embree::{
-    DEFAULT_PACKET_WIDTH, EmbreeAccel, EmbreeMode, EmbreePacketAccel, MAX_SIDE_PRIMITIVES,
-    availability as embree_availability, supports as embree_supports, version as embree_version,
+    DEFAULT_PACKET_WIDTH, EmbreeAccel, EmbreeMode, EmbreePacketAccel, EmbreeQuality,
+    MAX_SIDE_PRIMITIVES, availability as embree_availability, supports as embree_supports,
+    version as embree_version,
 };

@@ -484,8 +484,9 @@ pub struct ScalingPoint {
     /// Index into [`Results::shards`].
     pub shard: usize,
     /// `primitives` (x = M), `pixels` (x = N^2), `spp` (x = K), `heightfield` (x = N^2
-    /// cells; series `direct` or `tessellated`) or `bezier` (x = primitives: 32 patches, or
-    /// `2 N^2 32` triangles; series `direct` or `tessellated`).
+    /// cells; series `direct` or `tessellated`), `bezier` (x = primitives: 32 patches, or
+    /// `2 N^2 32` triangles; series `direct` or `tessellated`) or `presets` (x = rays;
+    /// series `SCENE RAYS`, such as `bunny primary`; backend `BACKEND:PRESET`).
     pub experiment: String,
     /// The scene or generator varied (`soup`, `spheres`, `bunny`, `cornell-box`).
     pub series: String,
@@ -503,10 +504,11 @@ pub struct ScalingPoint {
     /// building the min-max levels).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub load_seconds: Option<f64>,
-    /// Seconds to build the backend's structure (experiment `heightfield`).
+    /// Seconds to build the backend's structure (experiments `heightfield` and `presets`:
+    /// there the median of the run's repetitions).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub build_seconds: Option<f64>,
-    /// Bytes of primitives plus structure (experiment `heightfield`).
+    /// Bytes of primitives plus structure (experiments `heightfield` and `presets`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub memory_bytes: Option<u64>,
     /// The image against the direct rendering (experiment `bezier`, tessellated points).

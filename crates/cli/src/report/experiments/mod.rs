@@ -10,6 +10,7 @@ mod bezier;
 mod heightfield;
 mod matrix;
 mod pixels;
+mod presets;
 mod primitives;
 mod quality;
 mod spp;
@@ -27,22 +28,24 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// Every experiment in the order it runs and is written: the matrix, then [`SCALING`].
-pub(super) const ALL: [&dyn Experiment; 6] = [
+pub(super) const ALL: [&dyn Experiment; 7] = [
     &matrix::Matrix,
     SCALING[0],
     SCALING[1],
     SCALING[2],
     SCALING[3],
     SCALING[4],
+    SCALING[5],
 ];
 
 /// The scaling experiments, in the order they run (`--experiments` names them).
-pub(super) const SCALING: [&dyn Experiment; 5] = [
+pub(super) const SCALING: [&dyn Experiment; 6] = [
     &primitives::Primitives,
     &pixels::Pixels,
     &spp::Spp,
     &heightfield::Heightfield,
     &bezier::Bezier,
+    &presets::Presets,
 ];
 
 /// A unit of an experiment ready to run, and how many progress steps it takes.
