@@ -746,3 +746,47 @@ fn the_presets_experiment_runs_and_is_written() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A derived set without rays (shadow rays in a scene without lights) is not timed: the
+/// workload is listed as skipped with the reason, and the other sets run.
+#[test]
+fn a_workload_without_rays_is_skipped_with_its_reason() {
+    let dir = tmp_dir("no-lights");
+    let out = raybench(&[
+        "report",
+        "--scenes",
+        "soup:200",
+        "--backends",
+        "naive,bvh",
+        "--modes",
+        "cast",
+        "--rays",
+        "primary,shadow",
+        "--size",
+        "16",
+        "--repeat",
+        "1",
+        "--no-scaling",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = results(&dir);
+    let sets: Vec<&str> = r["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["ray_set"].as_str().unwrap())
+        .collect();
+    assert_eq!(sets, ["primary", "primary"]);
+    let skipped = r["skipped"].as_array().unwrap();
+    assert_eq!(skipped.len(), 1, "{skipped:?}");
+    assert_eq!(skipped[0]["kind"], "workload");
+    assert_eq!(skipped[0]["name"], "soup:200 cast-shadow");
+    assert!(skipped[0]["reason"].as_str().unwrap().contains("no light"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -173,7 +173,7 @@ mod tests {
         serde_json::from_value(serde_json::json!({
             "shard": 0, "scene": "s", "primitives": 1, "mode": "cast", "ray_set": "primary",
             "width": 1000, "height": 1000, "spp": 1, "backend": backend, "exact": true,
-            "reference": "naive", "status": "ok", "reason": null, "build_seconds": 0.1,
+            "reference": "oracle", "status": "ok", "reason": null, "build_seconds": 0.1,
             "memory_bytes": 1, "structure": {}, "seconds": timing, "rays": rays,
             "mrays_per_s": rays as f64 / timing.median / 1e6, "tests_per_ray": null,
             "visits_per_ray": null, "equality": null, "images": {}

@@ -61,7 +61,17 @@ impl Experiment for Matrix {
         results: &mut Results,
     ) -> Result<()> {
         if let Some(scene) = &planned.scene {
-            results.runs.extend(run_scene(ctx, scene, progress)?);
+            let (runs, empty) = run_scene(ctx, scene, progress)?;
+            results.runs.extend(runs);
+            for (workload, why) in empty {
+                skip(
+                    results,
+                    "workload",
+                    &format!("{} {workload}", scene.name),
+                    "skipped",
+                    why,
+                );
+            }
         }
         Ok(())
     }
@@ -466,8 +476,15 @@ fn workloads(ctx: &Ctx, scene: &Scene) -> Vec<Workload> {
 }
 
 /// Renders `scene` with every chosen backend on every workload, the reference first.
-fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<Run>> {
-    let workloads = workloads(ctx, scene);
+///
+/// Also returns the workloads left out because they have no rays (a derived set of a scene
+/// without lights, or whose camera sees nothing), with the reason.
+fn run_scene(
+    ctx: &Ctx,
+    scene: &Arc<Scene>,
+    progress: &Progress,
+) -> Result<(Vec<Run>, Vec<(String, String)>)> {
+    let mut workloads = workloads(ctx, scene);
     let prims = scene.geometry.len();
     // The reference: the oracle where it fits every workload's budget, else the
     // baseline. Brute-force backends run only within that budget.
@@ -498,7 +515,7 @@ fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<R
         progress.remove(workloads.len());
     }
     if order.is_empty() {
-        return Ok(Vec::new());
+        return Ok((Vec::new(), Vec::new()));
     }
 
     let params = DerivedParams {
@@ -534,6 +551,33 @@ fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<R
                 .collect::<Result<Box<Views>>>()
         })
         .collect::<Result<_>>()?;
+    // A set derived from the primary hits can be empty (shadow rays without lights): there
+    // is nothing to time.
+    let no_rays = |views: &Views| {
+        views
+            .iter()
+            .all(|(_, rays)| rays.as_ref().is_some_and(|b| b.rays.is_empty()))
+    };
+    let mut empty = Vec::new();
+    let kept: Vec<(Workload, Box<Views>)> = workloads
+        .drain(..)
+        .zip(explicit)
+        .filter(|(w, views)| {
+            if no_rays(views) {
+                progress.remove(order.len());
+                let why = if w.rays == RaySet::Shadow {
+                    "no rays: the scene has no light to aim shadow rays at".to_string()
+                } else {
+                    format!("no {} rays: no primary ray hits the scene", w.ray_set())
+                };
+                empty.push((w.key(), why));
+                false
+            } else {
+                true
+            }
+        })
+        .collect();
+    let (workloads, explicit): (Vec<Workload>, Vec<Box<Views>>) = kept.into_iter().unzip();
     let mut reference: Vec<Option<Reference>> = workloads.iter().map(|_| None).collect();
     let mut runs = Vec::new();
     for b in order {
@@ -685,7 +729,7 @@ fn run_scene(ctx: &Ctx, scene: &Arc<Scene>, progress: &Progress) -> Result<Vec<R
             runs.push(run);
         }
     }
-    Ok(runs)
+    Ok((runs, empty))
 }
 
 /// How a backend's measurement compares with the reference's, writing the images of a
