@@ -752,10 +752,18 @@ fn the_presets_experiment_runs_and_is_written() {
 #[test]
 fn a_workload_without_rays_is_skipped_with_its_reason() {
     let dir = tmp_dir("no-lights");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("dark.toml");
+    std::fs::write(
+        &scene,
+        "name = \"dark\"\n[[object]]\nkind = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n",
+    )
+    .unwrap();
+    let out_dir = dir.join("out");
     let out = raybench(&[
         "report",
         "--scenes",
-        "soup:200",
+        scene.to_str().unwrap(),
         "--backends",
         "naive,bvh",
         "--modes",
@@ -768,14 +776,14 @@ fn a_workload_without_rays_is_skipped_with_its_reason() {
         "1",
         "--no-scaling",
         "--out",
-        dir.to_str().unwrap(),
+        out_dir.to_str().unwrap(),
     ]);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let r = results(&dir);
+    let r = results(&out_dir);
     let sets: Vec<&str> = r["runs"]
         .as_array()
         .unwrap()
@@ -786,7 +794,7 @@ fn a_workload_without_rays_is_skipped_with_its_reason() {
     let skipped = r["skipped"].as_array().unwrap();
     assert_eq!(skipped.len(), 1, "{skipped:?}");
     assert_eq!(skipped[0]["kind"], "workload");
-    assert_eq!(skipped[0]["name"], "soup:200 cast-shadow");
+    assert_eq!(skipped[0]["name"], "dark cast-shadow");
     assert!(skipped[0]["reason"].as_str().unwrap().contains("no light"));
     let _ = std::fs::remove_dir_all(&dir);
 }
