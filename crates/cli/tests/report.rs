@@ -798,3 +798,51 @@ fn a_workload_without_rays_is_skipped_with_its_reason() {
     assert!(skipped[0]["reason"].as_str().unwrap().contains("no light"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A scene over the machine's memory budget (the largest scaling points on a small machine)
+/// is skipped with the budget's message, even under `CI=true`, and the run goes on.
+#[test]
+fn a_scene_over_the_memory_budget_is_skipped() {
+    let dir = tmp_dir("over-budget");
+    let out = Command::new(env!("CARGO_BIN_EXE_raybench"))
+        .args([
+            "report",
+            "--scenes",
+            "spheres,soup:200000",
+            "--backends",
+            "bvh",
+            "--modes",
+            "cast",
+            "--rays",
+            "primary",
+            "--size",
+            "16",
+            "--repeat",
+            "1",
+            "--no-scaling",
+            "--out",
+            dir.to_str().unwrap(),
+        ])
+        .env("RAYBENCH_MEMORY_LIMIT", "8M")
+        .env("CI", "true")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = results(&dir);
+    assert_eq!(r["runs"].as_array().unwrap().len(), 1);
+    let skipped = r["skipped"].as_array().unwrap();
+    assert_eq!(skipped.len(), 1, "{skipped:?}");
+    assert_eq!(skipped[0]["name"], "soup:200000");
+    assert!(
+        skipped[0]["reason"]
+            .as_str()
+            .unwrap()
+            .contains("memory budget"),
+        "{skipped:?}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

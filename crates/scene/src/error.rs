@@ -78,4 +78,11 @@ impl LoadError {
     pub fn is_missing_asset(&self) -> bool {
         matches!(self, Self::MissingAsset { .. })
     }
+
+    /// True when the scene would not fit in this machine's memory budget (harnesses skip
+    /// such scenes, saying so: the same run fits on a larger machine).
+    #[must_use]
+    pub fn is_over_budget(&self) -> bool {
+        matches!(self, Self::OverBudget { .. })
+    }
 }
