@@ -477,13 +477,13 @@ fn workloads(ctx: &Ctx, scene: &Scene) -> Vec<Workload> {
 
 /// Renders `scene` with every chosen backend on every workload, the reference first.
 ///
-/// Also returns the workloads left out because they have no rays (a derived set of a scene
+/// Also returns the workloads left out because they have no rays ([`NoRays`]) (a derived set of a scene
 /// without lights, or whose camera sees nothing), with the reason.
 fn run_scene(
     ctx: &Ctx,
     scene: &Arc<Scene>,
     progress: &Progress,
-) -> Result<(Vec<Run>, Vec<(String, String)>)> {
+) -> Result<(Vec<Run>, Vec<NoRays>)> {
     let mut workloads = workloads(ctx, scene);
     let prims = scene.geometry.len();
     // The reference: the oracle where it fits every workload's budget, else the
@@ -789,6 +789,9 @@ fn equality(
         pass,
     })
 }
+
+/// A workload left out because it has no rays: its key (`cast-shadow`) and why.
+type NoRays = (String, String);
 
 /// The reference backend's measurement of one workload: over every camera, each camera's,
 /// and the first camera's image.
