@@ -277,7 +277,9 @@ pub fn run(opts: &Options) -> Result<Results> {
 /// When a file cannot be written.
 pub fn write(results: &Results, out: &Path) -> Result<()> {
     std::fs::create_dir_all(out.join("charts"))?;
-    let json = serde_json::to_string_pretty(results)?;
+    // Compact: a full report's results run to hundreds of kilobytes, read by tools (`jq`
+    // formats them for people).
+    let json = serde_json::to_string(results)?;
     // Every file through a temporary name: an interrupted run leaves the previous report's
     // files whole, never a truncated one.
     write_text(&out.join("results.json"), &(json + "\n"))?;
