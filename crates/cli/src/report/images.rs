@@ -82,6 +82,20 @@ pub fn flip(reference: &Rgb8, test: &Rgb8) -> (f64, Rgb8) {
     )
 }
 
+/// `n >= 2` evenly spaced colours of the magma colour map that [`flip`] draws its error
+/// maps in, from error 0 to error 1 (the colour key of those maps).
+#[must_use]
+pub fn magma_stops(n: usize) -> Vec<[u8; 3]> {
+    let lut = nv_flip::magma_lut().to_vec();
+    let last = lut.len() / 3 - 1;
+    (0..n)
+        .map(|i| {
+            let j = 3 * (i * last / (n - 1).max(1));
+            [lut[j], lut[j + 1], lut[j + 2]]
+        })
+        .collect()
+}
+
 /// A heat map of id differences: black where the ids agree, orange where both hit different
 /// primitives, white where one hits and the other misses; the reference's image, darkened,
 /// shows through agreeing pixels when given.
@@ -155,6 +169,18 @@ mod tests {
             0.0 < small && small < large && large <= 1.0,
             "{small} {large}"
         );
+    }
+
+    #[test]
+    fn magma_runs_from_dark_to_light() {
+        let stops = magma_stops(9);
+        assert_eq!(stops.len(), 9);
+        let luma = |c: &[u8; 3]| u32::from(c[0]) + u32::from(c[1]) + u32::from(c[2]);
+        assert!(
+            stops.windows(2).all(|w| luma(&w[0]) < luma(&w[1])),
+            "{stops:?}"
+        );
+        assert!(luma(&stops[0]) < 40 && luma(&stops[8]) > 600, "{stops:?}");
     }
 
     #[test]

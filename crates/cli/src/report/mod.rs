@@ -1,11 +1,13 @@
 //! `raybench report`: renders a matrix of scenes, workloads and backends, times them, checks
 //! that the images agree, runs the scaling experiments, and writes `REPORT.md`, charts,
-//! images and `results.json` into one folder. `raybench merge` joins the results of
+//! images, `REPORT.html` (the same report as a page with an image viewer) and `results.json`
+//! into one folder. `raybench merge` joins the results of
 //! shards (parts of the matrix run on several machines or at several times).
 
 pub mod baseline;
 pub mod charts;
 mod experiments;
+mod html;
 pub mod images;
 pub mod machine;
 mod markdown;
@@ -255,27 +257,26 @@ pub fn run(opts: &Options) -> Result<Results> {
     }
     results.shards[0].wall_seconds = wall.elapsed().as_secs_f64();
     results.fit();
-    write(&results, &opts.out)?;
-    if let Some((before, name)) = &before {
-        let section = baseline::markdown(
+    let appendix = before.as_ref().map(|(before, name)| {
+        baseline::markdown(
             &baseline::compare(before, &results),
             name,
             &opts.out.display().to_string(),
-        );
+        )
+    });
+    if let Some(section) = &appendix {
         print!("{section}");
-        let path = opts.out.join("REPORT.md");
-        let report = std::fs::read_to_string(&path)
-            .with_context(|| format!("cannot read {}", path.display()))?;
-        write_text(&path, &(report + "\n" + &section))?;
     }
+    write(&results, &opts.out, appendix.as_deref())?;
     Ok(results)
 }
 
-/// Writes `results.json`, the charts and `REPORT.md` into `out`.
+/// Writes `results.json`, the charts, `REPORT.md` and `REPORT.html` into `out`;
+/// `appendix` (Markdown: the comparison with a baseline) ends both reports.
 ///
 /// # Errors
 /// When a file cannot be written.
-pub fn write(results: &Results, out: &Path) -> Result<()> {
+pub fn write(results: &Results, out: &Path, appendix: Option<&str>) -> Result<()> {
     std::fs::create_dir_all(out.join("charts"))?;
     // Compact: a full report's results run to hundreds of kilobytes, read by tools (`jq`
     // formats them for people).
@@ -284,8 +285,17 @@ pub fn write(results: &Results, out: &Path) -> Result<()> {
     // files whole, never a truncated one.
     write_text(&out.join("results.json"), &(json + "\n"))?;
     let charts = markdown::charts(results, &out.join("charts"));
-    write_text(&out.join("REPORT.md"), &markdown::report(results, &charts))?;
-    eprintln!("report written to {}", out.join("REPORT.md").display());
+    let mut text = markdown::report(results, &charts);
+    if let Some(appendix) = appendix {
+        text = text + "\n" + appendix;
+    }
+    write_text(&out.join("REPORT.md"), &text)?;
+    write_text(&out.join("REPORT.html"), &html::page(results, &text, out))?;
+    eprintln!(
+        "report written to {} and {}",
+        out.join("REPORT.md").display(),
+        out.join("REPORT.html").display()
+    );
     Ok(())
 }
 
@@ -344,7 +354,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Results> {
         }
         merged.absorb(r);
     }
-    write(&merged, out)?;
+    write(&merged, out, None)?;
     Ok(merged)
 }
 

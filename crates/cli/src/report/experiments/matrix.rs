@@ -17,6 +17,58 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::sync::Arc;
 
+/// The start of the lines of `REPORT.md` that `REPORT.html` replaces with the image viewer
+/// of one workload: followed by the workload's index in [`measured`] and ` -->`.
+pub(in crate::report) const VIEWER_BEGIN: &str = "<!-- raybench-viewer ";
+/// The end of those lines.
+pub(in crate::report) const VIEWER_END: &str = "<!-- /raybench-viewer -->";
+
+/// One workload of one scene in the results: the runs of every backend on it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(in crate::report) struct WorkloadKey {
+    pub scene: String,
+    pub mode: String,
+    pub set: String,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+}
+
+impl WorkloadKey {
+    /// Its runs, the reference's first (in the order they were measured).
+    pub fn runs<'r>(&self, results: &'r Results) -> Vec<&'r Run> {
+        results.runs.iter().filter(|r| self.holds(r)).collect()
+    }
+
+    fn holds(&self, r: &Run) -> bool {
+        r.scene == self.scene
+            && r.mode == self.mode
+            && r.ray_set == self.set
+            && r.width == self.width
+            && r.height == self.height
+            && r.spp == self.spp
+    }
+}
+
+/// The matrix's workloads in `results`, in order of first appearance (the order of the
+/// report's per-scene tables).
+pub(in crate::report) fn measured(results: &Results) -> Vec<WorkloadKey> {
+    let mut keys: Vec<WorkloadKey> = Vec::new();
+    for r in &results.runs {
+        if !keys.iter().any(|k| k.holds(r)) {
+            keys.push(WorkloadKey {
+                scene: r.scene.clone(),
+                mode: r.mode.clone(),
+                set: r.ray_set.clone(),
+                width: r.width,
+                height: r.height,
+                spp: r.spp,
+            });
+        }
+    }
+    keys
+}
+
 /// The main matrix of scenes, workloads and backends.
 pub(super) struct Matrix;
 
@@ -263,34 +315,17 @@ impl Experiment for Matrix {
 
         // Per scene and workload.
         let _ = writeln!(s, "## Scenes\n");
-        let mut keys: Vec<(String, String, String, u32, u32, u32)> = Vec::new();
-        for r in &results.runs {
-            let k = (
-                r.scene.clone(),
-                r.mode.clone(),
-                r.ray_set.clone(),
-                r.width,
-                r.height,
-                r.spp,
-            );
-            if !keys.contains(&k) {
-                keys.push(k);
-            }
-        }
         let mut last_scene = String::new();
-        for (scene, mode, set, w, h, spp) in &keys {
-            let runs: Vec<&Run> = results
-                .runs
-                .iter()
-                .filter(|r| {
-                    &r.scene == scene
-                        && &r.mode == mode
-                        && &r.ray_set == set
-                        && r.width == *w
-                        && r.height == *h
-                        && r.spp == *spp
-                })
-                .collect();
+        for (index, key) in measured(results).iter().enumerate() {
+            let WorkloadKey {
+                scene,
+                mode,
+                set,
+                width: w,
+                height: h,
+                spp,
+            } = key;
+            let runs = key.runs(results);
             if *scene != last_scene {
                 let prims = runs.first().map_or(0, |r| r.primitives);
                 let _ = writeln!(s, "### {scene} ({prims} primitives)\n");
@@ -384,7 +419,12 @@ impl Experiment for Matrix {
                     pictures.push(format!("[{} FLIP map]({f})", r.backend));
                 }
             }
-            if let Some(reference_image) = runs.first().and_then(|r| r.images.color.as_ref()) {
+            // REPORT.html replaces what lies between the markers with its image viewer.
+            let reference_image = runs.first().and_then(|r| r.images.color.as_ref());
+            if reference_image.is_some() {
+                let _ = writeln!(s, "{VIEWER_BEGIN}{index} -->\n");
+            }
+            if let Some(reference_image) = reference_image {
                 let _ = writeln!(
                     s,
                     "<img src=\"{reference_image}\" width=\"192\" alt=\"{scene} {mode}\">\n"
@@ -392,6 +432,9 @@ impl Experiment for Matrix {
             }
             if !pictures.is_empty() {
                 let _ = writeln!(s, "Images: {}\n", pictures.join(", "));
+            }
+            if reference_image.is_some() {
+                let _ = writeln!(s, "{VIEWER_END}\n");
             }
         }
     }

@@ -8,7 +8,7 @@
 
 mod bezier;
 mod heightfield;
-mod matrix;
+pub(super) mod matrix;
 mod pixels;
 mod presets;
 mod primitives;
