@@ -28,7 +28,7 @@ const DEFAULT_CHROMIUM: &str = "/usr/bin/chromium";
 const START_TIMEOUT: Duration = Duration::from_secs(60);
 
 /// How long one command or one awaited event may take.
-pub const TIMEOUT: Duration = Duration::from_secs(30);
+const TIMEOUT: Duration = Duration::from_secs(30);
 
 /// How long a closing browser gets before it is killed.
 const CLOSE_TIMEOUT: Duration = Duration::from_secs(5);
@@ -181,12 +181,12 @@ impl Chromium {
             .as_str()
             .expect("a session id")
             .to_string();
+        let first_event = self.events.len();
         let mut page = Page {
             browser: self,
             session,
-            first_event: 0,
+            first_event,
         };
-        page.first_event = page.browser.events.len();
         for domain in ["Runtime", "Log", "Page"] {
             page.call(&format!("{domain}.enable"), json!({}));
         }
@@ -393,7 +393,7 @@ impl Page<'_> {
     /// `console.error` and failed `console.assert` calls, and error-level log entries (a
     /// resource that failed to load, a blocked request), one line each.
     pub fn errors(&mut self) -> Vec<String> {
-        // Collect what has arrived without waiting for more.
+        // A round trip: the events the page sent before it arrive before its reply.
         self.eval("0");
         self.browser.events[self.first_event..]
             .iter()
