@@ -115,10 +115,13 @@
   // A cell's value: its first number, scaled by a unit right after it (so "3.1 MiB" sorts
   // above "900 KiB"), Infinity for "inf"; null for "-" and text without a number.
   const UNITS = { ns: 1e-9, "µs": 1e-6, us: 1e-6, ms: 1e-3, s: 1, B: 1, KiB: 1024, MiB: 1048576, GiB: 1073741824, "%": 1 };
-  const NUMBER = /^[^0-9+\-.]*?([-+]?(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?)\s*(ns|µs|us|ms|s|B|KiB|MiB|GiB|%)?(?![A-Za-z])/i;
+  // The number is taken whole (never "2.6" of "2.65x"); a unit only when a word ends there
+  // ("1 s", not the "s" of "spp").
+  const NUMBER = /^[^0-9+\-.]*?([-+]?(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?)(?![\d.])(?:\s*(ns|µs|us|ms|s|B|KiB|MiB|GiB|%)(?![A-Za-z]))?/;
 
   function cellValue(text) {
-    const t = text.replace(/†/g, "").trim();
+    // Thousands separators out: "6,320" is 6320.
+    const t = text.replace(/†/g, "").replace(/(\d),(?=\d{3}(?!\d))/g, "$1").trim();
     if (t === "" || t === "-") return null;
     if (/^inf\b/i.test(t)) return Infinity;
     const m = NUMBER.exec(t);
