@@ -384,12 +384,14 @@ fn log_axis(values: impl Iterator<Item = f64>) -> Axis {
     if decades.len() >= 3 {
         // More than ten decades: every other one labelled, the rest minor.
         let every = if decades.len() > 10 { 2 } else { 1 };
-        let (major, skipped): (Vec<(usize, f64)>, Vec<(usize, f64)>) = decades
-            .iter()
-            .copied()
-            .enumerate()
-            .partition(|(i, _)| i % every == 0);
-        let mut minor: Vec<f64> = skipped.into_iter().map(|(_, v)| v).collect();
+        let (mut major, mut minor) = (Vec::new(), Vec::new());
+        for (i, v) in decades.iter().copied().enumerate() {
+            if i % every == 0 {
+                major.push(v);
+            } else {
+                minor.push(v);
+            }
+        }
         if decades.len() <= 8 {
             minor.extend(log_candidates(
                 lo,
@@ -401,7 +403,7 @@ fn log_axis(values: impl Iterator<Item = f64>) -> Axis {
         return Axis {
             lo,
             hi,
-            major: labelled(major.into_iter().map(|(_, v)| v).collect()),
+            major: labelled(major),
             minor,
         };
     }
@@ -785,15 +787,20 @@ pub fn svg(chart: &Chart) -> String {
                 .flat_map(|s| s.points.iter().map(|p| p.1).chain(fits(s, |p| p.1)));
             (Some(log_axis(xs)), log_axis(ys))
         }
-        Plot::Categories(_, bars) => (
-            None,
-            log_axis(bars.iter().flat_map(|b| {
-                b.values.iter().filter_map(|v| match v {
-                    Bar::Value(v) => Some(*v),
+        Plot::Categories(_, bars) => {
+            let values: Vec<f64> = bars
+                .iter()
+                .flat_map(|b| &b.values)
+                .filter_map(|v| match v {
+                    Bar::Value(v) if *v > 0.0 && v.is_finite() => Some(*v),
                     _ => None,
                 })
-            })),
-        ),
+                .collect();
+            // Bars rise from the bottom of a log axis: room below the lowest value keeps its
+            // bar tall enough to read (and unlike a stub).
+            let floor = values.iter().copied().fold(f64::INFINITY, f64::min) * 0.3;
+            (None, log_axis(values.into_iter().chain([floor])))
+        }
     };
     let lay = layout(chart, &y_axis, &entries);
     let p = lay.plot;
@@ -825,24 +832,11 @@ pub fn svg(chart: &Chart) -> String {
     // The y axis: grid lines, ticks, labels, title.
     let y_at = |v: f64| p.bottom() - y_axis.frac(v) * p.h;
     for &v in &y_axis.minor {
-        let y = y_at(v);
-        let _ = writeln!(
-            out,
-            r##"<path d="M{:.1},{y:.1}H{:.1}M{:.1},{y:.1}h-3" stroke="#eeeeee" stroke-width="1" fill="none"/>"##,
-            p.x,
-            p.right(),
-            p.x
-        );
+        rule(&mut out, p, Dir::Y, y_at(v), MINOR);
     }
     for (v, label) in &y_axis.major {
         let y = y_at(*v);
-        let _ = writeln!(
-            out,
-            r##"<path d="M{:.1},{y:.1}H{:.1}M{:.1},{y:.1}h-6" stroke="#d0d0d0" stroke-width="1" fill="none"/>"##,
-            p.x,
-            p.right(),
-            p.x
-        );
+        rule(&mut out, p, Dir::Y, y, MAJOR);
         text(&mut out, p.x - 9.0, y + 4.0, TICK_SIZE, "end", "", label);
     }
     let (yx, yy) = (14.0 + LABEL_SIZE - 2.0, p.y + p.h / 2.0);
@@ -873,24 +867,11 @@ pub fn svg(chart: &Chart) -> String {
             let xa = x_axis.as_ref().expect("log-log charts have an x axis");
             let x_at = |v: f64| p.x + xa.frac(v) * p.w;
             for &v in &xa.minor {
-                let x = x_at(v);
-                let _ = writeln!(
-                    out,
-                    r##"<path d="M{x:.1},{:.1}V{:.1}M{x:.1},{:.1}v3" stroke="#eeeeee" stroke-width="1" fill="none"/>"##,
-                    p.y,
-                    p.bottom(),
-                    p.bottom()
-                );
+                rule(&mut out, p, Dir::X, x_at(v), MINOR);
             }
             for (v, label) in &xa.major {
                 let x = x_at(*v);
-                let _ = writeln!(
-                    out,
-                    r##"<path d="M{x:.1},{:.1}V{:.1}M{x:.1},{:.1}v6" stroke="#d0d0d0" stroke-width="1" fill="none"/>"##,
-                    p.y,
-                    p.bottom(),
-                    p.bottom()
-                );
+                rule(&mut out, p, Dir::X, x, MAJOR);
                 text(
                     &mut out,
                     x,
@@ -1054,6 +1035,42 @@ fn x_range(s: &Series) -> Option<(f64, f64)> {
     a.is_finite().then_some((a, b))
 }
 
+/// Which axis a rule marks a value of.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Dir {
+    /// A vertical line at an `x` value.
+    X,
+    /// A horizontal line at a `y` value.
+    Y,
+}
+
+/// A labelled tick: its tick's length outside the plot and its grid line's colour.
+const MAJOR: (f64, &str) = (6.0, "#d0d0d0");
+/// An unlabelled tick.
+const MINOR: (f64, &str) = (3.0, "#eeeeee");
+
+/// A grid line across the plot at `at` (user units) and its tick outside the plot.
+fn rule(out: &mut String, p: Rect, dir: Dir, at: f64, (tick, colour): (f64, &str)) {
+    let d = match dir {
+        Dir::X => format!(
+            "M{at:.1},{:.1}V{:.1}M{at:.1},{:.1}v{tick}",
+            p.y,
+            p.bottom(),
+            p.bottom()
+        ),
+        Dir::Y => format!(
+            "M{:.1},{at:.1}H{:.1}M{:.1},{at:.1}h-{tick}",
+            p.x,
+            p.right(),
+            p.x
+        ),
+    };
+    let _ = writeln!(
+        out,
+        r#"<path d="{d}" stroke="{colour}" stroke-width="1" fill="none"/>"#
+    );
+}
+
 /// The plot's frame.
 fn frame(out: &mut String, p: Rect) {
     let _ = writeln!(
@@ -1205,10 +1222,7 @@ mod tests {
         // 2..9 times each decade from 0.001 to 10.
         assert_eq!(axis.minor.len(), 8 * 5);
         for m in [0.002, 0.05, 3.0, 70.0] {
-            assert!(
-                axis.minor.iter().any(|v| (v / m - 1.0).abs() < 1e-9),
-                "{m}"
-            );
+            assert!(axis.minor.iter().any(|v| (v / m - 1.0).abs() < 1e-9), "{m}");
         }
         let big = log_axis([10.0, 1e6].into_iter());
         assert_eq!(labels(&big), ["10", "100", "1k", "10k", "100k", "1M"]);
@@ -1258,7 +1272,12 @@ mod tests {
     #[test]
     fn the_legend_never_covers_the_plot() {
         let many: Vec<Series> = (0..40)
-            .map(|i| series(&format!("a rather long series name number {i}"), &[(1.0, 1.0)]))
+            .map(|i| {
+                series(
+                    &format!("a rather long series name number {i}"),
+                    &[(1.0, 1.0)],
+                )
+            })
             .collect();
         let bars = Plot::Categories(
             vec!["spheres".into(), "a-very-long-scene-name".into()],
@@ -1277,7 +1296,9 @@ mod tests {
             let lay = layout(&c, &y, &entries);
             assert!(!lay.legend.overlaps(&lay.plot), "{}", c.stem);
             assert!(lay.legend.right() <= lay.width && lay.legend.bottom() <= lay.height);
-            assert!(lay.rows * lay.legend.w.div_euclid(lay.column).max(1.0) as usize >= entries.len());
+            assert!(
+                lay.rows * lay.legend.w.div_euclid(lay.column).max(1.0) as usize >= entries.len()
+            );
         }
     }
 
@@ -1305,7 +1326,10 @@ mod tests {
         };
         let s = svg(&c);
         assert!(s.starts_with("<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 "));
-        assert!(s.contains("<title>a &lt;b&gt; &amp; &quot;c&quot;</title>"), "{s}");
+        assert!(
+            s.contains("<title>a &lt;b&gt; &amp; &quot;c&quot;</title>"),
+            "{s}"
+        );
         assert!(s.contains("x&amp;y") && !s.contains("x&y"));
         assert!(s.contains("wgpu on x&amp;y: no &lt;SDF&gt;"), "{s}");
         assert!(!s.contains("<style") && !s.contains("class="));
@@ -1335,7 +1359,9 @@ mod tests {
         let out = svg(&chart("fit", "t", Plot::LogLog(vec![s])));
         let colour = backend_style("bvh").unwrap().colour;
         assert!(
-            out.contains(&format!("stroke=\"{colour}\" stroke-width=\"1.6\" stroke-dasharray")),
+            out.contains(&format!(
+                "stroke=\"{colour}\" stroke-width=\"1.6\" stroke-dasharray"
+            )),
             "{out}"
         );
         assert!(out.contains("bvh (slope 0.30)"));

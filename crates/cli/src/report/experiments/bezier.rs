@@ -161,7 +161,13 @@ impl Scaling for Bezier {
             Series {
                 label: "tessellated (triangles)".into(),
                 points: tess.iter().map(|p| (p.x, p.seconds)).collect(),
-                fit: power_law(results, self.name(), "tessellated", &tess[0].backend, "seconds"),
+                fit: power_law(
+                    results,
+                    self.name(),
+                    "tessellated",
+                    &tess[0].backend,
+                    "seconds",
+                ),
             },
             Series {
                 label: "direct (32 patches; level line for comparison)".into(),

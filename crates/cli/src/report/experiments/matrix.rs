@@ -3,9 +3,9 @@
 //! phases and per-scene tables.
 
 use super::{Chart, Experiment, Planned, Plot};
-use crate::report::charts::{Bar, Bars};
 use crate::measure::{Measured, explicit_rays, prepare};
 use crate::progress::Progress;
+use crate::report::charts::{Bar, Bars};
 use crate::report::images::{self, Rgb8};
 use crate::report::markdown::{backends_in, bytes, noisy_mark, opt};
 use crate::report::results::{CameraRun, Equality, Images, Quality, Results, Run};
@@ -109,8 +109,8 @@ impl Experiment for Matrix {
                     let brute = crate::roles_of(&b).is_some_and(|r| r.contains(Roles::BRUTE_FORCE));
                     let values = scenes
                         .iter()
-                        .map(|s| {
-                            match runs.iter().find(|r| &r.scene == s && r.backend == b) {
+                        .map(
+                            |s| match runs.iter().find(|r| &r.scene == s && r.backend == b) {
                                 Some(r) if r.status != "ok" => Bar::Unsupported(format!(
                                     "{}: {}",
                                     r.status,
@@ -123,8 +123,8 @@ impl Experiment for Matrix {
                                         .into(),
                                 ),
                                 None => Bar::Absent,
-                            }
-                        })
+                            },
+                        )
                         .collect();
                     Bars { label: b, values }
                 })

@@ -265,7 +265,10 @@ impl Experiment for Presets {
                     .collect();
                 if !series.is_empty() {
                     out.push(Chart {
-                        title: format!("build vs trace, {} rays ({scene})", set.name()),
+                        title: format!(
+                            "Build time against trace time, {} rays ({scene})",
+                            set.name()
+                        ),
                         stem: format!("presets-{}-{}", file_safe(&scene), set.name()),
                         x_label: "build time (s)".into(),
                         y_label: format!("trace time (s), {} rays", set.name()),
@@ -284,7 +287,7 @@ impl Experiment for Presets {
                 .collect();
             if !series.is_empty() {
                 out.push(Chart {
-                    title: format!("time to image: build + k frames ({scene})"),
+                    title: format!("Time to an image: build + k frames ({scene})"),
                     stem: format!("presets-{}-time-to-image", file_safe(&scene)),
                     x_label: "frames rendered (k)".into(),
                     y_label: "build + k frames (s)".into(),
