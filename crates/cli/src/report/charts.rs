@@ -760,7 +760,7 @@ fn marker(out: &mut String, x: f64, y: f64, style: Style, title: &str) {
             // A wider transparent stroke under it makes the tooltip easier to reach.
             writeln!(
                 out,
-                r##"<g><path d="{d}" fill="none" stroke="#fff" stroke-opacity="0" stroke-width="8"/><path d="{d}" {stroked}/>{tip}</g>"##
+                r##"<g>{tip}<path d="{d}" fill="none" stroke="#fff" stroke-opacity="0" stroke-width="8"/><path d="{d}" {stroked}/></g>"##
             )
         }
     };
@@ -995,7 +995,7 @@ pub fn svg(chart: &Chart) -> String {
                             let tip = escape(&format!("{} on {name}: {why}", b.label));
                             let _ = writeln!(
                                 out,
-                                r#"<g><rect x="{x:.1}" y="{:.1}" width="{:.1}" height="{STUB}" fill="url(#{id}-hatch)" stroke="{}" stroke-width="1"/><text x="{:.1}" y="{:.1}" font-size="{TICK_SIZE}" text-anchor="middle" fill="{}">×</text><title>{tip}</title></g>"#,
+                                r#"<g><title>{tip}</title><rect x="{x:.1}" y="{:.1}" width="{:.1}" height="{STUB}" fill="url(#{id}-hatch)" stroke="{}" stroke-width="1"/><text x="{:.1}" y="{:.1}" font-size="{TICK_SIZE}" text-anchor="middle" fill="{}">×</text></g>"#,
                                 p.bottom() - STUB,
                                 (bar_w - 1.0).max(0.5),
                                 st.colour,

@@ -745,6 +745,41 @@ mod tests {
         );
     }
 
+    /// A fit written before `intercept` existed reads without one, and a merge (which fits
+    /// anew) gives it one.
+    #[test]
+    fn fits_without_an_intercept_still_read() {
+        let old = r#"{"experiment": "spp", "series": "cornell-box", "backend": "bvh",
+            "quantity": "seconds", "slope": 1.0, "points": 2}"#;
+        let f: Fit = serde_json::from_str(old).unwrap();
+        assert_eq!(f.intercept, None);
+        let json = serde_json::to_string(&f).unwrap();
+        assert!(!json.contains("intercept"), "{json}");
+        let mut r = Results::default();
+        for (x, s) in [(1.0, 0.5), (4.0, 2.0)] {
+            r.scaling.push(ScalingPoint {
+                shard: 0,
+                experiment: "spp".into(),
+                series: "cornell-box".into(),
+                backend: "bvh".into(),
+                x,
+                seconds: s,
+                rays: 1,
+                tests_per_ray: None,
+                load_seconds: None,
+                build_seconds: None,
+                memory_bytes: None,
+                difference: None,
+            });
+        }
+        r.fits.push(f);
+        r.absorb(Results::default());
+        let f = r.fit_of("spp", "cornell-box", "bvh", "seconds").unwrap();
+        assert!((f.slope - 1.0).abs() < 1e-12);
+        // 0.5 x: log10 y = log10 0.5 + log10 x.
+        assert!((f.intercept.unwrap() - 0.5f64.log10()).abs() < 1e-12);
+    }
+
     #[test]
     fn timing_median_and_spread() {
         let t = Timing::of(vec![3.0, 1.0, 2.0]);
