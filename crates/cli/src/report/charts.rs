@@ -869,9 +869,16 @@ pub fn svg(chart: &Chart) -> String {
             for &v in &xa.minor {
                 rule(&mut out, p, Dir::X, x_at(v), MINOR);
             }
+            // A label that would touch the one before it is left off (its tick stays).
+            let mut free_from = f64::NEG_INFINITY;
             for (v, label) in &xa.major {
                 let x = x_at(*v);
                 rule(&mut out, p, Dir::X, x, MAJOR);
+                let half = text_width(label, TICK_SIZE) / 2.0;
+                if x - half < free_from {
+                    continue;
+                }
+                free_from = x + half + 6.0;
                 text(
                     &mut out,
                     x,
@@ -942,7 +949,9 @@ pub fn svg(chart: &Chart) -> String {
             let n = names.len().max(1) as f64;
             let slot = p.w / n;
             let k = bars.len().max(1) as f64;
-            let bar_w = (slot - 12.0).max(1.0) / k;
+            // At most 28 units a bar: a few wide groups would look like blocks.
+            let bar_w = ((slot - 12.0).max(1.0) / k).min(28.0);
+            let first = (slot - bar_w * k) / 2.0;
             for (i, name) in names.iter().enumerate() {
                 let cx = p.x + (i as f64 + 0.5) * slot;
                 let ty = p.bottom() + 10.0 + TICK_SIZE;
@@ -973,7 +982,7 @@ pub fn svg(chart: &Chart) -> String {
                 let _ = writeln!(out, "<g>");
                 for (i, v) in b.values.iter().enumerate() {
                     let Some(name) = names.get(i) else { break };
-                    let x = p.x + i as f64 * slot + 6.0 + j as f64 * bar_w;
+                    let x = p.x + i as f64 * slot + first + j as f64 * bar_w;
                     match v {
                         Bar::Value(v) if *v > 0.0 && v.is_finite() => {
                             let top = y_at(*v).min(p.bottom() - 1.0);
