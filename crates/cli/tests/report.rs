@@ -1,6 +1,7 @@
 //! `raybench report` and `raybench merge` end to end, on small matrices: the files a report
 //! promises, the results schema, sharding by scene, merging, and bad options.
 
+use raybench::report::charts::backend_style;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -16,6 +17,21 @@ fn tmp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("raybench-report-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     dir
+}
+
+/// The SVG text of chart `stem` of the report in `dir`, checked to be one SVG document
+/// whose ids all start with the stem.
+fn chart(dir: &Path, stem: &str) -> String {
+    let path = dir.join(format!("charts/{stem}.svg"));
+    let svg = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert!(
+        svg.starts_with("<svg xmlns=\"http://www.w3.org/2000/svg\"") && svg.ends_with("</svg>\n"),
+        "{svg}"
+    );
+    for part in svg.split(" id=\"").skip(1) {
+        assert!(part.starts_with(&format!("{stem}-")), "{stem}: {part}");
+    }
+    svg
 }
 
 fn results(dir: &Path) -> Value {
@@ -120,26 +136,49 @@ fn report_writes_markdown_json_images_and_charts() {
         md.contains("the tree with the lowest SAH cost was the fastest in"),
         "{md}"
     );
-    // Charts need a font; CI installs one (fonts-dejavu-core).
-    if md.contains("> Charts:") {
+    // Charts: SVG only, each shown in REPORT.md; the throughput chart shows every backend
+    // in its own colour, with a tooltip on each bar.
+    assert!(!md.contains("> Charts:"), "{md}");
+    assert!(
+        md.contains(
+            "**Throughput, cast (primary rays)**\n\n![Throughput, cast (primary rays)](charts/throughput-cast-primary.svg)"
+        ),
+        "{md}"
+    );
+    let svg = chart(&dir, "throughput-cast-primary");
+    for backend in ["naive", "bvh", "packet"] {
+        let colour = backend_style(backend).unwrap().colour;
         assert!(
-            std::env::var("CI").as_deref() != Ok("true"),
-            "CI=true but no charts: {md}"
+            svg.contains(&format!(">{backend}</text>")),
+            "{backend}: {svg}"
         );
-    } else {
-        for ext in ["svg", "png"] {
+        assert!(
+            svg.contains(&format!("fill=\"{colour}\"")),
+            "{backend}: {svg}"
+        );
+        assert!(
+            svg.contains(&format!("<title>{backend} on cornell-box\n")),
+            "{svg}"
+        );
+    }
+    assert!(svg.contains(">rays per second (millions)</text>"), "{svg}");
+    // Every run ran: no stub marks a backend that did not.
+    assert!(!svg.contains(">×</text>"), "{svg}");
+    for chart_name in ["sah", "epo"] {
+        for set in ["primary", "incoherent"] {
+            let stem = format!("quality-{chart_name}-cast-{set}");
             assert!(
-                dir.join(format!("charts/throughput-cast-primary.{ext}"))
-                    .is_file()
+                md.contains(&format!("](charts/{stem}.svg)")),
+                "{stem}: {md}"
             );
-            for chart in ["sah", "epo"] {
-                for set in ["primary", "incoherent"] {
-                    let file = format!("charts/quality-{chart}-cast-{set}.{ext}");
-                    assert!(dir.join(&file).is_file(), "{file}");
-                }
-            }
+            chart(&dir, &stem);
         }
     }
+    let pngs = std::fs::read_dir(dir.join("charts"))
+        .unwrap()
+        .filter(|e| e.as_ref().unwrap().path().extension() != Some("svg".as_ref()))
+        .count();
+    assert_eq!(pngs, 0, "only SVG charts");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -426,12 +465,25 @@ fn a_scaling_experiment_runs_and_is_written() {
     let md = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
     assert!(md.contains("## Scaling"), "{md}");
     assert!(md.contains("| spp | cornell-box | bvh |"), "{md}");
-    if !md.contains("> Charts:") {
-        assert!(
-            md.contains("charts/scaling-spp-cornell-box-seconds.png"),
-            "{md}"
-        );
-    }
+    // The chart draws the fitted power law dashed, its slope in the legend.
+    assert!(
+        md.contains("(charts/scaling-spp-cornell-box-seconds.svg)"),
+        "{md}"
+    );
+    let svg = chart(&dir, "scaling-spp-cornell-box-seconds");
+    let colour = backend_style("bvh").unwrap().colour;
+    assert!(
+        svg.contains(&format!(
+            "stroke=\"{colour}\" stroke-width=\"1.6\" stroke-dasharray"
+        )),
+        "{svg}"
+    );
+    let slope = r["fits"][0]["slope"].as_f64().unwrap();
+    assert!(
+        svg.contains(&format!(">bvh (slope {slope:.2})</text>")),
+        "{svg}"
+    );
+    assert!(svg.contains(">samples per pixel (K)</text>"), "{svg}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -739,11 +791,68 @@ fn the_presets_experiment_runs_and_is_written() {
     );
     assert!(md.contains("| bunny | bvh:fast |"), "{md}");
     assert!(md.contains("| bunny | bvh | "), "{md}");
-    if !md.contains("> Charts:") {
-        for chart in ["presets-bunny-primary", "presets-bunny-time-to-image"] {
-            assert!(md.contains(&format!("charts/{chart}.png")), "{md}");
+    // Both presets in bvh's colour, told apart by their markers.
+    for stem in ["presets-bunny-primary", "presets-bunny-time-to-image"] {
+        assert!(md.contains(&format!("(charts/{stem}.svg)")), "{md}");
+        let svg = chart(&dir, stem);
+        for preset in ["bvh:fast", "bvh:quality"] {
+            assert!(svg.contains(&format!(">{preset}</text>")), "{svg}");
         }
+        let colour = backend_style("bvh").unwrap().colour;
+        assert!(svg.contains(&format!("fill=\"{colour}\"")), "{svg}");
     }
+    assert_ne!(
+        backend_style("bvh:fast").unwrap().marker,
+        backend_style("bvh:quality").unwrap().marker
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A backend that cannot run a scene (wgpu has no sphere tracing: unsupported there, or
+/// unavailable without a GPU) keeps its place in the throughput charts: a marked stub whose
+/// tooltip says why, never a silent gap.
+#[test]
+fn a_backend_that_did_not_run_is_marked_in_the_charts() {
+    let dir = tmp_dir("not-run");
+    let out = raybench(&[
+        "report",
+        "--scenes",
+        "spheres,sdf",
+        "--backends",
+        "naive,wgpu",
+        "--modes",
+        "whitted",
+        "--size",
+        "16",
+        "--repeat",
+        "1",
+        "--no-scaling",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = results(&dir);
+    let run = r["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|r| r["backend"] == "wgpu" && r["scene"] == "sdf")
+        .expect("a wgpu run on sdf");
+    let status = run["status"].as_str().unwrap();
+    assert!(status == "unsupported" || status == "unavailable", "{run}");
+    let svg = chart(&dir, "throughput-whitted-primary");
+    assert!(
+        svg.contains(&format!("<title>wgpu on sdf: {status}: ")),
+        "{svg}"
+    );
+    assert!(svg.contains(">×</text>"), "{svg}");
+    assert!(svg.contains(">× did not run (hover: why)</text>"), "{svg}");
+    let colour = backend_style("wgpu").unwrap().colour;
+    assert!(svg.contains(&format!("stroke=\"{colour}\"")), "{svg}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

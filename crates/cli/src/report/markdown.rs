@@ -3,16 +3,22 @@
 //! its own part ([`super::experiments`]); this file holds the frame around them.
 
 use super::charts;
-use super::experiments::{self, Plot};
+use super::experiments;
 use super::results::{Results, Run};
 use super::{PEER_MAX_FLIP, PEER_MIN_ID_MATCH};
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// The charts drawn: `(title, svg, png)`, or why none could be.
+/// A chart written: its title and its SVG's path relative to the report (`charts/STEM.svg`).
+pub struct Drawn {
+    pub title: String,
+    pub svg: String,
+}
+
+/// The charts drawn, and the first error met writing one (the others are still drawn).
 pub struct Charts {
-    pub drawn: Vec<(String, String, String)>,
+    pub drawn: Vec<Drawn>,
     pub problem: Option<String>,
 }
 
@@ -33,35 +39,18 @@ pub(super) fn backends_in(runs: &[&Run]) -> Vec<String> {
     seen
 }
 
-/// Draws every experiment's charts into `dir`, in the order of [`experiments::ALL`].
+/// Draws every experiment's charts into `dir` as SVG, in the order of [`experiments::ALL`].
 pub fn charts(results: &Results, dir: &Path) -> Charts {
     let mut out = Charts {
         drawn: Vec::new(),
         problem: None,
     };
-    if let Err(e) = charts::font() {
-        out.problem = Some(e);
-        return out;
-    }
     for chart in experiments::ALL.iter().flat_map(|e| e.charts(results)) {
-        let stem = dir.join(&chart.stem);
-        let drawn = match &chart.plot {
-            Plot::LogLog(series) => {
-                charts::log_log(&stem, &chart.title, &chart.x_label, &chart.y_label, series)
-            }
-            Plot::Categories(names, series) => {
-                charts::categories(&stem, &chart.title, &chart.y_label, names, series)
-            }
-            Plot::Scatter(series) => {
-                charts::scatter(&stem, &chart.title, &chart.x_label, &chart.y_label, series)
-            }
-        };
-        match drawn {
-            Ok([svg, png]) => out.drawn.push((
-                chart.title,
-                format!("charts/{svg}"),
-                format!("charts/{png}"),
-            )),
+        match charts::draw(dir, &chart) {
+            Ok(svg) => out.drawn.push(Drawn {
+                title: chart.title,
+                svg: format!("charts/{svg}"),
+            }),
             Err(e) => {
                 out.problem.get_or_insert(e);
             }
@@ -208,8 +197,8 @@ pub fn report(results: &Results, charts: &Charts) -> String {
 
     if !charts.drawn.is_empty() {
         let _ = writeln!(s, "## Charts\n");
-        for (title, svg, png) in &charts.drawn {
-            let _ = writeln!(s, "**{title}** ([SVG]({svg}))\n\n![{title}]({png})\n");
+        for Drawn { title, svg } in &charts.drawn {
+            let _ = writeln!(s, "**{title}**\n\n![{title}]({svg})\n");
         }
     }
     s

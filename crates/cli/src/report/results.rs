@@ -553,14 +553,18 @@ pub struct Fit {
     pub quantity: String,
     /// The slope: the exponent `a` in `y ~ x^a`.
     pub slope: f64,
+    /// The line's intercept on log-log axes: `log10 y = intercept + slope * log10 x`.
+    /// Absent from files written before it was added (a merge fits them anew).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub intercept: Option<f64>,
     /// Points fitted.
     pub points: usize,
 }
 
-/// The slope of the least-squares line through `(log10 x, log10 y)` for positive pairs;
-/// `None` with fewer than two distinct `x`.
+/// The slope and intercept of the least-squares line through `(log10 x, log10 y)` for
+/// positive pairs; `None` with fewer than two distinct `x`.
 #[must_use]
-pub fn log_log_slope(points: &[(f64, f64)]) -> Option<f64> {
+pub fn log_log_fit(points: &[(f64, f64)]) -> Option<(f64, f64)> {
     let logs: Vec<(f64, f64)> = points
         .iter()
         .filter(|(x, y)| *x > 0.0 && *y > 0.0 && x.is_finite() && y.is_finite())
@@ -574,7 +578,10 @@ pub fn log_log_slope(points: &[(f64, f64)]) -> Option<f64> {
     let my = logs.iter().map(|p| p.1).sum::<f64>() / n;
     let sxx: f64 = logs.iter().map(|p| (p.0 - mx).powi(2)).sum();
     let sxy: f64 = logs.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    (sxx > 0.0).then(|| sxy / sxx)
+    (sxx > 0.0).then(|| {
+        let slope = sxy / sxx;
+        (slope, my - slope * mx)
+    })
 }
 
 impl Results {
@@ -595,18 +602,36 @@ impl Results {
                 .filter_map(|p| p.tests_per_ray.map(|t| (p.x, t)))
                 .collect();
             for (quantity, data) in [("seconds", time), ("tests_per_ray", tests)] {
-                if let Some(slope) = log_log_slope(&data) {
+                if let Some((slope, intercept)) = log_log_fit(&data) {
                     self.fits.push(Fit {
                         experiment: experiment.clone(),
                         series: series.clone(),
                         backend: backend.clone(),
                         quantity: quantity.into(),
                         slope,
+                        intercept: Some(intercept),
                         points: data.len(),
                     });
                 }
             }
         }
+    }
+
+    /// The fit of `quantity` for one series and backend.
+    #[must_use]
+    pub fn fit_of(
+        &self,
+        experiment: &str,
+        series: &str,
+        backend: &str,
+        quantity: &str,
+    ) -> Option<&Fit> {
+        self.fits.iter().find(|f| {
+            f.experiment == experiment
+                && f.series == series
+                && f.backend == backend
+                && f.quantity == quantity
+        })
     }
 
     /// The slope of `quantity` for one series and backend.
@@ -618,14 +643,7 @@ impl Results {
         backend: &str,
         quantity: &str,
     ) -> Option<f64> {
-        self.fits
-            .iter()
-            .find(|f| {
-                f.experiment == experiment
-                    && f.series == series
-                    && f.backend == backend
-                    && f.quantity == quantity
-            })
+        self.fit_of(experiment, series, backend, quantity)
             .map(|f| f.slope)
     }
 
@@ -710,17 +728,56 @@ mod tests {
         let linear: Vec<(f64, f64)> = (1..6)
             .map(|i| (10f64.powi(i), 3.0 * 10f64.powi(i)))
             .collect();
-        assert!((log_log_slope(&linear).unwrap() - 1.0).abs() < 1e-12);
+        let (slope, intercept) = log_log_fit(&linear).unwrap();
+        assert!((slope - 1.0).abs() < 1e-12);
+        assert!((intercept - 3f64.log10()).abs() < 1e-12);
         let flat: Vec<(f64, f64)> = (1..6).map(|i| (10f64.powi(i), 2.0)).collect();
-        assert!(log_log_slope(&flat).unwrap().abs() < 1e-12);
+        let (slope, intercept) = log_log_fit(&flat).unwrap();
+        assert!(slope.abs() < 1e-12 && (intercept - 2f64.log10()).abs() < 1e-12);
         let half: Vec<(f64, f64)> = (1..6).map(|i| (4f64.powi(i), 2f64.powi(i))).collect();
-        assert!((log_log_slope(&half).unwrap() - 0.5).abs() < 1e-12);
-        assert_eq!(log_log_slope(&[(1.0, 1.0)]), None);
-        assert_eq!(log_log_slope(&[(1.0, 1.0), (1.0, 2.0)]), None);
+        let (slope, intercept) = log_log_fit(&half).unwrap();
+        assert!((slope - 0.5).abs() < 1e-12 && intercept.abs() < 1e-12);
+        assert_eq!(log_log_fit(&[(1.0, 1.0)]), None);
+        assert_eq!(log_log_fit(&[(1.0, 1.0), (1.0, 2.0)]), None);
         assert_eq!(
-            log_log_slope(&[(0.0, 1.0), (-1.0, 2.0), (f64::NAN, 1.0)]),
+            log_log_fit(&[(0.0, 1.0), (-1.0, 2.0), (f64::NAN, 1.0)]),
             None
         );
+    }
+
+    /// A fit written before `intercept` existed reads without one, and a merge (which fits
+    /// anew) gives it one.
+    #[test]
+    fn fits_without_an_intercept_still_read() {
+        let old = r#"{"experiment": "spp", "series": "cornell-box", "backend": "bvh",
+            "quantity": "seconds", "slope": 1.0, "points": 2}"#;
+        let f: Fit = serde_json::from_str(old).unwrap();
+        assert_eq!(f.intercept, None);
+        let json = serde_json::to_string(&f).unwrap();
+        assert!(!json.contains("intercept"), "{json}");
+        let mut r = Results::default();
+        for (x, s) in [(1.0, 0.5), (4.0, 2.0)] {
+            r.scaling.push(ScalingPoint {
+                shard: 0,
+                experiment: "spp".into(),
+                series: "cornell-box".into(),
+                backend: "bvh".into(),
+                x,
+                seconds: s,
+                rays: 1,
+                tests_per_ray: None,
+                load_seconds: None,
+                build_seconds: None,
+                memory_bytes: None,
+                difference: None,
+            });
+        }
+        r.fits.push(f);
+        r.absorb(Results::default());
+        let f = r.fit_of("spp", "cornell-box", "bvh", "seconds").unwrap();
+        assert!((f.slope - 1.0).abs() < 1e-12);
+        // 0.5 x: log10 y = log10 0.5 + log10 x.
+        assert!((f.intercept.unwrap() - 0.5f64.log10()).abs() < 1e-12);
     }
 
     #[test]

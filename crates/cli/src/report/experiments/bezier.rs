@@ -3,7 +3,9 @@
 //! triangles per patch, both in the baseline backend, with each tessellation's image
 //! difference from the direct rendering.
 
-use super::{Chart, Ctx, Observed, Plot, Point, Scaling, baseline_only, scene_for, square};
+use super::{
+    Chart, Ctx, Observed, Plot, Point, Scaling, baseline_only, power_law, scene_for, square,
+};
 use crate::Backend;
 use crate::report::charts::Series;
 use crate::report::images::{self, Rgb8};
@@ -36,7 +38,7 @@ impl Scaling for Bezier {
     }
 
     fn x_label(&self) -> &'static str {
-        "primitives (patches or triangles)"
+        "primitives (32 patches, or 2 N² triangles per patch)"
     }
 
     fn axis(&self) -> Option<&'static str> {
@@ -159,10 +161,18 @@ impl Scaling for Bezier {
             Series {
                 label: "tessellated (triangles)".into(),
                 points: tess.iter().map(|p| (p.x, p.seconds)).collect(),
+                fit: power_law(
+                    results,
+                    self.name(),
+                    "tessellated",
+                    &tess[0].backend,
+                    "seconds",
+                ),
             },
             Series {
                 label: "direct (32 patches; level line for comparison)".into(),
                 points: vec![(d.x, d.seconds), (x_max, d.seconds)],
+                fit: None,
             },
         ];
         let diff = |label: &str, f: fn(&ImageDifference) -> f64| Series {
@@ -172,6 +182,7 @@ impl Scaling for Bezier {
                 .filter_map(|p| p.difference.as_ref().map(|q| (p.x, f(q))))
                 .filter(|&(_, y)| y > 0.0)
                 .collect(),
+            fit: None,
         };
         let differences = vec![
             diff("mean FLIP", |q| q.mean_flip),
@@ -186,19 +197,20 @@ impl Scaling for Bezier {
         .filter(|s| !s.points.is_empty())
         .collect::<Vec<_>>();
         let mut out = vec![Chart {
-            title: "render seconds vs primitives (Bezier teapot: direct against tessellated)"
+            title: "Render time against primitives (Bezier teapot: direct against tessellated)"
                 .to_string(),
             stem: "scaling-bezier-seconds".into(),
-            x_label: "primitives (patches or triangles)".into(),
-            y_label: "render seconds".into(),
+            x_label: self.x_label().into(),
+            y_label: "render time (s)".into(),
             plot: Plot::LogLog(times),
         }];
         if !differences.is_empty() {
             out.push(Chart {
-                title: "difference from the direct image vs triangles (Bezier teapot)".to_string(),
+                title: "Difference from the direct image against triangles (Bezier teapot)"
+                    .to_string(),
                 stem: "scaling-bezier-difference".into(),
-                x_label: "triangles 2 N^2 32".into(),
-                y_label: "difference".into(),
+                x_label: "triangles (2 N² per patch × 32 patches)".into(),
+                y_label: "difference (mean FLIP, or fraction of pixels)".into(),
                 plot: Plot::LogLog(differences),
             });
         }

@@ -21,7 +21,7 @@ impl Scaling for Heightfield {
     }
 
     fn x_label(&self) -> &'static str {
-        "height-field cells N^2"
+        "height-field cells (N²)"
     }
 
     fn axis(&self) -> Option<&'static str> {

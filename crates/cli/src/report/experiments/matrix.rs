@@ -5,6 +5,7 @@
 use super::{Chart, Experiment, Planned, Plot};
 use crate::measure::{Measured, explicit_rays, prepare};
 use crate::progress::Progress;
+use crate::report::charts::{Bar, Bars};
 use crate::report::images::{self, Rgb8};
 use crate::report::markdown::{backends_in, bytes, noisy_mark, opt};
 use crate::report::results::{CameraRun, Equality, Images, Quality, Results, Run};
@@ -150,25 +151,41 @@ impl Experiment for Matrix {
                     scenes.push(r.scene.clone());
                 }
             }
-            let series: Vec<(String, Vec<Option<f64>>)> = backends_in(&runs)
+            // Every backend with a run, a bar per scene: its throughput, or a marked stub
+            // where it did not run (unsupported there, unavailable on this machine, or a
+            // brute-force backend left out of a scene over its time budget, which has no
+            // run).
+            let series: Vec<Bars> = backends_in(&runs)
                 .into_iter()
                 .map(|b| {
-                    let v = scenes
+                    let brute = crate::roles_of(&b).is_some_and(|r| r.contains(Roles::BRUTE_FORCE));
+                    let values = scenes
                         .iter()
-                        .map(|s| {
-                            runs.iter()
-                                .find(|r| &r.scene == s && r.backend == b)
-                                .and_then(|r| r.mrays_per_s)
-                        })
+                        .map(
+                            |s| match runs.iter().find(|r| &r.scene == s && r.backend == b) {
+                                Some(r) if r.status != "ok" => Bar::Unsupported(format!(
+                                    "{}: {}",
+                                    r.status,
+                                    r.reason.as_deref().unwrap_or("no reason given")
+                                )),
+                                Some(r) => r.mrays_per_s.map_or(Bar::Absent, Bar::Value),
+                                None if brute => Bar::Unsupported(
+                                    "left out: a brute-force backend over its time budget \
+                                     on this scene"
+                                        .into(),
+                                ),
+                                None => Bar::Absent,
+                            },
+                        )
                         .collect();
-                    (b, v)
+                    Bars { label: b, values }
                 })
                 .collect();
             out.push(Chart {
                 title: format!("Throughput, {mode} ({set} rays)"),
                 stem: format!("throughput-{mode}-{set}"),
-                x_label: String::new(),
-                y_label: "Mrays/s".into(),
+                x_label: "scene".into(),
+                y_label: "rays per second (millions)".into(),
                 plot: Plot::Categories(scenes, series),
             });
         }

@@ -15,7 +15,8 @@ mod primitives;
 mod quality;
 mod spp;
 
-use super::charts::Series;
+pub(super) use super::charts::{Chart, Plot};
+use super::charts::{PowerLaw, Series};
 use super::results::{Results, ScalingPoint};
 use super::{Ctx, Loaded, Measured, Workload, skip};
 use crate::Backend;
@@ -54,31 +55,6 @@ pub(super) struct Planned {
     pub steps: usize,
     /// Its loaded scene (the matrix's units).
     pub scene: Option<Arc<Scene>>,
-}
-
-/// A chart: its title, file stem (under `charts/`), axis labels and what it plots.
-pub(super) struct Chart {
-    /// Its title.
-    pub title: String,
-    /// Its file name without extension (an SVG and a PNG are drawn).
-    pub stem: String,
-    /// The `x` axis label (log-log charts).
-    pub x_label: String,
-    /// The `y` axis label.
-    pub y_label: String,
-    /// The data.
-    pub plot: Plot,
-}
-
-/// What a chart plots.
-pub(super) enum Plot {
-    /// Lines on log-log axes ([`super::charts::log_log`]).
-    LogLog(Vec<Series>),
-    /// Bars per named category, one per series, on a log axis
-    /// ([`super::charts::categories`]); `None` leaves a gap.
-    Categories(Vec<String>, Vec<(String, Vec<Option<f64>>)>),
-    /// Unjoined points on log-log axes, one colour per series ([`super::charts::scatter`]).
-    Scatter(Vec<Series>),
 }
 
 /// One part of the report: it splits into units (shards run whole units), plans and runs
@@ -168,7 +144,8 @@ pub(super) trait Scaling: Sync {
     /// Its name.
     fn name(&self) -> &'static str;
 
-    /// The label of its `x` axis.
+    /// The title of its `x` axis, in plain words (`primitives in the scene`); also the
+    /// charts' titles use it.
     fn x_label(&self) -> &'static str;
 
     /// What its fits' `x` is, for the sentence before the fits table.
@@ -476,8 +453,25 @@ fn points_of<'r>(
         .filter(move |p| p.experiment == experiment && p.series == series)
 }
 
+/// The fitted power law of `quantity` for one series and backend, when its fit has an
+/// intercept (files written before it was added have none until merged anew).
+fn power_law(
+    results: &Results,
+    experiment: &str,
+    series: &str,
+    backend: &str,
+    quantity: &str,
+) -> Option<PowerLaw> {
+    let f = results.fit_of(experiment, series, backend, quantity)?;
+    Some(PowerLaw {
+        coefficient: 10f64.powf(f.intercept?),
+        exponent: f.slope,
+    })
+}
+
 /// The chart of `quantity` (`seconds` or `tests_per_ray`) against `x` for one series, each
-/// backend a line labelled with its fitted slope; `None` when no point has it.
+/// backend a line with its fitted power law drawn dashed and its slope in the legend;
+/// `None` when no point has it.
 fn fit_chart(
     results: &Results,
     experiment: &str,
@@ -486,10 +480,10 @@ fn fit_chart(
     x_label: &str,
     quantity: &str,
 ) -> Option<Chart> {
-    let y_label = if quantity == "seconds" {
-        "render seconds"
+    let (what, y_label) = if quantity == "seconds" {
+        ("Render time", "render time (s)")
     } else {
-        "ray/primitive tests per ray"
+        ("Tests per ray", "ray/primitive tests per ray")
     };
     let series: Vec<Series> = backends
         .iter()
@@ -502,19 +496,16 @@ fn fit_chart(
                 })
                 .collect();
             points.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let slope = results.slope(experiment, series_name, b, quantity);
             Series {
-                label: match slope {
-                    Some(s) => format!("{b} (slope {s:.2})"),
-                    None => b.clone(),
-                },
+                label: b.clone(),
                 points,
+                fit: power_law(results, experiment, series_name, b, quantity),
             }
         })
         .filter(|s| !s.points.is_empty())
         .collect();
     (!series.is_empty()).then(|| Chart {
-        title: format!("{y_label} vs {x_label} ({series_name})"),
+        title: format!("{what} against {x_label}: {series_name}"),
         stem: format!("scaling-{experiment}-{series_name}-{quantity}"),
         x_label: x_label.into(),
         y_label: y_label.into(),

@@ -15,7 +15,7 @@ impl Scaling for Pixels {
     }
 
     fn x_label(&self) -> &'static str {
-        "pixels N^2"
+        "pixels per image (N²)"
     }
 
     fn axis(&self) -> Option<&'static str> {

@@ -259,15 +259,19 @@ impl Experiment for Presets {
                         p.build_seconds.map(|b| Series {
                             label: p.backend.clone(),
                             points: vec![(b, p.seconds)],
+                            fit: None,
                         })
                     })
                     .collect();
                 if !series.is_empty() {
                     out.push(Chart {
-                        title: format!("build vs trace, {} rays ({scene})", set.name()),
+                        title: format!(
+                            "Build time against trace time, {} rays ({scene})",
+                            set.name()
+                        ),
                         stem: format!("presets-{}-{}", file_safe(&scene), set.name()),
-                        x_label: "build seconds".into(),
-                        y_label: format!("trace seconds ({} rays)", set.name()),
+                        x_label: "build time (s)".into(),
+                        y_label: format!("trace time (s), {} rays", set.name()),
                         plot: Plot::Scatter(series),
                     });
                 }
@@ -278,14 +282,15 @@ impl Experiment for Presets {
                 .map(|(name, build, trace)| Series {
                     label: name,
                     points: FRAMES.iter().map(|&k| (k, build + k * trace)).collect(),
+                    fit: None,
                 })
                 .collect();
             if !series.is_empty() {
                 out.push(Chart {
-                    title: format!("time to image: build + k frames ({scene})"),
+                    title: format!("Time to an image: build + k frames ({scene})"),
                     stem: format!("presets-{}-time-to-image", file_safe(&scene)),
-                    x_label: "frames k".into(),
-                    y_label: "seconds to k frames".into(),
+                    x_label: "frames rendered (k)".into(),
+                    y_label: "build + k frames (s)".into(),
                     plot: Plot::LogLog(series),
                 });
             }

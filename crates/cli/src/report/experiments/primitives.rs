@@ -19,7 +19,7 @@ impl Scaling for Primitives {
     }
 
     fn x_label(&self) -> &'static str {
-        "primitives M"
+        "primitives in the scene"
     }
 
     fn axis(&self) -> Option<&'static str> {
@@ -84,15 +84,16 @@ impl Scaling for Primitives {
                             .map(|n| (p.x, n / p.seconds.max(1e-12)))
                     })
                     .collect(),
+                fit: None,
             })
             .filter(|s| !s.points.is_empty())
             .collect();
         if !series.is_empty() {
             out.push(Chart {
-                title: format!("speed-up over {oracle} vs primitives M ({series_name})"),
+                title: format!("Speed-up over {oracle} against primitives: {series_name}"),
                 stem: format!("speedup-{series_name}"),
-                x_label: "primitives M".into(),
-                y_label: format!("{oracle} time / backend time"),
+                x_label: self.x_label().into(),
+                y_label: format!("speed-up ({oracle}'s time / the backend's)"),
                 plot: Plot::LogLog(series),
             });
         }

@@ -69,6 +69,7 @@ pub(super) fn charts(results: &Results) -> Vec<Chart> {
                         .filter(|(x, y)| *x > 0.0 && *y > 0.0)
                         .collect(),
                     label: b,
+                    fit: None,
                 })
                 .filter(|s| !s.points.is_empty())
                 .collect();
@@ -78,8 +79,8 @@ pub(super) fn charts(results: &Results) -> Vec<Chart> {
             out.push(Chart {
                 title: format!("{metric} against time, {mode} ({set} rays)"),
                 stem: format!("quality-{stem}-{mode}-{set}"),
-                x_label: format!("{metric} (C_t = 1, C_i = 1)"),
-                y_label: "seconds (median)".into(),
+                x_label: format!("{metric} (C_t = C_i = 1)"),
+                y_label: format!("time to cast the {set} rays (s, median)"),
                 plot: Plot::Scatter(series),
             });
         }

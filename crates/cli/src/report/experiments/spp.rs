@@ -15,7 +15,7 @@ impl Scaling for Spp {
     }
 
     fn x_label(&self) -> &'static str {
-        "samples per pixel K"
+        "samples per pixel (K)"
     }
 
     fn axis(&self) -> Option<&'static str> {
