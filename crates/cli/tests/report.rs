@@ -1041,6 +1041,8 @@ fn report_html_is_one_page_with_viewers_and_local_files() {
         assert_eq!(html.matches("data-reference=\"true\"").count(), 5);
         // Files beside the page, by relative paths that exist; no network.
         let mut files = attributes(&html, "src");
+        // The charts, embedded as objects.
+        files.extend(attributes(&html, "data"));
         for a in ["data-image", "data-ids", "data-flip"] {
             files.extend(attributes(&html, a).into_iter().filter(|f| !f.is_empty()));
         }

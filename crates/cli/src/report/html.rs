@@ -6,9 +6,9 @@
 //! each backend's image at the same place, switched by keys or clicks as in the JERI and
 //! tev viewers, with the id-difference and FLIP maps, their colour keys, pixel-exact zoom
 //! and the figures of the current pair); tables that sort by any column, noisy figures
-//! marked; charts inlined, so their points show tooltips. One file, no network, no build
-//! step: images and charts are beside it (relative paths), its style and script are
-//! inlined (`assets/report.css`, `assets/report.js`).
+//! marked; charts embedded as SVG documents, so their points show tooltips. One file, no
+//! network, no build step: images and charts are beside it (relative paths), its style and
+//! script are inlined (`assets/report.css`, `assets/report.js`).
 //!
 //! The page's structure is a contract with its script and with the browser test
 //! (`crates/cli/tests/browser.rs`): `nav#toc`; each viewer a `section.viewer` with
@@ -28,7 +28,7 @@ const CSS: &str = include_str!("assets/report.css");
 const JS: &str = include_str!("assets/report.js");
 
 /// The page of a report whose Markdown text is `markdown`, written into the folder `out`
-/// (charts are read from there to be inlined).
+/// (where its charts are looked for).
 #[must_use]
 pub fn page(results: &Results, markdown: &str, out: &Path) -> String {
     let (markdown, viewers) = take_viewers(markdown);
@@ -276,7 +276,7 @@ fn toc(headings: &[Heading]) -> String {
 }
 
 /// Renders `events` as HTML into `s`: tables sortable and their noisy cells marked, chart
-/// images (`charts/*.svg`) inlined from `out`.
+/// images (`charts/*.svg`, when the file is in `out`) embedded as objects.
 fn render(events: &[Event], out: &Path, s: &mut String) {
     let mut plain: Vec<Event> = Vec::new();
     let mut i = 0;
@@ -293,11 +293,25 @@ fn render(events: &[Event], out: &Path, s: &mut String) {
                 if dest_url.starts_with("charts/") && dest_url.ends_with(".svg") =>
             {
                 let end = find_end(events, i, |e| matches!(e, Event::End(TagEnd::Image)));
-                match inline_svg(&out.join(dest_url.as_ref())) {
-                    Some(svg) => plain.push(Event::InlineHtml(CowStr::from(format!(
-                        "<span class=\"chart\">{svg}</span>"
-                    )))),
-                    None => plain.extend(events[i..=end].iter().cloned()),
+                if out.join(dest_url.as_ref()).is_file() {
+                    let title: String = events[i + 1..end]
+                        .iter()
+                        .filter_map(|e| match e {
+                            Event::Text(t) => Some(t.as_ref()),
+                            _ => None,
+                        })
+                        .collect();
+                    // An object, not an img: the chart stays a live SVG document, so its
+                    // points' titles show on hover; not inlined, so a full report's page
+                    // stays small (its charts are about as large as the rest of it).
+                    plain.push(Event::InlineHtml(CowStr::from(format!(
+                        "<object class=\"chart\" type=\"image/svg+xml\" data=\"{}\" aria-label=\"{}\">{}</object>",
+                        esc(dest_url),
+                        esc(&title),
+                        esc(&title)
+                    ))));
+                } else {
+                    plain.extend(events[i..=end].iter().cloned());
                 }
                 i = end + 1;
                 continue;
@@ -316,14 +330,6 @@ fn find_end(events: &[Event], start: usize, is_end: impl Fn(&Event) -> bool) -> 
         .iter()
         .position(is_end)
         .map_or(events.len() - 1, |p| start + p)
-}
-
-/// An SVG file's text without its XML declaration, to be inlined; `None` when it cannot
-/// be read.
-fn inline_svg(path: &Path) -> Option<String> {
-    let text = std::fs::read_to_string(path).ok()?;
-    let start = text.find("<svg")?;
-    Some(text[start..].trim_end().to_string())
 }
 
 /// A Markdown table (the events between its start and end) as a sortable HTML table.
