@@ -626,8 +626,8 @@ fn layout(chart: &Chart, y: &Axis, entries: &[(String, Key)]) -> Layout {
 // ---------------------------------------------------------------------------------------
 // Writing SVG.
 
-/// `s` escaped for SVG text and attribute values.
-fn escape(s: &str) -> String {
+/// `s` escaped for SVG and HTML text and attribute values (`REPORT.html` uses it too).
+pub(super) fn escape(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
     for c in s.chars() {
         match c {

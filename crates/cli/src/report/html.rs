@@ -16,6 +16,7 @@
 //! `button.viewer-layer[data-layer=image|ids|flip]`, one `img.viewer-image` and one
 //! `.viewer-stats`; every data table a `table.sortable`, its noisy cells `td.noisy`.
 
+use super::charts::escape as esc;
 use super::experiments::matrix::{self, VIEWER_BEGIN, VIEWER_END, WorkloadKey};
 use super::results::{Results, Run};
 use pulldown_cmark::{Alignment, CowStr, Event, HeadingLevel, Options, Parser, Tag, TagEnd};
@@ -687,22 +688,6 @@ fn keys_legend() -> String {
     )
 }
 
-/// `s` with the characters that HTML gives a meaning escaped.
-fn esc(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    for c in s.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&#39;"),
-            c => out.push(c),
-        }
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -756,10 +741,5 @@ mod tests {
             "{text}"
         );
         assert!(text.starts_with("a\n") && text.ends_with("b\n"), "{text}");
-    }
-
-    #[test]
-    fn escaping_covers_markup() {
-        assert_eq!(esc("a<b & \"c\">'"), "a&lt;b &amp; &quot;c&quot;&gt;&#39;");
     }
 }
