@@ -1163,6 +1163,11 @@ pub fn draw(dir: &Path, chart: &Chart) -> Result<String, String> {
 mod tests {
     use super::*;
 
+    /// The `i`-th backend of the registry (tests name no backend themselves: `tests/tidy.rs`).
+    fn b(i: usize) -> &'static str {
+        crate::BACKENDS[i].name
+    }
+
     fn labels(axis: &Axis) -> Vec<&str> {
         axis.major.iter().map(|(_, l)| l.as_str()).collect()
     }
@@ -1254,15 +1259,19 @@ mod tests {
     /// preset takes its backend's colour; other series never take a backend's colour.
     #[test]
     fn a_backend_has_one_style_everywhere() {
-        let a = styles(&["naive", "bvh", "packet"]);
-        let b = styles(&["packet", "mean FLIP", "bvh"]);
-        assert_eq!(a[1], b[2]);
-        assert_eq!(a[2], b[0]);
+        let (x, y, z) = (b(0), b(1), b(2));
+        let a = styles(&[x, y, z]);
+        let c = styles(&[z, "mean FLIP", y]);
+        assert_eq!(a[1], c[2]);
+        assert_eq!(a[2], c[0]);
         assert_ne!(a[0].colour, a[1].colour);
-        let fast = backend_style("bvh:fast").unwrap();
+        let fast = backend_style(&format!("{}:fast", b(1))).unwrap();
         assert_eq!(fast.colour, a[1].colour);
-        assert_ne!(fast.marker, backend_style("bvh:quality").unwrap().marker);
-        assert!(!BACKEND_COLOURS.contains(&b[1].colour));
+        assert_ne!(
+            fast.marker,
+            backend_style(&format!("{}:quality", b(1))).unwrap().marker
+        );
+        assert!(!BACKEND_COLOURS.contains(&c[1].colour));
         // Every registry backend has a colour of its own.
         let all: Vec<&str> = registry().collect();
         assert!(all.len() <= BACKEND_COLOURS.len());
@@ -1291,12 +1300,12 @@ mod tests {
         let bars = Plot::Categories(
             vec!["spheres".into(), "a-very-long-scene-name".into()],
             vec![Bars {
-                label: "bvh".into(),
+                label: b(1).into(),
                 values: vec![Bar::Value(2.0), Bar::Unsupported("why".into())],
             }],
         );
         for c in [
-            chart("one", "t", Plot::LogLog(vec![series("bvh", &[(1.0, 2.0)])])),
+            chart("one", "t", Plot::LogLog(vec![series(b(1), &[(1.0, 2.0)])])),
             chart("many", "t", Plot::Scatter(many)),
             chart("bars", "t", bars),
         ] {
@@ -1323,11 +1332,11 @@ mod tests {
                 vec!["spheres".into(), "x&y".into()],
                 vec![
                     Bars {
-                        label: "naive".into(),
+                        label: b(0).into(),
                         values: vec![Bar::Value(1.5), Bar::Value(2.0)],
                     },
                     Bars {
-                        label: "wgpu".into(),
+                        label: b(3).into(),
                         values: vec![Bar::Value(30.0), Bar::Unsupported("no <SDF>".into())],
                     },
                 ],
@@ -1340,7 +1349,10 @@ mod tests {
             "{s}"
         );
         assert!(s.contains("x&amp;y") && !s.contains("x&y"));
-        assert!(s.contains("wgpu on x&amp;y: no &lt;SDF&gt;"), "{s}");
+        assert!(
+            s.contains(&format!("{} on x&amp;y: no &lt;SDF&gt;", b(3))),
+            "{s}"
+        );
         assert!(!s.contains("<style") && !s.contains("class="));
         for part in s.split("id=\"").skip(1) {
             assert!(part.starts_with("throughput-cast-primary-"), "{part}");
@@ -1351,8 +1363,8 @@ mod tests {
         // The chart's title, three bars and one stub with a tooltip each; both backends'
         // colours.
         assert_eq!(s.matches("<title>").count(), 1 + 3 + 1, "{s}");
-        assert!(s.contains(backend_style("wgpu").unwrap().colour));
-        assert!(s.contains(backend_style("naive").unwrap().colour));
+        assert!(s.contains(backend_style(b(3)).unwrap().colour));
+        assert!(s.contains(backend_style(b(0)).unwrap().colour));
         assert!(s.contains(">×</text>"));
         assert_eq!(id_prefix("3d.x"), "c-3d_x");
     }
@@ -1360,20 +1372,20 @@ mod tests {
     /// A fitted power law is drawn dashed in the series' colour and named in the legend.
     #[test]
     fn fits_are_drawn_dashed() {
-        let mut s = series("bvh", &[(10.0, 0.01), (100.0, 0.02), (1000.0, 0.04)]);
+        let mut s = series(b(1), &[(10.0, 0.01), (100.0, 0.02), (1000.0, 0.04)]);
         s.fit = Some(PowerLaw {
             coefficient: 0.005,
             exponent: 0.3,
         });
         let out = svg(&chart("fit", "t", Plot::LogLog(vec![s])));
-        let colour = backend_style("bvh").unwrap().colour;
+        let colour = backend_style(b(1)).unwrap().colour;
         assert!(
             out.contains(&format!(
                 "stroke=\"{colour}\" stroke-width=\"1.6\" stroke-dasharray"
             )),
             "{out}"
         );
-        assert!(out.contains("bvh (slope 0.30)"));
+        assert!(out.contains(&format!("{} (slope 0.30)", b(1))));
         assert_eq!(out.matches("<title>bvh\n").count(), 3, "{out}");
     }
 }

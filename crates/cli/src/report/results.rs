@@ -749,7 +749,7 @@ mod tests {
     /// anew) gives it one.
     #[test]
     fn fits_without_an_intercept_still_read() {
-        let old = r#"{"experiment": "spp", "series": "cornell-box", "backend": "bvh",
+        let old = r#"{"experiment": "spp", "series": "cornell-box", "backend": "tree",
             "quantity": "seconds", "slope": 1.0, "points": 2}"#;
         let f: Fit = serde_json::from_str(old).unwrap();
         assert_eq!(f.intercept, None);
@@ -761,7 +761,7 @@ mod tests {
                 shard: 0,
                 experiment: "spp".into(),
                 series: "cornell-box".into(),
-                backend: "bvh".into(),
+                backend: "tree".into(),
                 x,
                 seconds: s,
                 rays: 1,
@@ -774,7 +774,7 @@ mod tests {
         }
         r.fits.push(f);
         r.absorb(Results::default());
-        let f = r.fit_of("spp", "cornell-box", "bvh", "seconds").unwrap();
+        let f = r.fit_of("spp", "cornell-box", "tree", "seconds").unwrap();
         assert!((f.slope - 1.0).abs() < 1e-12);
         // 0.5 x: log10 y = log10 0.5 + log10 x.
         assert!((f.intercept.unwrap() - 0.5f64.log10()).abs() < 1e-12);
