@@ -26,6 +26,24 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
 
+/// `println!` that returns the write's `io::Result` instead of panicking, so that a reader
+/// that closes the pipe early (`raybench compare-results A B --json | head`) ends the
+/// command quietly ([`main`]) rather than with a panic.
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout().lock(), $($arg)*)
+    }};
+}
+
+/// `print!` likewise ([`outln`]).
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        write!(std::io::stdout().lock(), $($arg)*)
+    }};
+}
+
 /// Renders scenes with interchangeable acceleration strategies and compares them.
 #[derive(Parser)]
 #[command(name = "raybench", version = raybench::VERSION, about, long_about = None)]
@@ -522,11 +540,21 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match run(cli) {
         Ok(code) => code,
+        // The reader of standard output went away (`| head`): what it wanted was written.
+        Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE
         }
     }
+}
+
+/// Whether `e` comes from writing to a pipe whose reader has closed it.
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
 }
 
 /// Gives the process a private, empty `XDG_RUNTIME_DIR` when it has none (or a relative
@@ -589,16 +617,16 @@ fn run(cli: Cli) -> Result<ExitCode> {
             let after = baseline::read(&cmd.after)?;
             let c = baseline::compare(&before, &after);
             if cmd.json {
-                println!("{}", serde_json::to_string_pretty(&c)?);
+                outln!("{}", serde_json::to_string_pretty(&c)?)?;
             } else {
-                print!(
+                out!(
                     "{}",
                     baseline::markdown(
                         &c,
                         &cmd.before.display().to_string(),
                         &cmd.after.display().to_string()
                     )
-                );
+                )?;
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -633,26 +661,27 @@ fn diff_images(cmd: &DiffCmd) -> Result<ExitCode> {
     let (stats, error_map, flip_map) = diff(&a, &b, exposure)
         .map_err(|e| anyhow::anyhow!("{} and {}: {e}", cmd.a.display(), cmd.b.display()))?;
     if cmd.json {
-        println!("{}", serde_json::to_string(&stats)?);
+        outln!("{}", serde_json::to_string(&stats)?)?;
     } else {
-        println!("size            {} x {}", stats.width, stats.height);
-        println!(
+        outln!("size            {} x {}", stats.width, stats.height)?;
+        outln!(
             "mean            {:.6} (A)  {:.6} (B)",
-            stats.mean_a, stats.mean_b
-        );
-        println!("mean abs error  {:.6}", stats.mean_abs_error);
-        println!("max abs error   {:.6}", stats.max_abs_error);
-        println!("MSE             {:.6e}", stats.mse);
-        println!("relative MSE    {:.6e}", stats.rel_mse);
-        println!(
+            stats.mean_a,
+            stats.mean_b
+        )?;
+        outln!("mean abs error  {:.6}", stats.mean_abs_error)?;
+        outln!("max abs error   {:.6}", stats.max_abs_error)?;
+        outln!("MSE             {:.6e}", stats.mse)?;
+        outln!("relative MSE    {:.6e}", stats.rel_mse)?;
+        outln!(
             "PSNR            {}",
             stats
                 .psnr
                 .map_or("inf (identical as displayed)".into(), |p| format!(
                     "{p:.2} dB"
                 ))
-        );
-        println!("mean FLIP       {:.6}", stats.flip);
+        )?;
+        outln!("mean FLIP       {:.6}", stats.flip)?;
     }
     if let Some((e, f)) = &maps {
         error_map.save(e)?;
@@ -950,9 +979,9 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
 
     drop(progress);
     if cmd.json {
-        println!("{}", serde_json::to_string_pretty(&rows)?);
+        outln!("{}", serde_json::to_string_pretty(&rows)?)?;
     } else {
-        print_table(&rows);
+        print_table(&rows)?;
     }
     if disagree {
         eprintln!("error: a raybench CPU backend disagrees with the reference");
@@ -965,8 +994,8 @@ fn fmt_opt<T>(v: Option<T>, f: impl Fn(T) -> String) -> String {
     v.map_or_else(|| "-".into(), f)
 }
 
-fn print_table(rows: &[CompareRow]) {
-    println!(
+fn print_table(rows: &[CompareRow]) -> std::io::Result<()> {
+    outln!(
         "{:<16} {:>10} {:>10} {:>10} {:>12} {:>10} {:>9} {:>8} {:>10}",
         "backend",
         "build s",
@@ -977,18 +1006,18 @@ fn print_table(rows: &[CompareRow]) {
         "hit diff",
         "max|dt|",
         "speed-up"
-    );
+    )?;
     let base = rows.iter().find_map(|r| r.render_seconds);
     for r in rows {
         if !r.available {
-            println!(
+            outln!(
                 "{:<16} unavailable: {}",
                 r.backend,
                 r.reason.as_deref().unwrap_or("")
-            );
+            )?;
             continue;
         }
-        println!(
+        outln!(
             "{:<16} {:>10} {:>10} {:>10} {:>12} {:>10} {:>9} {:>8} {:>10}",
             r.backend,
             fmt_opt(r.build_seconds, |v| format!("{v:.4}")),
@@ -1002,8 +1031,9 @@ fn print_table(rows: &[CompareRow]) {
                 "{:.1}x",
                 b / s.max(1e-12)
             )),
-        );
+        )?;
     }
+    Ok(())
 }
 
 /// `assets` as an absolute path without `.` or `..` (symbolic links resolved when it
@@ -1028,7 +1058,7 @@ fn resolved_dir(assets: &Path) -> (PathBuf, bool) {
 
 fn scenes(assets: &Path) -> Result<ExitCode> {
     let (dir, exists) = resolved_dir(assets);
-    println!(
+    outln!(
         "# built-in scenes (assets: {}{})",
         dir.display(),
         if exists {
@@ -1036,7 +1066,7 @@ fn scenes(assets: &Path) -> Result<ExitCode> {
         } else {
             ", which does not exist: set --assets or RAYBENCH_ASSETS"
         }
-    );
+    )?;
     for b in BUILTIN_SCENES {
         let missing: Vec<_> = b
             .assets
@@ -1048,18 +1078,18 @@ fn scenes(assets: &Path) -> Result<ExitCode> {
         } else {
             "missing-assets"
         };
-        println!("{:<14} {:<15} {}", b.name, state, b.description);
+        outln!("{:<14} {:<15} {}", b.name, state, b.description)?;
     }
-    println!("# generators (NAME:ARG)");
+    outln!("# generators (NAME:ARG)")?;
     for g in GENERATORS {
-        println!(
+        outln!(
             "{:<14} {:<15} {} (ARG = {}, at most {})",
             format!("{}:ARG", g.name),
             "ok",
             g.description,
             g.argument,
             g.max
-        );
+        )?;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -1116,7 +1146,7 @@ fn backends(json: bool) -> Result<ExitCode> {
     });
     let rows: Vec<BackendRow> = built.chain(not_built).chain(presets).collect();
     if json {
-        println!("{}", serde_json::to_string_pretty(&rows)?);
+        outln!("{}", serde_json::to_string_pretty(&rows)?)?;
     } else {
         let width = rows
             .iter()
@@ -1128,10 +1158,10 @@ fn backends(json: bool) -> Result<ExitCode> {
         for r in rows {
             if r.preset_of.is_some() && !presets_begun {
                 presets_begun = true;
-                println!(
+                outln!(
                     "\nBuild presets (name them as BACKEND:PRESET wherever a backend is taken; \
                      * = the backend's default):"
-                );
+                )?;
             }
             let name = match r.default_preset {
                 Some(true) => format!("{}*", r.name),
@@ -1142,9 +1172,9 @@ fn backends(json: bool) -> Result<ExitCode> {
             } else {
                 format!("unavailable ({})", r.reason.unwrap_or_default())
             };
-            println!("{name:<width$} {:<12} {}", state, r.description);
+            outln!("{name:<width$} {:<12} {}", state, r.description)?;
             if let Some(d) = &r.device {
-                println!("{:<width$} {:<12} device: {d}", "", "");
+                outln!("{:<width$} {:<12} device: {d}", "", "")?;
             }
         }
     }
@@ -1192,19 +1222,19 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
     let scene = load_scene(&cmd.scene, assets, &cmd.camera)?;
     check_mode_fits(&scene, cmd.mode)?;
     let g = &scene.geometry;
-    println!("scene       {}", scene.name);
-    println!("primitives  {}", g.len());
+    outln!("scene       {}", scene.name)?;
+    outln!("primitives  {}", g.len())?;
     for (kind, n) in g.count_by_kind() {
-        println!("  {:<9} {n}", kind.name());
+        outln!("  {:<9} {n}", kind.name())?;
     }
-    println!("volumes     {}", scene.volumes.len());
-    println!("objects     {}", scene.objects.len());
-    println!("materials   {}", scene.materials.len());
-    println!("lights      {}", scene.lights.len());
-    println!("cameras     {}", scene.cameras.len());
+    outln!("volumes     {}", scene.volumes.len())?;
+    outln!("objects     {}", scene.objects.len())?;
+    outln!("materials   {}", scene.materials.len())?;
+    outln!("lights      {}", scene.lights.len())?;
+    outln!("cameras     {}", scene.cameras.len())?;
     for (i, c) in scene.cameras.iter().enumerate() {
         let cam = c.camera;
-        println!(
+        outln!(
             "  {i:<3} {:<20} from [{}, {}, {}] at [{}, {}, {}] fov {}",
             format!("'{}'", c.name),
             cam.position.x,
@@ -1214,16 +1244,21 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
             cam.look_at.y,
             cam.look_at.z,
             cam.vfov_degrees
-        );
+        )?;
     }
     let bb = g.bounds();
     if bb.is_empty() {
-        println!("bounds      (none: no bounded primitives)");
+        outln!("bounds      (none: no bounded primitives)")?;
     } else {
-        println!(
+        outln!(
             "bounds      [{}, {}, {}] .. [{}, {}, {}]",
-            bb.min.x, bb.min.y, bb.min.z, bb.max.x, bb.max.y, bb.max.z
-        );
+            bb.min.x,
+            bb.min.y,
+            bb.min.z,
+            bb.max.x,
+            bb.max.y,
+            bb.max.z
+        )?;
     }
     let settings = RenderSettings {
         width: cmd.width,
@@ -1235,7 +1270,7 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
     };
     settings.validate()?;
     let (ray_set, probe) = cmd.rays.batch(&scene, &settings)?;
-    println!(
+    outln!(
         "probe       {} rays{}, {}x{}, mode {}, {} spp, max depth {}",
         ray_set,
         probe.as_ref().map_or(String::new(), |b| format!(
@@ -1248,13 +1283,18 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
         cmd.mode.name(),
         cmd.spp,
         cmd.max_depth
-    );
+    )?;
     let work = cmd.rays.work(probe.as_ref(), &settings, g.len(), 1);
     let chosen = chosen_backends(cmd.backends.as_deref(), work).map_err(anyhow::Error::msg)?;
-    println!(
+    outln!(
         "{:<16} {:>10} {:>14} {:>9} {:>10} {:>10}  structure",
-        "backend", "build s", "memory bytes", "rays/px", "tests/ray", "visits/ray"
-    );
+        "backend",
+        "build s",
+        "memory bytes",
+        "rays/px",
+        "tests/ray",
+        "visits/ray"
+    )?;
     let params = QualityParams {
         epo_samples: cmd.epo_samples,
         ..QualityParams::default()
@@ -1262,7 +1302,7 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
     let mut qualities = Vec::new();
     for b in chosen {
         match prepare_for_mode(b, &scene, settings.mode) {
-            Err(reason) => println!("{:<16} unavailable: {reason}", b.name),
+            Err(reason) => outln!("{:<16} unavailable: {reason}", b.name)?,
             Ok(Prepared {
                 renderer: r, build, ..
             }) => {
@@ -1273,7 +1313,7 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
                 let m = measure(r.as_ref(), &settings, probe.as_ref(), true)?;
                 let per_ray = |v: u64| format!("{:.2}", v as f64 / m.rays.max(1) as f64);
                 let pixels = f64::from(cmd.width) * f64::from(cmd.height);
-                println!(
+                outln!(
                     "{:<16} {:>10.4} {:>14} {:>9.2} {:>10} {:>10}  {}",
                     b.name,
                     build,
@@ -1286,27 +1326,32 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
                     } else {
                         counts.join(" ")
                     }
-                );
+                )?;
             }
         }
     }
-    print_quality(&qualities, &params);
+    print_quality(&qualities, &params)?;
     Ok(ExitCode::SUCCESS)
 }
 
 /// `raybench info`'s structure quality: one table for trees, one for grids, then the
 /// structures that cannot be read and the backends without one.
-fn print_quality(qualities: &[(&str, Option<Quality>)], params: &QualityParams) {
-    println!(
+fn print_quality(
+    qualities: &[(&str, Option<Quality>)],
+    params: &QualityParams,
+) -> std::io::Result<()> {
+    outln!(
         "quality     SAH cost and EPO with C_t = {}, C_i = {}; EPO from {} points sampled by area \
          on triangles and spheres, +- its standard error",
-        params.costs.traversal, params.costs.intersection, params.epo_samples
-    );
-    let table = |headers: [&str; 7], rows: Vec<(&str, [String; 7])>| {
+        params.costs.traversal,
+        params.costs.intersection,
+        params.epo_samples
+    )?;
+    let table = |headers: [&str; 7], rows: Vec<(&str, [String; 7])>| -> std::io::Result<()> {
         if rows.is_empty() {
-            return;
+            return Ok(());
         }
-        println!(
+        outln!(
             "{:<16} {:>10} {:>16} {:>9} {:>9} {:>14} {:>10}  {}",
             "backend",
             headers[0],
@@ -1316,13 +1361,20 @@ fn print_quality(qualities: &[(&str, Option<Quality>)], params: &QualityParams) 
             headers[4],
             headers[5],
             headers[6]
-        );
+        )?;
         for (name, c) in rows {
-            println!(
+            outln!(
                 "{name:<16} {:>10} {:>16} {:>9} {:>9} {:>14} {:>10}  {}",
-                c[0], c[1], c[2], c[3], c[4], c[5], c[6]
-            );
+                c[0],
+                c[1],
+                c[2],
+                c[3],
+                c[4],
+                c[5],
+                c[6]
+            )?;
         }
+        Ok(())
     };
     let rows = |f: fn(&Quality) -> Option<[String; 7]>| {
         qualities
@@ -1330,14 +1382,14 @@ fn print_quality(qualities: &[(&str, Option<Quality>)], params: &QualityParams) 
             .filter_map(|(name, q)| Some((*name, f(q.as_ref()?)?)))
             .collect::<Vec<_>>()
     };
-    table(TREE_COLUMNS, rows(Quality::tree_columns));
-    table(GRID_COLUMNS, rows(Quality::grid_columns));
+    table(TREE_COLUMNS, rows(Quality::tree_columns))?;
+    table(GRID_COLUMNS, rows(Quality::grid_columns))?;
     for (name, q) in qualities {
         match q {
             Some(Quality::NotReadable { reason }) => {
-                println!("{name:<16} not readable: {reason}");
+                outln!("{name:<16} not readable: {reason}")?;
             }
-            None => println!("{name:<16} no structure"),
+            None => outln!("{name:<16} no structure")?,
             Some(_) => {}
         }
     }
@@ -1349,10 +1401,11 @@ fn print_quality(qualities: &[(&str, Option<Quality>)], params: &QualityParams) 
         _ => None,
     });
     if let Some(n @ 1..) = excluded {
-        println!(
+        outln!(
             "            EPO leaves out {n} bounded primitives that are neither triangles nor spheres"
-        );
+        )?;
     }
+    Ok(())
 }
 
 /// `raybench rays export`: the rays of a set written to a ray file.

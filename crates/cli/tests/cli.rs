@@ -1571,3 +1571,34 @@ fn cameras_are_chosen_and_adjusted() {
         assert_clean_error(&raybench(&args), needle);
     }
 }
+
+/// A reader that closes the pipe early (`raybench compare-results A B --json | head`) ends
+/// the command quietly: success, no panic on standard error.
+#[test]
+fn a_closed_pipe_ends_the_command_quietly() {
+    use std::io::Read as _;
+    use std::process::Stdio;
+    let reports = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../reports");
+    // A committed report: comparing it with itself prints far more than a pipe holds.
+    let report = std::fs::read_dir(&reports)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.join("results.json").is_file())
+        .expect("a committed report");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_raybench"))
+        .args(["compare-results", "--json"])
+        .arg(&report)
+        .arg(&report)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("raybench runs");
+    let mut first = [0u8; 16];
+    child.stdout.take().unwrap().read_exact(&mut first).unwrap();
+    // The read end is closed here; the rest of the output meets a broken pipe.
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{:?}: {stderr}", out.status);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(first.starts_with(b"{"));
+}

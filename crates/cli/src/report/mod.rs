@@ -265,7 +265,8 @@ pub fn run(opts: &Options) -> Result<Results> {
         )
     });
     if let Some(section) = &appendix {
-        print!("{section}");
+        use std::io::Write as _;
+        write!(std::io::stdout().lock(), "{section}")?;
     }
     write(&results, &opts.out, appendix.as_deref())?;
     Ok(results)
