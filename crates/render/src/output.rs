@@ -73,7 +73,8 @@ pub fn id_color(id: u32) -> [u8; 3] {
 
 /// The temporary name a file is written under before [`write_atomically`] renames it into
 /// place: `.partial` inserted before the extension (`a.png` -> `a.partial.png`), so that
-/// writers that pick the format from the extension (plotters) still see it.
+/// the temporary file keeps its type's extension for anything that picks the format from
+/// it (`image::open`, a viewer); raybench's own writers name their format explicitly.
 #[must_use]
 pub fn partial_path(path: &Path) -> PathBuf {
     let mut name = path.file_stem().unwrap_or_default().to_owned();
