@@ -697,7 +697,7 @@ fn load_scene(spec: &str, assets: &Path, camera: &CameraArgs) -> Result<Arc<Scen
     eprintln!(
         "loaded {} ({} primitives) in {:.3} s",
         scene.name,
-        scene.geometry.len(),
+        scene.geometry.total_len(),
         start.elapsed().as_secs_f64()
     );
     for w in &scene.warnings {
@@ -840,7 +840,7 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
     let work = cmd.rays.work(
         rays.as_ref(),
         &settings,
-        scene.geometry.len(),
+        scene.geometry.total_len(),
         cmd.repeat + 1,
     );
     let chosen = chosen_backends(cmd.backends.as_deref(), work).map_err(anyhow::Error::msg)?;
