@@ -423,7 +423,8 @@ impl SceneBuilder {
         }
         if part.shapes.iter().any(|s| s.bounds().is_none()) {
             return Err(SceneError::Invalid(format!(
-                "instance mesh '{name}' holds a plane: only bounded primitives can be                  instanced"
+                "instance mesh '{name}' holds a plane: only bounded primitives can be \
+                 instanced"
             )));
         }
         self.check_room(part.shapes.len())?;
@@ -433,7 +434,8 @@ impl SceneBuilder {
         }
         if !part.attributes.is_empty() {
             self.warn(format!(
-                "instance mesh '{name}': its vertex normals and texture coordinates are                  not used (instanced primitives are shaded with their geometric normals)"
+                "instance mesh '{name}': its vertex normals and texture coordinates are \
+                 not used (instanced primitives are shaded with their geometric normals)"
             ));
         }
         self.meshes.push(InstanceMesh {
@@ -476,7 +478,8 @@ impl SceneBuilder {
         };
         if emissive {
             return Err(SceneError::Invalid(format!(
-                "an instance of '{}' emits light: instanced primitives are not sampled as                  lights in this version (use a non-emissive material)",
+                "an instance of '{}' emits light: instanced primitives are not sampled as \
+                 lights in this version (use a non-emissive material)",
                 m.name
             )));
         }
@@ -499,7 +502,8 @@ impl SceneBuilder {
         let total = self.shapes.len() as u64 + self.instanced + more;
         if total > limits::MAX_INSTANCED_PRIMITIVES {
             return Err(SceneError::TooLarge(format!(
-                "the scene would have {total} primitives once its instances are counted                  (limit {})",
+                "the scene would have {total} primitives once its instances are counted \
+                 (limit {})",
                 limits::MAX_INSTANCED_PRIMITIVES
             )));
         }
@@ -892,6 +896,7 @@ impl SceneBuilder {
         if unusable > 0 {
             self.warn(format!(
                 "{name}: {unusable} vertex normals are zero or not finite: their triangles \
+ \
                  are shaded with their geometric normals"
             ));
         }
@@ -990,6 +995,7 @@ impl SceneBuilder {
         if left_out.unbounded > 0 {
             self.warnings.push(format!(
                 "{} emissive plane(s) are unbounded: path tracing finds their light \
+ \
                  by BSDF sampling only (no next-event estimation), so expect noise",
                 left_out.unbounded
             ));

@@ -273,21 +273,18 @@ impl<A: Accel> Accel for TwoLevel<A> {
         hit
     }
 
-    /// The flat structure's and each distinct mesh's figures once (summed by name), plus
-    /// the top level's nodes and the instances.
+    /// Memory: the flat structure's, each distinct mesh's structure once, and the top
+    /// level's. Counts: the flat structure's own (its names may be maxima or ratios, which
+    /// do not add across structures), then the top level's nodes, the instances and the
+    /// distinct meshes.
     fn stats(&self) -> AccelStats {
         let mut stats = self.flat.stats();
-        for m in &self.meshes {
-            let s = m.stats();
-            stats.memory_bytes += s.memory_bytes;
-            for (name, n) in s.counts {
-                match stats.counts.iter_mut().find(|(k, _)| *k == name) {
-                    Some((_, total)) => *total += n,
-                    None => stats.counts.push((name, n)),
-                }
-            }
-        }
-        stats.memory_bytes += self.top.nodes.len() * std::mem::size_of::<TopNode>()
+        stats.memory_bytes += self
+            .meshes
+            .iter()
+            .map(|m| m.stats().memory_bytes)
+            .sum::<usize>()
+            + self.top.nodes.len() * std::mem::size_of::<TopNode>()
             + self.top.order.len() * 4
             + self.meshes.len() * std::mem::size_of::<A>();
         stats.counts.extend([

@@ -217,7 +217,8 @@ fn take_instance_keys(
             Err(fail("an instance mesh's `name` must not be empty"))
         }
         (Some(toml::Value::String(_)), None | Some(toml::Value::Boolean(false))) => Err(fail(
-            "`name` names an instance mesh and needs `instance_only = true` (objects drawn              by themselves have no name)",
+            "`name` names an instance mesh and needs `instance_only = true` (objects drawn \
+             by themselves have no name)",
         )),
         (None, Some(toml::Value::Boolean(_))) => Err(fail(
             "`instance_only` needs a `name` for [[instance]] tables to refer to",
@@ -258,7 +259,8 @@ fn add_instances(
         let Some(mesh) = meshes.iter_mut().find(|(n, _, _)| *n == d.mesh) else {
             let known: Vec<String> = meshes.iter().map(|(n, _, _)| format!("'{n}'")).collect();
             return Err(fail(format!(
-                "mesh '{}' is not defined (instance meshes are objects with a `name` and                  `instance_only = true`; this file has {})",
+                "mesh '{}' is not defined (instance meshes are objects with a `name` and \
+                 `instance_only = true`; this file has {})",
                 d.mesh,
                 if known.is_empty() {
                     "none".to_owned()
@@ -828,5 +830,116 @@ mod tests {
                     scael = 2\n";
         let e = load(text).unwrap_err().to_string();
         assert!(e.contains("object 1 (mesh)") && e.contains("scael"), "{e}");
+    }
+
+    /// Issue 23: named `instance_only` objects (one or a group) become meshes stored once,
+    /// `[[instance]]` tables place them; ids follow the flat primitives in instance order,
+    /// materials come from the mesh or the instance's override.
+    #[test]
+    fn instances() {
+        let s = load(
+            "[[material]]\nname = \"red\"\ncolor = [1, 0, 0]\n\
+             [[material]]\nname = \"blue\"\ncolor = [0, 0, 1]\n\
+             [[object]]\nkind = \"sphere\"\ncenter = [0, 0, -5]\nradius = 1\n\
+             [[object]]\nname = \"m\"\ninstance_only = true\nkind = \"generator\"\n\
+             spec = \"soup:10\"\nmaterial = \"red\"\n\
+             [[object]]\nname = \"m\"\ninstance_only = true\nkind = \"sphere\"\n\
+             center = [0, 0, 0]\nradius = 0.5\n\
+             [[object]]\nname = \"unused\"\ninstance_only = true\nkind = \"sphere\"\n\
+             center = [0, 0, 0]\nradius = 0.5\n\
+             [[instance]]\nmesh = \"m\"\n\
+             [[instance]]\nmesh = \"m\"\nmaterial = \"blue\"\n\
+             transform = { scale = [-1, 2, 1], rotate = [0, 90, 0], translate = [3, 0, 0] }\n",
+        )
+        .unwrap();
+        let g = &s.geometry;
+        assert_eq!((g.len(), g.meshes().len(), g.instances().len()), (1, 2, 2));
+        assert_eq!(g.meshes()[0].len(), 11);
+        assert_eq!(g.total_len(), 1 + 2 * 11);
+        assert_eq!(g.instances()[1].base(), 12);
+        assert_eq!(s.material_of(0).name, "default");
+        assert_eq!(s.material_of(1).name, "red");
+        assert_eq!(s.material_of(11).name, "default", "the group's sphere");
+        assert_eq!(s.material_of(12).name, "blue");
+        assert_eq!(s.material_of(22).name, "blue");
+        let names: Vec<&str> = s.objects.iter().map(|o| o.name.as_str()).collect();
+        assert_eq!(names, ["sphere", "instance of m", "instance of m"]);
+        assert!(
+            s.warnings
+                .iter()
+                .any(|w| w.contains("'unused' is placed by no [[instance]]")),
+            "{:?}",
+            s.warnings
+        );
+    }
+
+    /// Every bad instance is one error naming the table, its line and the cause.
+    #[test]
+    fn instance_errors_name_the_problem() {
+        let mesh = "[[object]]\nname = \"m\"\ninstance_only = true\nkind = \"sphere\"\n\
+                    center = [0, 0, 0]\nradius = 1\n";
+        let cases = [
+            (
+                format!("{mesh}[[instance]]\nmesh = \"n\"\n"),
+                "line 7: instance 1: mesh 'n' is not defined",
+            ),
+            (
+                format!("{mesh}[[instance]]\nmesh = \"m\"\ntransform = {{ scale = [1, 0, 1] }}\n"),
+                "line 7: instance 1: instance transform is singular",
+            ),
+            (
+                format!(
+                    "{mesh}[[instance]]\nmesh = \"m\"\n\
+                     transform = {{ translate = [nan, 0, 0] }}\n"
+                ),
+                "instance transform is not finite",
+            ),
+            (
+                format!("{mesh}[[instance]]\nmesh = \"m\"\nmaterial = \"x\"\n"),
+                "line 7: instance 1: material 'x' is not defined",
+            ),
+            (
+                format!("{mesh}[[instance]]\nmesh = \"m\"\nscale = 2\n"),
+                "line 9: instance 1: unknown field `scale`",
+            ),
+            (
+                format!(
+                    "[[material]]\nname = \"lamp\"\nemission = [1, 1, 1]\n{mesh}\
+                     [[instance]]\nmesh = \"m\"\nmaterial = \"lamp\"\n"
+                ),
+                "emits light",
+            ),
+            (
+                "[[object]]\nname = \"m\"\nkind = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n"
+                    .into(),
+                "line 1: object 1: `name` names an instance mesh and needs `instance_only = true`",
+            ),
+            (
+                "[[object]]\ninstance_only = true\nkind = \"sphere\"\ncenter = [0, 0, 0]\n\
+                 radius = 1\n"
+                    .into(),
+                "`instance_only` needs a `name`",
+            ),
+            (
+                "[[object]]\nname = \"p\"\ninstance_only = true\nkind = \"plane\"\n\
+                 point = [0, 0, 0]\nnormal = [0, 1, 0]\n[[instance]]\nmesh = \"p\"\n"
+                    .into(),
+                "line 1: object 1 (plane): instance mesh 'p' holds a plane",
+            ),
+            (
+                "[[object]]\nname = 3\ninstance_only = true\nkind = \"sphere\"\n\
+                 center = [0, 0, 0]\nradius = 1\n"
+                    .into(),
+                "`name` must be a string",
+            ),
+        ];
+        for (text, needle) in cases {
+            let e = load(&text)
+                .err()
+                .unwrap_or_else(|| panic!("accepted: {text}"))
+                .to_string();
+            assert!(e.contains(needle), "{text:?} -> {e}");
+            assert!(e.starts_with("t.toml: "), "{e}");
+        }
     }
 }
