@@ -89,7 +89,7 @@ fn coincident_instances_take_the_smallest_id() {
     let scene = load_or_skip(path).unwrap();
     let n = scene.geometry.meshes()[0].len() as u32;
     for name in available(BACKENDS) {
-        let frame = prepared(&name, &scene)
+        let frame = prepared(name, &scene)
             .render(&raybench_core::RenderSettings {
                 width: 48,
                 height: 48,
