@@ -174,7 +174,9 @@ impl Scene {
         &self.materials[m as usize]
     }
 
-    /// The material index of the instanced primitive `prim`.
+    /// The material index of the instanced primitive `prim` (cold: kept out of a flat
+    /// scene's shading path).
+    #[cold]
     #[inline(never)]
     fn instanced_material(&self, prim: u32) -> u32 {
         let Some((k, local)) = self.geometry.locate(prim) else {
