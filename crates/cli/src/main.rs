@@ -1193,7 +1193,17 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
     check_mode_fits(&scene, cmd.mode)?;
     let g = &scene.geometry;
     println!("scene       {}", scene.name);
-    println!("primitives  {}", g.len());
+    println!("primitives  {}", g.total_len());
+    if g.has_instances() {
+        let stored: usize = g.meshes().iter().map(|m| m.len()).sum();
+        println!(
+            "instances   {} of {} meshes ({} flat primitives and {stored} in the meshes \
+             stored; the counts by kind below are the flat ones)",
+            g.instances().len(),
+            g.meshes().len(),
+            g.len()
+        );
+    }
     for (kind, n) in g.count_by_kind() {
         println!("  {:<9} {n}", kind.name());
     }
@@ -1216,7 +1226,7 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
             cam.vfov_degrees
         );
     }
-    let bb = g.bounds();
+    let bb = g.world_bounds();
     if bb.is_empty() {
         println!("bounds      (none: no bounded primitives)");
     } else {
