@@ -266,9 +266,11 @@ fn chosen_ray_sets(scene: &Scene, bvh: &Bvh) -> Vec<(&'static str, Vec<Ray>, boo
         .map(|set| {
             let rays = match set {
                 RaySet::Primary => primary.clone(),
-                RaySet::Incoherent => {
-                    ray_sets::incoherent(scene.geometry.bounds(), INCOHERENT_COUNT, INCOHERENT_SEED)
-                }
+                RaySet::Incoherent => ray_sets::incoherent(
+                    scene.geometry.world_bounds(),
+                    INCOHERENT_COUNT,
+                    INCOHERENT_SEED,
+                ),
                 _ => ray_sets::derived(
                     set,
                     scene,

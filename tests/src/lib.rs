@@ -224,7 +224,7 @@ pub fn check(backends: &[&str], scene: &str, size: u32) {
         ..RenderSettings::default()
     };
     let reference = render_with(ORACLE, &scene_data, &settings, 1);
-    let m = scene_data.geometry.len() as u64;
+    let m = scene_data.geometry.total_len() as u64;
     assert_eq!(reference.stats.rays, u64::from(size * size));
     assert_eq!(
         reference.stats.counters.unwrap().prim_tests,
@@ -246,7 +246,7 @@ pub fn check(backends: &[&str], scene: &str, size: u32) {
         }
     }
     let rays = raybench_core::ray_sets::incoherent(
-        scene_data.geometry.bounds(),
+        scene_data.geometry.world_bounds(),
         (size * size) as usize,
         1,
     );
@@ -301,7 +301,7 @@ pub fn check_derived(backends: &[&str], scene: &str, scene_data: &Arc<Scene>, si
         .collect();
     let oracle = prepared(ORACLE, scene_data);
     let (primary_hits, _) = oracle.trace_rays(&primary, false).unwrap();
-    let m = scene_data.geometry.len() as u64;
+    let m = scene_data.geometry.total_len() as u64;
     let mut reference = Vec::new();
     for &set in &derived_sets {
         let rays = ray_sets::derived(set, scene_data, &primary, &primary_hits, &params)

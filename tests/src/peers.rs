@@ -322,7 +322,7 @@ pub fn ray_set(
     Ok(match set {
         RaySet::Primary => primary(),
         RaySet::Incoherent => {
-            ray_sets::incoherent(scene.geometry.bounds(), o.incoherent_rays, o.seed)
+            ray_sets::incoherent(scene.geometry.world_bounds(), o.incoherent_rays, o.seed)
         }
         _ => {
             let params = ray_sets::DerivedParams {

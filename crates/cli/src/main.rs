@@ -726,7 +726,7 @@ fn load_scene(spec: &str, assets: &Path, camera: &CameraArgs) -> Result<Arc<Scen
     eprintln!(
         "loaded {} ({} primitives) in {:.3} s",
         scene.name,
-        scene.geometry.len(),
+        scene.geometry.total_len(),
         start.elapsed().as_secs_f64()
     );
     for w in &scene.warnings {
@@ -869,7 +869,7 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
     let work = cmd.rays.work(
         rays.as_ref(),
         &settings,
-        scene.geometry.len(),
+        scene.geometry.total_len(),
         cmd.repeat + 1,
     );
     let chosen = chosen_backends(cmd.backends.as_deref(), work).map_err(anyhow::Error::msg)?;
@@ -1223,7 +1223,17 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
     check_mode_fits(&scene, cmd.mode)?;
     let g = &scene.geometry;
     outln!("scene       {}", scene.name)?;
-    outln!("primitives  {}", g.len())?;
+    outln!("primitives  {}", g.total_len())?;
+    if g.has_instances() {
+        let stored: usize = g.meshes().iter().map(|m| m.len()).sum();
+        outln!(
+            "instances   {} of {} meshes ({} flat primitives and {stored} in the meshes \
+             stored; the counts by kind below are the flat ones)",
+            g.instances().len(),
+            g.meshes().len(),
+            g.len()
+        )?;
+    }
     for (kind, n) in g.count_by_kind() {
         outln!("  {:<9} {n}", kind.name())?;
     }
@@ -1246,7 +1256,7 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
             cam.vfov_degrees
         )?;
     }
-    let bb = g.bounds();
+    let bb = g.world_bounds();
     if bb.is_empty() {
         outln!("bounds      (none: no bounded primitives)")?;
     } else {

@@ -60,7 +60,7 @@ pub fn explicit_rays(
             limits::MAX_EXPLICIT_RAYS
         ),
         RaySet::Incoherent => raybench_core::ray_sets::incoherent(
-            scene.geometry.bounds(),
+            scene.geometry.world_bounds(),
             count as usize,
             INCOHERENT_SEED,
         ),

@@ -253,7 +253,7 @@ pub fn derived(
     if count > limits::MAX_EXPLICIT_RAYS {
         return Err(DerivedError::TooManyRays { set, count });
     }
-    let bounds = scene.geometry.bounds();
+    let bounds = scene.geometry.world_bounds();
     let bounded = !bounds.is_empty() && bounds.extent().length().is_finite();
     let ao_t_max = if bounded {
         params.ao_distance * bounds.extent().length()
@@ -477,7 +477,7 @@ mod tests {
 
         let ao = derived(RaySet::Ao, &scene, &rays, &hits, &p).unwrap();
         assert_eq!(ao.len(), 2 * DEFAULT_AO_RAYS as usize);
-        let diagonal = scene.geometry.bounds().extent().length();
+        let diagonal = scene.geometry.world_bounds().extent().length();
         for (k, r) in ao.iter().enumerate() {
             let n = hits[if k < 4 { 0 } else { 2 }].unwrap().normal;
             assert!(r.dir.dot(n) > 0.0, "ao ray {k} below the surface");

@@ -13,8 +13,8 @@ use crate::limits;
 use crate::material::{Light, Material};
 use crate::texture::Texture;
 use crate::voxels::Volume;
-use crate::{Geometry, Hit, Shape};
-use glam::{Vec2, Vec3};
+use crate::{Geometry, Hit, Instance, Shape};
+use glam::{Affine3A, Vec2, Vec3};
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -51,9 +51,16 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// All primitives.
     pub geometry: Arc<Geometry>,
-    /// Material index of each primitive.
+    /// Material index of each flat primitive (ids `0..geometry.len()`); instanced
+    /// primitives' materials are [`Scene::mesh_materials`] or their instance's override
+    /// ([`Scene::material_of`] reads both).
     pub prim_material: Vec<u32>,
-    /// The objects, in scene order.
+    /// Material index of each primitive of each distinct instanced mesh, in
+    /// [`Geometry::meshes`] order.
+    pub mesh_materials: Vec<Arc<[u32]>>,
+    /// Each instance's material override, in [`Geometry::instances`] order.
+    pub instance_materials: Vec<Option<u32>>,
+    /// The objects, in scene order, then one per instance.
     pub objects: Vec<ObjectInfo>,
     /// The lights next-event estimation samples: emissive bounded primitives and the
     /// environment map.
@@ -151,11 +158,32 @@ impl Scene {
         Ok(())
     }
 
-    /// The material of primitive `prim`.
+    /// The material of primitive `prim` (any id of the flattened scene).
+    ///
+    /// # Panics
+    /// When `prim` is not an id of the scene.
     #[inline]
     #[must_use]
     pub fn material_of(&self, prim: u32) -> &Material {
-        &self.materials[self.prim_material[prim as usize] as usize]
+        // The flat ids' lookup as before; only an id past them (an instance's) goes out of
+        // line, where a flat scene's out-of-range id panicked before.
+        let m = match self.prim_material.get(prim as usize) {
+            Some(&m) => m,
+            None => self.instanced_material(prim),
+        };
+        &self.materials[m as usize]
+    }
+
+    /// The material index of the instanced primitive `prim` (cold: kept out of a flat
+    /// scene's shading path).
+    #[cold]
+    #[inline(never)]
+    fn instanced_material(&self, prim: u32) -> u32 {
+        let Some((k, local)) = self.geometry.locate(prim) else {
+            panic!("primitive {prim} is not in the scene");
+        };
+        let mesh = self.geometry.instances()[k].mesh() as usize;
+        self.instance_materials[k].unwrap_or_else(|| self.mesh_materials[mesh][local as usize])
     }
 
     /// Texture `t` at `uv`, or 1 without texture (a factor to multiply with).
@@ -241,6 +269,21 @@ pub struct SceneBuilder {
     texture_keys: HashMap<String, u32>,
     attributes: ShadingAttributes,
     warnings: Vec<String>,
+    meshes: Vec<InstanceMesh>,
+    instances: Vec<Instance>,
+    instance_materials: Vec<Option<u32>>,
+    instanced: u64,
+    /// For a builder from [`SceneBuilder::part`]: how many materials and textures it
+    /// started with (those it shares with its scene).
+    shared: (usize, usize),
+}
+
+/// A distinct mesh that instances place: its name, primitives and their materials.
+#[derive(Clone, Debug)]
+struct InstanceMesh {
+    name: String,
+    geometry: Arc<Geometry>,
+    materials: Arc<[u32]>,
 }
 
 fn finite(v: Vec3, what: &str) -> Result<(), SceneError> {
@@ -294,7 +337,179 @@ impl SceneBuilder {
             texture_keys: HashMap::new(),
             attributes: ShadingAttributes::default(),
             warnings: Vec::new(),
+            meshes: Vec::new(),
+            instances: Vec::new(),
+            instance_materials: Vec::new(),
+            instanced: 0,
+            shared: (1, 0),
         }
+    }
+
+    /// An empty builder with this one's materials and textures, in which the objects of an
+    /// instance mesh are added before [`SceneBuilder::add_instance_mesh`] takes them.
+    #[must_use]
+    pub fn part(&self) -> Self {
+        let mut part = Self::new(self.name.clone());
+        part.materials.clone_from(&self.materials);
+        part.textures.clone_from(&self.textures);
+        part.texture_keys.clone_from(&self.texture_keys);
+        part.shared = (part.materials.len(), part.textures.len());
+        part
+    }
+
+    /// Takes the materials and textures `part` added (a mesh file's own) into this scene,
+    /// and returns its primitives' material indices in this scene's numbering.
+    fn adopt_materials(&mut self, part: &SceneBuilder) -> Vec<u32> {
+        let (m0, t0) = part.shared;
+        let textures: Vec<u32> = (t0..part.textures.len())
+            .map(|t| {
+                let key = part
+                    .texture_keys
+                    .iter()
+                    .find(|&(_, &i)| i as usize == t)
+                    .map_or_else(|| format!("instance texture {t}"), |(k, _)| k.clone());
+                if let Some(&i) = self.texture_keys.get(&key) {
+                    return i;
+                }
+                self.textures.push(Arc::clone(&part.textures[t]));
+                let i = (self.textures.len() - 1) as u32;
+                self.texture_keys.insert(key, i);
+                i
+            })
+            .collect();
+        let remap_texture = |t: Option<u32>| {
+            t.map(|t| match (t as usize).checked_sub(t0) {
+                Some(k) => textures[k],
+                None => t,
+            })
+        };
+        let materials: Vec<u32> = part.materials[m0..]
+            .iter()
+            .map(|m| {
+                let mut m = m.clone();
+                m.base_color_texture = remap_texture(m.base_color_texture);
+                m.emission_texture = remap_texture(m.emission_texture);
+                self.materials.push(m);
+                (self.materials.len() - 1) as u32
+            })
+            .collect();
+        part.prim_material
+            .iter()
+            .map(|&m| match (m as usize).checked_sub(m0) {
+                Some(k) => materials[k],
+                None => m,
+            })
+            .collect()
+    }
+
+    /// Makes the primitives of `part` (a builder from [`SceneBuilder::part`]) a mesh that
+    /// instances can place, named `name` in messages; returns its index for
+    /// [`SceneBuilder::add_instance`]. Its primitives are stored once, however many
+    /// instances place them; its cameras, lights and volumes are not taken, and its vertex
+    /// normals and texture coordinates are dropped with a warning (instanced primitives are
+    /// shaded with their geometric normals in this version).
+    ///
+    /// # Errors
+    /// When the mesh has no primitives or an unbounded one (a plane), or the scene's
+    /// stored primitives would exceed [`limits::MAX_PRIMITIVES`].
+    pub fn add_instance_mesh(
+        &mut self,
+        name: impl Into<String>,
+        part: SceneBuilder,
+    ) -> Result<u32, SceneError> {
+        let name = name.into();
+        if part.shapes.is_empty() {
+            return Err(SceneError::Invalid(format!(
+                "instance mesh '{name}' has no primitives"
+            )));
+        }
+        if part.shapes.iter().any(|s| s.bounds().is_none()) {
+            return Err(SceneError::Invalid(format!(
+                "instance mesh '{name}' holds a plane: only bounded primitives can be \
+                 instanced"
+            )));
+        }
+        self.check_room(part.shapes.len())?;
+        let materials = self.adopt_materials(&part);
+        for w in part.warnings {
+            self.warn(w);
+        }
+        if !part.attributes.is_empty() {
+            self.warn(format!(
+                "instance mesh '{name}': its vertex normals and texture coordinates are \
+                 not used (instanced primitives are shaded with their geometric normals)"
+            ));
+        }
+        self.meshes.push(InstanceMesh {
+            name,
+            geometry: Arc::new(Geometry::new(part.shapes)),
+            materials: materials.into(),
+        });
+        Ok((self.meshes.len() - 1) as u32)
+    }
+
+    /// Places mesh `mesh` (from [`SceneBuilder::add_instance_mesh`]) by `to_world`, with
+    /// its own materials or `material` for all its primitives. Its primitives' ids follow
+    /// every flat primitive's, in instance order, whenever the instance is added.
+    ///
+    /// # Errors
+    /// When the mesh or material does not exist, the transform is not finite, singular or
+    /// badly conditioned, a material of the instance emits light (instanced emitters are
+    /// not sampled as lights in this version), or the scene would exceed
+    /// [`limits::MAX_INSTANCES`] instances or [`limits::MAX_INSTANCED_PRIMITIVES`]
+    /// primitives flattened.
+    pub fn add_instance(
+        &mut self,
+        mesh: u32,
+        to_world: Affine3A,
+        material: Option<u32>,
+    ) -> Result<&mut Self, SceneError> {
+        let Some(m) = self.meshes.get(mesh as usize) else {
+            return Err(SceneError::Invalid(format!(
+                "instance mesh index {mesh} does not exist"
+            )));
+        };
+        if let Some(material) = material {
+            self.check_material(material)?;
+        }
+        let instance = Instance::new(mesh, &m.geometry, to_world)?;
+        let emits = |i: u32| self.materials[i as usize].emission.max_element() > 0.0;
+        let emissive = match material {
+            Some(i) => emits(i),
+            None => m.materials.iter().any(|&i| emits(i)),
+        };
+        if emissive {
+            return Err(SceneError::Invalid(format!(
+                "an instance of '{}' emits light: instanced primitives are not sampled as \
+                 lights in this version (use a non-emissive material)",
+                m.name
+            )));
+        }
+        if self.instances.len() >= limits::MAX_INSTANCES {
+            return Err(SceneError::TooLarge(format!(
+                "the scene would have more than {} instances",
+                limits::MAX_INSTANCES
+            )));
+        }
+        self.check_total(u64::from(instance.count()))?;
+        self.instanced += u64::from(instance.count());
+        self.instances.push(instance);
+        self.instance_materials.push(material);
+        Ok(self)
+    }
+
+    /// Checks that `more` primitives fit in [`limits::MAX_INSTANCED_PRIMITIVES`], the
+    /// flattened scene's ids.
+    fn check_total(&self, more: u64) -> Result<(), SceneError> {
+        let total = self.shapes.len() as u64 + self.instanced + more;
+        if total > limits::MAX_INSTANCED_PRIMITIVES {
+            return Err(SceneError::TooLarge(format!(
+                "the scene would have {total} primitives once its instances are counted \
+                 (limit {})",
+                limits::MAX_INSTANCED_PRIMITIVES
+            )));
+        }
+        Ok(())
     }
 
     /// Adds a camera named `camera` (`camera 2`, ... when that name is taken); the first
@@ -448,15 +663,18 @@ impl SceneBuilder {
         Ok(self)
     }
 
+    /// Checks that `more` stored primitives fit in [`limits::MAX_PRIMITIVES`] (the flat
+    /// ones and each instance mesh's once) and in the flattened ids.
     fn check_room(&self, more: usize) -> Result<(), SceneError> {
-        if self.shapes.len() + more > limits::MAX_PRIMITIVES {
+        let stored: usize = self.meshes.iter().map(|m| m.geometry.len()).sum();
+        if self.shapes.len() + stored + more > limits::MAX_PRIMITIVES {
             return Err(SceneError::TooLarge(format!(
                 "the scene would have {} primitives (limit {})",
-                self.shapes.len() + more,
+                self.shapes.len() + stored + more,
                 limits::MAX_PRIMITIVES
             )));
         }
-        Ok(())
+        self.check_total(more as u64)
     }
 
     fn check_material(&self, material: u32) -> Result<(), SceneError> {
@@ -680,6 +898,7 @@ impl SceneBuilder {
         if unusable > 0 {
             self.warn(format!(
                 "{name}: {unusable} vertex normals are zero or not finite: their triangles \
+ \
                  are shaded with their geometric normals"
             ));
         }
@@ -741,11 +960,26 @@ impl SceneBuilder {
     /// Finishes the scene; without a camera, one framing the geometry is chosen.
     #[must_use]
     pub fn build(mut self) -> Scene {
-        let geometry = Geometry::new(self.shapes);
+        let mesh_materials = self.meshes.iter().map(|m| m.materials.clone()).collect();
+        let geometry = Geometry::with_instances(
+            self.shapes,
+            self.meshes
+                .iter()
+                .map(|m| Arc::clone(&m.geometry))
+                .collect(),
+            self.instances,
+        );
+        for i in geometry.instances() {
+            self.objects.push(ObjectInfo {
+                name: format!("instance of {}", self.meshes[i.mesh() as usize].name),
+                first: i.base(),
+                count: i.count(),
+            });
+        }
         let framed = self
             .volumes
             .iter()
-            .fold(geometry.bounds(), |b, v| b.union(v.bounds()));
+            .fold(geometry.world_bounds(), |b, v| b.union(v.bounds()));
         let mut cameras = self.cameras;
         if cameras.is_empty() {
             cameras.push(NamedCamera {
@@ -763,6 +997,7 @@ impl SceneBuilder {
         if left_out.unbounded > 0 {
             self.warnings.push(format!(
                 "{} emissive plane(s) are unbounded: path tracing finds their light \
+ \
                  by BSDF sampling only (no next-event estimation), so expect noise",
                 left_out.unbounded
             ));
@@ -785,6 +1020,8 @@ impl SceneBuilder {
             lights: self.lights,
             geometry: Arc::new(geometry),
             prim_material: self.prim_material,
+            mesh_materials,
+            instance_materials: self.instance_materials,
             objects: self.objects,
             emitters,
             volumes: self.volumes,

@@ -35,12 +35,25 @@ pub struct AccelStats {
 ///    stops only when the best `t` is *less* than the current cell's exit.
 /// 4. **Original rays.** Primitive tests always receive the original ray (its `t_max` may be
 ///    lowered to the best `t` so far, which changes no computed `t`), never one clipped to
-///    a node or cell or with a moved origin.
+///    a node or cell or with a moved origin; an instance's primitives receive the
+///    instance-space ray of the original ray ([`crate::Instance::local_ray`], the one
+///    function every backend calls), likewise clipped only at the best `t`.
+///
+/// Ids number the flattened scene ([`Geometry`]): a structure built over a geometry with
+/// instances organises its flat primitives only, unless it says it tests the instances
+/// itself ([`Accel::TESTS_INSTANCES`]); [`crate::TwoLevel`] is the two-level form of any
+/// structure that does not.
 ///
 /// Unbounded primitives ([`Geometry::unbounded`]) are kept beside the structure and tested
 /// by every ray. Any-hit queries ([`Accel::occluded`]) may stop at the first hit in any
 /// order; only their boolean result is defined.
 pub trait Accel: Send + Sync + Sized + 'static {
+    /// True when the structure's queries cover every primitive of the flattened scene,
+    /// instances included (naive, through [`Geometry::closest_every`]); false when it
+    /// organises the flat primitives only and needs [`crate::TwoLevel`] on top for a
+    /// geometry with instances (every structure but naive).
+    const TESTS_INSTANCES: bool = false;
+
     /// Builds the structure over `geometry` with default parameters. Building is separate
     /// from tracing: one build serves any number of frames.
     fn build(geometry: Arc<Geometry>) -> Self;

@@ -5,6 +5,7 @@ use crate::bezier::BezierPatch;
 use crate::csg::Csg;
 use crate::heightfield::HeightField;
 use crate::hit::{Hit, PrimHit, keep_closer};
+use crate::instance::Instance;
 use crate::plane::Plane;
 use crate::ray::Ray;
 use crate::sdf::Sdf;
@@ -161,13 +162,26 @@ impl Shape {
 
 /// Every primitive of a scene, indexed by global primitive id, with the split into bounded
 /// primitives (which acceleration structures organise) and unbounded ones (tested by every
-/// ray).
+/// ray), and the scene's instances.
+///
+/// Ids number the flattened scene: the primitives stored here (the *flat* ones) are
+/// `0..len()`; instance `k`'s primitives follow at `base_k .. base_k + n(mesh_k)` in
+/// instance order, up to [`Geometry::total_len`]. [`Geometry::shapes`], [`Geometry::bounded`],
+/// [`Geometry::unbounded`], [`Geometry::bounds`] and the query helpers whose names do not say
+/// otherwise are about the flat primitives only: a structure built over a geometry with
+/// instances organises its flat part, and [`crate::TwoLevel`] adds the instances (the
+/// render crate's `CpuRenderer` picks it by itself). [`Geometry::closest_every`] and
+/// [`Geometry::occluded_every`] (the naive loop) and [`Geometry::complete_global`] cover
+/// every id.
 #[derive(Clone, Debug, Default)]
 pub struct Geometry {
     shapes: Vec<Shape>,
     bounded: Vec<u32>,
     unbounded: Vec<u32>,
     bounds: Aabb,
+    meshes: Vec<Arc<Geometry>>,
+    instances: Vec<Instance>,
+    total: usize,
 }
 
 impl Geometry {
@@ -190,12 +204,96 @@ impl Geometry {
                 None => unbounded.push(i as u32),
             }
         }
+        let total = shapes.len();
         Self {
             shapes,
             bounded,
             unbounded,
             bounds,
+            meshes: Vec::new(),
+            instances: Vec::new(),
+            total,
         }
+    }
+
+    /// Geometry from the flat primitives in id order, the distinct meshes that instances
+    /// place, and the instances in id order (each built by [`Instance::new`] with its
+    /// mesh's index); assigns the instances' base ids after the flat primitives.
+    ///
+    /// # Panics
+    /// When an instance names a mesh that is not in `meshes`, or the flattened total
+    /// reaches `u32::MAX` ([`crate::limits::MAX_INSTANCED_PRIMITIVES`]: scene loaders refuse
+    /// such scenes first).
+    #[must_use]
+    pub fn with_instances(
+        shapes: Vec<Shape>,
+        meshes: Vec<Arc<Geometry>>,
+        mut instances: Vec<Instance>,
+    ) -> Self {
+        let mut g = Self::new(shapes);
+        let mut total = g.shapes.len() as u64;
+        for i in &mut instances {
+            let mesh = &meshes[i.mesh() as usize];
+            assert_eq!(mesh.len(), i.count() as usize, "instance of another mesh");
+            i.set_base(total as u32);
+            total += u64::from(i.count());
+            assert!(
+                total <= crate::limits::MAX_INSTANCED_PRIMITIVES,
+                "too many instanced primitives"
+            );
+        }
+        g.meshes = meshes;
+        g.instances = instances;
+        g.total = total as usize;
+        g
+    }
+
+    /// The distinct meshes the instances place (each one structure in a two-level form).
+    #[inline]
+    #[must_use]
+    pub fn meshes(&self) -> &[Arc<Geometry>] {
+        &self.meshes
+    }
+
+    /// The instances, in id order.
+    #[inline]
+    #[must_use]
+    pub fn instances(&self) -> &[Instance] {
+        &self.instances
+    }
+
+    /// True when the geometry has instances.
+    #[inline]
+    #[must_use]
+    pub fn has_instances(&self) -> bool {
+        !self.instances.is_empty()
+    }
+
+    /// Number of primitives of the flattened scene: the flat ones plus every instance's.
+    #[inline]
+    #[must_use]
+    pub fn total_len(&self) -> usize {
+        self.total
+    }
+
+    /// Bounds of the flat bounded primitives and of every instance's world box.
+    #[must_use]
+    pub fn world_bounds(&self) -> Aabb {
+        self.instances
+            .iter()
+            .fold(self.bounds, |b, i| b.union(i.bounds()))
+    }
+
+    /// The index in [`Geometry::instances`] of the instance that global id `id` belongs
+    /// to and the id's index in its mesh, or `None` for a flat primitive's id or one past
+    /// the total.
+    #[must_use]
+    pub fn locate(&self, id: u32) -> Option<(usize, u32)> {
+        if (id as usize) < self.shapes.len() || (id as usize) >= self.total {
+            return None;
+        }
+        let k = self.instances.partition_point(|i| i.base() <= id) - 1;
+        Some((k, id - self.instances[k].base()))
     }
 
     /// All primitives, indexed by id.
@@ -248,9 +346,17 @@ impl Geometry {
     }
 
     /// Bytes held by the primitives: the shape list, the id lists, and what objects such
-    /// as height fields hold behind their `Arc`.
+    /// as height fields hold behind their `Arc`; with instances, each distinct mesh once
+    /// and the instance records.
     #[must_use]
     pub fn memory_bytes(&self) -> usize {
+        self.flat_memory_bytes()
+            + self.meshes.iter().map(|m| m.memory_bytes()).sum::<usize>()
+            + self.instances.len() * std::mem::size_of::<Instance>()
+    }
+
+    /// [`Geometry::memory_bytes`] of the flat primitives.
+    fn flat_memory_bytes(&self) -> usize {
         let heap: usize = self
             .shapes
             .iter()
@@ -340,10 +446,75 @@ impl Geometry {
         false
     }
 
-    /// Turns the winner of [`Geometry::test_closest`] into a full [`Hit`].
+    /// Turns the winner of [`Geometry::test_closest`] into a full [`Hit`] (flat ids only:
+    /// instanced ones go through [`Geometry::complete_global`]).
     #[inline]
     #[must_use]
     pub fn complete(&self, ray: &Ray, best: Option<(u32, PrimHit)>) -> Option<Hit> {
         best.map(|(id, h)| self.shape(id).complete_hit(ray, id, h))
+    }
+
+    /// [`Geometry::complete`] for any id of the flattened scene: an instanced primitive is
+    /// completed on its instance-space ray ([`Instance::local_ray`]) with its global id,
+    /// and its normal carried to world space ([`Instance::world_normal`]). The one
+    /// completion of an instance hit.
+    #[must_use]
+    pub fn complete_global(&self, ray: &Ray, best: Option<(u32, PrimHit)>) -> Option<Hit> {
+        let (id, h) = best?;
+        let Some((k, local)) = self.locate(id) else {
+            return self.complete(ray, best);
+        };
+        let instance = &self.instances[k];
+        let mesh = &self.meshes[instance.mesh() as usize];
+        let mut hit = mesh
+            .shape(local)
+            .complete_hit(&instance.local_ray(ray), id, h);
+        hit.normal = instance.world_normal(hit.normal);
+        Some(hit)
+    }
+
+    /// The closest hit over every primitive of the flattened scene in global id order:
+    /// the flat ones, then each instance's on its instance-space ray. The naive strategy;
+    /// counts [`Geometry::total_len`] tests.
+    #[must_use]
+    pub fn closest_every<C: crate::Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
+        if self.instances.is_empty() {
+            return self.closest_brute_force(ray, counters);
+        }
+        let mut best = None;
+        for id in 0..self.len() as u32 {
+            self.test_closest(id, ray, &mut best);
+        }
+        for instance in &self.instances {
+            let mesh = &self.meshes[instance.mesh() as usize];
+            let local = instance.local_ray(ray);
+            for (l, shape) in mesh.shapes.iter().enumerate() {
+                let t_max = best.map_or(local.t_max, |(_, h): (u32, PrimHit)| h.t);
+                if let Some(h) = shape.intersect(&local.clipped(t_max)) {
+                    keep_closer(&mut best, instance.base() + l as u32, h);
+                }
+            }
+        }
+        counters.add_tests(self.total as u64);
+        self.complete_global(ray, best)
+    }
+
+    /// Whether any primitive of the flattened scene is hit, in global id order, stopping at
+    /// the first; counts the tests made.
+    #[must_use]
+    pub fn occluded_every<C: crate::Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
+        if self.occluded_brute_force(ray, counters) {
+            return true;
+        }
+        for instance in &self.instances {
+            let local = instance.local_ray(ray);
+            let shapes = &self.meshes[instance.mesh() as usize].shapes;
+            if let Some(i) = shapes.iter().position(|s| s.intersect(&local).is_some()) {
+                counters.add_tests(i as u64 + 1);
+                return true;
+            }
+            counters.add_tests(shapes.len() as u64);
+        }
+        false
     }
 }

@@ -31,6 +31,7 @@ mod error;
 mod geometry;
 mod heightfield;
 mod hit;
+mod instance;
 pub mod limits;
 mod mesh;
 mod optree;
@@ -44,6 +45,7 @@ mod sphere;
 mod stack;
 pub mod traverse;
 mod triangle;
+mod two_level;
 
 pub use aabb::{Aabb, FAR_SCALE, SlabRay};
 pub use accel::{Accel, AccelStats, BatchTracer};
@@ -57,6 +59,7 @@ pub use error::SceneError;
 pub use geometry::{Geometry, PrimitiveKind, Shape};
 pub use heightfield::{CellSurface, HeightField, HeightFieldTraversal, MAX_HEIGHT_FIELD_VERTICES};
 pub use hit::{Hit, PrimHit, keep_closer};
+pub use instance::{INSTANCE_BOX_PAD, Instance};
 pub use mesh::{
     MAX_EAR_CLIP_VERTICES, PolygonKind, PolygonMesh, TriangleMesh, Triangulated,
     triangulate_polygon,
@@ -71,5 +74,6 @@ pub use sdf::{March, Sdf, SdfNode, SdfOp, SdfParams, SdfPrimitive};
 pub use sphere::Sphere;
 pub use stack::{CULL_SLACK, NodeStack, cull_bound};
 pub use triangle::Triangle;
+pub use two_level::TwoLevel;
 
 pub use glam::{Affine3A, Vec2, Vec3, Vec3A};

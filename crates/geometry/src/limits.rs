@@ -13,6 +13,16 @@ pub const MAX_SPP: u32 = 1 << 16;
 /// Largest accepted number of primitives in one scene (about 2.7 GB of primitives).
 pub const MAX_PRIMITIVES: usize = 1 << 26;
 
+/// Largest accepted number of primitives of a scene with instances, flattened (the flat
+/// ones plus every instance's mesh, counted once per instance): every id of the flattened
+/// scene is a `u32` below `NO_HIT` (`u32::MAX`). The stored primitives (the flat ones and
+/// each distinct mesh once) stay bounded by [`MAX_PRIMITIVES`].
+pub const MAX_INSTANCED_PRIMITIVES: u64 = u32::MAX as u64 - 1;
+
+/// Largest accepted number of instances in one scene (each costs about 230 bytes: its
+/// record, its material override and its share of the top-level tree).
+pub const MAX_INSTANCES: usize = 1 << 20;
+
 /// Largest accepted magnitude of a coordinate or radius: scene extents, squared radii and
 /// products in the intersection routines then stay finite in f32.
 pub const MAX_COORDINATE: f32 = 1.0e18;

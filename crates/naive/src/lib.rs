@@ -7,6 +7,11 @@
 //! Because it tests primitives in id order and keeps a candidate only when it is strictly
 //! closer (or equally close with a smaller id, which in id order never happens), it is the
 //! definition of the right answer: every other raybench CPU backend is tested against it.
+//!
+//! With instances it tests every primitive of every instance too, in global id order, on
+//! each instance's instance-space ray ([`Geometry::closest_every`]): `rays * total` tests,
+//! where the total counts each instance's mesh once per instance. It does not go through
+//! the two-level form the other backends use, so it checks that form instead of sharing it.
 
 use raybench_geometry::{Accel, AccelStats, Counters, Geometry, Hit, Ray};
 use std::sync::Arc;
@@ -18,6 +23,8 @@ pub struct NaiveAccel {
 }
 
 impl Accel for NaiveAccel {
+    const TESTS_INSTANCES: bool = true;
+
     fn build(geometry: Arc<Geometry>) -> Self {
         Self { geometry }
     }
@@ -28,12 +35,12 @@ impl Accel for NaiveAccel {
 
     #[inline]
     fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
-        self.geometry.closest_brute_force(ray, counters)
+        self.geometry.closest_every(ray, counters)
     }
 
     #[inline]
     fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
-        self.geometry.occluded_brute_force(ray, counters)
+        self.geometry.occluded_every(ray, counters)
     }
 
     fn stats(&self) -> AccelStats {

@@ -2,11 +2,12 @@
 //! equivalence contract, so they must agree on nearly every ray, not on all: the `bvh`
 //! crate (raybench's own primitive test, the crate's non-conservative box test) with `t`
 //! bit-identical wherever the id agrees, Embree (its own triangle test) with `t` within
-//! `1e-4` relative.
+//! `1e-4` relative. The same holds for their two-level forms on an instanced scene
+//! (`TwoLevel`, which the render crate builds for every CPU backend on such scenes).
 
 use raybench_core::{
-    Aabb, Accel, Camera, Geometry, Hit, NoCounters, Ray, SceneBuilder, Shape, Sphere, Vec3,
-    ray_sets,
+    Aabb, Accel, Affine3A, Camera, Geometry, Hit, Instance, NoCounters, Ray, SceneBuilder, Shape,
+    Sphere, TwoLevel, Vec3, ray_sets,
 };
 use raybench_naive::NaiveAccel;
 use raybench_peers::BvhCrateAccel;
@@ -25,13 +26,33 @@ fn geometries() -> Vec<(&'static str, Arc<Geometry>)> {
     generators::test_geometries(20)
 }
 
+/// An icosphere instanced 24 times (rotated, scaled, every third mirrored, every fourth
+/// coincident with the previous one) beside a flat sphere.
+fn instanced() -> Vec<(&'static str, Arc<Geometry>)> {
+    let mesh = icosphere();
+    let place = |k: usize| {
+        let mirror = if k.is_multiple_of(3) { -1.0 } else { 1.0 };
+        Affine3A::from_translation(Vec3::new((k % 6) as f32 - 2.5, (k / 6) as f32 - 1.5, 0.0))
+            * Affine3A::from_rotation_y(0.4 * k as f32)
+            * Affine3A::from_scale(Vec3::new(mirror * 0.5, 0.4, 0.6))
+    };
+    let instances = (0..24)
+        .map(|k| Instance::new(0, &mesh, place(if k % 4 == 3 { k - 1 } else { k })).unwrap())
+        .collect();
+    let flat = vec![Shape::Sphere(Sphere::new(Vec3::new(0.0, 0.0, -2.0), 1.0))];
+    vec![(
+        "instanced icospheres",
+        Arc::new(Geometry::with_instances(flat, vec![mesh], instances)),
+    )]
+}
+
 /// Camera rays framing the geometry, seeded incoherent rays in its box, and rays that can
 /// hit nothing (NaN and zero directions) or only a short interval.
 fn ray_sets(g: &Geometry) -> Vec<(&'static str, Vec<Ray>)> {
-    let bounds = if g.bounds().is_empty() {
+    let bounds = if g.world_bounds().is_empty() {
         Aabb::new(-Vec3::ONE, Vec3::ONE)
     } else {
-        g.bounds()
+        g.world_bounds()
     };
     let primary = ray_sets::primary(&Camera::framing(bounds), 96, 80);
     let incoherent = ray_sets::incoherent(bounds, 4000, 7);
@@ -71,12 +92,17 @@ fn batch_occluded<A: Accel>(accel: &A, rays: &[Ray]) -> Vec<bool> {
     out
 }
 
-/// Checks `build`'s accelerator against naive on every geometry and ray set: closest hits
+/// Checks `build`'s accelerator against naive on every geometry of `geometries` and ray set: closest hits
 /// (batch and single) agree on at least [`MIN_AGREEMENT`] of each set's rays with `t` within
 /// `rel_t` relative where the ids agree, any-hit results likewise, and rays that can hit
 /// nothing miss.
-fn check_against_naive<A: Accel>(name: &str, build: impl Fn(Arc<Geometry>) -> A, rel_t: f32) {
-    for (gname, g) in geometries() {
+fn check_against_naive<A: Accel>(
+    name: &str,
+    geometries: Vec<(&'static str, Arc<Geometry>)>,
+    build: impl Fn(Arc<Geometry>) -> A,
+    rel_t: f32,
+) {
+    for (gname, g) in geometries {
         let naive = NaiveAccel::build(Arc::clone(&g));
         let accel = build(Arc::clone(&g));
         for (set, rays) in ray_sets(&g) {
@@ -152,7 +178,17 @@ fn check_against_naive<A: Accel>(name: &str, build: impl Fn(Arc<Geometry>) -> A,
 #[test]
 fn bvh_crate_matches_naive_except_ties() {
     // Same primitive routine as naive: where the ids agree, `t` is bit-identical.
-    check_against_naive("bvh-crate", BvhCrateAccel::build, 0.0);
+    check_against_naive("bvh-crate", geometries(), BvhCrateAccel::build, 0.0);
+}
+
+#[test]
+fn bvh_crate_two_level_matches_naive_except_ties() {
+    check_against_naive(
+        "bvh-crate two-level",
+        instanced(),
+        TwoLevel::<BvhCrateAccel>::build,
+        0.0,
+    );
 }
 
 /// Rays with a NaN or zero direction, or an infinite origin, miss without trouble.
@@ -243,12 +279,27 @@ mod embree {
 
     #[test]
     fn embree_single_rays_agree_with_naive() {
-        check_against_naive("embree", EmbreeAccel::build, REL_T);
+        check_against_naive("embree", geometries(), EmbreeAccel::build, REL_T);
+    }
+
+    #[test]
+    fn embree_two_level_agrees_with_naive() {
+        check_against_naive(
+            "embree two-level",
+            instanced(),
+            TwoLevel::<EmbreeAccel>::build,
+            REL_T,
+        );
     }
 
     #[test]
     fn embree_packets_of_16_agree_with_naive() {
-        check_against_naive("embree-packet", EmbreePacketAccel::build, REL_T);
+        check_against_naive(
+            "embree-packet",
+            geometries(),
+            EmbreePacketAccel::build,
+            REL_T,
+        );
         let g = icosphere();
         assert_eq!(EmbreePacketAccel::build(g).width(), 16);
     }
@@ -257,6 +308,7 @@ mod embree {
     fn embree_packets_of_8_agree_with_naive() {
         check_against_naive(
             "embree-packet (8)",
+            geometries(),
             |g| EmbreePacketAccel::build_with_width(g, 8),
             REL_T,
         );

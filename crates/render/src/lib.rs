@@ -8,7 +8,9 @@
 //! **Architecture invariant:** the hot loop is generic over the accelerator
 //! (`render_frame::<A, C>`); dynamic dispatch happens once per frame, at the `Renderer`
 //! boundary. Tiles are reduced in tile order, so frames and counters are identical on any
-//! number of threads.
+//! number of threads. A scene with instances is rendered through the two-level form of the
+//! backend's structure ([`TwoLevel`]), chosen once in `prepare`: the match between the two
+//! forms happens once per frame or batch, so flat scenes keep their direct path.
 
 mod output;
 mod read;
@@ -22,7 +24,7 @@ pub use read::{LinearImage, ReadError, parse_pfm, read_linear};
 use raybench_core::integrator::{assemble, render_tile, tiles};
 use raybench_core::{
     Accel, AccelStats, BatchTracer, Counters, Frame, Geometry, Hit, NoCounters, QualityParams, Ray,
-    RayCounters, RenderError, RenderSettings, Renderer, Scene, StructureQuality, Timings,
+    RayCounters, RenderError, RenderSettings, Renderer, Scene, StructureQuality, Timings, TwoLevel,
 };
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -70,7 +72,27 @@ fn render_counted<A: Accel, C: Counters>(
 /// The builder of an accelerator: a function so that backends can pass their parameters.
 pub type BuildFn<A> = Box<dyn Fn(Arc<Geometry>) -> A + Send + Sync>;
 
-/// The one CPU [`Renderer`]: builds an [`Accel`] in `prepare`, renders tiles in parallel.
+/// The structure `prepare` built: the backend's own for a flat scene (or for a backend
+/// that tests instances itself, [`Accel::TESTS_INSTANCES`]: naive), its two-level form for a
+/// scene with instances.
+enum Built<A: Accel> {
+    Flat(A),
+    TwoLevel(TwoLevel<A>),
+}
+
+/// `$body` with `$a` bound to the built structure, whichever form it has: the one match per
+/// frame or batch, outside the per-ray path.
+macro_rules! with_built {
+    ($built:expr, $a:ident => $body:expr) => {
+        match $built {
+            Built::Flat($a) => $body,
+            Built::TwoLevel($a) => $body,
+        }
+    };
+}
+
+/// The one CPU [`Renderer`]: builds an [`Accel`] in `prepare` (its [`TwoLevel`] form for a
+/// scene with instances), renders tiles in parallel.
 pub struct CpuRenderer<A: Accel> {
     name: String,
     description: String,
@@ -78,7 +100,7 @@ pub struct CpuRenderer<A: Accel> {
     availability: fn() -> Result<(), String>,
     support: fn(&Geometry) -> Result<(), String>,
     counts_tests: bool,
-    prepared: Option<(Arc<Scene>, A)>,
+    prepared: Option<(Arc<Scene>, Built<A>)>,
 }
 
 impl<A: Accel> CpuRenderer<A> {
@@ -128,10 +150,14 @@ impl<A: Accel> CpuRenderer<A> {
         Self::new(name, description, Box::new(A::build))
     }
 
-    /// The built structure, after `prepare`.
+    /// The built structure, after `prepare` of a flat scene (`None` before, and for a
+    /// scene with instances, whose structure is the [`TwoLevel`] form of `A`).
     #[must_use]
     pub fn accel(&self) -> Option<&A> {
-        self.prepared.as_ref().map(|(_, a)| a)
+        match self.prepared.as_ref() {
+            Some((_, Built::Flat(a))) => Some(a),
+            _ => None,
+        }
     }
 }
 
@@ -148,8 +174,14 @@ impl<A: Accel> Renderer for CpuRenderer<A> {
         (self.availability)()
     }
 
+    /// The support check on the flat primitives and on every instanced mesh.
     fn supports(&self, scene: &Scene) -> Result<(), String> {
-        (self.support)(&scene.geometry)
+        (self.support)(&scene.geometry)?;
+        scene
+            .geometry
+            .meshes()
+            .iter()
+            .try_for_each(|m| (self.support)(m))
     }
 
     fn counts_tests(&self) -> bool {
@@ -161,7 +193,12 @@ impl<A: Accel> Renderer for CpuRenderer<A> {
         self.prepared = None;
         self.supports(scene).map_err(RenderError::Unsupported)?;
         let start = Instant::now();
-        let accel = (self.build)(Arc::clone(&scene.geometry));
+        let geometry = Arc::clone(&scene.geometry);
+        let accel = if geometry.has_instances() && !A::TESTS_INSTANCES {
+            Built::TwoLevel(TwoLevel::build_with(geometry, &self.build))
+        } else {
+            Built::Flat((self.build)(geometry))
+        };
         let mut timings = Timings::default();
         timings.push("build", start.elapsed().as_secs_f64());
         self.prepared = Some((Arc::clone(scene), accel));
@@ -169,20 +206,27 @@ impl<A: Accel> Renderer for CpuRenderer<A> {
     }
 
     fn render(&self, settings: &RenderSettings) -> Result<Frame, RenderError> {
-        let (scene, accel) = self.prepared.as_ref().ok_or(RenderError::NotPrepared)?;
-        render_frame(scene, accel, settings)
+        let (scene, built) = self.prepared.as_ref().ok_or(RenderError::NotPrepared)?;
+        with_built!(built, a => render_frame(scene, a, settings))
     }
 
+    /// The structure's figures; a two-level form counts each distinct mesh's structure
+    /// once.
     fn structure(&self) -> Option<AccelStats> {
-        self.accel().map(Accel::stats)
+        let (_, built) = self.prepared.as_ref()?;
+        Some(with_built!(built, a => a.stats()))
     }
 
     fn batch_tracer(&self) -> Option<&dyn BatchTracer> {
-        self.accel().map(|a| a as &dyn BatchTracer)
+        let (_, built) = self.prepared.as_ref()?;
+        Some(with_built!(built, a => a as &dyn BatchTracer))
     }
 
+    /// The structure's quality; `None` for a two-level form (not defined for it in this
+    /// version).
     fn quality(&self, params: &QualityParams) -> Option<StructureQuality> {
-        self.accel().and_then(|a| a.quality(params))
+        let (_, built) = self.prepared.as_ref()?;
+        with_built!(built, a => a.quality(params))
     }
 
     fn trace_rays(
@@ -190,12 +234,12 @@ impl<A: Accel> Renderer for CpuRenderer<A> {
         rays: &[Ray],
         count: bool,
     ) -> Result<(Vec<Option<Hit>>, Option<RayCounters>), RenderError> {
-        let (_, accel) = self.prepared.as_ref().ok_or(RenderError::NotPrepared)?;
-        Ok(counted_if(
+        let (_, built) = self.prepared.as_ref().ok_or(RenderError::NotPrepared)?;
+        Ok(with_built!(built, a => counted_if(
             count,
-            || trace_counted(accel, rays),
-            || trace_counted(accel, rays),
-        ))
+            || trace_counted(a, rays),
+            || trace_counted(a, rays),
+        )))
     }
 
     /// Any hits through the structure's `occluded_batch`, in parallel chunks like
@@ -205,12 +249,12 @@ impl<A: Accel> Renderer for CpuRenderer<A> {
         rays: &[Ray],
         count: bool,
     ) -> Result<(Vec<bool>, Option<RayCounters>), RenderError> {
-        let (_, accel) = self.prepared.as_ref().ok_or(RenderError::NotPrepared)?;
-        Ok(counted_if(
+        let (_, built) = self.prepared.as_ref().ok_or(RenderError::NotPrepared)?;
+        Ok(with_built!(built, a => counted_if(
             count,
-            || occlude_counted(accel, rays),
-            || occlude_counted(accel, rays),
-        ))
+            || occlude_counted(a, rays),
+            || occlude_counted(a, rays),
+        )))
     }
 }
 

@@ -519,6 +519,11 @@ impl Renderer for WgpuRenderer {
 
     fn supports(&self, scene: &Scene) -> Result<(), String> {
         check_kinds(scene)?;
+        if scene.geometry.has_instances() {
+            return Err(
+                "the GPU kernels have no instances (render the scene with a CPU backend)".into(),
+            );
+        }
         if scene.has_textures() {
             return Err(
                 "the GPU kernels have no textures (render the scene with a CPU backend)".into(),

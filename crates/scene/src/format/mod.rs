@@ -54,6 +54,8 @@ struct SceneFile {
     objects: Vec<toml::Table>,
     #[serde(default, rename = "volume")]
     volumes: Vec<toml::Table>,
+    #[serde(default, rename = "instance")]
+    instances: Vec<toml::Table>,
     /// `[benchmark]`: a built-in scene's report metadata, read by `build.rs`; ignored here.
     #[serde(default, rename = "benchmark")]
     _benchmark: Option<serde::de::IgnoredAny>,
@@ -171,6 +173,123 @@ impl TransformDesc {
             translate: self.translate.map_or(Vec3::ZERO, Vec3::from),
         }
     }
+}
+
+/// An `[[instance]]` table: a named instance mesh placed by an affine transform, with an
+/// optional material for all its primitives.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct InstanceDesc {
+    mesh: String,
+    #[serde(default)]
+    transform: TransformDesc,
+    material: Option<String>,
+}
+
+/// The keys every `[[object]]` may carry besides its kind's, taken out of the table before
+/// the kind's own struct reads it: `name` and `instance_only = true` make the object (or,
+/// with several objects of one name, a group of objects) a mesh that `[[instance]]` tables
+/// place and that is not drawn by itself. Returns the mesh's name for such an object.
+fn take_instance_keys(
+    table: &mut toml::Table,
+    text: &str,
+    index: usize,
+    ctx: &Context,
+) -> Result<Option<String>, LoadError> {
+    let name = table.remove("name");
+    let only = table.remove("instance_only");
+    if name.is_none() && only.is_none() {
+        return Ok(None);
+    }
+    let what = header_line(text, "object", index).map_or_else(
+        || format!("object {}", index + 1),
+        |l| format!("line {l}: object {}", index + 1),
+    );
+    let fail = |message: &str| LoadError::Parse {
+        path: ctx.file.clone(),
+        message: format!("{what}: {message}"),
+    };
+    match (name, only) {
+        (Some(toml::Value::String(n)), Some(toml::Value::Boolean(true))) if !n.is_empty() => {
+            Ok(Some(n))
+        }
+        (Some(toml::Value::String(_)), Some(toml::Value::Boolean(true))) => {
+            Err(fail("an instance mesh's `name` must not be empty"))
+        }
+        (Some(toml::Value::String(_)), None | Some(toml::Value::Boolean(false))) => Err(fail(
+            "`name` names an instance mesh and needs `instance_only = true` (objects drawn \
+             by themselves have no name)",
+        )),
+        (None, Some(toml::Value::Boolean(_))) => Err(fail(
+            "`instance_only` needs a `name` for [[instance]] tables to refer to",
+        )),
+        (Some(_), _) => Err(fail("`name` must be a string")),
+        (None, Some(_)) => Err(fail("`instance_only` must be true or false")),
+        (None, None) => Ok(None),
+    }
+}
+
+/// The instance meshes of a scene file, in order of their first object: each one's name,
+/// the label of its first object (for errors) and the builder its objects went to.
+type Parts = Vec<(String, String, SceneBuilder)>;
+
+/// Adds every `[[instance]]` table: the meshes of `parts` first (each stored once), then
+/// one instance per table, in file order.
+fn add_instances(
+    tables: Vec<toml::Table>,
+    parts: Parts,
+    text: &str,
+    ctx: &Context,
+    b: &mut SceneBuilder,
+    materials: &HashMap<String, u32>,
+) -> Result<(), LoadError> {
+    let mut meshes: Vec<(String, u32, bool)> = Vec::new();
+    for (name, what, part) in parts {
+        let i = b
+            .add_instance_mesh(name.clone(), part)
+            .map_err(ctx.scene_err(&what))?;
+        meshes.push((name, i, false));
+    }
+    for (index, table) in tables.into_iter().enumerate() {
+        let (d, what): (InstanceDesc, _) = table_item(text, "instance", index, table, ctx)?;
+        let fail = |message: String| LoadError::Parse {
+            path: ctx.file.clone(),
+            message: format!("{what}: {message}"),
+        };
+        let Some(mesh) = meshes.iter_mut().find(|(n, _, _)| *n == d.mesh) else {
+            let known: Vec<String> = meshes.iter().map(|(n, _, _)| format!("'{n}'")).collect();
+            return Err(fail(format!(
+                "mesh '{}' is not defined (instance meshes are objects with a `name` and \
+                 `instance_only = true`; this file has {})",
+                d.mesh,
+                if known.is_empty() {
+                    "none".to_owned()
+                } else {
+                    known.join(", ")
+                }
+            )));
+        };
+        mesh.2 = true;
+        let material = match &d.material {
+            None => None,
+            Some(n) => Some(
+                *materials
+                    .get(n)
+                    .ok_or_else(|| fail(format!("material '{n}' is not defined")))?,
+            ),
+        };
+        let affine = d.transform.to_transform().affine();
+        b.add_instance(mesh.1, affine, material)
+            .map_err(ctx.scene_err(&what))?;
+    }
+    for (name, _, used) in &meshes {
+        if !used {
+            b.warn(format!(
+                "instance mesh '{name}' is placed by no [[instance]]: it is not drawn"
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// An `[[object]]` table, by its `kind`: each variant's table and its `add` live in the
@@ -446,16 +565,32 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
         let (l, what): (light::LightDesc, _) = table_item(text, "light", index, table, ctx)?;
         b.add_light(l.light()).map_err(ctx.scene_err(&what))?;
     }
-    for (index, table) in file.objects.into_iter().enumerate() {
+    let mut parts: Parts = Vec::new();
+    for (index, mut table) in file.objects.into_iter().enumerate() {
+        let mesh = take_instance_keys(&mut table, text, index, ctx)?;
         let (o, what): (ObjectDesc, _) = table_item(text, "object", index, table, ctx)?;
+        let target = match mesh {
+            None => &mut b,
+            Some(name) => {
+                let k = match parts.iter().position(|(n, _, _)| *n == name) {
+                    Some(k) => k,
+                    None => {
+                        parts.push((name, what.clone(), b.part()));
+                        parts.len() - 1
+                    }
+                };
+                &mut parts[k].2
+            }
+        };
         o.add(&mut ObjectCx {
-            b: &mut b,
+            b: target,
             ctx,
             what: &what,
             budget: &mut budget,
             materials: &names,
         })?;
     }
+    add_instances(file.instances, parts, text, ctx, &mut b, &names)?;
     for (index, table) in file.volumes.into_iter().enumerate() {
         let (v, what): (volume::VolumeDesc, _) = table_item(text, "volume", index, table, ctx)?;
         let volume = volume::volume(&v, ctx, &what, &mut budget)?;
@@ -695,5 +830,116 @@ mod tests {
                     scael = 2\n";
         let e = load(text).unwrap_err().to_string();
         assert!(e.contains("object 1 (mesh)") && e.contains("scael"), "{e}");
+    }
+
+    /// Issue 23: named `instance_only` objects (one or a group) become meshes stored once,
+    /// `[[instance]]` tables place them; ids follow the flat primitives in instance order,
+    /// materials come from the mesh or the instance's override.
+    #[test]
+    fn instances() {
+        let s = load(
+            "[[material]]\nname = \"red\"\ncolor = [1, 0, 0]\n\
+             [[material]]\nname = \"blue\"\ncolor = [0, 0, 1]\n\
+             [[object]]\nkind = \"sphere\"\ncenter = [0, 0, -5]\nradius = 1\n\
+             [[object]]\nname = \"m\"\ninstance_only = true\nkind = \"generator\"\n\
+             spec = \"soup:10\"\nmaterial = \"red\"\n\
+             [[object]]\nname = \"m\"\ninstance_only = true\nkind = \"sphere\"\n\
+             center = [0, 0, 0]\nradius = 0.5\n\
+             [[object]]\nname = \"unused\"\ninstance_only = true\nkind = \"sphere\"\n\
+             center = [0, 0, 0]\nradius = 0.5\n\
+             [[instance]]\nmesh = \"m\"\n\
+             [[instance]]\nmesh = \"m\"\nmaterial = \"blue\"\n\
+             transform = { scale = [-1, 2, 1], rotate = [0, 90, 0], translate = [3, 0, 0] }\n",
+        )
+        .unwrap();
+        let g = &s.geometry;
+        assert_eq!((g.len(), g.meshes().len(), g.instances().len()), (1, 2, 2));
+        assert_eq!(g.meshes()[0].len(), 11);
+        assert_eq!(g.total_len(), 1 + 2 * 11);
+        assert_eq!(g.instances()[1].base(), 12);
+        assert_eq!(s.material_of(0).name, "default");
+        assert_eq!(s.material_of(1).name, "red");
+        assert_eq!(s.material_of(11).name, "default", "the group's sphere");
+        assert_eq!(s.material_of(12).name, "blue");
+        assert_eq!(s.material_of(22).name, "blue");
+        let names: Vec<&str> = s.objects.iter().map(|o| o.name.as_str()).collect();
+        assert_eq!(names, ["sphere", "instance of m", "instance of m"]);
+        assert!(
+            s.warnings
+                .iter()
+                .any(|w| w.contains("'unused' is placed by no [[instance]]")),
+            "{:?}",
+            s.warnings
+        );
+    }
+
+    /// Every bad instance is one error naming the table, its line and the cause.
+    #[test]
+    fn instance_errors_name_the_problem() {
+        let mesh = "[[object]]\nname = \"m\"\ninstance_only = true\nkind = \"sphere\"\n\
+                    center = [0, 0, 0]\nradius = 1\n";
+        let cases = [
+            (
+                format!("{mesh}[[instance]]\nmesh = \"n\"\n"),
+                "line 7: instance 1: mesh 'n' is not defined",
+            ),
+            (
+                format!("{mesh}[[instance]]\nmesh = \"m\"\ntransform = {{ scale = [1, 0, 1] }}\n"),
+                "line 7: instance 1: instance transform is singular",
+            ),
+            (
+                format!(
+                    "{mesh}[[instance]]\nmesh = \"m\"\n\
+                     transform = {{ translate = [nan, 0, 0] }}\n"
+                ),
+                "instance transform is not finite",
+            ),
+            (
+                format!("{mesh}[[instance]]\nmesh = \"m\"\nmaterial = \"x\"\n"),
+                "line 7: instance 1: material 'x' is not defined",
+            ),
+            (
+                format!("{mesh}[[instance]]\nmesh = \"m\"\nscale = 2\n"),
+                "line 9: instance 1: unknown field `scale`",
+            ),
+            (
+                format!(
+                    "[[material]]\nname = \"lamp\"\nemission = [1, 1, 1]\n{mesh}\
+                     [[instance]]\nmesh = \"m\"\nmaterial = \"lamp\"\n"
+                ),
+                "emits light",
+            ),
+            (
+                "[[object]]\nname = \"m\"\nkind = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n"
+                    .into(),
+                "line 1: object 1: `name` names an instance mesh and needs `instance_only = true`",
+            ),
+            (
+                "[[object]]\ninstance_only = true\nkind = \"sphere\"\ncenter = [0, 0, 0]\n\
+                 radius = 1\n"
+                    .into(),
+                "`instance_only` needs a `name`",
+            ),
+            (
+                "[[object]]\nname = \"p\"\ninstance_only = true\nkind = \"plane\"\n\
+                 point = [0, 0, 0]\nnormal = [0, 1, 0]\n[[instance]]\nmesh = \"p\"\n"
+                    .into(),
+                "line 1: object 1 (plane): instance mesh 'p' holds a plane",
+            ),
+            (
+                "[[object]]\nname = 3\ninstance_only = true\nkind = \"sphere\"\n\
+                 center = [0, 0, 0]\nradius = 1\n"
+                    .into(),
+                "`name` must be a string",
+            ),
+        ];
+        for (text, needle) in cases {
+            let e = load(&text)
+                .err()
+                .unwrap_or_else(|| panic!("accepted: {text}"))
+                .to_string();
+            assert!(e.contains(needle), "{text:?} -> {e}");
+            assert!(e.starts_with("t.toml: "), "{e}");
+        }
     }
 }

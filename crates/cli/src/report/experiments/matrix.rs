@@ -545,7 +545,7 @@ fn run_scene(
     progress: &Progress,
 ) -> Result<(Vec<Run>, Vec<NoRays>)> {
     let mut workloads = workloads(ctx, scene);
-    let prims = scene.geometry.len();
+    let prims = scene.geometry.total_len();
     // The reference: the oracle where it fits every workload's budget, else the
     // baseline. Brute-force backends run only within that budget.
     let naive_ok = workloads.iter().all(|w| ctx.naive_fits(w, prims));

@@ -368,7 +368,7 @@ fn run_scaling<E: Scaling>(
             }
         };
         for b in &backends {
-            if b.is(crate::Roles::BRUTE_FORCE) && !ctx.naive_fits(&w, scene.geometry.len()) {
+            if b.is(crate::Roles::BRUTE_FORCE) && !ctx.naive_fits(&w, scene.geometry.total_len()) {
                 progress.remove(1);
                 continue;
             }
