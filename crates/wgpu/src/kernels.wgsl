@@ -611,9 +611,9 @@ fn closest_wide(r: Ray, best_in: Hit) -> Hit {
                 if ((leaves >> slot) & 1u) == 0u {
                     continue;
                 }
-                let meta = slot_byte(n.base_meta.z, n.base_meta.w, slot);
-                let first = n.base_meta.y + (meta & 31u);
-                for (var k = first; k < first + (meta >> 5u); k++) {
+                let info = slot_byte(n.base_meta.z, n.base_meta.w, slot);
+                let first = n.base_meta.y + (info & 31u);
+                for (var k = first; k < first + (info >> 5u); k++) {
                     test_closest(r, k, &best);
                 }
             }
@@ -657,9 +657,9 @@ fn occluded_wide(r: Ray) -> bool {
             if ((leaves >> slot) & 1u) == 0u {
                 continue;
             }
-            let meta = slot_byte(n.base_meta.z, n.base_meta.w, slot);
-            let first = n.base_meta.y + (meta & 31u);
-            for (var k = first; k < first + (meta >> 5u); k++) {
+            let info = slot_byte(n.base_meta.z, n.base_meta.w, slot);
+            let first = n.base_meta.y + (info & 31u);
+            for (var k = first; k < first + (info >> 5u); k++) {
                 if prim_hit(r, k, r.t_max).w != 0.0 {
                     return true;
                 }
