@@ -40,12 +40,15 @@ pub enum Layout {
     Cwbvh,
 }
 
+/// A pipeline's entry point, whether it counts, and the tree it walks.
+type PipelineKey = (&'static str, bool, Layout);
+
 /// The compiled kernels of one device: one pipeline per (entry point, counting, layout).
 pub(crate) struct Kernels {
     module: wgpu::ShaderModule,
     layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
-    pipelines: Mutex<HashMap<(&'static str, bool, Layout), Arc<wgpu::ComputePipeline>>>,
+    pipelines: Mutex<HashMap<PipelineKey, Arc<wgpu::ComputePipeline>>>,
 }
 
 fn storage(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
