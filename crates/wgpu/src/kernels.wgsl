@@ -566,27 +566,41 @@ fn wide_order(r: Ray) -> u32 {
     return (select(0u, 1u, r.d.x < 0.0) | select(0u, 2u, r.d.y < 0.0) | select(0u, 4u, r.d.z < 0.0)) ^ 7u;
 }
 
-// The hit interior children of `n` as a stack entry's mask (see above), 0 when none.
-fn wide_group(n: WideNode, hits: u32, order: u32) -> u32 {
+// The walk's stack: per level a child base and a mask (see above).
+struct WideStack {
+    base: array<u32, STACK_SIZE>,
+    mask: array<u32, STACK_SIZE>,
+    sp: u32,
+}
+
+// Pushes the hit interior children of `n` as one entry, then takes the next node to visit
+// from the top entry into `index`; false when none is left.
+fn wide_advance(stack: ptr<function, WideStack>, n: WideNode, hits: u32, order: u32, index: ptr<function, u32>) -> bool {
     let imask = n.p_e.w >> 24u;
     let inner = hits & imask;
     var visit = 0u;
     for (var j = 0u; j < 8u; j++) {
         visit |= ((inner >> (j ^ order)) & 1u) << j;
     }
-    if visit == 0u {
-        return 0u;
+    if visit != 0u {
+        (*stack).base[(*stack).sp] = n.base_meta.x;
+        (*stack).mask[(*stack).sp] = visit | (imask << 8u);
+        (*stack).sp += 1u;
     }
-    return visit | (imask << 8u);
-}
-
-// The node index of the next child of a stack entry, and the entry's remaining mask.
-fn wide_next(base: u32, mask: u32, order: u32) -> vec2<u32> {
-    let j = firstTrailingBit(mask & 0xffu);
-    let slot = j ^ order;
-    let imask = mask >> 8u;
-    let child = base + countOneBits(imask & ((1u << slot) - 1u));
-    return vec2<u32>(child, mask & (mask - 1u));
+    if (*stack).sp == 0u {
+        return false;
+    }
+    let top = (*stack).sp - 1u;
+    let mask = (*stack).mask[top];
+    let slot = firstTrailingBit(mask & 0xffu) ^ order;
+    *index = (*stack).base[top] + countOneBits((mask >> 8u) & ((1u << slot) - 1u));
+    let rest = mask & (mask - 1u);
+    if (rest & 0xffu) == 0u {
+        (*stack).sp = top;
+    } else {
+        (*stack).mask[top] = rest;
+    }
+    return true;
 }
 
 // `closest` over the CWBVH, from the best hit among the unbounded primitives.
@@ -594,9 +608,8 @@ fn closest_wide(r: Ray, best_in: Hit) -> Hit {
     var best = best_in;
     var limit = cull_bound(best.t);
     let order = wide_order(r);
-    var stack_base: array<u32, STACK_SIZE>;
-    var stack_mask: array<u32, STACK_SIZE>;
-    var sp = 0u;
+    var stack: WideStack;
+    stack.sp = 0u;
     var index = 0u;
     loop {
         if COUNT {
@@ -619,21 +632,8 @@ fn closest_wide(r: Ray, best_in: Hit) -> Hit {
             }
             limit = cull_bound(best.t);
         }
-        let group = wide_group(n, hits, order);
-        if group != 0u {
-            stack_base[sp] = n.base_meta.x;
-            stack_mask[sp] = group;
-            sp += 1u;
-        }
-        if sp == 0u {
+        if !wide_advance(&stack, n, hits, order, &index) {
             break;
-        }
-        let next = wide_next(stack_base[sp - 1u], stack_mask[sp - 1u], order);
-        index = next.x;
-        if (next.y & 0xffu) == 0u {
-            sp -= 1u;
-        } else {
-            stack_mask[sp - 1u] = next.y;
         }
     }
     return best;
@@ -642,9 +642,8 @@ fn closest_wide(r: Ray, best_in: Hit) -> Hit {
 // `occluded` over the CWBVH (the unbounded primitives already tested): the first hit ends.
 fn occluded_wide(r: Ray) -> bool {
     let order = wide_order(r);
-    var stack_base: array<u32, STACK_SIZE>;
-    var stack_mask: array<u32, STACK_SIZE>;
-    var sp = 0u;
+    var stack: WideStack;
+    stack.sp = 0u;
     var index = 0u;
     loop {
         if COUNT {
@@ -665,21 +664,8 @@ fn occluded_wide(r: Ray) -> bool {
                 }
             }
         }
-        let group = wide_group(n, hits, order);
-        if group != 0u {
-            stack_base[sp] = n.base_meta.x;
-            stack_mask[sp] = group;
-            sp += 1u;
-        }
-        if sp == 0u {
+        if !wide_advance(&stack, n, hits, order, &index) {
             break;
-        }
-        let next = wide_next(stack_base[sp - 1u], stack_mask[sp - 1u], order);
-        index = next.x;
-        if (next.y & 0xffu) == 0u {
-            sp -= 1u;
-        } else {
-            stack_mask[sp - 1u] = next.y;
         }
     }
     return false;
