@@ -32,8 +32,13 @@ pub const ORACLE: &str = raybench::name_with(Roles::ORACLE);
 /// exact backend rather than every one.
 pub const BASELINE: &str = raybench::name_with(Roles::BASELINE);
 
-/// The backend on another device (the GPU: [`Roles::DEVICE`]).
+/// The backend on another device (the GPU: [`Roles::DEVICE`]), the first of [`DEVICES`].
 pub const DEVICE: &str = raybench::name_with(Roles::DEVICE);
+
+/// Every backend on another device (the GPU kernels over each tree), from the registry's
+/// roles: the GPU suites check each.
+pub const DEVICES: [&str; raybench::count_with(Roles::DEVICE)] =
+    raybench::names_with(Roles::DEVICE);
 
 /// The number of exact backends but the oracle.
 const ACCELERATED_COUNT: usize = EXACT_COUNT - raybench::count_with(Roles::ORACLE);
@@ -604,20 +609,33 @@ pub mod gpu {
         );
     }
 
-    /// The GPU against naive on `scene`: ray casting at `size x size` and as many seeded
-    /// incoherent rays; with `modes`, Whitted (4 bounces) and path tracing (4 samples, 4
-    /// bounces, the same seed) at `size x size` too.
+    /// Every GPU backend ([`super::DEVICES`]) against naive on `scene`: [`check_backend`].
+    ///
+    /// # Panics
+    /// When a GPU backend differs beyond the tolerances.
+    pub fn check(scene: &str, size: u32, modes: bool) {
+        for name in super::DEVICES {
+            check_backend(name, scene, size, modes);
+        }
+    }
+
+    /// GPU backend `name` against naive on `scene`: ray casting at `size x size` and as many
+    /// seeded incoherent rays, closest hits and any hits (at full length and shortened to
+    /// a twentieth of the scene's diagonal); with `modes`, Whitted (4 bounces) and path
+    /// tracing (4 samples, 4 bounces, the same seed) at `size x size` too. Ray counts agree:
+    /// exactly in ray casting and for explicit rays, within 1% where paths may branch
+    /// differently.
     ///
     /// # Panics
     /// When the GPU differs beyond the tolerances.
-    pub fn check(scene: &str, size: u32, modes: bool) {
+    pub fn check_backend(name: &str, scene: &str, size: u32, modes: bool) {
         if !available() {
             return;
         }
         let Some(s) = load_or_skip(scene) else {
             return;
         };
-        let gpu = prepared(super::DEVICE, &s);
+        let gpu = prepared(name, &s);
         let mut cases = vec![(Mode::Cast, 1)];
         if modes {
             cases.extend([(Mode::Cast, 4), (Mode::Whitted, 1), (Mode::Path, 4)]);
@@ -626,8 +644,17 @@ pub mod gpu {
             let settings = super::mode_settings(size, mode, spp);
             let reference = render_with(super::ORACLE, &s, &settings, 2);
             let frame = gpu.render(&settings).unwrap();
-            let what = format!("wgpu on {scene}, {} spp {spp}", mode.name());
+            let what = format!("{name} on {scene}, {} spp {spp}", mode.name());
             assert_close_hits(&what, &reference, &frame);
+            let (a, b) = (reference.stats.rays, frame.stats.rays);
+            if mode == Mode::Cast {
+                assert_eq!(a, b, "{what}: rays");
+            } else {
+                assert!(
+                    a.abs_diff(b) as f64 <= 0.01 * a as f64,
+                    "{what}: rays {a} vs {b}"
+                );
+            }
             let max_mismatch = if mode == Mode::Path {
                 MAX_PATH_COLOR_MISMATCH
             } else {
@@ -635,12 +662,12 @@ pub mod gpu {
             };
             assert_close_colors(&what, &reference.color, &frame.color, max_mismatch);
         }
-        let rays =
+        let mut rays =
             raybench_core::ray_sets::incoherent(s.geometry.bounds(), (size * size) as usize, 1);
-        let (reference, _) = prepared(super::ORACLE, &s)
-            .trace_rays(&rays, false)
-            .unwrap();
-        let (hits, _) = gpu.trace_rays(&rays, false).unwrap();
+        let oracle = prepared(super::ORACLE, &s);
+        let (reference, ref_counts) = oracle.trace_rays(&rays, true).unwrap();
+        let (hits, counts) = gpu.trace_rays(&rays, true).unwrap();
+        assert_eq!(hits.len(), rays.len());
         let key = |h: &[Option<raybench_core::Hit>]| -> (Vec<u32>, Vec<f32>) {
             (
                 h.iter()
@@ -651,11 +678,39 @@ pub mod gpu {
         };
         let ((ri, rt), (gi, gt)) = (key(&reference), key(&hits));
         let c = raybench::compare_hits(&ri, &rt, &gi, &gt);
-        eprintln!("wgpu on {scene}, incoherent rays: {c:?}");
+        eprintln!(
+            "{name} on {scene}, incoherent rays: {c:?}, counters {counts:?} (naive {ref_counts:?})"
+        );
         let id_match = c.id_match + c.tie_mismatch as f64 / rays.len().max(1) as f64;
         assert!(
             id_match >= MIN_ID_MATCH && c.max_rel_dt <= MAX_REL_DT,
-            "wgpu on {scene}, incoherent rays: {c:?}"
+            "{name} on {scene}, incoherent rays: {c:?}"
+        );
+        // Any hit, at full length and shortened (shadow rays end before the light).
+        let short = s.geometry.bounds().extent().length() / 20.0;
+        let n = rays.len();
+        rays.extend_from_within(..);
+        for r in &mut rays[n..] {
+            r.t_max = short / r.dir.length();
+        }
+        let (reference, _) = oracle.occlude_rays(&rays, false).unwrap();
+        let (blocked, _) = gpu.occlude_rays(&rays, false).unwrap();
+        assert_eq!(blocked.len(), rays.len());
+        let agree = reference
+            .iter()
+            .zip(&blocked)
+            .filter(|(a, b)| a == b)
+            .count();
+        let fraction = agree as f64 / rays.len().max(1) as f64;
+        eprintln!(
+            "{name} on {scene}, any-hit rays: {:.4}% agree",
+            fraction * 100.0
+        );
+        assert!(
+            fraction >= MIN_ID_MATCH,
+            "{name} on {scene}, any-hit rays agree on {:.4}% (least {}%)",
+            fraction * 100.0,
+            MIN_ID_MATCH * 100.0
         );
     }
 }

@@ -78,6 +78,7 @@ fn modes_on_builtin_scenes() {
 /// within its tolerance.
 const TOLERANCE_TESTED: &[(&str, &str)] = &[
     ("wgpu", "tests/tests/gpu.rs"),
+    ("wgpu-cwbvh", "tests/tests/gpu.rs"),
     ("bvh-crate", "crates/peers/tests/naive.rs"),
     ("embree", "crates/peers/tests/naive.rs (feature embree)"),
     (

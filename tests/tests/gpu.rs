@@ -1,5 +1,6 @@
-//! The GPU backend (`wgpu`) against the naive oracle on every built-in scene, within the
-//! tolerances of `raybench_tests::gpu`. Runs on whatever adapter wgpu finds: Mesa's lavapipe
+//! The GPU backends (`wgpu` over the BVH2, `wgpu-cwbvh` over the compressed wide BVH:
+//! `raybench_tests::DEVICES`) against the naive oracle on every built-in scene, within the
+//! tolerances of `raybench_tests::gpu`, closest hits and any hits. Runs on whatever adapter wgpu finds: Mesa's lavapipe
 //! (software Vulkan, about one CPU thread's speed) in CI, so images stay small. Skips when
 //! there is no adapter, except under `CI=true`.
 
@@ -59,15 +60,25 @@ fn the_empty_scene_renders_background() {
         return;
     }
     let scene = raybench_tests::empty_scene();
-    let r = raybench_tests::prepared(raybench_tests::DEVICE, &scene);
-    let settings = raybench_core::RenderSettings {
-        width: 8,
-        height: 5,
-        ..Default::default()
-    };
-    let f = r.render(&settings).unwrap();
-    assert!(f.ids.iter().all(|&id| id == raybench_core::NO_HIT));
-    assert!(f.color.iter().all(|&c| c == scene.background));
+    for name in raybench_tests::DEVICES {
+        let r = raybench_tests::prepared(name, &scene);
+        let settings = raybench_core::RenderSettings {
+            width: 8,
+            height: 5,
+            ..Default::default()
+        };
+        let f = r.render(&settings).unwrap();
+        assert!(
+            f.ids.iter().all(|&id| id == raybench_core::NO_HIT),
+            "{name}"
+        );
+        assert!(f.color.iter().all(|&c| c == scene.background), "{name}");
+        let rays = [raybench_core::Ray::new(
+            raybench_core::Vec3::ZERO,
+            raybench_core::Vec3::X,
+        )];
+        assert_eq!(r.occlude_rays(&rays, false).unwrap().0, [false], "{name}");
+    }
 }
 
 /// Height fields, CSG trees, SDF models, Bezier patches and the volume modes have no WGSL port:
@@ -205,14 +216,31 @@ fn degenerate_and_extreme_rays_behave_as_on_the_cpu() {
     let (reference, _) = raybench_tests::prepared(raybench_tests::ORACLE, &scene)
         .trace_rays(&rays, false)
         .unwrap();
-    let (hits, _) = raybench_tests::prepared(raybench_tests::DEVICE, &scene)
-        .trace_rays(&rays, false)
-        .unwrap();
-    for (i, (a, b)) in reference.iter().zip(&hits).enumerate() {
+    for name in raybench_tests::DEVICES {
+        let gpu = raybench_tests::prepared(name, &scene);
+        let (hits, _) = gpu.trace_rays(&rays, false).unwrap();
+        check_extreme(name, &rays, &reference, &hits, must_miss);
+        // The any-hit kernel: the same rays blocked.
+        let (blocked, _) = gpu.occlude_rays(&rays, false).unwrap();
+        let expected: Vec<bool> = reference.iter().map(Option::is_some).collect();
+        assert_eq!(blocked, expected, "{name}: any-hit rays");
+    }
+}
+
+/// Every ray of `hits` as `reference` has it: the first `must_miss` miss, the others hit the
+/// same primitive within [`raybench_tests::gpu::MAX_REL_DT`].
+fn check_extreme(
+    name: &str,
+    rays: &[raybench_core::Ray],
+    reference: &[Option<raybench_core::Hit>],
+    hits: &[Option<raybench_core::Hit>],
+    must_miss: usize,
+) {
+    for (i, (a, b)) in reference.iter().zip(hits).enumerate() {
         if i < must_miss {
             assert!(
                 a.is_none() && b.is_none(),
-                "ray {i} {:?}: {a:?} {b:?}",
+                "{name}: ray {i} {:?}: {a:?} {b:?}",
                 rays[i]
             );
             continue;
@@ -220,13 +248,13 @@ fn degenerate_and_extreme_rays_behave_as_on_the_cpu() {
         assert_eq!(
             a.map(|h| h.prim),
             b.map(|h| h.prim),
-            "ray {i} {:?}",
+            "{name}: ray {i} {:?}",
             rays[i]
         );
         if let (Some(a), Some(b)) = (a, b) {
             assert!(
                 (a.t - b.t).abs() <= raybench_tests::gpu::MAX_REL_DT as f32 * a.t.abs(),
-                "ray {i}: t {} vs {}",
+                "{name}: ray {i}: t {} vs {}",
                 a.t,
                 b.t
             );
@@ -268,19 +296,66 @@ fn samples_split_over_dispatches_accumulate() {
         "the test must split: {plan:?}"
     );
     let reference = raybench_tests::render_with(raybench_tests::ORACLE, &scene, &settings, 2);
-    let frame = raybench_tests::prepared(raybench_tests::DEVICE, &scene)
-        .render(&settings)
-        .unwrap();
-    assert_eq!(frame.ids, reference.ids);
-    // Every sample traced: a lost sample (as when lavapipe cut a thread's long loop, see
-    // `plan::MAX_SAMPLES_PER_DISPATCH`) shows as missing rays. Paths may branch differently
-    // on the GPU, so the counts agree within 1%.
-    let (a, b) = (reference.stats.rays as f64, frame.stats.rays as f64);
-    assert!((a - b).abs() <= 0.01 * a, "rays: naive {a}, wgpu {b}");
-    raybench_tests::gpu::assert_close_colors(
-        "wgpu, path, 2,000 samples",
-        &reference.color,
-        &frame.color,
-        raybench_tests::gpu::MAX_PATH_COLOR_MISMATCH,
-    );
+    for name in raybench_tests::DEVICES {
+        let frame = raybench_tests::prepared(name, &scene)
+            .render(&settings)
+            .unwrap();
+        assert_eq!(frame.ids, reference.ids, "{name}");
+        // Every sample traced: a lost sample (as when lavapipe cut a thread's long loop, see
+        // `plan::MAX_SAMPLES_PER_DISPATCH`) shows as missing rays. Paths may branch
+        // differently on the GPU, so the counts agree within 1%.
+        let (a, b) = (reference.stats.rays as f64, frame.stats.rays as f64);
+        assert!((a - b).abs() <= 0.01 * a, "rays: naive {a}, {name} {b}");
+        raybench_tests::gpu::assert_close_colors(
+            &format!("{name}, path, 2,000 samples"),
+            &reference.color,
+            &frame.color,
+            raybench_tests::gpu::MAX_PATH_COLOR_MISMATCH,
+        );
+    }
+}
+
+/// The two GPU trees walk to the same hits: every ray of a seeded incoherent set and every
+/// pixel of a small frame get the same primitive and bit-identical `t` from `wgpu` and
+/// `wgpu-cwbvh` (the same primitive routine on the same rays; only the culling differs, and
+/// both cull conservatively), and their node-visit counters differ as their trees do.
+#[test]
+fn the_gpu_trees_find_the_same_hits() {
+    if !raybench_tests::gpu::available() {
+        return;
+    }
+    for scene in ["teapot", "spheres:2000", "soup:2000", "terrain:32"] {
+        let s = raybench_tests::load_or_skip(scene).unwrap();
+        let rays = raybench_core::ray_sets::incoherent(s.geometry.bounds(), 4096, 5);
+        let results: Vec<_> = raybench_tests::DEVICES
+            .iter()
+            .map(|name| {
+                let r = raybench_tests::prepared(name, &s);
+                let (hits, counters) = r.trace_rays(&rays, true).unwrap();
+                let settings = raybench_tests::mode_settings(48, raybench_core::Mode::Cast, 1);
+                let frame = r.render(&settings).unwrap();
+                let key: Vec<(u32, u32)> = hits
+                    .iter()
+                    .map(|h| h.map_or((raybench_core::NO_HIT, 0), |h| (h.prim, h.t.to_bits())))
+                    .collect();
+                (key, frame.ids, frame.t, counters.unwrap())
+            })
+            .collect();
+        for w in results.windows(2) {
+            assert_eq!(w[0].0, w[1].0, "{scene}: explicit rays");
+            assert_eq!(w[0].1, w[1].1, "{scene}: pixel ids");
+            assert!(
+                w[0].2
+                    .iter()
+                    .zip(&w[1].2)
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                "{scene}: pixel t"
+            );
+            assert_eq!(w[0].3.node_visits == 0, w[1].3.node_visits == 0, "{scene}");
+            eprintln!(
+                "{scene}: node visits {} vs {}, primitive tests {} vs {}",
+                w[0].3.node_visits, w[1].3.node_visits, w[0].3.prim_tests, w[1].3.prim_tests
+            );
+        }
+    }
 }

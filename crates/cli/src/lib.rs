@@ -30,7 +30,7 @@ use raybench_peers::BvhCrateAccel;
 #[cfg(feature = "embree")]
 use raybench_peers::{EmbreeAccel, EmbreePacketAccel, embree_availability, embree_supports};
 use raybench_render::CpuRenderer;
-use raybench_wgpu::WgpuRenderer;
+use raybench_wgpu::{Layout, WgpuRenderer};
 
 /// What a backend is for: the flags the report, `compare`, `info`, the machine description
 /// and the tests read, instead of testing backend names. A backend has any number of them
@@ -334,6 +334,13 @@ pub const BACKENDS: &[Backend] = &[
         detail: None,
         make: || Box::new(WgpuRenderer::new("wgpu", WGPU)),
     },
+    Backend {
+        name: "wgpu-cwbvh",
+        description: WGPU_CWBVH,
+        roles: Roles::DEVICE,
+        detail: None,
+        make: || Box::new(WgpuRenderer::new("wgpu-cwbvh", WGPU_CWBVH).with_layout(Layout::Cwbvh)),
+    },
     #[cfg(feature = "embree")]
     Backend {
         name: "embree",
@@ -370,6 +377,8 @@ pub const BACKENDS: &[Backend] = &[
 ];
 
 const WGPU: &str = "GPU: WGSL compute kernels over the CPU-built BVH2 (wgpu; WGPU_BACKEND and WGPU_ADAPTER_NAME pick the adapter; within tolerance, not exact)";
+
+const WGPU_CWBVH: &str = "GPU: the wgpu kernels over a compressed 8-wide BVH (raybench-bvh's BVH2 collapsed, quantised child boxes, Ylitie et al. 2017; within tolerance, not exact)";
 
 const BVH_CRATE: &str = "peer: svenstaro's bvh crate's tree, own stack traversal, raybench's primitive tests (not exact)";
 const EMBREE: &str =

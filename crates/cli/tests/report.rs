@@ -808,9 +808,10 @@ fn the_presets_experiment_runs_and_is_written() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// A backend that cannot run a scene (wgpu has no sphere tracing: unsupported there, or
-/// unavailable without a GPU) keeps its place in the throughput charts: a marked stub whose
-/// tooltip says why, never a silent gap.
+/// A backend that cannot run a scene (the GPU backends have no sphere tracing: unsupported
+/// there, or unavailable without a GPU) keeps its place in the throughput charts: a marked
+/// stub whose tooltip says why, never a silent gap. Where they ran, both GPU backends
+/// (`wgpu` over the BVH2, `wgpu-cwbvh` over the CWBVH) are in the "GPU phases" table.
 #[test]
 fn a_backend_that_did_not_run_is_marked_in_the_charts() {
     let dir = tmp_dir("not-run");
@@ -819,7 +820,7 @@ fn a_backend_that_did_not_run_is_marked_in_the_charts() {
         "--scenes",
         "spheres,sdf",
         "--backends",
-        "naive,wgpu",
+        "naive,wgpu,wgpu-cwbvh",
         "--modes",
         "whitted",
         "--size",
@@ -836,23 +837,32 @@ fn a_backend_that_did_not_run_is_marked_in_the_charts() {
         String::from_utf8_lossy(&out.stderr)
     );
     let r = results(&dir);
-    let run = r["runs"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|r| r["backend"] == "wgpu" && r["scene"] == "sdf")
-        .expect("a wgpu run on sdf");
-    let status = run["status"].as_str().unwrap();
-    assert!(status == "unsupported" || status == "unavailable", "{run}");
+    let md = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
     let svg = chart(&dir, "throughput-whitted-primary");
-    assert!(
-        svg.contains(&format!("<title>wgpu on sdf: {status}: ")),
-        "{svg}"
-    );
+    for gpu in ["wgpu", "wgpu-cwbvh"] {
+        let runs = r["runs"].as_array().unwrap();
+        let run = runs
+            .iter()
+            .find(|r| r["backend"] == gpu && r["scene"] == "sdf")
+            .unwrap_or_else(|| panic!("a {gpu} run on sdf"));
+        let status = run["status"].as_str().unwrap();
+        assert!(status == "unsupported" || status == "unavailable", "{run}");
+        assert!(
+            svg.contains(&format!("<title>{gpu} on sdf: {status}: ")),
+            "{svg}"
+        );
+        let colour = backend_style(gpu).unwrap().colour;
+        assert!(svg.contains(&format!("stroke=\"{colour}\"")), "{svg}");
+        let ran = runs
+            .iter()
+            .any(|r| r["backend"] == gpu && r["scene"] == "spheres" && r["status"] == "ok");
+        if ran {
+            let phases = &md[md.find("## GPU phases").expect("a GPU phases table")..];
+            assert!(phases.contains(&format!("| {gpu} |")), "{phases}");
+        }
+    }
     assert!(svg.contains(">×</text>"), "{svg}");
     assert!(svg.contains(">× did not run (hover: why)</text>"), "{svg}");
-    let colour = backend_style("wgpu").unwrap().colour;
-    assert!(svg.contains(&format!("stroke=\"{colour}\"")), "{svg}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

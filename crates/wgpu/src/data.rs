@@ -13,6 +13,7 @@ use crate::constants::{
     EMITTER_BIT, KIND_PLANE, KIND_SPHERE, KIND_TRIANGLE, LIGHT_DIRECTIONAL, LIGHT_POINT,
     MAT_DIFFUSE, MAT_GLASS, MAT_MIRROR,
 };
+use crate::cwbvh::WideNode;
 
 /// Per-dispatch parameters: 176 bytes, one 256-byte-aligned slot per dispatch of a frame.
 #[repr(C)]
@@ -56,7 +57,7 @@ pub struct Params {
     pub s0: u32,
     /// One past its last sample.
     pub s1: u32,
-    /// Nodes of the BVH (0: no bounded primitive).
+    /// Nodes of the BVH2 or the CWBVH (0: no bounded primitive).
     pub node_count: u32,
     /// Index of the first unbounded primitive (planes) in the primitive buffer.
     pub unbounded_first: u32,
@@ -225,8 +226,10 @@ pub fn check_path_emitters(scene: &Scene) -> Result<(), String> {
 
 /// The scene flattened for the GPU.
 pub struct SceneData {
-    /// BVH2 nodes, depth first.
+    /// BVH2 nodes, depth first (none for the CWBVH kernels).
     pub nodes: Vec<GpuNode>,
+    /// CWBVH nodes (none for the BVH2 kernels).
+    pub wide: Vec<WideNode>,
     /// Bounded primitives in leaf order, then the unbounded ones, then the emitter list.
     pub prims: Vec<GpuPrim>,
     /// Per primitive id: material index, with [`EMITTER_BIT`] for sampled emitters.
@@ -241,28 +244,38 @@ pub struct SceneData {
     pub lights: (u32, u32),
 }
 
+/// The 32-byte nodes of `bvh`, depth first as it stores them.
+#[must_use]
+pub fn bvh2_nodes(bvh: &Bvh) -> Vec<GpuNode> {
+    bvh.nodes()
+        .iter()
+        .map(|n| GpuNode {
+            min: n.min.into(),
+            first_or_right: n.first_or_right,
+            max: n.max.into(),
+            count: n.count,
+        })
+        .collect()
+}
+
 impl SceneData {
-    /// Flattens `scene` with its BVH.
+    /// Flattens `scene` with the nodes of its tree: BVH2 `nodes` or CWBVH `wide` nodes (the
+    /// other list empty), whose leaves index the primitives `leaf_order` lists.
     ///
     /// # Errors
     /// When the scene holds a primitive kind without a WGSL port ([`check_kinds`]).
-    pub fn new(scene: &Scene, bvh: &Bvh) -> Result<Self, String> {
+    pub fn new(
+        scene: &Scene,
+        nodes: Vec<GpuNode>,
+        wide: Vec<WideNode>,
+        leaf_order: &[u32],
+    ) -> Result<Self, String> {
         check_kinds(scene)?;
         // Kinds are checked above, so `prim` is `Some` for every primitive.
         let flat = |id: u32| prim(scene.geometry.shape(id), id).unwrap_or_default();
         let g = &scene.geometry;
-        let nodes = bvh
-            .nodes()
-            .iter()
-            .map(|n| GpuNode {
-                min: n.min.into(),
-                first_or_right: n.first_or_right,
-                max: n.max.into(),
-                count: n.count,
-            })
-            .collect();
         // Leaves index the primitive buffer directly: primitives are stored in leaf order.
-        let mut prims: Vec<GpuPrim> = bvh.prim_ids().iter().map(|&id| flat(id)).collect();
+        let mut prims: Vec<GpuPrim> = leaf_order.iter().map(|&id| flat(id)).collect();
         let unbounded = (prims.len() as u32, g.unbounded().len() as u32);
         prims.extend(g.unbounded().iter().map(|&id| flat(id)));
         let emitter_first = prims.len() as u32;
@@ -307,6 +320,7 @@ impl SceneData {
         }
         Ok(Self {
             nodes,
+            wide,
             prims,
             prim_info,
             shading,
@@ -319,7 +333,10 @@ impl SceneData {
     /// Bytes of the scene buffers.
     #[must_use]
     pub fn bytes(&self) -> u64 {
-        (self.nodes.len() * 32 + self.prims.len() * 48 + self.prim_info.len() * 4) as u64
+        (self.nodes.len() * 32
+            + self.wide.len() * 80
+            + self.prims.len() * 48
+            + self.prim_info.len() * 4) as u64
             + self.shading.len() as u64 * 16
     }
 
@@ -345,7 +362,7 @@ impl SceneData {
             inf: f32::INFINITY,
             width: settings.width,
             height: settings.height,
-            node_count: self.nodes.len() as u32,
+            node_count: (self.nodes.len() + self.wide.len()) as u32,
             unbounded_first: self.unbounded.0,
             unbounded_count: self.unbounded.1,
             emitter_first: self.emitters.0,
@@ -362,6 +379,9 @@ impl SceneData {
         })
     }
 }
+
+/// The kernel (entry point) of explicit any-hit rays.
+pub const OCCLUDE_ENTRY: &str = "occlude_kernel";
 
 /// The kernel (entry point) of a mode (`None`: explicit rays), or why there is none.
 ///

@@ -12,6 +12,10 @@
 // the uncounted kernels carry no counting code).
 override COUNT: bool = false;
 
+// Whether the kernels walk the CWBVH (`wide_nodes`) instead of the BVH2 (`nodes`): a
+// pipeline-override constant, so each pipeline carries one traversal.
+override WIDE: bool = false;
+
 // The constants shared with Rust (NO_HIT, KIND_*, MAT_*, LIGHT_POINT, EMITTER_BIT,
 // STACK_SIZE, WHITTED_STACK, AMBIENT, ROULETTE_DEPTH, DIMENSIONS_PER_BOUNCE, SHADOW_SHORTEN,
 // MIN_POSITIVE, INV_PI, TAU, BLOCK) are generated from the Rust definitions and prepended
@@ -61,6 +65,18 @@ struct Node {
     count: u32,
 }
 
+// 80-byte CWBVH node (`cwbvh::WideNode`, Ylitie et al. 2017): the origin's bits in
+// p_e.xyz and the biased exponents (bytes 0-2) and interior mask (byte 3) in p_e.w; the
+// first interior child, the first primitive and the eight metadata bytes in base_meta;
+// the quantised planes lo.x, lo.y (q0), lo.z, hi.x (q1), hi.y, hi.z (q2), eight bytes each.
+struct WideNode {
+    p_e: vec4<u32>,
+    base_meta: vec4<u32>,
+    q0: vec4<u32>,
+    q1: vec4<u32>,
+    q2: vec4<u32>,
+}
+
 // 48-byte primitive (`data::GpuPrim`): a.w holds the kind, b.w the primitive id.
 // Triangle: vertices a.xyz, b.xyz, c.xyz (c.w: the weight CDF in the emitter list).
 // Sphere: centre a.xyz, radius c.x. Plane: point a.xyz, unit normal c.xyz.
@@ -93,6 +109,7 @@ struct RayIn {
 @group(0) @binding(5) var<storage, read> rays_in: array<RayIn>;
 @group(0) @binding(6) var<storage, read_write> out: array<Out>;
 @group(0) @binding(7) var<storage, read_write> counters: array<atomic<u32>, 6>;
+@group(0) @binding(8) var<storage, read> wide_nodes: array<WideNode>;
 
 var<private> n_rays: u32;
 var<private> n_tests: u32;
@@ -381,6 +398,9 @@ fn closest(r: Ray) -> Hit {
     if params.node_count == 0u {
         return best;
     }
+    if WIDE {
+        return closest_wide(r, best);
+    }
     var stack_node: array<u32, STACK_SIZE>;
     var stack_t: array<f32, STACK_SIZE>;
     var sp = 0u;
@@ -453,6 +473,9 @@ fn occluded(r: Ray) -> bool {
     if params.node_count == 0u {
         return false;
     }
+    if WIDE {
+        return occluded_wide(r);
+    }
     var stack: array<u32, STACK_SIZE>;
     var sp = 0u;
     let root = nodes[0];
@@ -485,6 +508,164 @@ fn occluded(r: Ray) -> bool {
         if box_entry(r, nl.min, nl.max, r.t_max) >= 0.0 {
             stack[sp] = index + 1u;
             sp += 1u;
+        }
+    }
+    return false;
+}
+
+// ---------------------------------------------------------------------------------------
+// CWBVH traversal (the `wgpu-cwbvh` kernels; the tree is `cwbvh::Cwbvh`, raybench-bvh's
+// BVH2 collapsed): the same contract as `closest` and `occluded` above, over 8-wide nodes.
+//
+// A node's eight child boxes are decoded (`p + q * 2^e`, exact products, so the CPU's
+// check that they hold their children holds here) and tested with `box_entry`. Leaf
+// children are tested at once, near to far; the hit interior children are pushed as one
+// stack entry: the child base, the interior mask (bits 8-15) and the hit mask in visiting
+// order (bits 0-7; step j visits slot j ^ octant, about near to far because children sit
+// in slots by direction). The stack grows by at most one entry per level. Entries carry no
+// distance, so a group is not culled again when the best hit improves; its children's
+// boxes are, against the limit of their turn (less culling, never a lost hit).
+
+// Byte `slot` of the eight bytes in `lo` (slots 0-3) and `hi` (slots 4-7).
+fn slot_byte(lo: u32, hi: u32, slot: u32) -> u32 {
+    return (select(lo, hi, slot >= 4u) >> ((slot & 3u) * 8u)) & 0xffu;
+}
+
+// `2^(e - 127)` from a biased exponent byte (made from the bits: exact).
+fn exp2_bits(e: u32) -> f32 {
+    return bitcast<f32>(e << 23u);
+}
+
+// The slots of node `n` whose decoded boxes `r` enters within `limit`, as a bit mask.
+fn wide_hits(r: Ray, n: WideNode, limit: f32) -> u32 {
+    let p = bitcast<vec3<f32>>(n.p_e.xyz);
+    let s = vec3<f32>(exp2_bits(n.p_e.w & 0xffu), exp2_bits((n.p_e.w >> 8u) & 0xffu), exp2_bits((n.p_e.w >> 16u) & 0xffu));
+    let imask = n.p_e.w >> 24u;
+    var hits = 0u;
+    for (var slot = 0u; slot < 8u; slot++) {
+        if ((imask >> slot) & 1u) == 0u && slot_byte(n.base_meta.z, n.base_meta.w, slot) == 0u {
+            continue;
+        }
+        let qlo = vec3<f32>(
+            f32(slot_byte(n.q0.x, n.q0.y, slot)),
+            f32(slot_byte(n.q0.z, n.q0.w, slot)),
+            f32(slot_byte(n.q1.x, n.q1.y, slot)));
+        let qhi = vec3<f32>(
+            f32(slot_byte(n.q1.z, n.q1.w, slot)),
+            f32(slot_byte(n.q2.x, n.q2.y, slot)),
+            f32(slot_byte(n.q2.z, n.q2.w, slot)));
+        if box_entry(r, p + qlo * s, p + qhi * s, limit) >= 0.0 {
+            hits |= 1u << slot;
+        }
+    }
+    return hits;
+}
+
+// The visiting order of `r`'s children: step j visits slot j ^ wide_order(r).
+fn wide_order(r: Ray) -> u32 {
+    return (select(0u, 1u, r.d.x < 0.0) | select(0u, 2u, r.d.y < 0.0) | select(0u, 4u, r.d.z < 0.0)) ^ 7u;
+}
+
+// The walk's stack: per level a child base and a mask (see above).
+struct WideStack {
+    base: array<u32, STACK_SIZE>,
+    mask: array<u32, STACK_SIZE>,
+    sp: u32,
+}
+
+// Pushes the hit interior children of `n` as one entry, then takes the next node to visit
+// from the top entry into `index`; false when none is left.
+fn wide_advance(stack: ptr<function, WideStack>, n: WideNode, hits: u32, order: u32, index: ptr<function, u32>) -> bool {
+    let imask = n.p_e.w >> 24u;
+    let inner = hits & imask;
+    var visit = 0u;
+    for (var j = 0u; j < 8u; j++) {
+        visit |= ((inner >> (j ^ order)) & 1u) << j;
+    }
+    if visit != 0u {
+        (*stack).base[(*stack).sp] = n.base_meta.x;
+        (*stack).mask[(*stack).sp] = visit | (imask << 8u);
+        (*stack).sp += 1u;
+    }
+    if (*stack).sp == 0u {
+        return false;
+    }
+    let top = (*stack).sp - 1u;
+    let mask = (*stack).mask[top];
+    let slot = firstTrailingBit(mask & 0xffu) ^ order;
+    *index = (*stack).base[top] + countOneBits((mask >> 8u) & ((1u << slot) - 1u));
+    let rest = mask & (mask - 1u);
+    if (rest & 0xffu) == 0u {
+        (*stack).sp = top;
+    } else {
+        (*stack).mask[top] = rest;
+    }
+    return true;
+}
+
+// `closest` over the CWBVH, from the best hit among the unbounded primitives.
+fn closest_wide(r: Ray, best_in: Hit) -> Hit {
+    var best = best_in;
+    var limit = cull_bound(best.t);
+    let order = wide_order(r);
+    var stack: WideStack;
+    stack.sp = 0u;
+    var index = 0u;
+    loop {
+        if COUNT {
+            n_visits += 1u;
+        }
+        let n = wide_nodes[index];
+        let hits = wide_hits(r, n, limit);
+        let leaves = hits & ~(n.p_e.w >> 24u);
+        if leaves != 0u {
+            for (var j = 0u; j < 8u; j++) {
+                let slot = j ^ order;
+                if ((leaves >> slot) & 1u) == 0u {
+                    continue;
+                }
+                let info = slot_byte(n.base_meta.z, n.base_meta.w, slot);
+                let first = n.base_meta.y + (info & 31u);
+                for (var k = first; k < first + (info >> 5u); k++) {
+                    test_closest(r, k, &best);
+                }
+            }
+            limit = cull_bound(best.t);
+        }
+        if !wide_advance(&stack, n, hits, order, &index) {
+            break;
+        }
+    }
+    return best;
+}
+
+// `occluded` over the CWBVH (the unbounded primitives already tested): the first hit ends.
+fn occluded_wide(r: Ray) -> bool {
+    let order = wide_order(r);
+    var stack: WideStack;
+    stack.sp = 0u;
+    var index = 0u;
+    loop {
+        if COUNT {
+            n_visits += 1u;
+        }
+        let n = wide_nodes[index];
+        let hits = wide_hits(r, n, r.t_max);
+        let leaves = hits & ~(n.p_e.w >> 24u);
+        for (var slot = 0u; slot < 8u; slot++) {
+            if ((leaves >> slot) & 1u) == 0u {
+                continue;
+            }
+            let info = slot_byte(n.base_meta.z, n.base_meta.w, slot);
+            let first = n.base_meta.y + (info & 31u);
+            for (var k = first; k < first + (info >> 5u); k++) {
+                if prim_hit(r, k, r.t_max).w != 0.0 {
+                    return true;
+                }
+            }
+        }
+        if !wide_advance(&stack, n, hits, order, &index) {
+            break;
         }
     }
     return false;
@@ -1056,25 +1237,51 @@ fn path_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
 // ---------------------------------------------------------------------------------------
 // Explicit rays (incoherent ray sets): closest hits as (t, u, v) and id.
 
+// Explicit ray `i`, and whether it is valid (`Ray::is_valid`): rays with a NaN or infinite
+// component, a direction whose squared length is 0 or overflows, or a NaN bound, miss
+// (tested by the bits: the shader compiler may assume finite arithmetic).
+struct ExplicitRay {
+    r: Ray,
+    valid: bool,
+}
+
+fn explicit_ray(i: u32) -> ExplicitRay {
+    let q = rays_in[i];
+    let length2 = dot(q.d.xyz, q.d.xyz);
+    let valid = is_finite(q.o.x) && is_finite(q.o.y) && is_finite(q.o.z)
+        && is_finite(length2) && length2 > 0.0 && !is_nan(q.o.w) && !is_nan(q.d.w);
+    return ExplicitRay(make_ray(q.o.xyz, q.d.xyz, q.o.w, q.d.w), valid);
+}
+
 @compute @workgroup_size(64)
 fn trace_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
     if i >= params.ray_count {
         return;
     }
-    let q = rays_in[i];
-    // `Ray::is_valid`: rays with a NaN or infinite component, a direction whose squared
-    // length is 0 or overflows, or a NaN bound, miss
-    // (tested by the bits: the shader compiler may assume finite arithmetic).
-    let length2 = dot(q.d.xyz, q.d.xyz);
-    let valid = is_finite(q.o.x) && is_finite(q.o.y) && is_finite(q.o.z)
-        && is_finite(length2) && length2 > 0.0 && !is_nan(q.o.w) && !is_nan(q.d.w);
+    let q = explicit_ray(i);
     var h = Hit(params.inf, NO_HIT, 0.0, 0.0, 0u);
-    if valid {
-        h = closest(make_ray(q.o.xyz, q.d.xyz, q.o.w, q.d.w));
+    if q.valid {
+        h = closest(q.r);
     }
     n_rays += 1u;
     out[i].v = vec4<f32>(select(h.t, params.inf, h.id == NO_HIT), h.u, h.v, 0.0);
     out[i].id = h.id;
+    flush_counters();
+}
+
+// Explicit any-hit rays (shadow and occlusion rays, `Accel::occluded`): the traversal stops
+// at the first hit; id 0 when something blocks the ray, NO_HIT when nothing does.
+@compute @workgroup_size(64)
+fn occlude_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if i >= params.ray_count {
+        return;
+    }
+    let q = explicit_ray(i);
+    let blocked = q.valid && occluded(q.r);
+    n_rays += 1u;
+    out[i].v = vec4<f32>(0.0);
+    out[i].id = select(NO_HIT, 0u, blocked);
     flush_counters();
 }

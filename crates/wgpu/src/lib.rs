@@ -8,6 +8,12 @@
 //!   32-byte nodes; primitives are stored in leaf order (48 bytes each), so leaves index them
 //!   directly. Kernels traverse it with a per-thread stack, near child first, with the
 //!   core's closest-hit contract (closest `t`, ties to the smaller id, strict early exit).
+//! - With [`Layout::Cwbvh`] (the `wgpu-cwbvh` backend) the same builder's BVH2, with
+//!   leaves of up to three primitives, is collapsed into a compressed 8-wide BVH
+//!   ([`cwbvh`]: 80-byte nodes, child boxes quantised outward to 8 bits per plane) and the
+//!   kernels walk it with a stack of child groups in octant order (Ylitie, Karras and Laine
+//!   2017), finding the same hits.
+//! - Any-hit rays (`occlude_rays`) run a kernel of their own that stops at the first hit.
 //! - The intersection routines, shading, optics and the counter-based random numbers are
 //!   ports of `raybench-core`'s (`kernels.wgsl` names each original), so images match the
 //!   CPU's within floating-point tolerance.
@@ -20,6 +26,7 @@
 
 mod constants;
 mod context;
+pub mod cwbvh;
 mod data;
 pub mod plan;
 mod renderer;
@@ -27,7 +34,7 @@ mod renderer;
 pub use constants::{kernel_source, wgsl_constants};
 pub use context::{AdapterRequest, describe};
 pub use data::{check_kinds, check_path_emitters};
-pub use renderer::WgpuRenderer;
+pub use renderer::{Layout, WgpuRenderer};
 
 /// Whether a wgpu adapter can be opened here (`WGPU_BACKEND`, `WGPU_ADAPTER_NAME`), or why
 /// not.

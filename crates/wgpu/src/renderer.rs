@@ -1,7 +1,10 @@
 //! [`WgpuRenderer`]: the frame-level [`Renderer`] on a wgpu device.
 
 use crate::context::{AdapterRequest, Gpu, gpu};
-use crate::data::{GpuOut, GpuRay, Params, SceneData, check_kinds, entry_point};
+use crate::cwbvh::{self, Cwbvh};
+use crate::data::{
+    GpuOut, GpuRay, OCCLUDE_ENTRY, Params, SceneData, bvh2_nodes, check_kinds, entry_point,
+};
 use crate::plan;
 use raybench_bvh::Bvh;
 use raybench_core::{
@@ -24,12 +27,28 @@ const PASSES_PER_SUBMIT: usize = 64;
 /// finishes a dispatch in milliseconds; lavapipe in seconds).
 const WAIT_LIMIT: Duration = Duration::from_secs(600);
 
-/// The compiled kernels of one device: one pipeline per (entry point, counting).
+/// The tree the kernels walk, a parameter of [`WgpuRenderer`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Layout {
+    /// raybench-bvh's BVH2 (default build), 32-byte nodes, a per-thread stack of nodes,
+    /// near child first.
+    #[default]
+    Bvh2,
+    /// The same builder's BVH2 (leaves of up to three) collapsed into a compressed 8-wide
+    /// BVH (Ylitie, Karras and Laine 2017; `cwbvh.rs`): 80-byte nodes with quantised child
+    /// boxes, a stack of child groups in octant order.
+    Cwbvh,
+}
+
+/// A pipeline's entry point, whether it counts, and the tree it walks.
+type PipelineKey = (&'static str, bool, Layout);
+
+/// The compiled kernels of one device: one pipeline per (entry point, counting, layout).
 pub(crate) struct Kernels {
     module: wgpu::ShaderModule,
     layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
-    pipelines: Mutex<HashMap<(&'static str, bool), Arc<wgpu::ComputePipeline>>>,
+    pipelines: Mutex<HashMap<PipelineKey, Arc<wgpu::ComputePipeline>>>,
 }
 
 fn storage(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
@@ -77,6 +96,7 @@ impl Kernels {
         }];
         entries.extend((1..=5).map(|b| storage(b, true)));
         entries.extend((6..=7).map(|b| storage(b, false)));
+        entries.push(storage(8, true));
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("raybench bindings"),
             entries: &entries,
@@ -95,18 +115,24 @@ impl Kernels {
         })
     }
 
-    /// The pipeline of `entry`, with or without counting, compiled on first use.
+    /// The pipeline of `entry`, with or without counting, over the tree of `layout`,
+    /// compiled on first use.
     fn pipeline(
         &self,
         gpu: &Gpu,
         entry: &'static str,
         count: bool,
+        layout: Layout,
     ) -> Result<Arc<wgpu::ComputePipeline>, RenderError> {
         let mut map = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(p) = map.get(&(entry, count)) {
+        if let Some(p) = map.get(&(entry, count, layout)) {
             return Ok(Arc::clone(p));
         }
-        let constants = [("COUNT", if count { 1.0 } else { 0.0 })];
+        let flag = |b: bool| if b { 1.0 } else { 0.0 };
+        let constants = [
+            ("COUNT", flag(count)),
+            ("WIDE", flag(layout == Layout::Cwbvh)),
+        ];
         let pipeline = gpu
             .device
             .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -122,9 +148,15 @@ impl Kernels {
             });
         device_errors(gpu, &format!("compiling kernel {entry}"))?;
         let pipeline = Arc::new(pipeline);
-        map.insert((entry, count), Arc::clone(&pipeline));
+        map.insert((entry, count, layout), Arc::clone(&pipeline));
         Ok(pipeline)
     }
+}
+
+/// The tree of a prepared scene.
+enum Tree {
+    Bvh2(Bvh),
+    Cwbvh(Cwbvh),
 }
 
 /// A renderer prepared for one scene.
@@ -134,9 +166,10 @@ struct Prepared {
     scene: Arc<Scene>,
     data: SceneData,
     stats: AccelStats,
-    /// The BVH2 the buffers were filled from, kept for [`Renderer::quality`].
-    bvh: Bvh,
+    /// The tree the buffers were filled from, kept for [`Renderer::quality`].
+    tree: Tree,
     nodes: wgpu::Buffer,
+    wide: wgpu::Buffer,
     prims: wgpu::Buffer,
     prim_info: wgpu::Buffer,
     shading: wgpu::Buffer,
@@ -144,9 +177,11 @@ struct Prepared {
     frame_lock: Mutex<()>,
 }
 
-/// The wgpu compute backend: the scene's BVH2 is built on the CPU by raybench-bvh,
-/// flattened and uploaded once; each frame runs one WGSL kernel per mode over 8 x 8 pixel
-/// blocks, in dispatches bounded by [`plan::budget`], and reads the image back.
+/// The wgpu compute backend: the scene's BVH2 is built on the CPU by raybench-bvh (and,
+/// with [`Layout::Cwbvh`], collapsed into a compressed 8-wide BVH), flattened and uploaded
+/// once; each frame runs one WGSL kernel per mode over 8 x 8 pixel blocks, in dispatches
+/// bounded by [`plan::budget`], and reads the image back. Any-hit rays
+/// ([`Renderer::occlude_rays`]) run a kernel of their own that stops at the first hit.
 ///
 /// Results match the CPU backends within floating-point tolerance, not bit for bit (see
 /// `kernels.wgsl`). Timings of a frame: `upload` (parameters), `gpu` (execution, from
@@ -156,6 +191,7 @@ pub struct WgpuRenderer {
     name: String,
     description: String,
     request: AdapterRequest,
+    layout: Layout,
     prepared: Option<Prepared>,
 }
 
@@ -196,8 +232,23 @@ impl WgpuRenderer {
             name: name.into(),
             description: description.into(),
             request,
+            layout: Layout::Bvh2,
             prepared: None,
         }
+    }
+
+    /// The same renderer over the tree of `layout`.
+    #[must_use]
+    pub fn with_layout(mut self, layout: Layout) -> Self {
+        self.layout = layout;
+        self.prepared = None;
+        self
+    }
+
+    /// The tree the kernels walk.
+    #[must_use]
+    pub fn layout(&self) -> Layout {
+        self.layout
     }
 
     fn gpu(&self) -> Result<Arc<Gpu>, RenderError> {
@@ -214,8 +265,8 @@ impl WgpuRenderer {
 
 fn buffer_init(gpu: &Gpu, label: &str, bytes: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
     // wgpu refuses bindings smaller than one element of the shader's array: an empty
-    // array gets one zero element of the largest kind (a 48-byte primitive).
-    let zeros = [0u8; 64];
+    // array gets one zero element of the largest kind (an 80-byte CWBVH node).
+    let zeros = [0u8; 80];
     let contents = if bytes.is_empty() { &zeros[..] } else { bytes };
     gpu.device
         .create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -372,6 +423,10 @@ impl Batches<'_> {
             wgpu::BindGroupEntry {
                 binding: 7,
                 resource: self.counters.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 8,
+                resource: p.wide.as_entire_binding(),
             },
         ];
         p.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -558,27 +613,52 @@ impl Renderer for WgpuRenderer {
         let kernels = kernels(&gpu)?;
         let mut timings = Timings::default();
         let start = Instant::now();
-        let bvh = Bvh::build(Arc::clone(&scene.geometry));
-        timings.push("build", start.elapsed().as_secs_f64());
-        let stats = bvh.stats();
+        let bvh = match self.layout {
+            Layout::Bvh2 => Bvh::build(Arc::clone(&scene.geometry)),
+            Layout::Cwbvh => Bvh::build_with(Arc::clone(&scene.geometry), cwbvh::bvh2_params()),
+        };
         if bvh.depth() + 1 > STACK_SIZE as usize {
             return Err(RenderError::Unsupported(format!(
                 "BVH depth {} exceeds the GPU traversal stack",
                 bvh.depth()
             )));
         }
+        let (tree, stats) = match self.layout {
+            Layout::Bvh2 => {
+                let stats = bvh.stats();
+                (Tree::Bvh2(bvh), stats)
+            }
+            Layout::Cwbvh => {
+                let wide = Cwbvh::collapse(&bvh).map_err(RenderError::Unsupported)?;
+                let stats = AccelStats {
+                    memory_bytes: 0,
+                    counts: vec![
+                        ("nodes", wide.nodes.len() as u64),
+                        ("leaves", wide.leaves),
+                        ("depth", u64::from(wide.depth)),
+                    ],
+                };
+                (Tree::Cwbvh(wide), stats)
+            }
+        };
+        timings.push("build", start.elapsed().as_secs_f64());
         let start = Instant::now();
-        let data = SceneData::new(scene, &bvh).map_err(RenderError::Unsupported)?;
+        let data = match &tree {
+            Tree::Bvh2(bvh) => SceneData::new(scene, bvh2_nodes(bvh), Vec::new(), bvh.prim_ids()),
+            Tree::Cwbvh(w) => SceneData::new(scene, Vec::new(), w.nodes.clone(), &w.prim_ids),
+        }
+        .map_err(RenderError::Unsupported)?;
         let limit = Self::binding_limit(&gpu);
-        if data.nodes.len() as u64 * 32 > limit {
+        let node_bytes = (data.nodes.len() * 32 + data.wide.len() * 80) as u64;
+        if node_bytes > limit {
             return Err(RenderError::Unsupported(format!(
-                "the BVH needs {} bytes, more than a storage buffer may hold on {}",
-                data.nodes.len() * 32,
+                "the BVH needs {node_bytes} bytes, more than a storage buffer may hold on {}",
                 gpu.info.name
             )));
         }
         let usage = wgpu::BufferUsages::STORAGE;
         let nodes = buffer_init(&gpu, "nodes", bytemuck::cast_slice(&data.nodes), usage);
+        let wide = buffer_init(&gpu, "wide nodes", bytemuck::cast_slice(&data.wide), usage);
         let prims = buffer_init(&gpu, "prims", bytemuck::cast_slice(&data.prims), usage);
         let prim_info = buffer_init(
             &gpu,
@@ -602,8 +682,9 @@ impl Renderer for WgpuRenderer {
             scene: Arc::clone(scene),
             data,
             stats,
-            bvh,
+            tree,
             nodes,
+            wide,
             prims,
             prim_info,
             shading,
@@ -622,7 +703,9 @@ impl Renderer for WgpuRenderer {
         if settings.mode == Mode::Path {
             crate::data::check_path_emitters(&p.scene).map_err(RenderError::Unsupported)?;
         }
-        let pipeline = p.kernels.pipeline(gpu, entry, settings.count)?;
+        let pipeline = p
+            .kernels
+            .pipeline(gpu, entry, settings.count, self.layout)?;
         let (w, h) = (settings.width, settings.height);
         let out_size = std::mem::size_of::<GpuOut>() as u64;
         let band_pixels = (Self::binding_limit(gpu) / out_size).min(1 << 24);
@@ -732,15 +815,15 @@ impl Renderer for WgpuRenderer {
         self.prepared.as_ref().map(|p| p.stats.clone())
     }
 
-    /// The CPU-built BVH2's figures (the GPU walks the same tree), bytes per primitive
-    /// counting the uploaded buffers.
+    /// The figures of the tree the GPU walks (the CPU-built BVH2, or the CWBVH with the
+    /// child boxes the kernel decodes), bytes per primitive counting the uploaded buffers.
     fn quality(&self, params: &QualityParams) -> Option<StructureQuality> {
         self.prepared.as_ref().map(|p| {
-            StructureQuality::Tree(p.bvh.tree_view().quality(
-                &p.scene.geometry,
-                params,
-                p.stats.memory_bytes,
-            ))
+            let view = match &p.tree {
+                Tree::Bvh2(bvh) => bvh.tree_view(),
+                Tree::Cwbvh(w) => w.tree_view(),
+            };
+            StructureQuality::Tree(view.quality(&p.scene.geometry, params, p.stats.memory_bytes))
         })
     }
 
@@ -752,18 +835,59 @@ impl Renderer for WgpuRenderer {
         self.trace_rays_timed(rays, count).map(|(h, c, _)| (h, c))
     }
 
-    /// Any hit through the explicit-ray closest-hit kernel (`is_some()`), keeping its
-    /// `upload`, `gpu` and `readback` phases.
+    /// Any hit through the any-hit kernel ([`Renderer::occlude_rays_timed`]).
+    fn occlude_rays(
+        &self,
+        rays: &[Ray],
+        count: bool,
+    ) -> Result<(Vec<bool>, Option<RayCounters>), RenderError> {
+        self.occlude_rays_timed(rays, count).map(|(b, c, _)| (b, c))
+    }
+
+    /// Any hit through the any-hit kernel (`occlude_kernel`: the traversal stops at the
+    /// first hit), with `upload`, `gpu` and `readback` phases.
     fn occlude_rays_timed(&self, rays: &[Ray], count: bool) -> Result<OccludedRays, RenderError> {
-        let (hits, counters, timings) = self.trace_rays_timed(rays, count)?;
-        Ok((
-            hits.iter().map(Option::is_some).collect(),
-            counters,
-            timings,
-        ))
+        let mut blocked = Vec::with_capacity(rays.len());
+        let (counters, timings) = self.explicit_rays(rays, count, OCCLUDE_ENTRY, |o, _| {
+            blocked.push(o.id != NO_HIT)
+        })?;
+        Ok((blocked, counters, timings))
     }
 
     fn trace_rays_timed(&self, rays: &[Ray], count: bool) -> Result<TracedRays, RenderError> {
+        let p = self.prepared.as_ref().ok_or(RenderError::NotPrepared)?;
+        let entry = entry_point(None).map_err(RenderError::Unsupported)?;
+        let g = &p.scene.geometry;
+        let mut hits = Vec::with_capacity(rays.len());
+        let (counters, timings) = self.explicit_rays(rays, count, entry, |o, ray| {
+            hits.push((o.id != NO_HIT).then(|| {
+                g.shape(o.id).complete_hit(
+                    ray,
+                    o.id,
+                    PrimHit {
+                        t: o.v[0],
+                        sub: 0,
+                        u: o.v[1],
+                        v: o.v[2],
+                    },
+                )
+            }));
+        })?;
+        Ok((hits, counters, timings))
+    }
+}
+
+impl WgpuRenderer {
+    /// Runs kernel `entry` on explicit `rays` in chunks that fit a dispatch and the output
+    /// buffer, handing each ray's output record to `each` in order; returns the counters and
+    /// the `upload`, `gpu`, `readback` and `render` phases.
+    fn explicit_rays(
+        &self,
+        rays: &[Ray],
+        count: bool,
+        entry: &'static str,
+        mut each: impl FnMut(&GpuOut, &Ray),
+    ) -> Result<(Option<RayCounters>, Timings), RenderError> {
         let p = self.prepared.as_ref().ok_or(RenderError::NotPrepared)?;
         if rays.len() as u64 > limits::MAX_EXPLICIT_RAYS {
             return Err(RenderError::InvalidSettings(format!(
@@ -775,8 +899,7 @@ impl Renderer for WgpuRenderer {
         let _frame = p.frame_lock.lock().unwrap_or_else(|e| e.into_inner());
         let start = Instant::now();
         let gpu = &p.gpu;
-        let entry = entry_point(None).map_err(RenderError::Unsupported)?;
-        let pipeline = p.kernels.pipeline(gpu, entry, count)?;
+        let pipeline = p.kernels.pipeline(gpu, entry, count, self.layout)?;
         let out_size = std::mem::size_of::<GpuOut>() as u64;
         let per_dispatch = u64::from(gpu.limits.max_compute_workgroups_per_dimension) * 64;
         let chunk = (Self::binding_limit(gpu) / out_size)
@@ -820,9 +943,7 @@ impl Renderer for WgpuRenderer {
         );
         let mut upload = upload_start.elapsed().as_secs_f64();
 
-        let mut hits = Vec::with_capacity(rays.len());
         let (mut gpu_seconds, mut readback) = (0.0, 0.0);
-        let g = &p.scene.geometry;
         for (slot, c) in chunks.iter().enumerate() {
             let up = Instant::now();
             let packed: Vec<GpuRay> = c
@@ -841,18 +962,7 @@ impl Renderer for WgpuRenderer {
             f.fetch(&out, c.len() as u64 * out_size, |bytes| {
                 let outs: &[GpuOut] = bytemuck::cast_slice(bytes);
                 for (o, ray) in outs.iter().zip(c.iter()) {
-                    hits.push((o.id != NO_HIT).then(|| {
-                        g.shape(o.id).complete_hit(
-                            ray,
-                            o.id,
-                            PrimHit {
-                                t: o.v[0],
-                                sub: 0,
-                                u: o.v[1],
-                                v: o.v[2],
-                            },
-                        )
-                    }));
+                    each(o, ray);
                 }
             })?;
             readback += read_start.elapsed().as_secs_f64();
@@ -863,6 +973,6 @@ impl Renderer for WgpuRenderer {
         timings.push("gpu", gpu_seconds);
         timings.push("readback", readback);
         timings.push("render", start.elapsed().as_secs_f64());
-        Ok((hits, counted, timings))
+        Ok((counted, timings))
     }
 }

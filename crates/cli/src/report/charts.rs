@@ -116,9 +116,9 @@ const BACKEND_COLOURS: [&str; 16] = [
     "#997700", // packet-portable
     "#56B4E9", // bvh-crate
     "#332288", // wgpu
-    "#CC79A7", // embree
-    "#999933", // embree-packet
-    "#661100", // spare
+    "#CC79A7", // wgpu-cwbvh
+    "#999933", // embree
+    "#661100", // embree-packet
     "#6699CC", // spare
     "#555555", // spare
 ];
