@@ -416,30 +416,31 @@ fn gpu_on_adversarial_rays() {
     let (reference, _) = prepared(raybench_tests::ORACLE, &scene)
         .trace_rays(&rays, false)
         .unwrap();
-    let (hits, _) = prepared(raybench_tests::DEVICE, &scene)
-        .trace_rays(&rays, false)
-        .unwrap();
-    let mut agree = 0usize;
-    for (i, ((r, a), b)) in rays.iter().zip(&reference).zip(&hits).enumerate() {
-        if !r.is_valid() {
-            assert!(b.is_none(), "wgpu: invalid ray {i} {r:?} hits {b:?}");
-        }
-        let same = match (a, b) {
-            (None, None) => true,
-            (Some(a), Some(b)) => {
-                a.prim == b.prim
-                    && f64::from((a.t - b.t).abs())
-                        <= raybench_tests::gpu::MAX_REL_DT * f64::from(a.t.abs().max(1e-6))
+    // Every GPU backend (BVH2 and CWBVH walks).
+    for device in raybench_tests::DEVICES {
+        let (hits, _) = prepared(device, &scene).trace_rays(&rays, false).unwrap();
+        let mut agree = 0usize;
+        for (i, ((r, a), b)) in rays.iter().zip(&reference).zip(&hits).enumerate() {
+            if !r.is_valid() {
+                assert!(b.is_none(), "{device}: invalid ray {i} {r:?} hits {b:?}");
             }
-            _ => false,
-        };
-        agree += usize::from(same);
+            let same = match (a, b) {
+                (None, None) => true,
+                (Some(a), Some(b)) => {
+                    a.prim == b.prim
+                        && f64::from((a.t - b.t).abs())
+                            <= raybench_tests::gpu::MAX_REL_DT * f64::from(a.t.abs().max(1e-6))
+                }
+                _ => false,
+            };
+            agree += usize::from(same);
+        }
+        // Edge- and vertex-aimed rays are where the GPU's rounding may pick the neighbour,
+        // so the bound is looser than for random rays: 95% of rays agree.
+        assert!(
+            agree * 100 >= rays.len() * 95,
+            "{device} agrees with naive on {agree} of {} adversarial rays",
+            rays.len()
+        );
     }
-    // Edge- and vertex-aimed rays are where the GPU's rounding may pick the neighbour, so
-    // the bound is looser than for random rays: 95% of rays agree.
-    assert!(
-        agree * 100 >= rays.len() * 95,
-        "wgpu agrees with naive on {agree} of {} adversarial rays",
-        rays.len()
-    );
 }

@@ -327,9 +327,8 @@ pub trait Renderer: Send + Sync {
     /// ray; only the work may differ (an any-hit walk stops at the first hit it finds).
     ///
     /// The default is exactly that: [`Renderer::trace_rays`] and `is_some()`, correct for
-    /// any backend (the GPU answers through its explicit-ray closest-hit kernel), with the
-    /// closest-hit work counted. A CPU backend overrides it with its structure's
-    /// `occluded_batch`.
+    /// any backend, with the closest-hit work counted. A CPU backend overrides it with its
+    /// structure's `occluded_batch`, the GPU backends with their any-hit kernel.
     ///
     /// # Errors
     /// As [`Renderer::trace_rays`].
