@@ -7,7 +7,6 @@
   // Each section.viewer holds one button.viewer-pick per image (the reference first), with
   // the file of each layer in data-image, data-ids and data-flip (empty where the result is
   // identical to the reference, so the map is derived from the reference image by a filter).
-  const LAYERS = ["image", "ids", "flip"];
   const ZOOMS = [1, 2, 4, 8, 16];
 
   function setUpViewer(viewer) {
@@ -105,7 +104,6 @@
         pixel.textContent = "pixel: x " + x + ", y " + y + " (of " + width + " x " + height + ")";
       }
     });
-    if (LAYERS.indexOf(state.layer) < 0) state.layer = "image";
     show();
   }
 
