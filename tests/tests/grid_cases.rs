@@ -29,6 +29,42 @@ fn rays_along_cell_boundaries_and_grid_faces() {
     }
 }
 
+/// Rays from far away (up to just inside `raybench_grid::FAR_ORIGIN` grid sizes, as an
+/// instance's rays start when its mesh is small and the camera far): along the cell
+/// boundaries and grid faces, and through every vertex of watertight meshes, where the
+/// DDA's rounding of a far origin matters most; every backend against naive.
+#[test]
+fn rays_from_far_origins() {
+    for spec in ["soup:3000", "terrain:24", "icosphere:3"] {
+        let scene = Arc::new(raybench_scene::load(spec, std::path::Path::new(".")).unwrap());
+        let grid = Grid::build_with(Arc::clone(&scene.geometry), GridParams::default());
+        let size = grid.bounds().extent().max_element();
+        let mut targets: Vec<Ray> = raybench_tests::grid_boundary_rays(&grid)
+            .into_iter()
+            .step_by(3)
+            .collect();
+        // Through the vertices, from seeded directions.
+        let vertices = scene.geometry.shapes().iter().filter_map(|s| match s {
+            raybench_core::Shape::Triangle(t) => Some(t.v[0]),
+            _ => None,
+        });
+        for (k, v) in vertices.step_by(7).enumerate() {
+            let a = k as f32 * 2.399_963;
+            let z = 1.0 - 2.0 * ((k as f32 * 0.618_034) % 1.0);
+            let r = (1.0 - z * z).sqrt();
+            targets.push(Ray::new(v, Vec3::new(r * a.cos(), z, r * a.sin())));
+        }
+        let limit = raybench_grid::FAR_ORIGIN * 0.95;
+        let mut rays = Vec::new();
+        for (k, t) in targets.iter().enumerate() {
+            let reach = [limit / 8.0, limit / 2.0, limit][k % 3] * size;
+            let dir = t.dir.normalize();
+            rays.push(Ray::new(t.origin - dir * reach, dir));
+        }
+        check(&format!("{spec}, far origins"), &scene, &rays);
+    }
+}
+
 #[test]
 fn single_huge_triangle() {
     let mut b = SceneBuilder::new("huge");

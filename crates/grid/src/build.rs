@@ -95,7 +95,7 @@ impl Grid {
         self.cell = e / Vec3::new(res[0] as f32, res[1] as f32, res[2] as f32);
         self.inv_cell = self.cell.recip();
         self.pad =
-            (self.cell * (1.0 / 4096.0)).max(Vec3::splat(e.max_element() * (1.0 / 65_536.0)));
+            (self.cell * (1.0 / 4096.0)).max(Vec3::splat(e.max_element() * crate::PAD_OF_SIZE));
     }
 
     /// The number of cell-list entries the current resolution needs.

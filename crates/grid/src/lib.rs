@@ -13,7 +13,7 @@
 //! - **Storage**: one flat array of primitive ids and one of per-cell offsets (compressed
 //!   rows), no `Vec` per cell.
 //! - **Insertion**: each primitive goes into every cell its box, padded by `PAD` (the
-//!   larger of 1/4096 of a cell and 2^-16 of the grid's size), overlaps. The padding makes
+//!   larger of 1/4096 of a cell and 2^-12 of the grid's size, [`PAD_OF_SIZE`]), overlaps. The padding makes
 //!   insertion conservative against the DDA's rounding: a ray that passes through a cell
 //!   corner visits three of the four cells around it, and any primitive near that corner
 //!   is also listed in the visited ones; and the DDA's positions, off by a few ulps of the
@@ -48,8 +48,16 @@ pub use two_level::{TwoLevelGrid, TwoLevelParams};
 pub const MAILBOX: usize = 8;
 
 /// Rays whose origin lies farther than this many grid sizes from the grid's centre skip
-/// the DDA and test every bounded primitive (see the crate documentation).
-pub const FAR_ORIGIN: f32 = 8.0;
+/// the DDA and test every bounded primitive (see the crate documentation). Instances make
+/// such rays common: an instance's rays start in its mesh's space as many of the mesh's
+/// sizes away as the camera is (7 to 30 on `bunny-field`), so it is set well beyond that.
+pub const FAR_ORIGIN: f32 = 128.0;
+
+/// The insertion padding's floor relative to the grid's size, from [`FAR_ORIGIN`]: the
+/// DDA's positions are off by up to about 16 ulps of the origin's distance to the grid
+/// (in grid units, `FAR_ORIGIN * 16 * 2^-23` of the grid's size), which the padding must
+/// cover: `2^-12` of the grid's size, a sixty-fourth of a cell at 64 cells per axis.
+pub const PAD_OF_SIZE: f32 = FAR_ORIGIN * 16.0 / 8_388_608.0;
 
 /// The cell lists are kept below this many entries per primitive (plus one per cell) by
 /// coarsening the grid.
