@@ -324,4 +324,14 @@ mod tests {
         );
         r.reserve(Holds::Primitives(4), "c").unwrap();
     }
+
+    /// Instances count their records only (their meshes are primitives of their objects,
+    /// counted once): a million instances of a large mesh are a quarter of a gigabyte.
+    #[test]
+    fn instances_count_their_records() {
+        let mut r = Reservation::with_limit(10 * INSTANCE_BYTES_ESTIMATE);
+        r.reserve(Holds::Instances(10), "a").unwrap();
+        let e = r.reserve(Holds::Instances(1), "b").unwrap_err().to_string();
+        assert!(e.contains("1 instances, about 256 bytes each"), "{e}");
+    }
 }
