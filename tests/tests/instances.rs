@@ -12,7 +12,7 @@ use raybench::Roles;
 use raybench_core::{RayCounters, Scene};
 use raybench_tests::{
     BASELINE, ORACLE, assert_same_hits, assert_same_ray_hits, available, check, check_modes,
-    load_or_skip, prepared,
+    load_or_skip, prepared, render_with,
 };
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -324,4 +324,164 @@ fn structure_counts_meshes_once_and_devices_refuse() {
         let why = (b.make)().supports(&scene).unwrap_err();
         assert!(why.contains("no instances"), "{}: {why}", b.name);
     }
+}
+
+/// A glTF file of one smooth UV sphere (vertex normals) placed by five nodes, rotated,
+/// non-uniformly scaled and one mirrored: with `shared`, every node names mesh 0; without,
+/// node `k` names mesh `k`, five meshes with the same accessors (so each is placed once and
+/// copied, as before instancing). The same scene either way.
+fn spheres_gltf(shared: bool) -> String {
+    use base64::Engine as _;
+    let (rings, segments) = (8u16, 12u16);
+    let (mut positions, mut indices) = (Vec::new(), Vec::new());
+    for r in 0..=rings {
+        let theta = std::f32::consts::PI * f32::from(r) / f32::from(rings);
+        for s in 0..=segments {
+            let phi = std::f32::consts::TAU * f32::from(s) / f32::from(segments);
+            positions.extend([
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            ]);
+        }
+    }
+    let row = segments + 1;
+    for r in 0..rings {
+        for s in 0..segments {
+            let (a, b) = (r * row + s, (r + 1) * row + s);
+            indices.extend([a, b, a + 1, a + 1, b, b + 1]);
+        }
+    }
+    let mut bin: Vec<u8> = Vec::new();
+    // Positions, then the same numbers as normals (a unit sphere's), then indices.
+    for _ in 0..2 {
+        bin.extend(positions.iter().flat_map(|x: &f32| x.to_le_bytes()));
+    }
+    bin.extend(indices.iter().flat_map(|i: &u16| i.to_le_bytes()));
+    let vbytes = positions.len() * 4;
+    let uri = base64::engine::general_purpose::STANDARD.encode(&bin);
+    let nodes = [
+        r#""translation": [-2.2, 0, 0]"#,
+        r#""translation": [0, 0, 0], "rotation": [0, 0, 0.258819, 0.9659258], "scale": [-0.8, 0.8, 0.8]"#,
+        r#""translation": [2.2, 0, 0], "rotation": [0.3826834, 0, 0, 0.9238795], "scale": [1, 0.5, 1]"#,
+        r#""translation": [-1.1, 1.8, -1], "rotation": [0, 0.7071068, 0, 0.7071068], "scale": [0.6, 0.6, 1.4]"#,
+        r#""translation": [1.1, 1.8, -1], "scale": [0.7, -0.7, 0.7]"#,
+    ];
+    let node_list: Vec<String> = nodes
+        .iter()
+        .enumerate()
+        .map(|(k, t)| format!(r#"{{"mesh": {}, {t}}}"#, if shared { 0 } else { k }))
+        .collect();
+    let mesh = r#"{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}, "indices": 2}]}"#;
+    let meshes = vec![mesh; if shared { 1 } else { nodes.len() }].join(", ");
+    format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0,
+        "scenes": [{{"nodes": [0, 1, 2, 3, 4]}}],
+        "nodes": [{}],
+        "meshes": [{meshes}],
+        "buffers": [{{"uri": "data:application/octet-stream;base64,{uri}", "byteLength": {}}}],
+        "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": {vbytes}}},
+                        {{"buffer": 0, "byteOffset": {vbytes}, "byteLength": {vbytes}}},
+                        {{"buffer": 0, "byteOffset": {}, "byteLength": {}}}],
+        "accessors": [
+          {{"bufferView": 0, "componentType": 5126, "count": {n}, "type": "VEC3",
+            "min": [-1, -1, -1], "max": [1, 1, 1]}},
+          {{"bufferView": 1, "componentType": 5126, "count": {n}, "type": "VEC3"}},
+          {{"bufferView": 2, "componentType": 5123, "count": {}, "type": "SCALAR"}}]}}"#,
+        node_list.join(", "),
+        bin.len(),
+        2 * vbytes,
+        indices.len() * 2,
+        indices.len(),
+        n = positions.len() / 3,
+    )
+}
+
+/// A glTF mesh that several nodes place becomes instances (stored once), and renders like
+/// the same file with one mesh per node: the same ids for all but a few pixels (see
+/// `instances_match_the_flattened_scene` for why not all) and the same smooth shading on
+/// rotated, mirrored and uniformly scaled instances, so its vertex normals follow each
+/// instance's transform. Every exact
+/// backend agrees with naive on it.
+#[test]
+fn gltf_meshes_placed_by_several_nodes_are_instances() {
+    // Scene files with one camera: framing the geometry would frame the instances' boxes.
+    let file = |name: &str, gltf: String| {
+        let dir = scene_file(name, "").parent().unwrap().to_owned();
+        std::fs::write(dir.join(format!("{name}.gltf")), gltf).unwrap();
+        scene_file(
+            name,
+            &format!(
+                "[camera]\nposition = [0, 1, 7]\nlook_at = [0, 0.6, 0]\nfov = 50\n\
+                 [[light]]\nkind = \"point\"\nposition = [3, 6, 5]\nintensity = [50, 50, 50]\n\
+                 [[object]]\nkind = \"mesh\"\npath = \"{name}.gltf\"\n"
+            ),
+        )
+    };
+    let (shared, copied) = (
+        file("shared", spheres_gltf(true)),
+        file("copied", spheres_gltf(false)),
+    );
+    let a = load_or_skip(shared.to_str().unwrap()).unwrap();
+    let b = load_or_skip(copied.to_str().unwrap()).unwrap();
+    let (ga, gb) = (&a.geometry, &b.geometry);
+    assert_eq!(
+        (ga.len(), ga.meshes().len(), ga.instances().len()),
+        (0, 1, 5)
+    );
+    assert!(!gb.has_instances() && gb.len() == ga.total_len());
+    assert!(
+        a.warnings.is_empty(),
+        "the instanced mesh keeps its normals: {:?}",
+        a.warnings
+    );
+    check(&available(BACKENDS), shared.to_str().unwrap(), 48);
+
+    let settings = raybench_tests::mode_settings(96, raybench_core::Mode::Cast, 1);
+    let (fa, fb) = (
+        render_with(BASELINE, &a, &settings, 2),
+        render_with(BASELINE, &b, &settings, 2),
+    );
+    let (mut same, mut other, mut uniform, mut worst) = (0, 0, 0, 0.0f32);
+    for i in 0..fa.ids.len() {
+        if fa.ids[i] != fb.ids[i] {
+            other += 1;
+        } else if let Some((k, _)) = ga.locate(fa.ids[i]) {
+            same += 1;
+            // Under a non-uniform scale, normals normalised per vertex and then
+            // interpolated (the copy) differ from normals interpolated and then carried
+            // (the instance): compared where the scale is uniform (rotations, mirrors).
+            let m = ga.instances()[k].to_world().matrix3;
+            let lengths = [m.x_axis.length(), m.y_axis.length(), m.z_axis.length()];
+            if lengths.iter().all(|l| (l - lengths[0]).abs() < 1e-5) {
+                uniform += 1;
+                worst = worst.max((fa.color[i] - fb.color[i]).abs().max_element());
+            }
+        }
+    }
+    assert!(
+        same > 2000 && other * 100 <= same,
+        "{same} same, {other} other"
+    );
+    assert!(
+        uniform > 1000,
+        "{uniform} pixels of uniformly scaled instances"
+    );
+    assert!(worst < 1e-3, "shading differs by {worst}");
+
+    // Flattened (`raybench_core::flatten`), the instanced file shades as the copied one
+    // everywhere, non-uniform scales included: its vertex normals are carried vertex by
+    // vertex and then interpolated, as the copies' are.
+    let flat = Arc::new(raybench_core::flatten(&a).unwrap());
+    assert!(!flat.geometry.has_instances() && flat.mesh_attributes.is_empty());
+    let ff = render_with(BASELINE, &flat, &settings, 2);
+    let (mut both, mut worst) = (0, 0.0f32);
+    for i in 0..ff.ids.len() {
+        if ff.ids[i] == fb.ids[i] && ff.ids[i] != raybench_core::NO_HIT {
+            both += 1;
+            worst = worst.max((ff.color[i] - fb.color[i]).abs().max_element());
+        }
+    }
+    assert!(both > 2000, "{both} pixels on the same primitive");
+    assert!(worst < 1e-3, "flattened shading differs by {worst}");
 }

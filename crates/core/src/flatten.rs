@@ -111,8 +111,11 @@ pub fn flatten_geometry(
 }
 
 /// `scene` without instances ([`flatten_geometry`]): the same primitives under the same
-/// ids, each instanced primitive with its mesh's material or its instance's override;
-/// cameras, lights, materials, objects and volumes unchanged. A scene without instances
+/// ids, each instanced primitive with its mesh's material or its instance's override and
+/// its mesh's vertex normals (each carried by the instance's inverse transpose, then
+/// interpolated: under a non-uniform scale that differs slightly from the instanced
+/// shading, which interpolates first) and texture coordinates; cameras, lights,
+/// materials, objects and volumes unchanged. A scene without instances
 /// comes back as it is.
 ///
 /// # Errors
@@ -139,6 +142,13 @@ pub fn flatten(scene: &Scene) -> Result<Scene, SceneError> {
             None => prim_material.extend_from_slice(mesh),
         }
     }
+    let mut attributes = scene.attributes.clone();
+    if !scene.mesh_attributes.is_empty() {
+        for instance in g.instances() {
+            let mesh = &scene.mesh_attributes[instance.mesh() as usize];
+            attributes.push_placed(mesh, instance.base(), |n| instance.world_normal(n));
+        }
+    }
     let (emitters, _) = Emitters::new(
         &geometry,
         &prim_material,
@@ -150,6 +160,8 @@ pub fn flatten(scene: &Scene) -> Result<Scene, SceneError> {
         prim_material,
         mesh_materials: Vec::new(),
         instance_materials: Vec::new(),
+        attributes,
+        mesh_attributes: Vec::new(),
         emitters,
         ..scene.clone()
     })

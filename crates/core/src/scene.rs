@@ -5,7 +5,7 @@ use crate::SceneError;
 use crate::Sphere;
 use crate::Triangle;
 use crate::TriangleMesh;
-use crate::attributes::{ShadingAttributes, VertexAttributes};
+use crate::attributes::{AttributesAt, ShadingAttributes, VertexAttributes};
 use crate::camera::{Camera, CameraOverrides, NamedCamera};
 use crate::emitters::Emitters;
 use crate::environment::Environment;
@@ -71,8 +71,13 @@ pub struct Scene {
     /// Image textures, each held once and shared by the materials naming it
     /// ([`Material::base_color_texture`], [`Material::emission_texture`]).
     pub textures: Vec<Arc<Texture>>,
-    /// Vertex normals and texture coordinates of the meshes that have them.
+    /// Vertex normals and texture coordinates of the meshes that have them (flat ids).
     pub attributes: ShadingAttributes,
+    /// Vertex normals and texture coordinates of each distinct instanced mesh, by the
+    /// mesh's own primitive index, in [`Geometry::meshes`] order; empty when no instanced
+    /// mesh has any. An instance's normals are carried to world space by its inverse
+    /// transpose ([`crate::Instance::world_normal`]).
+    pub mesh_attributes: Vec<ShadingAttributes>,
     /// What is legal but surely not what was meant (an object whose triangles are all
     /// degenerate, ...), one sentence each; the command line prints them as warnings.
     pub warnings: Vec<String>,
@@ -204,7 +209,7 @@ impl Scene {
     #[must_use]
     pub fn shading(&self, hit: &Hit, p: Vec3) -> SurfaceShading {
         let m = self.material_of(hit.prim);
-        let at = self.attributes.at(hit.prim, hit.u, hit.v);
+        let at = self.attributes_at(hit.prim, hit.u, hit.v);
         let normal = match at.normal {
             Some(n) if n.dot(hit.normal) < 0.0 => -n,
             Some(n) => n,
@@ -228,7 +233,32 @@ impl Scene {
         if m.emission_texture.is_none() {
             return m.emission;
         }
-        m.emission * self.texel(m.emission_texture, self.attributes.at(prim, u, v).uv)
+        m.emission * self.texel(m.emission_texture, self.attributes_at(prim, u, v).uv)
+    }
+
+    /// The shading attributes of primitive `prim` (any id of the flattened scene) at
+    /// barycentric weights `u`, `v`: a flat primitive's from [`Scene::attributes`], an
+    /// instanced one's from its mesh's, the normal carried to world space.
+    #[inline(always)]
+    fn attributes_at(&self, prim: u32, u: f32, v: f32) -> AttributesAt {
+        if !self.mesh_attributes.is_empty() && prim as usize >= self.prim_material.len() {
+            return self.instanced_attributes_at(prim, u, v);
+        }
+        self.attributes.at(prim, u, v)
+    }
+
+    /// [`Scene::attributes_at`] of an instanced primitive (cold: kept out of a flat
+    /// scene's shading path).
+    #[cold]
+    #[inline(never)]
+    fn instanced_attributes_at(&self, prim: u32, u: f32, v: f32) -> AttributesAt {
+        let Some((k, local)) = self.geometry.locate(prim) else {
+            return AttributesAt::default();
+        };
+        let instance = &self.geometry.instances()[k];
+        let mut at = self.mesh_attributes[instance.mesh() as usize].at(local, u, v);
+        at.normal = at.normal.map(|n| instance.world_normal(n));
+        at
     }
 
     /// Whether some material uses a texture.
@@ -284,6 +314,7 @@ struct InstanceMesh {
     name: String,
     geometry: Arc<Geometry>,
     materials: Arc<[u32]>,
+    attributes: ShadingAttributes,
 }
 
 fn finite(v: Vec3, what: &str) -> Result<(), SceneError> {
@@ -405,9 +436,9 @@ impl SceneBuilder {
     /// Makes the primitives of `part` (a builder from [`SceneBuilder::part`]) a mesh that
     /// instances can place, named `name` in messages; returns its index for
     /// [`SceneBuilder::add_instance`]. Its primitives are stored once, however many
-    /// instances place them; its cameras, lights and volumes are not taken, and its vertex
-    /// normals and texture coordinates are dropped with a warning (instanced primitives are
-    /// shaded with their geometric normals in this version).
+    /// instances place them, with its vertex normals and texture coordinates (each
+    /// instance's normals carried by its inverse transpose); its cameras, lights and
+    /// volumes are not taken.
     ///
     /// # Errors
     /// When the mesh has no primitives or an unbounded one (a plane), or the scene's
@@ -434,16 +465,11 @@ impl SceneBuilder {
         for w in part.warnings {
             self.warn(w);
         }
-        if !part.attributes.is_empty() {
-            self.warn(format!(
-                "instance mesh '{name}': its vertex normals and texture coordinates are \
-                 not used (instanced primitives are shaded with their geometric normals)"
-            ));
-        }
         self.meshes.push(InstanceMesh {
             name,
             geometry: Arc::new(Geometry::new(part.shapes)),
             materials: materials.into(),
+            attributes: part.attributes,
         });
         Ok((self.meshes.len() - 1) as u32)
     }
@@ -473,10 +499,9 @@ impl SceneBuilder {
             self.check_material(material)?;
         }
         let instance = Instance::new(mesh, &m.geometry, to_world)?;
-        let emits = |i: u32| self.materials[i as usize].emission.max_element() > 0.0;
         let emissive = match material {
-            Some(i) => emits(i),
-            None => m.materials.iter().any(|&i| emits(i)),
+            Some(i) => self.material_emits(i),
+            None => m.materials.iter().any(|&i| self.material_emits(i)),
         };
         if emissive {
             return Err(SceneError::Invalid(format!(
@@ -518,6 +543,16 @@ impl SceneBuilder {
             )));
         }
         self.check_total(count.saturating_mul(m.geometry.len() as u64))
+    }
+
+    /// Whether material `material` (an index [`SceneBuilder::add_material`] returned)
+    /// emits light.
+    ///
+    /// # Panics
+    /// When there is no such material.
+    #[must_use]
+    pub fn material_emits(&self, material: u32) -> bool {
+        self.materials[material as usize].emission.max_element() > 0.0
     }
 
     /// Checks that `more` primitives fit in [`limits::MAX_INSTANCED_PRIMITIVES`], the
@@ -983,6 +1018,11 @@ impl SceneBuilder {
     #[must_use]
     pub fn build(mut self) -> Scene {
         let mesh_materials = self.meshes.iter().map(|m| m.materials.clone()).collect();
+        let mesh_attributes = if self.meshes.iter().all(|m| m.attributes.is_empty()) {
+            Vec::new()
+        } else {
+            self.meshes.iter().map(|m| m.attributes.clone()).collect()
+        };
         let geometry = Geometry::with_instances(
             self.shapes,
             self.meshes
@@ -1049,6 +1089,7 @@ impl SceneBuilder {
             volumes: self.volumes,
             textures: self.textures,
             attributes: self.attributes,
+            mesh_attributes,
             warnings: self.warnings,
         }
     }

@@ -122,7 +122,10 @@ fn material_of(m: &gltf::Material) -> Material {
 }
 
 /// Loads every triangle primitive of the default scene (or the first scene, or every mesh
-/// when there is no scene), with node transforms applied, in node order.
+/// when there is no scene), with node transforms applied, in node order. A mesh that
+/// several nodes place is read once into [`MeshData::shared`] with each node's transform
+/// (the scene loader makes its placements instances); the others are placed in
+/// [`MeshData::mesh`].
 ///
 /// # Errors
 /// When the file is missing, malformed, truncated, or has bad indices or coordinates.
@@ -171,9 +174,11 @@ pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<MeshData, LoadError>
     match scene {
         Some(scene) => {
             let mut visited = vec![false; doc.nodes().len()];
+            let mut placements = Vec::new();
             for node in scene.nodes() {
-                add_node(path, &node, &buffers, &mut data, &mut visited)?;
+                add_node(path, &node, &mut data, &mut visited, &mut placements)?;
             }
+            add_placed_meshes(path, doc, &placements, &buffers, &mut data)?;
         }
         None => {
             for mesh in doc.meshes() {
@@ -181,17 +186,84 @@ pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<MeshData, LoadError>
             }
         }
     }
+    let distinct = data.mesh.indices.len()
+        + data
+            .shared
+            .iter()
+            .map(|s| s.data.mesh.indices.len())
+            .sum::<usize>();
+    if distinct > raybench_core::limits::MAX_PRIMITIVES {
+        return Err(parse_err(path, "more triangles than the primitive limit"));
+    }
     Ok(data)
 }
 
-/// Adds the meshes of `root` and its descendants, depth first in node order. The walk keeps
-/// its own stack: a chain of many nested nodes must not overflow the thread's.
+/// A node's mesh and where the node puts it: `(mesh index, node index, world matrix)`.
+type Placement = (usize, usize, Mat4);
+
+/// Adds the meshes the scene's nodes place, in node order: a mesh placed by one node is
+/// transformed and added to `data.mesh` (as before instancing); a mesh placed by several
+/// nodes is read once, in its own space, into [`MeshData::shared`] with every placement,
+/// to become instances (not copies).
+fn add_placed_meshes(
+    path: &Path,
+    doc: &gltf::Document,
+    placements: &[Placement],
+    buffers: &[Vec<u8>],
+    data: &mut MeshData,
+) -> Result<(), LoadError> {
+    let meshes: Vec<gltf::Mesh> = doc.meshes().collect();
+    let mut uses = vec![0usize; meshes.len()];
+    for &(mesh, _, _) in placements {
+        uses[mesh] += 1;
+    }
+    let mut shared: HashMap<usize, usize> = HashMap::new();
+    for &(index, node, world) in placements {
+        let mesh = meshes
+            .get(index)
+            .ok_or_else(|| parse_err(path, format!("node {node}: mesh {index} does not exist")))?;
+        if uses[index] == 1 {
+            add_mesh(path, mesh, world, buffers, data)?;
+            continue;
+        }
+        let k = match shared.get(&index) {
+            Some(&k) => k,
+            None => {
+                let mut own = MeshData::default();
+                add_mesh(path, mesh, Mat4::IDENTITY, buffers, &mut own)?;
+                if own.mesh.indices.is_empty() {
+                    // No triangle primitives (points or lines only): nothing to place.
+                    continue;
+                }
+                let name = mesh.name().map_or_else(
+                    || format!("glTF mesh {index}"),
+                    |n| format!("glTF mesh {index} '{n}'"),
+                );
+                data.shared.push(crate::obj::SharedMesh {
+                    name,
+                    data: own,
+                    placements: Vec::new(),
+                });
+                shared.insert(index, data.shared.len() - 1);
+                data.shared.len() - 1
+            }
+        };
+        data.shared[k]
+            .placements
+            .push(glam::Affine3A::from_mat4(world));
+    }
+    Ok(())
+}
+
+/// Collects the meshes of `root` and its descendants with their world matrices, and adds
+/// their cameras, depth first in node order. The walk keeps its own stack: a chain of many
+/// nested nodes must not overflow the thread's.
 fn add_node(
     path: &Path,
     root: &gltf::Node,
-    buffers: &[Vec<u8>],
     data: &mut MeshData,
     visited: &mut [bool],
+    placements: &mut Vec<Placement>,
 ) -> Result<(), LoadError> {
     let mut stack = vec![(root.clone(), Mat4::IDENTITY)];
     while let Some((node, parent)) = stack.pop() {
@@ -226,7 +298,7 @@ fn add_node(
                     format!("node {} (mesh {}): {e}", node.index(), mesh.index()),
                 )
             })?;
-            add_mesh(path, &mesh, world, buffers, data)?;
+            placements.push((mesh.index(), node.index(), world));
         }
         if let Some(camera) = node.camera() {
             add_camera(&camera, node.index(), world, data);
@@ -771,6 +843,68 @@ mod tests {
             let e = load_gltf_file(&p).map(|_| ()).unwrap_err().to_string();
             assert!(e.contains(needle), "case {i}: {e}");
         }
+    }
+
+    /// A mesh placed by several nodes is read once with every placement (to become
+    /// instances); a mesh placed by one node stays placed in `mesh`.
+    #[test]
+    fn meshes_placed_by_several_nodes_are_shared() {
+        let (bin, _) = triangle_gltf(None);
+        let data_uri = format!(
+            "data:application/octet-stream;base64,{}",
+            base64::engine::general_purpose::STANDARD.encode(&bin)
+        );
+        let (_, json) = triangle_gltf(Some(&data_uri));
+        let json = json
+            .replacen(
+                r#""nodes": [0]}"#,
+                r#""nodes": [0, 1, 2]}"#,
+                1,
+            )
+            .replacen(
+                r#""nodes": [{"mesh": 0, "translation": [0, 0, 5]}]"#,
+                r#""nodes": [{"mesh": 0, "translation": [0, 0, 5]},
+                             {"mesh": 1, "scale": [2, 2, 2]},
+                             {"mesh": 0, "translation": [3, 0, 0], "children": [3]},
+                             {"mesh": 0, "translation": [0, 1, 0]}]"#,
+                1,
+            )
+            .replacen(
+                r#""meshes": [{"primitives""#,
+                r#""meshes": [{"name": "tri", "primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}, {"primitives""#,
+                1,
+            );
+        let p = tmp("shared.gltf");
+        std::fs::write(&p, &json).unwrap();
+        let data = load_gltf_file(&p).unwrap();
+        // Mesh 1 (one node) is placed: scaled by 2.
+        assert_eq!(data.mesh.indices.len(), 1);
+        assert_eq!(data.mesh.positions[1], Vec3::new(2.0, 0.0, 0.0));
+        assert_eq!(data.triangle_material, vec![Some(0)]);
+        // Mesh 0 (three nodes, one of them a child) is read once in its own space.
+        assert_eq!(data.shared.len(), 1);
+        let shared = &data.shared[0];
+        assert_eq!(shared.name, "glTF mesh 0 'tri'");
+        assert_eq!(shared.data.mesh.indices.len(), 1);
+        assert_eq!(shared.data.mesh.positions[1], Vec3::X);
+        let at: Vec<Vec3> = shared
+            .placements
+            .iter()
+            .map(|a| a.transform_point3(Vec3::ZERO))
+            .collect();
+        assert_eq!(
+            at,
+            [
+                Vec3::new(0.0, 0.0, 5.0),
+                Vec3::new(3.0, 0.0, 0.0),
+                Vec3::new(3.0, 1.0, 0.0)
+            ],
+            "node order, the child under its parent's transform"
+        );
+        // Its copy is the three placed triangles.
+        let copy = shared.copied();
+        assert_eq!(copy.mesh.indices, [[0, 1, 2], [3, 4, 5], [6, 7, 8]]);
+        assert_eq!(copy.mesh.positions[4], Vec3::new(4.0, 0.0, 0.0));
     }
 
     #[test]

@@ -38,7 +38,7 @@ pub use builtin::{
 pub use error::LoadError;
 pub use format::{load_scene_str, load_toml_file};
 pub use gltf_loader::{load_gltf_bytes, load_gltf_file};
-pub use obj::{MeshData, load_obj_bytes, load_obj_file};
+pub use obj::{MeshData, SharedMesh, load_obj_bytes, load_obj_file};
 pub use ply::{load_ply_bytes, load_ply_file};
 pub use texture::{ImageSource, TextureRef};
 pub use transform::Transform;

@@ -30,6 +30,52 @@ pub struct MeshData {
     pub textures: Vec<TextureRef>,
     /// What is legal but surely not meant (self-intersecting polygons), one sentence each.
     pub warnings: Vec<String>,
+    /// Meshes the file places more than once (glTF meshes referenced by several nodes),
+    /// each stored once in its own space, to become instances; `mesh` above holds the
+    /// rest, placed.
+    pub shared: Vec<SharedMesh>,
+}
+
+/// A mesh a file places several times: its triangles once, in the mesh's own space, and
+/// where each copy goes.
+#[derive(Clone, Debug, Default)]
+pub struct SharedMesh {
+    /// A name for messages (`glTF mesh 3 'wheel'`).
+    pub name: String,
+    /// Its triangles and vertex attributes. Its `triangle_material` indexes the
+    /// enclosing [`MeshData::materials`]; its own `materials` and `textures` are empty.
+    pub data: MeshData,
+    /// Each placement's transform (mesh space to the file's space), in node order.
+    pub placements: Vec<glam::Affine3A>,
+}
+
+impl SharedMesh {
+    /// Its triangles placed by every placement in turn, as one mesh in the file's space
+    /// (vertex normals through each placement's inverse transpose): the copy a file gets
+    /// where its mesh cannot be instanced.
+    #[must_use]
+    pub fn copied(&self) -> MeshData {
+        let mut out = MeshData::default();
+        for p in &self.placements {
+            let base = out.mesh.positions.len() as u32;
+            out.mesh.positions.extend(
+                self.data
+                    .mesh
+                    .positions
+                    .iter()
+                    .map(|&v| p.transform_point3(v)),
+            );
+            let n = p.matrix3.inverse().transpose();
+            out.normals.extend(self.data.normals.iter().map(|&v| n * v));
+            out.uvs.extend_from_slice(&self.data.uvs);
+            out.mesh
+                .indices
+                .extend(self.data.mesh.indices.iter().map(|t| t.map(|i| i + base)));
+            out.triangle_material
+                .extend_from_slice(&self.data.triangle_material);
+        }
+        out
+    }
 }
 
 impl MeshData {

@@ -190,11 +190,10 @@ fn fuzz_seeds_load() {
             let text = || String::from_utf8(bytes.clone()).unwrap();
             let loaded = match target {
                 "scene_toml" => load_scene_str(&text(), "seed", None, Path::new("/nonexistent"))
-                    .map(|s| assert!(!s.geometry.is_empty() || !s.volumes.is_empty())),
+                    .map(|s| assert!(s.geometry.total_len() > 0 || !s.volumes.is_empty())),
                 "obj" => load_obj_bytes(&bytes, &path).map(|m| assert!(!m.mesh.indices.is_empty())),
-                "gltf" => {
-                    load_gltf_bytes(&bytes, &path).map(|m| assert!(!m.mesh.indices.is_empty()))
-                }
+                "gltf" => load_gltf_bytes(&bytes, &path)
+                    .map(|m| assert!(!m.mesh.indices.is_empty() || !m.shared.is_empty())),
                 "ply" => load_ply_bytes(&bytes, &path).map(|m| assert!(!m.mesh.indices.is_empty())),
                 "bpt" => parse_bpt(&text(), &path).map(drop),
                 _ => {

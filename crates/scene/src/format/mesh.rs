@@ -108,9 +108,18 @@ impl MeshDesc {
             for v in &mut data.normals {
                 *v = n.mul_vec3(*v);
             }
+            // A shared mesh stays in its own space; its placements take the transform.
+            for s in &mut data.shared {
+                for p in &mut s.placements {
+                    *p = a * *p;
+                }
+            }
         }
         if self.smooth == Some(false) {
             data.normals.clear();
+            for s in &mut data.shared {
+                s.data.normals.clear();
+            }
         }
         let m = cx.material(self.material.as_ref())?;
         let context = format!("{}: {}", cx.ctx.file.display(), cx.what);
@@ -137,11 +146,13 @@ fn load_mesh_file(path: &Path, reserve: Reserve<'_>) -> Result<MeshData, LoadErr
                     });
                 }
             };
-            reserve(data.mesh.indices.len() as u64)?;
+            // Each distinct triangle once: a shared mesh's placements are instances.
+            let shared: usize = data.shared.iter().map(|s| s.data.mesh.indices.len()).sum();
+            reserve((data.mesh.indices.len() + shared) as u64)?;
             data
         }
     };
-    if data.mesh.indices.is_empty() {
+    if data.mesh.indices.is_empty() && data.shared.is_empty() {
         return Err(LoadError::Parse {
             path: path.to_owned(),
             message: "no triangles found (is this a mesh file?)".into(),
@@ -183,7 +194,8 @@ pub(crate) fn bare_mesh_scene(path: &Path) -> Result<Scene, LoadError> {
 
 /// Adds a loaded mesh: its own materials (unless `override_material`) with their textures
 /// (decoded once per scene; one that cannot be used is a warning), its triangles as one
-/// object with their vertex normals and texture coordinates. `context` names the mesh in
+/// object with their vertex normals and texture coordinates, and each of its shared meshes
+/// ([`MeshData::shared`]) stored once and placed by instances. `context` names the mesh in
 /// messages.
 fn add_mesh_data(
     b: &mut SceneBuilder,
@@ -197,35 +209,82 @@ fn add_mesh_data(
         context: context.to_owned(),
         cause,
     };
-    let materials: Vec<u32> = match override_material {
-        Some(m) => {
-            // The file's materials and their textures are not used.
-            data.uvs.clear();
-            vec![m; data.mesh.indices.len()]
+    // The scene's material of each of the file's materials (`None`: the default, 0).
+    let ids: Vec<u32> = if override_material.is_some() {
+        // The file's materials and their textures are not used.
+        data.uvs.clear();
+        for s in &mut data.shared {
+            s.data.uvs.clear();
         }
-        None => {
-            let textures = add_textures(b, &data.textures, budget, context)?;
-            let texture = |t: Option<u32>| t.and_then(|t| textures.get(t as usize).copied()?);
-            let mut ids = Vec::with_capacity(data.materials.len());
-            for mut m in data.materials {
-                m.base_color_texture = texture(m.base_color_texture);
-                m.emission_texture = texture(m.emission_texture);
-                ids.push(b.add_material(m).map_err(scene_err)?);
-            }
-            data.triangle_material
+        Vec::new()
+    } else {
+        let textures = add_textures(b, &data.textures, budget, context)?;
+        let texture = |t: Option<u32>| t.and_then(|t| textures.get(t as usize).copied()?);
+        let mut ids = Vec::with_capacity(data.materials.len());
+        for mut m in std::mem::take(&mut data.materials) {
+            m.base_color_texture = texture(m.base_color_texture);
+            m.emission_texture = texture(m.emission_texture);
+            ids.push(b.add_material(m).map_err(scene_err)?);
+        }
+        ids
+    };
+    let material_ids = |triangles: &[Option<u32>]| -> Vec<u32> {
+        match override_material {
+            Some(m) => vec![m; triangles.len()],
+            None => triangles
                 .iter()
                 .map(|m| m.map_or(0, |i| ids[i as usize]))
-                .collect()
+                .collect(),
         }
     };
-    for w in data.warnings {
+    for w in std::mem::take(&mut data.warnings) {
         b.warn(w);
     }
-    let attributes = VertexAttributes {
-        normals: data.normals,
-        uvs: data.uvs,
-    };
-    b.add_mesh_with_attributes(name, &data.mesh, attributes, &materials)
-        .map_err(scene_err)?;
+    if !data.mesh.indices.is_empty() {
+        let materials = material_ids(&data.triangle_material);
+        let attributes = VertexAttributes {
+            normals: data.normals,
+            uvs: data.uvs,
+        };
+        b.add_mesh_with_attributes(name, &data.mesh, attributes, &materials)
+            .map_err(scene_err)?;
+    }
+    for shared in data.shared {
+        let materials = material_ids(&shared.data.triangle_material);
+        if materials.iter().any(|&m| b.material_emits(m)) {
+            // Instanced emitters are not sampled as lights: the copies keep the image right.
+            b.warn(format!(
+                "{context}: {} is placed {} times but emits light: copied per placement                  (instanced primitives are not sampled as lights in this version)",
+                shared.name,
+                shared.placements.len()
+            ));
+            let copy = shared.copied();
+            let attributes = VertexAttributes {
+                normals: copy.normals,
+                uvs: copy.uvs,
+            };
+            b.add_mesh_with_attributes(
+                &shared.name,
+                &copy.mesh,
+                attributes,
+                &material_ids(&copy.triangle_material),
+            )
+            .map_err(scene_err)?;
+            continue;
+        }
+        let mut part = b.part();
+        let attributes = VertexAttributes {
+            normals: shared.data.normals,
+            uvs: shared.data.uvs,
+        };
+        part.add_mesh_with_attributes(&shared.name, &shared.data.mesh, attributes, &materials)
+            .map_err(scene_err)?;
+        let mesh = b
+            .add_instance_mesh(shared.name.clone(), part)
+            .map_err(scene_err)?;
+        for p in shared.placements {
+            b.add_instance(mesh, p, None).map_err(scene_err)?;
+        }
+    }
     Ok(())
 }
