@@ -32,6 +32,12 @@ pub const ORACLE: &str = raybench::name_with(Roles::ORACLE);
 /// exact backend rather than every one.
 pub const BASELINE: &str = raybench::name_with(Roles::BASELINE);
 
+/// The most primitives (flattened) of a scene that the oracle's checks run on: 64 x 64
+/// camera rays over 2^21 primitives are already 8.6 billion naive tests. The larger built-in
+/// scenes (tens of millions of instanced triangles) are checked against [`BASELINE`]
+/// instead (`tests/tests/instances.rs`).
+pub const ORACLE_PRIMITIVES: usize = 1 << 21;
+
 /// The backend on another device (the GPU: [`Roles::DEVICE`]), the first of [`DEVICES`].
 pub const DEVICE: &str = raybench::name_with(Roles::DEVICE);
 

@@ -1,15 +1,21 @@
 //! Instanced scenes (issue 23): every exact CPU backend against the naive oracle on scenes
 //! of instances (mirrored, scaled, rotated, coincident, beside flat primitives, meshes of
 //! triangles and spheres), bit-identical ids and `t` for closest hits and the same any-hit
-//! answers, naive counting `rays x total` tests (`raybench_tests::check`); and an instanced
-//! scene against the same scene flattened into transformed triangles.
+//! answers, naive counting `rays x total` tests (`raybench_tests::check`); instanced scenes
+//! against the same scenes flattened (`raybench_core::flatten`); and the built-in scenes
+//! too large for the oracle against the baseline.
 //!
-//! The built-in scene `instances` is checked by `equivalence.rs` with every other built-in.
+//! The built-in scenes `instances` and `instance-grid` are checked by `equivalence.rs` with
+//! every other built-in.
 
 use raybench::Roles;
-use raybench_core::{Affine3A, Geometry, RayCounters, Shape, Triangle};
-use raybench_tests::{ORACLE, available, check, check_modes, load_or_skip, prepared, render_with};
+use raybench_core::{RayCounters, Scene};
+use raybench_tests::{
+    BASELINE, ORACLE, assert_same_hits, assert_same_ray_hits, available, check, check_modes,
+    load_or_skip, prepared, render_with,
+};
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// Backends under test.
 const BACKENDS: &[&str] = raybench_tests::EXACT_BACKENDS;
@@ -110,26 +116,11 @@ fn coincident_instances_take_the_smallest_id() {
     }
 }
 
-/// The flattened scene: the flat primitives, then every instance's triangles carried to
-/// world space by its transform, in instance order (so the ids are the same).
-fn flattened(g: &Geometry) -> Geometry {
-    let mut shapes = g.shapes().to_vec();
-    for i in g.instances() {
-        let xf: Affine3A = i.to_world();
-        for s in g.meshes()[i.mesh() as usize].shapes() {
-            let Shape::Triangle(t) = s else {
-                panic!("the flattening test uses triangle meshes only");
-            };
-            shapes.push(Shape::Triangle(Triangle {
-                v: t.v.map(|v| xf.transform_point3(v)),
-            }));
-        }
-    }
-    Geometry::new(shapes)
-}
-
-/// An instanced scene's hits against the same scene flattened: the same ids for all but a
-/// few rays and `t` within a relative `1e-4`.
+/// An instanced scene's hits against the same scene flattened (`raybench_core::flatten`,
+/// as `--flatten` and the report's `instancing` experiment make it): the same ids for all
+/// but one ray in a thousand and `t` within a relative `1e-4`, on incoherent rays and on
+/// the rendered frame, both through the baseline; returns the hits on incoherent rays
+/// and how many of them were on mirrored instances.
 ///
 /// Not bit for bit: an instanced primitive is tested on the instance-space ray, the
 /// flattened one on the world ray against transformed vertices, and the two round
@@ -139,35 +130,21 @@ fn flattened(g: &Geometry) -> Geometry {
 /// normals agree up to the side convention: a mirrored instance's normal is its mesh's
 /// outward normal carried by the inverse transpose, while the flattened triangle's winding
 /// is reversed, so they are opposite there.
-#[test]
-fn instances_match_the_flattened_scene() {
-    let mut text = String::from(
-        "[[object]]\nkind = \"sphere\"\ncenter = [0, 0, -3]\nradius = 0.5\n\
-         [[object]]\nname = \"ico\"\ninstance_only = true\nkind = \"generator\"\n\
-         spec = \"icosphere:3\"\n",
-    );
-    for k in 0..12 {
-        let mirror = if k % 4 == 1 { -1.0 } else { 1.0 };
-        text += &format!(
-            "[[instance]]\nmesh = \"ico\"\ntransform = {{ scale = [{}, 0.7, 1.2], \
-             rotate = [{}, {}, 0], translate = [{}, {}, 0] }}\n",
-            mirror * 0.8,
-            17 * k,
-            29 * k,
-            (k % 4) as f32 * 1.6 - 2.4,
-            (k / 4) as f32 * 1.6 - 1.6,
-        );
-    }
-    let path = scene_file("flatten", &text);
-    let scene = load_or_skip(path.to_str().unwrap()).unwrap();
+fn assert_matches_flattened(scene: &Arc<Scene>) -> (usize, usize) {
     let g = &scene.geometry;
-    let flat = flattened(g);
+    let flat_scene = Arc::new(raybench_core::flatten(scene).unwrap());
+    let flat = &flat_scene.geometry;
+    assert!(!flat.has_instances());
     assert_eq!(flat.len(), g.total_len());
     let rays = raybench_core::ray_sets::incoherent(g.world_bounds(), 20_000, 3);
+    // Through the baseline (bit-identical with the naive loop on both scenes, by the
+    // contract, and fast enough for 20,000 rays over tens of thousands of primitives).
+    let (instanced, _) = prepared(BASELINE, scene).trace_rays(&rays, false).unwrap();
+    let (flattened, _) = prepared(BASELINE, &flat_scene)
+        .trace_rays(&rays, false)
+        .unwrap();
     let (mut hits, mut other_id, mut mirrored) = (0, 0, 0);
-    for ray in &rays {
-        let a = g.closest_every(ray, &mut RayCounters::default());
-        let b = flat.closest_every(ray, &mut RayCounters::default());
+    for (&a, &b) in instanced.iter().zip(&flattened) {
         match (a, b) {
             (None, None) => {}
             (Some(a), Some(b)) if a.prim == b.prim => {
@@ -189,19 +166,135 @@ fn instances_match_the_flattened_scene() {
         }
     }
     assert!(
-        hits > 2000 && mirrored > 100,
-        "{hits} hits, {mirrored} mirrored"
-    );
-    assert!(
         other_id * 1000 <= hits,
         "{other_id} rays of {hits} hit another primitive"
     );
+    // The rendered frames: the baseline's two-level structure against its flat one.
+    let settings = raybench_core::RenderSettings {
+        width: 96,
+        height: 96,
+        ..Default::default()
+    };
+    let a = prepared(BASELINE, scene).render(&settings).unwrap();
+    let b = prepared(BASELINE, &flat_scene).render(&settings).unwrap();
+    let seen = a
+        .ids
+        .iter()
+        .filter(|&&id| id != raybench_core::NO_HIT)
+        .count();
+    let differ = a.ids.iter().zip(&b.ids).filter(|(x, y)| x != y).count();
+    assert!(seen > 1000, "{seen} pixels hit");
+    assert!(
+        differ * 1000 <= seen,
+        "{differ} of {seen} pixels hit another primitive flattened"
+    );
+    (hits, mirrored)
+}
+
+/// Twelve mirrored, rotated, non-uniformly scaled icospheres beside a flat sphere, against
+/// the scene flattened; the naive loop tests every primitive of every instance.
+#[test]
+fn instances_match_the_flattened_scene() {
+    let mut text = String::from(
+        "[camera]\nposition = [0, 0, 9]\nlook_at = [0, 0, 0]\n\
+         [[object]]\nkind = \"sphere\"\ncenter = [0, 0, -3]\nradius = 0.5\n\
+         [[object]]\nname = \"ico\"\ninstance_only = true\nkind = \"generator\"\n\
+         spec = \"icosphere:3\"\n",
+    );
+    for k in 0..12 {
+        let mirror = if k % 4 == 1 { -1.0 } else { 1.0 };
+        text += &format!(
+            "[[instance]]\nmesh = \"ico\"\ntransform = {{ scale = [{}, 0.7, 1.2], \
+             rotate = [{}, {}, 0], translate = [{}, {}, 0] }}\n",
+            mirror * 0.8,
+            17 * k,
+            29 * k,
+            (k % 4) as f32 * 1.6 - 2.4,
+            (k / 4) as f32 * 1.6 - 1.6,
+        );
+    }
+    let path = scene_file("flatten", &text);
+    let scene = load_or_skip(path.to_str().unwrap()).unwrap();
+    let (hits, mirrored) = assert_matches_flattened(&scene);
+    assert!(
+        hits > 2000 && mirrored > 100,
+        "{hits} hits, {mirrored} mirrored"
+    );
     // The naive loop tests every primitive of every instance.
+    let g = &scene.geometry;
+    let rays = raybench_core::ray_sets::incoherent(g.world_bounds(), 100, 3);
     let mut counters = RayCounters::default();
-    for ray in &rays[..100] {
+    for ray in &rays {
         let _ = g.closest_every(ray, &mut counters);
     }
     assert_eq!(counters.prim_tests, 100 * g.total_len() as u64);
+}
+
+/// The built-in scene of instance arrays (seeded rotations and scales of triangle meshes
+/// and of a sphere) against itself flattened; and the built-in `instances` scene, whose
+/// sphere under a non-uniform scale cannot be flattened exactly, refused with the reason.
+#[test]
+fn builtin_instances_against_their_flattened_form() {
+    let grid = raybench_scene::for_experiment("instancing").expect("a scene names it");
+    let scene = load_or_skip(grid.name).unwrap();
+    let (hits, _) = assert_matches_flattened(&scene);
+    assert!(hits > 5000, "{hits} hits");
+    let scene = load_or_skip("instances").unwrap();
+    let e = raybench_core::flatten(&scene).unwrap_err().to_string();
+    assert!(
+        e.starts_with("cannot flatten the instance of gem (instance 3, primitive")
+            && e.contains("non-uniform scale"),
+        "{e}"
+    );
+}
+
+/// The built-in scenes too large for the oracle's check in `equivalence.rs` (over
+/// [`raybench_tests::ORACLE_PRIMITIVES`] flattened: the field of bunnies and teapots, 12.6
+/// million instanced triangles): every accelerated exact backend against the baseline, bit
+/// for bit, on camera and incoherent rays. Each builds a two-level structure over the
+/// distinct meshes only, so this is cheap where naive would take minutes.
+#[test]
+fn large_instanced_scenes_against_the_baseline() {
+    let backends: Vec<&str> = available(raybench_tests::ACCELERATED_BACKENDS)
+        .into_iter()
+        .filter(|&n| n != BASELINE)
+        .collect();
+    let settings = raybench_core::RenderSettings {
+        width: 48,
+        height: 48,
+        ..Default::default()
+    };
+    for b in raybench_scene::BUILTIN_SCENES
+        .iter()
+        .filter(|b| b.benchmark.heavy)
+    {
+        let Some(scene) = load_or_skip(b.name) else {
+            continue;
+        };
+        if scene.geometry.total_len() <= raybench_tests::ORACLE_PRIMITIVES {
+            continue;
+        }
+        let reference = prepared(BASELINE, &scene).render(&settings).unwrap();
+        let seen = reference
+            .ids
+            .iter()
+            .filter(|&&id| id != raybench_core::NO_HIT)
+            .count();
+        assert!(seen > 1000, "{}: {seen} pixels hit", b.name);
+        let rays = raybench_core::ray_sets::incoherent(scene.geometry.world_bounds(), 2304, 1);
+        let (ref_hits, _) = prepared(BASELINE, &scene).trace_rays(&rays, false).unwrap();
+        for &name in &backends {
+            let r = prepared(name, &scene);
+            let frame = r.render(&settings).unwrap();
+            assert_same_hits(&format!("{name} on {}", b.name), &reference, &frame);
+            let (hits, _) = r.trace_rays(&rays, false).unwrap();
+            assert_same_ray_hits(
+                &format!("{name} on {}, incoherent", b.name),
+                &ref_hits,
+                &hits,
+            );
+        }
+    }
 }
 
 /// Every exact backend's two-level structure holds each distinct mesh's structure once
@@ -346,8 +439,8 @@ fn gltf_meshes_placed_by_several_nodes_are_instances() {
 
     let settings = raybench_tests::mode_settings(96, raybench_core::Mode::Cast, 1);
     let (fa, fb) = (
-        render_with(raybench_tests::BASELINE, &a, &settings, 2),
-        render_with(raybench_tests::BASELINE, &b, &settings, 2),
+        render_with(BASELINE, &a, &settings, 2),
+        render_with(BASELINE, &b, &settings, 2),
     );
     let (mut same, mut other, mut uniform, mut worst) = (0, 0, 0, 0.0f32);
     for i in 0..fa.ids.len() {
@@ -375,4 +468,20 @@ fn gltf_meshes_placed_by_several_nodes_are_instances() {
         "{uniform} pixels of uniformly scaled instances"
     );
     assert!(worst < 1e-3, "shading differs by {worst}");
+
+    // Flattened (`raybench_core::flatten`), the instanced file shades as the copied one
+    // everywhere, non-uniform scales included: its vertex normals are carried vertex by
+    // vertex and then interpolated, as the copies' are.
+    let flat = Arc::new(raybench_core::flatten(&a).unwrap());
+    assert!(!flat.geometry.has_instances() && flat.mesh_attributes.is_empty());
+    let ff = render_with(BASELINE, &flat, &settings, 2);
+    let (mut both, mut worst) = (0, 0.0f32);
+    for i in 0..ff.ids.len() {
+        if ff.ids[i] == fb.ids[i] && ff.ids[i] != raybench_core::NO_HIT {
+            both += 1;
+            worst = worst.max((ff.color[i] - fb.color[i]).abs().max_element());
+        }
+    }
+    assert!(both > 2000, "{both} pixels on the same primitive");
+    assert!(worst < 1e-3, "flattened shading differs by {worst}");
 }

@@ -66,9 +66,13 @@ impl Roles {
     pub const PEER: Roles = Roles(1 << 6);
     /// A peer the report states every backend's throughput against (Embree).
     pub const YARDSTICK: Roles = Roles(1 << 7);
+    /// The representative of SIMD tracing (packets over a wide tree; its pinned variants
+    /// do not carry it): the experiments that compare a few representative structures
+    /// (`instancing`) take it beside the baseline and the yardstick.
+    pub const SIMD: Roles = Roles(1 << 8);
 
     /// Every role with its name, in the order `raybench backends --json` lists them.
-    pub const NAMED: [(Roles, &'static str); 8] = [
+    pub const NAMED: [(Roles, &'static str); 9] = [
         (Roles::EXACT, "exact"),
         (Roles::ORACLE, "oracle"),
         (Roles::BRUTE_FORCE, "brute-force"),
@@ -77,6 +81,7 @@ impl Roles {
         (Roles::DEVICE, "device"),
         (Roles::PEER, "peer"),
         (Roles::YARDSTICK, "yardstick"),
+        (Roles::SIMD, "simd"),
     ];
 
     /// These roles and `other`'s.
@@ -286,7 +291,7 @@ pub const BACKENDS: &[Backend] = &[
     Backend {
         name: "packet",
         description: PACKET,
-        roles: Roles::EXACT,
+        roles: Roles::EXACT.with(Roles::SIMD),
         detail: Some(packet_detail),
         make: || {
             Box::new(CpuRenderer::<PacketAccel>::with_default_build(

@@ -279,7 +279,8 @@ struct ReportCmd {
     /// Leave out the scaling experiments.
     #[arg(long)]
     no_scaling: bool,
-    /// Run only these scaling experiments (primitives, pixels, spp, heightfield, bezier).
+    /// Run only these scaling experiments (primitives, pixels, spp, heightfield, bezier,
+    /// presets, instancing).
     #[arg(long, value_delimiter = ',', value_name = "A,B")]
     experiments: Option<Vec<String>>,
     /// Worker threads (default: all cores; at most 1024).
@@ -465,6 +466,11 @@ struct RenderCmd {
     out: Option<PathBuf>,
     #[command(flatten)]
     exposure: Exposure,
+    /// Flatten the scene's instances first: every instanced primitive carried to world
+    /// space and stored flat, ids unchanged (to compare a two-level structure with one over
+    /// the flattened scene; refused over the memory budget).
+    #[arg(long)]
+    flatten: bool,
     /// Also write a false-colour image of primitive ids.
     #[arg(long, value_name = "FILE.png")]
     ids: Option<PathBuf>,
@@ -491,6 +497,11 @@ struct CompareCmd {
     /// Print exactly one JSON array on stdout.
     #[arg(long)]
     json: bool,
+    /// Flatten the scene's instances first: every instanced primitive carried to world
+    /// space and stored flat, ids unchanged (to compare a two-level structure with one over
+    /// the flattened scene; refused over the memory budget).
+    #[arg(long)]
+    flatten: bool,
 }
 
 fn parse_ray_set(s: &str) -> Result<RaySet, String> {
@@ -531,6 +542,11 @@ struct InfoCmd {
     /// Points sampled for each structure's EPO (end-point overlap).
     #[arg(long, default_value_t = raybench_core::quality::DEFAULT_EPO_SAMPLES)]
     epo_samples: u32,
+    /// Flatten the scene's instances first: every instanced primitive carried to world
+    /// space and stored flat, ids unchanged (to compare a two-level structure with one over
+    /// the flattened scene; refused over the memory budget).
+    #[arg(long)]
+    flatten: bool,
     #[command(flatten)]
     camera: CameraArgs,
 }
@@ -719,9 +735,12 @@ fn with_threads<T: Send>(
     }
 }
 
-fn load_scene(spec: &str, assets: &Path, camera: &CameraArgs) -> Result<Arc<Scene>> {
+fn load_scene(spec: &str, assets: &Path, camera: &CameraArgs, flatten: bool) -> Result<Arc<Scene>> {
     let start = std::time::Instant::now();
     let mut scene = raybench_scene::load(spec, assets)?;
+    if flatten {
+        scene = raybench_scene::flatten_within_budget(&scene)?;
+    }
     camera.apply(&mut scene)?;
     eprintln!(
         "loaded {} ({} primitives) in {:.3} s",
@@ -770,7 +789,7 @@ fn render(cmd: &RenderCmd, assets: &Path) -> Result<ExitCode> {
     if let Some(ids) = &cmd.ids {
         raybench_render::check_png_path(ids)?;
     }
-    let scene = load_scene(&cmd.scene, assets, &cmd.camera)?;
+    let scene = load_scene(&cmd.scene, assets, &cmd.camera, cmd.flatten)?;
     check_mode_fits(&scene, settings.mode)?;
     if !scene.volumes.is_empty() && !matches!(settings.mode, Mode::Mip | Mode::Composite) {
         eprintln!(
@@ -863,7 +882,7 @@ fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
     if cmd.repeat == 0 || cmd.repeat > 10_000 {
         bail!("--repeat must be in 1..=10000");
     }
-    let scene = load_scene(&cmd.scene, assets, &cmd.camera)?;
+    let scene = load_scene(&cmd.scene, assets, &cmd.camera, cmd.flatten)?;
     check_mode_fits(&scene, settings.mode)?;
     let (ray_set, rays) = cmd.rays.batch(&scene, &settings)?;
     let work = cmd.rays.work(
@@ -1219,7 +1238,7 @@ fn report(cmd: &ReportCmd, assets: &Path) -> Result<ExitCode> {
 }
 
 fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
-    let scene = load_scene(&cmd.scene, assets, &cmd.camera)?;
+    let scene = load_scene(&cmd.scene, assets, &cmd.camera, cmd.flatten)?;
     check_mode_fits(&scene, cmd.mode)?;
     let g = &scene.geometry;
     outln!("scene       {}", scene.name)?;
@@ -1294,7 +1313,7 @@ fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
         cmd.spp,
         cmd.max_depth
     )?;
-    let work = cmd.rays.work(probe.as_ref(), &settings, g.len(), 1);
+    let work = cmd.rays.work(probe.as_ref(), &settings, g.total_len(), 1);
     let chosen = chosen_backends(cmd.backends.as_deref(), work).map_err(anyhow::Error::msg)?;
     outln!(
         "{:<16} {:>10} {:>14} {:>9} {:>10} {:>10}  structure",
@@ -1427,7 +1446,7 @@ fn export_rays(cmd: &ExportCmd, assets: &Path) -> Result<ExitCode> {
         ..RenderSettings::default()
     };
     settings.validate()?;
-    let scene = load_scene(&cmd.scene, assets, &cmd.camera)?;
+    let scene = load_scene(&cmd.scene, assets, &cmd.camera, false)?;
     let params = DerivedParams {
         ao_rays: cmd.ao_rays,
         seed: cmd.seed,

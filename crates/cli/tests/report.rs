@@ -808,6 +808,90 @@ fn the_presets_experiment_runs_and_is_written() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// The `instancing` experiment of the quick report: the small instanced scene (the one
+/// whose `[benchmark]` table names it, self-contained) instanced and flattened with the
+/// baseline and the packet backend, its table, ratios and chart; `raybench merge` of the
+/// one result writes the same section from `results.json` alone.
+#[test]
+fn the_quick_report_has_the_instancing_section() {
+    let (dir, merged) = (tmp_dir("instancing"), tmp_dir("instancing-merged"));
+    let out = raybench(&[
+        "report",
+        "--quick",
+        "--scenes",
+        "spheres",
+        "--modes",
+        "cast",
+        "--backends",
+        "bvh,packet",
+        "--size",
+        "16",
+        "--repeat",
+        "1",
+        "--experiments",
+        "instancing",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = results(&dir);
+    let points = r["scaling"].as_array().unwrap();
+    assert_eq!(points.len(), 4, "{points:?}");
+    for p in points {
+        assert_eq!(p["experiment"], "instancing");
+        assert_eq!(p["x"], 49_649.0, "the flattened count: {p}");
+        assert_eq!(p["rays"], 256);
+        let stored = p["stored_primitives"].as_u64().unwrap();
+        match p["series"].as_str().unwrap() {
+            "instance-grid instanced" => assert_eq!(stored, 1 + 320 + 8 + 1),
+            "instance-grid flattened" => assert_eq!(stored, 49_649),
+            other => panic!("series {other}"),
+        }
+        assert!(p["build_seconds"].as_f64().unwrap() > 0.0, "{p}");
+        assert!(p["memory_bytes"].as_u64().unwrap() > 0, "{p}");
+    }
+    let md = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
+    assert!(
+        md.contains("## Instancing: instanced against flattened"),
+        "{md}"
+    );
+    assert!(
+        md.contains("| instance-grid | instanced | bvh | 330 | 49649 |"),
+        "{md}"
+    );
+    assert!(
+        md.contains("- instance-grid, packet: flattened takes"),
+        "{md}"
+    );
+    assert!(md.contains("(charts/instancing-throughput.svg)"), "{md}");
+    let svg = chart(&dir, "instancing-throughput");
+    assert!(svg.contains(">instance-grid flattened</text>"), "{svg}");
+    let out = raybench(&[
+        "merge",
+        dir.to_str().unwrap(),
+        "--out",
+        merged.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let section = |md: &str| {
+        let start = md.find("## Instancing").expect("the section");
+        let rest = &md[start + 3..];
+        md[start..start + 3 + rest.find("\n## ").unwrap_or(rest.len())].to_string()
+    };
+    let again = std::fs::read_to_string(merged.join("REPORT.md")).unwrap();
+    assert_eq!(section(&md), section(&again));
+    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_dir_all(&merged);
+}
+
 /// A backend that cannot run a scene (the GPU backends have no sphere tracing: unsupported
 /// there, or unavailable without a GPU) keeps its place in the throughput charts: a marked
 /// stub whose tooltip says why, never a silent gap. Where they ran, both GPU backends

@@ -92,6 +92,26 @@ impl ShadingAttributes {
         });
     }
 
+    /// Adds the attributes of an instanced mesh's primitives, placed at ids `base + i`
+    /// (after every range added so far), each vertex normal carried by `carry` (an
+    /// instance's [`crate::Instance::world_normal`]; a zero normal stays unusable): how
+    /// [`crate::flatten`] keeps an instance's smooth shading.
+    pub(crate) fn push_placed(
+        &mut self,
+        mesh: &ShadingAttributes,
+        base: u32,
+        carry: impl Fn(Vec3) -> Vec3,
+    ) {
+        for r in &mesh.ranges {
+            let normals = r
+                .normals
+                .iter()
+                .map(|&n| if n == Vec3::ZERO { n } else { carry(n) })
+                .collect();
+            self.push(base + r.first, r.indices.clone(), normals, r.uvs.clone());
+        }
+    }
+
     /// The attributes of primitive `prim` at barycentric weights `u` (vertex 1) and `v`
     /// (vertex 2), as a triangle [`crate::Hit`] gives them.
     #[inline]

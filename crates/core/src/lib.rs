@@ -17,6 +17,7 @@ mod attributes;
 mod camera;
 mod emitters;
 mod environment;
+mod flatten;
 mod frame;
 pub mod integrator;
 mod material;
@@ -33,6 +34,7 @@ pub use attributes::{AttributeRange, AttributesAt, ShadingAttributes, VertexAttr
 pub use camera::{Camera, CameraOverrides, CameraRays, NamedCamera};
 pub use emitters::{Chosen, Emitters, LightSample};
 pub use environment::{Environment, luminance};
+pub use flatten::{flatten, flatten_geometry};
 pub use frame::{Frame, FrameStats, NO_HIT, Timings};
 pub use material::{Checker, Light, Material, MaterialKind};
 pub use ray_sets::RaySet;

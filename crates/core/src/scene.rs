@@ -523,6 +523,28 @@ impl SceneBuilder {
         Ok(self)
     }
 
+    /// Checks, before anything is allocated, that `count` more instances of mesh `mesh`
+    /// fit in [`limits::MAX_INSTANCES`] and [`limits::MAX_INSTANCED_PRIMITIVES`] (for
+    /// arrays of instances, which would otherwise find out one instance at a time).
+    ///
+    /// # Errors
+    /// When the mesh does not exist or a limit would be exceeded.
+    pub fn check_instances(&self, mesh: u32, count: u64) -> Result<(), SceneError> {
+        let Some(m) = self.meshes.get(mesh as usize) else {
+            return Err(SceneError::Invalid(format!(
+                "instance mesh index {mesh} does not exist"
+            )));
+        };
+        let instances = self.instances.len() as u64 + count;
+        if instances > limits::MAX_INSTANCES as u64 {
+            return Err(SceneError::TooLarge(format!(
+                "the scene would have {instances} instances (limit {})",
+                limits::MAX_INSTANCES
+            )));
+        }
+        self.check_total(count.saturating_mul(m.geometry.len() as u64))
+    }
+
     /// Whether material `material` (an index [`SceneBuilder::add_material`] returned)
     /// emits light.
     ///
@@ -536,7 +558,7 @@ impl SceneBuilder {
     /// Checks that `more` primitives fit in [`limits::MAX_INSTANCED_PRIMITIVES`], the
     /// flattened scene's ids.
     fn check_total(&self, more: u64) -> Result<(), SceneError> {
-        let total = self.shapes.len() as u64 + self.instanced + more;
+        let total = (self.shapes.len() as u64 + self.instanced).saturating_add(more);
         if total > limits::MAX_INSTANCED_PRIMITIVES {
             return Err(SceneError::TooLarge(format!(
                 "the scene would have {total} primitives once its instances are counted \

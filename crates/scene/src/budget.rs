@@ -9,6 +9,7 @@
 //! `/proc/meminfo`; no limit where that file does not exist).
 
 use crate::error::LoadError;
+use raybench_core::Scene;
 use raybench_core::limits::{
     HEIGHT_FIELD_VERTEX_BYTES_ESTIMATE, PRIMITIVE_BYTES_ESTIMATE, VOXEL_BYTES_ESTIMATE,
 };
@@ -139,6 +140,31 @@ impl MemoryBudget {
     }
 }
 
+/// Estimated bytes of `scene` flattened ([`raybench_core::flatten`]): every primitive of
+/// the flattened scene stored and under an acceleration structure.
+#[must_use]
+pub fn flattened_bytes_estimate(scene: &Scene) -> u64 {
+    (scene.geometry.total_len() as u64).saturating_mul(PRIMITIVE_BYTES_ESTIMATE)
+}
+
+/// `scene` flattened ([`raybench_core::flatten`]: its instances' primitives carried to world
+/// space and stored flat, ids unchanged) once its flattened primitives are checked against
+/// the memory budget: how `--flatten` and the report's `instancing` experiment flatten.
+///
+/// # Errors
+/// [`LoadError::OverBudget`] with the estimate and how to raise the budget, before anything
+/// is allocated; [`LoadError::Scene`] when a primitive cannot be flattened exactly.
+pub fn flatten_within_budget(scene: &Scene) -> Result<Scene, LoadError> {
+    let context = format!("{} flattened", scene.name);
+    if scene.geometry.has_instances() {
+        Reservation::new()?.reserve(
+            Holds::Primitives(scene.geometry.total_len() as u64),
+            &context,
+        )?;
+    }
+    raybench_core::flatten(scene).map_err(|cause| LoadError::Scene { context, cause })
+}
+
 /// A scene's estimated memory so far, against the budget.
 #[derive(Debug)]
 pub(crate) struct Reservation {
@@ -159,6 +185,9 @@ pub(crate) enum Holds {
     EnvironmentTexels(u64),
     /// Texture texels.
     Texels(u64),
+    /// Instances (their records and top-level tree: the meshes they place are counted once,
+    /// as the primitives of their objects).
+    Instances(u64),
 }
 
 /// Bytes per environment-map texel while it loads: the decoded RGBA f32 image (16), the
@@ -167,6 +196,11 @@ const ENVIRONMENT_TEXEL_BYTES_ESTIMATE: u64 = 36;
 /// Estimated memory per texture texel, in bytes: 12 for the linear RGB texel the scene
 /// keeps, plus the decoding's transient 8-bit RGBA image and RGB copy (7).
 pub(crate) const TEXEL_BYTES_ESTIMATE: u64 = 19;
+/// Estimated memory per instance, in bytes: its record (an [`raybench_core::Instance`]:
+/// three transforms and a box), its material override and object record, and its share of
+/// a two-level structure's top-level tree (the 230 bytes of `limits::MAX_INSTANCES`,
+/// rounded up).
+pub(crate) const INSTANCE_BYTES_ESTIMATE: u64 = 256;
 
 impl Holds {
     /// The estimate in bytes, and the same in words.
@@ -189,6 +223,7 @@ impl Holds {
                 "environment-map texels",
             ),
             Self::Texels(n) => (n, TEXEL_BYTES_ESTIMATE, "texture texels"),
+            Self::Instances(n) => (n, INSTANCE_BYTES_ESTIMATE, "instances"),
         };
         (
             n.saturating_mul(each),
@@ -288,5 +323,15 @@ mod tests {
             "{e}"
         );
         r.reserve(Holds::Primitives(4), "c").unwrap();
+    }
+
+    /// Instances count their records only (their meshes are primitives of their objects,
+    /// counted once): a million instances of a large mesh are a quarter of a gigabyte.
+    #[test]
+    fn instances_count_their_records() {
+        let mut r = Reservation::with_limit(10 * INSTANCE_BYTES_ESTIMATE);
+        r.reserve(Holds::Instances(10), "a").unwrap();
+        let e = r.reserve(Holds::Instances(1), "b").unwrap_err().to_string();
+        assert!(e.contains("1 instances, about 256 bytes each"), "{e}");
     }
 }

@@ -114,7 +114,9 @@ pub fn report(results: &Results, charts: &Charts) -> String {
          of the scene's diagonal long) and `diffuse` (one cosine bounce, closest hit); any-hit \
          sets are compared on whether each ray is blocked. **Equality** compares each backend with the \
          reference backend of its scene (naive where it fits its time budget, else bvh, which \
-         the test suite checks against naive on every built-in scene). **Pass**: a raybench CPU \
+         the test suite checks against naive on every built-in scene of up to 2^21 \
+         primitives flattened, and the other exact backends against on the larger ones). \
+         **Pass**: a raybench CPU \
          backend (bound by the equivalence contract) must be bit-identical (ids, `t`, colours); \
          other backends must match at least {:.1}% of the ids, counting **ties** (a different \
          primitive at the same distance, within 1e-4 relative: coincident surfaces, where each \

@@ -514,6 +514,11 @@ pub struct ScalingPoint {
     /// The image against the direct rendering (experiment `bezier`, tessellated points).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub difference: Option<ImageDifference>,
+    /// Primitives stored (experiment `instancing`: each distinct mesh once plus the flat
+    /// ones for series `SCENE instanced`, every primitive for `SCENE flattened`; `x` is the
+    /// flattened scene's primitive count).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stored_primitives: Option<u64>,
 }
 
 impl ScalingPoint {
@@ -770,6 +775,7 @@ mod tests {
                 build_seconds: None,
                 memory_bytes: None,
                 difference: None,
+                stored_primitives: None,
             });
         }
         r.fits.push(f);

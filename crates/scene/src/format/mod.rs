@@ -15,6 +15,7 @@ mod camera;
 mod csg;
 mod generator;
 mod heightfield;
+mod instance_array;
 mod light;
 mod material;
 mod mesh;
@@ -56,6 +57,8 @@ struct SceneFile {
     volumes: Vec<toml::Table>,
     #[serde(default, rename = "instance")]
     instances: Vec<toml::Table>,
+    #[serde(default, rename = "instance_array")]
+    instance_arrays: Vec<toml::Table>,
     /// `[benchmark]`: a built-in scene's report metadata, read by `build.rs`; ignored here.
     #[serde(default, rename = "benchmark")]
     _benchmark: Option<serde::de::IgnoredAny>,
@@ -233,23 +236,35 @@ fn take_instance_keys(
 /// the label of its first object (for errors) and the builder its objects went to.
 type Parts = Vec<(String, String, SceneBuilder)>;
 
+/// The instance meshes by name: each one's index in the scene and whether a table places
+/// it.
+type InstanceMeshes = Vec<(String, u32, bool)>;
+
 /// Adds every `[[instance]]` table: the meshes of `parts` first (each stored once), then
-/// one instance per table, in file order.
+/// one instance per table, in file order; then the `[[instance_array]]` tables
+/// (`instance_array.rs`).
+#[allow(clippy::too_many_arguments)]
 fn add_instances(
     tables: Vec<toml::Table>,
+    arrays: Vec<toml::Table>,
     parts: Parts,
     text: &str,
     ctx: &Context,
     b: &mut SceneBuilder,
     materials: &HashMap<String, u32>,
+    budget: &mut Reservation,
 ) -> Result<(), LoadError> {
-    let mut meshes: Vec<(String, u32, bool)> = Vec::new();
+    let mut meshes: InstanceMeshes = Vec::new();
     for (name, what, part) in parts {
         let i = b
             .add_instance_mesh(name.clone(), part)
             .map_err(ctx.scene_err(&what))?;
         meshes.push((name, i, false));
     }
+    budget.reserve(
+        crate::budget::Holds::Instances(tables.len() as u64),
+        &format!("{}: [[instance]] tables", ctx.file.display()),
+    )?;
     for (index, table) in tables.into_iter().enumerate() {
         let (d, what): (InstanceDesc, _) = table_item(text, "instance", index, table, ctx)?;
         let fail = |message: String| LoadError::Parse {
@@ -282,10 +297,12 @@ fn add_instances(
         b.add_instance(mesh.1, affine, material)
             .map_err(ctx.scene_err(&what))?;
     }
+    instance_array::add(arrays, &mut meshes, text, ctx, b, materials, budget)?;
     for (name, _, used) in &meshes {
         if !used {
             b.warn(format!(
-                "instance mesh '{name}' is placed by no [[instance]]: it is not drawn"
+                "instance mesh '{name}' is placed by no [[instance]] or [[instance_array]]: \
+                 it is not drawn"
             ));
         }
     }
@@ -590,7 +607,16 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
             materials: &names,
         })?;
     }
-    add_instances(file.instances, parts, text, ctx, &mut b, &names)?;
+    add_instances(
+        file.instances,
+        file.instance_arrays,
+        parts,
+        text,
+        ctx,
+        &mut b,
+        &names,
+        &mut budget,
+    )?;
     for (index, table) in file.volumes.into_iter().enumerate() {
         let (v, what): (volume::VolumeDesc, _) = table_item(text, "volume", index, table, ctx)?;
         let volume = volume::volume(&v, ctx, &what, &mut budget)?;

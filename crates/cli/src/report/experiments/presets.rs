@@ -226,6 +226,7 @@ impl Experiment for Presets {
                         build_seconds: Some(build),
                         memory_bytes: Some(memory),
                         difference: None,
+                        stored_primitives: None,
                     });
                 }
                 ran = true;
