@@ -76,6 +76,9 @@ pub struct Scene {
     /// What is legal but surely not what was meant (an object whose triangles are all
     /// degenerate, ...), one sentence each; the command line prints them as warnings.
     pub warnings: Vec<String>,
+    /// What moves over frames (`None`: a still scene); [`Scene::at_frame`] gives frame `f`,
+    /// and `geometry` is frame 0.
+    pub motion: Option<Arc<crate::Motion>>,
 }
 
 /// What a surface looks like at a hit, beyond where it is: what the integrators shade.
@@ -259,18 +262,20 @@ pub struct SceneBuilder {
     cameras: Vec<NamedCamera>,
     background: Vec3,
     environment: Option<Arc<Environment>>,
-    materials: Vec<Material>,
+    pub(crate) materials: Vec<Material>,
     lights: Vec<Light>,
-    shapes: Vec<Shape>,
-    prim_material: Vec<u32>,
-    objects: Vec<ObjectInfo>,
+    pub(crate) shapes: Vec<Shape>,
+    pub(crate) prim_material: Vec<u32>,
+    pub(crate) objects: Vec<ObjectInfo>,
     volumes: Vec<Arc<Volume>>,
     textures: Vec<Arc<Texture>>,
     texture_keys: HashMap<String, u32>,
-    attributes: ShadingAttributes,
+    pub(crate) attributes: ShadingAttributes,
+    /// What moves (`animation.rs`).
+    pub(crate) motion: crate::Motion,
     warnings: Vec<String>,
     meshes: Vec<InstanceMesh>,
-    instances: Vec<Instance>,
+    pub(crate) instances: Vec<Instance>,
     instance_materials: Vec<Option<u32>>,
     instanced: u64,
     /// For a builder from [`SceneBuilder::part`]: how many materials and textures it
@@ -336,6 +341,7 @@ impl SceneBuilder {
             textures: Vec::new(),
             texture_keys: HashMap::new(),
             attributes: ShadingAttributes::default(),
+            motion: crate::Motion::new(),
             warnings: Vec::new(),
             meshes: Vec::new(),
             instances: Vec::new(),
@@ -445,7 +451,9 @@ impl SceneBuilder {
             geometry: Arc::new(Geometry::new(part.shapes)),
             materials: materials.into(),
         });
-        Ok((self.meshes.len() - 1) as u32)
+        let mesh = (self.meshes.len() - 1) as u32;
+        crate::animation::adopt_deforms(&mut self.motion, part.motion, mesh);
+        Ok(mesh)
     }
 
     /// Places mesh `mesh` (from [`SceneBuilder::add_instance_mesh`]) by `to_world`, with
@@ -1028,6 +1036,7 @@ impl SceneBuilder {
             textures: self.textures,
             attributes: self.attributes,
             warnings: self.warnings,
+            motion: (!self.motion.is_empty()).then(|| Arc::new(self.motion)),
         }
     }
 }

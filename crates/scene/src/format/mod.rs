@@ -18,6 +18,7 @@ mod heightfield;
 mod light;
 mod material;
 mod mesh;
+mod motion;
 mod sdf;
 mod simple;
 mod volume;
@@ -184,6 +185,10 @@ struct InstanceDesc {
     #[serde(default)]
     transform: TransformDesc,
     material: Option<String>,
+    /// Its placement at frames, instead of `transform` (`motion.rs`).
+    keys: Option<Vec<motion::KeyDesc>>,
+    /// A procedural motion on top of its placement (`motion.rs`).
+    motion: Option<motion::MotionDesc>,
 }
 
 /// The keys every `[[object]]` may carry besides its kind's, taken out of the table before
@@ -278,9 +283,15 @@ fn add_instances(
                     .ok_or_else(|| fail(format!("material '{n}' is not defined")))?,
             ),
         };
-        let affine = d.transform.to_transform().affine();
+        let (affine, moving) =
+            motion::placement(&d.transform, d.keys.as_deref(), d.motion.as_ref())
+                .map_err(|e| fail(e))?;
         b.add_instance(mesh.1, affine, material)
             .map_err(ctx.scene_err(&what))?;
+        if let Some(m) = moving {
+            let index = (b.instance_count() - 1) as u32;
+            b.move_instance(index, m).map_err(ctx.scene_err(&what))?;
+        }
     }
     for (name, _, used) in &meshes {
         if !used {
@@ -568,6 +579,16 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
     let mut parts: Parts = Vec::new();
     for (index, mut table) in file.objects.into_iter().enumerate() {
         let mesh = take_instance_keys(&mut table, text, index, ctx)?;
+        let deform = motion::take_deform(
+            &mut table,
+            || {
+                header_line(text, "object", index).map_or_else(
+                    || format!("object {}", index + 1),
+                    |l| format!("line {l}: object {}", index + 1),
+                )
+            },
+            ctx,
+        )?;
         let (o, what): (ObjectDesc, _) = table_item(text, "object", index, table, ctx)?;
         let target = match mesh {
             None => &mut b,
@@ -589,6 +610,9 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
             budget: &mut budget,
             materials: &names,
         })?;
+        if let Some(d) = deform {
+            motion::deform(target, d, &what, ctx)?;
+        }
     }
     add_instances(file.instances, parts, text, ctx, &mut b, &names)?;
     for (index, table) in file.volumes.into_iter().enumerate() {
