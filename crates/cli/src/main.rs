@@ -279,7 +279,7 @@ struct ReportCmd {
     /// Leave out the scaling experiments.
     #[arg(long)]
     no_scaling: bool,
-    /// Run only these scaling experiments (primitives, pixels, spp, heightfield, bezier).
+    /// Run only these scaling experiments (primitives, pixels, spp, heightfield, bezier, presets, motion).
     #[arg(long, value_delimiter = ',', value_name = "A,B")]
     experiments: Option<Vec<String>>,
     /// Worker threads (default: all cores; at most 1024).

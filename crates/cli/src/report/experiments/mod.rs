@@ -9,6 +9,7 @@
 mod bezier;
 mod heightfield;
 pub(super) mod matrix;
+mod motion;
 mod pixels;
 mod presets;
 mod primitives;
@@ -29,7 +30,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// Every experiment in the order it runs and is written: the matrix, then [`SCALING`].
-pub(super) const ALL: [&dyn Experiment; 7] = [
+pub(super) const ALL: [&dyn Experiment; 8] = [
     &matrix::Matrix,
     SCALING[0],
     SCALING[1],
@@ -37,16 +38,18 @@ pub(super) const ALL: [&dyn Experiment; 7] = [
     SCALING[3],
     SCALING[4],
     SCALING[5],
+    SCALING[6],
 ];
 
 /// The scaling experiments, in the order they run (`--experiments` names them).
-pub(super) const SCALING: [&dyn Experiment; 6] = [
+pub(super) const SCALING: [&dyn Experiment; 7] = [
     &primitives::Primitives,
     &pixels::Pixels,
     &spp::Spp,
     &heightfield::Heightfield,
     &bezier::Bezier,
     &presets::Presets,
+    &motion::Motion,
 ];
 
 /// A unit of an experiment ready to run, and how many progress steps it takes.
