@@ -71,13 +71,13 @@ pub fn advance(
     Ok((at, timings))
 }
 
-/// `refit 0.0012 s, top 0.00003 s` (the phases of an update, in order).
+/// `refit 0.182 ms, top 0.004 ms` (the phases of an update, in order).
 #[must_use]
 pub fn describe(timings: &Timings) -> String {
     timings
         .0
         .iter()
-        .map(|(name, s)| format!("{name} {s:.5} s"))
+        .map(|(name, s)| format!("{name} {:.3} ms", s * 1e3))
         .collect::<Vec<_>>()
         .join(", ")
 }

@@ -870,8 +870,9 @@ fn render_frames(
         trace += secs;
         progress.step(&format!("frame {f}"));
         eprintln!(
-            "frame {f}: {}; render {secs:.4} s, {:.2} Mrays/s",
+            "frame {f}: {}; render {:.3} ms, {:.2} Mrays/s",
             describe(&phases),
+            secs * 1e3,
             frame.stats.rays as f64 / secs.max(1e-12) / 1e6
         );
         let path = numbered(out, f, cmd.frames);
@@ -883,14 +884,14 @@ fn render_frames(
     drop(progress);
     let n = f64::from(cmd.frames - 1);
     eprintln!(
-        "{}: {} frames: build {:.4} s, then {} {:.5} s per frame (mean), render {:.4} s per \
-         frame (mean)",
+        "{}: {} frames: build {:.3} ms, then update {:.3} ms per frame (mean, --update {}), \
+         render {:.3} ms per frame (mean)",
         b.name,
         cmd.frames,
-        p.build,
+        p.build * 1e3,
+        update / n * 1e3,
         cmd.update.name(),
-        update / n,
-        trace / f64::from(cmd.frames)
+        trace / f64::from(cmd.frames) * 1e3
     );
     eprintln!(
         "wrote {} .. {}",

@@ -340,8 +340,8 @@ impl InstanceMotion {
 pub enum Deformation {
     /// Twists the mesh about the line parallel to axis `axis` (0: x, 1: y, 2: z) through the
     /// centre of its rest box: a vertex at height `h` along the axis (0 at the box's bottom,
-    /// 1 at its top) turns by `h * degrees_per_frame * f` at frame `f`, so the top turns
-    /// ever further against the bottom.
+    /// 1 at its top) turns by `h * degrees_per_frame * f` at frame `f` (right-handed about
+    /// the axis), so the top turns ever further against the bottom.
     Twist {
         /// The axis, 0 (x), 1 (y) or 2 (z).
         axis: usize,
@@ -759,10 +759,10 @@ mod tests {
             assert_eq!(d.vertex_at(v, 0), v);
         }
         // The bottom never turns; the top turns 90 degrees at frame 2 about the box's
-        // centre line (x = 0, z = 0).
+        // centre line (x = 0, z = 0), right-handed about +y: +x goes to -z.
         assert_eq!(d.vertex_at(Vec3::X, 2), Vec3::X);
         let top = d.vertex_at(Vec3::new(1.0, 2.0, 0.0), 2);
-        assert!((top - Vec3::new(0.0, 2.0, 1.0)).length() < 1e-6, "{top}");
+        assert!((top - Vec3::new(0.0, 2.0, -1.0)).length() < 1e-6, "{top}");
         let flat = Deform::new(
             DeformTarget::Flat,
             0,

@@ -284,8 +284,7 @@ fn add_instances(
             ),
         };
         let (affine, moving) =
-            motion::placement(&d.transform, d.keys.as_deref(), d.motion.as_ref())
-                .map_err(|e| fail(e))?;
+            motion::placement(&d.transform, d.keys.as_deref(), d.motion.as_ref()).map_err(fail)?;
         b.add_instance(mesh.1, affine, material)
             .map_err(ctx.scene_err(&what))?;
         if let Some(m) = moving {

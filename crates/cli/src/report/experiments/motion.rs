@@ -5,7 +5,8 @@
 //! frame ([`UpdatePolicy::Rebuild`]). Per frame: the refit's and the rebuild's seconds (and
 //! the two-level form's top-level rebuild), the trace time of camera rays through each
 //! (median of the run's repetitions, ray casting at the report's size, or 128 in the quick
-//! run) and each one's SAH cost over the flat primitives. The frames are
+//! run) and each one's SAH cost over the flat primitives (backends that rebuild under both
+//! policies are left out, with a line on stderr). The frames are
 //! [`MotionFrame`]s of `results.json`, so `raybench merge` redraws the part.
 
 use super::{Chart, Experiment, Planned, Plot, skip};
@@ -163,6 +164,25 @@ impl Experiment for Motion {
         for b in backends {
             let name = b.name;
             progress.begin(format!("motion {name}: build"));
+            // Whether it refits: a backend that rebuilds under both policies has nothing
+            // to compare, and is left out.
+            let refits = match prepare(b, &scene) {
+                Ok(mut probe) => advance(probe.renderer.as_mut(), &scene, 1, UpdatePolicy::Refit)
+                    .map_err(anyhow::Error::msg)?
+                    .1
+                    .get("refit")
+                    .is_some(),
+                Err(why) => {
+                    skipped.push(format!("{name}: {why}"));
+                    progress.remove(frames as usize);
+                    continue;
+                }
+            };
+            if !refits {
+                eprintln!("motion: {name} cannot refit (it rebuilds every frame): left out");
+                progress.remove(frames as usize);
+                continue;
+            }
             let (mut refitted, mut rebuilt) = match (prepare(b, &scene), prepare(b, &scene)) {
                 (Ok(a), Ok(c)) => (a, c),
                 (Err(why), _) | (_, Err(why)) => {
@@ -172,7 +192,6 @@ impl Experiment for Motion {
                 }
             };
             let mut rows = Vec::new();
-            let mut refits = true;
             for f in 0..frames {
                 let (refit, top, rebuild) = if f == 0 {
                     (None, None, refitted.build)
@@ -184,10 +203,10 @@ impl Experiment for Motion {
                     let (_, c) =
                         advance(rebuilt.renderer.as_mut(), &scene, f, UpdatePolicy::Rebuild)
                             .map_err(anyhow::Error::msg)?;
-                    if a.get("refit").is_none() {
-                        refits = false;
-                        break;
-                    }
+                    anyhow::ensure!(
+                        a.get("refit").is_some(),
+                        "motion: {name} refitted frame 1 but not frame {f}"
+                    );
                     (
                         phase(&a, &["refit"]),
                         a.get("top"),
@@ -223,15 +242,10 @@ impl Experiment for Motion {
                 });
                 progress.step(&format!("motion {name}: frame {f}"));
             }
-            if refits {
-                results.motion.extend(rows);
-            } else {
-                progress.remove(frames as usize - rows.len());
-                skipped.push(format!("{name}: rebuilds (it cannot refit)"));
-            }
+            results.motion.extend(rows);
         }
         if !skipped.is_empty() {
-            let status = if results.motion.is_empty() {
+            let status = if !results.motion.iter().any(|m| m.scene == spec) {
                 "skipped"
             } else {
                 "partial"
