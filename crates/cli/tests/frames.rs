@@ -109,3 +109,66 @@ fn bad_frame_options_give_one_line_errors() {
     }
     assert!(!Path::new(out).exists());
 }
+
+/// The report's `motion` experiment (quick: 8 frames) writes its frames to `results.json`,
+/// its section and charts to the report, and `merge` redraws the same section from them.
+#[test]
+fn the_motion_experiment_survives_a_merge() {
+    let dir = tmp_dir("report");
+    let (out, merged) = (dir.join("run"), dir.join("merged"));
+    let o = raybench(&[
+        "report",
+        "--quick",
+        "--scenes",
+        "moving",
+        "--backends",
+        "bvh,grid",
+        "--modes",
+        "cast",
+        "--rays",
+        "primary",
+        "--size",
+        "24",
+        "--repeat",
+        "1",
+        "--experiments",
+        "motion",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(stderr.contains("motion: grid cannot refit"), "{stderr}");
+    let results: serde_json::Value =
+        serde_json::from_slice(&bytes(out.join("results.json"))).unwrap();
+    let frames = results["motion"].as_array().expect("motion frames");
+    assert_eq!(frames.len(), 8, "bvh's 8 frames, grid left out");
+    for (f, m) in frames.iter().enumerate() {
+        assert_eq!(m["backend"], "bvh");
+        assert_eq!(m["frame"], f);
+        assert_eq!(m["refit_seconds"].is_null(), f == 0);
+        assert!(m["sah_refitted"].as_f64().unwrap() > 0.0);
+    }
+    assert!(results["skipped"].as_array().unwrap().is_empty());
+    let o = raybench(&[
+        "merge",
+        out.to_str().unwrap(),
+        "--out",
+        merged.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let section = |d: &Path| {
+        let md = String::from_utf8(bytes(d.join("REPORT.md"))).unwrap();
+        let start = md.find("## Moving scenes").expect("the motion section");
+        let end = md[start..]
+            .find("\n## Charts")
+            .map_or(md.len(), |e| start + e);
+        md[start..end].to_string()
+    };
+    let s = section(&out);
+    assert!(s.contains("| 7 |") && s.contains("rebuild"), "{s}");
+    assert_eq!(s, section(&merged));
+    for chart in ["motion-moving-bvh-time.svg", "motion-moving-bvh-sah.svg"] {
+        assert!(merged.join("charts").join(chart).is_file(), "{chart}");
+    }
+}
