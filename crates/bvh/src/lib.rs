@@ -18,6 +18,7 @@ mod build;
 mod node;
 mod obvhs_adapter;
 mod params;
+mod refit;
 mod traverse;
 
 pub use node::Node;

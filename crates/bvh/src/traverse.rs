@@ -18,6 +18,14 @@ impl Accel for Bvh {
         Self::build_with(geometry, crate::BvhParams::default())
     }
 
+    const REFITS: bool = true;
+
+    /// Boxes recomputed bottom up in one reverse pass over the depth-first nodes
+    /// (`refit.rs`).
+    fn refit(&mut self, geometry: Arc<Geometry>) -> bool {
+        self.refit_to(geometry)
+    }
+
     fn geometry(&self) -> &Geometry {
         &self.geometry
     }

@@ -5,6 +5,7 @@
 //! in `main.rs`.
 
 pub mod diff;
+pub mod frames;
 pub mod measure;
 pub mod presets;
 pub mod progress;

@@ -17,7 +17,7 @@ use raybench_core::limits::MAX_THREADS;
 use raybench_core::ray_sets::{DEFAULT_AO_RAYS, DerivedParams};
 use raybench_core::{
     CameraOverrides, LightSampling, Mode, QualityParams, RaySet, RenderSettings, Scene, Timings,
-    Vec3,
+    UpdatePolicy, Vec3,
 };
 use raybench_scene::{BUILTIN_SCENES, assets_dir, generators::GENERATORS};
 use serde::Serialize;
@@ -280,7 +280,7 @@ struct ReportCmd {
     #[arg(long)]
     no_scaling: bool,
     /// Run only these scaling experiments (primitives, pixels, spp, heightfield, bezier,
-    /// presets, instancing).
+    /// presets, instancing, motion).
     #[arg(long, value_delimiter = ',', value_name = "A,B")]
     experiments: Option<Vec<String>>,
     /// Worker threads (default: all cores; at most 1024).
@@ -474,6 +474,22 @@ struct RenderCmd {
     /// Also write a false-colour image of primitive ids.
     #[arg(long, value_name = "FILE.png")]
     ids: Option<PathBuf>,
+    /// Renders frames 0..N-1 of a moving scene (instance `keys` and `motion`, object
+    /// `deform`), each image named after --out (and --ids) with the frame number:
+    /// moving.png becomes moving-0000.png, moving-0001.png, ... A scene that does not move
+    /// refuses N > 1 (its frames would be the same image).
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    frames: u32,
+    /// How the structure follows the frames: `refit` (boxes recomputed bottom up, the
+    /// tree's topology kept; a two-level form rebuilds its top level) or `rebuild`.
+    /// Backends that cannot refit rebuild.
+    #[arg(long, default_value = "refit", value_parser = parse_update)]
+    update: UpdatePolicy,
+}
+
+fn parse_update(s: &str) -> Result<UpdatePolicy, String> {
+    UpdatePolicy::from_name(s)
+        .ok_or_else(|| format!("unknown update policy '{s}' (known: refit, rebuild)"))
 }
 
 #[derive(Args)]
@@ -791,11 +807,15 @@ fn render(cmd: &RenderCmd, assets: &Path) -> Result<ExitCode> {
     }
     let scene = load_scene(&cmd.scene, assets, &cmd.camera, cmd.flatten)?;
     check_mode_fits(&scene, settings.mode)?;
+    raybench::frames::check_frames(&scene, cmd.frames).map_err(anyhow::Error::msg)?;
     if !scene.volumes.is_empty() && !matches!(settings.mode, Mode::Mip | Mode::Composite) {
         eprintln!(
             "note: the scene's {} volume(s) show only with --mode mip or --mode composite",
             scene.volumes.len()
         );
+    }
+    if cmd.frames > 1 {
+        return render_frames(cmd, b, &scene, &settings, &out, exposure);
     }
     let progress = Progress::new(1);
     progress.begin(format!("{}: build", b.name));
@@ -834,6 +854,69 @@ fn render(cmd: &RenderCmd, assets: &Path) -> Result<ExitCode> {
         raybench_render::write_ids_png(&frame, ids)?;
         eprintln!("wrote {}", ids.display());
     }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `render --frames N`: frame 0 prepared, every later one updated by `--update`; per frame
+/// the update's and the render's times, and the images numbered
+/// ([`raybench::frames::numbered`]).
+fn render_frames(
+    cmd: &RenderCmd,
+    b: &raybench::Backend,
+    scene: &Arc<Scene>,
+    settings: &RenderSettings,
+    out: &Path,
+    exposure: f32,
+) -> Result<ExitCode> {
+    use raybench::frames::{advance, describe, numbered};
+    let progress = Progress::new(cmd.frames as usize);
+    progress.begin(format!("{}: build", b.name));
+    let mut p = prepare(b, scene).map_err(|e| anyhow::anyhow!("backend '{}': {e}", b.name))?;
+    let (mut update, mut trace) = (0.0, 0.0);
+    for f in 0..cmd.frames {
+        let phases = if f == 0 {
+            p.phases.clone()
+        } else {
+            progress.begin(format!("{}: frame {f}: {}", b.name, cmd.update.name()));
+            let (_, phases) = advance(p.renderer.as_mut(), scene, f, cmd.update)
+                .map_err(|e| anyhow::anyhow!("backend '{}': {e}", b.name))?;
+            update += phases.0.iter().map(|(_, s)| s).sum::<f64>();
+            phases
+        };
+        progress.begin(format!("{}: frame {f}: render", b.name));
+        let frame = p.renderer.render(settings)?;
+        let secs = timed_seconds(&frame.timings);
+        trace += secs;
+        progress.step(&format!("frame {f}"));
+        eprintln!(
+            "frame {f}: {}; render {:.3} ms, {:.2} Mrays/s",
+            describe(&phases),
+            secs * 1e3,
+            frame.stats.rays as f64 / secs.max(1e-12) / 1e6
+        );
+        let path = numbered(out, f, cmd.frames);
+        raybench_render::write_color(&frame, &path, exposure)?;
+        if let Some(ids) = &cmd.ids {
+            raybench_render::write_ids_png(&frame, &numbered(ids, f, cmd.frames))?;
+        }
+    }
+    drop(progress);
+    let n = f64::from(cmd.frames - 1);
+    eprintln!(
+        "{}: {} frames: build {:.3} ms, then update {:.3} ms per frame (mean, --update {}), \
+         render {:.3} ms per frame (mean)",
+        b.name,
+        cmd.frames,
+        p.build * 1e3,
+        update / n * 1e3,
+        cmd.update.name(),
+        trace / f64::from(cmd.frames) * 1e3
+    );
+    eprintln!(
+        "wrote {} .. {}",
+        numbered(out, 0, cmd.frames).display(),
+        numbered(out, cmd.frames - 1, cmd.frames).display()
+    );
     Ok(ExitCode::SUCCESS)
 }
 

@@ -13,6 +13,7 @@
 //! **Architecture invariant:** this crate knows nothing of threads, I/O, SIMD intrinsics or
 //! GPUs. It depends on `raybench-geometry` and `glam` and nothing else.
 
+mod animation;
 mod attributes;
 mod camera;
 mod emitters;
@@ -40,6 +41,7 @@ pub use material::{Checker, Light, Material, MaterialKind};
 pub use ray_sets::RaySet;
 pub use renderer::{
     LightSampling, Mode, OccludedRays, RenderError, RenderSettings, Renderer, TracedRays,
+    UpdatePolicy,
 };
 pub use scene::{ObjectInfo, Scene, SceneBuilder, SurfaceShading};
 pub use texture::{MAX_TEXTURE_SIZE, Texture, Wrap, srgb_to_linear};

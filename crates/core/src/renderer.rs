@@ -91,6 +91,39 @@ impl LightSampling {
     }
 }
 
+/// How [`Renderer::update`] brings a prepared structure to another frame of a moving scene.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum UpdatePolicy {
+    /// Refit where the structure can ([`crate::Accel::refit`]: boxes recomputed bottom up,
+    /// topology kept; a two-level form refits its bottom level and rebuilds its top level),
+    /// else rebuild. Cheap per frame; the tree's quality decays as things move.
+    #[default]
+    Refit,
+    /// Rebuild: what has moved is built anew (a two-level form rebuilds its flat part, the
+    /// meshes that deformed and its top level).
+    Rebuild,
+}
+
+impl UpdatePolicy {
+    /// Both, in a fixed order.
+    pub const ALL: [Self; 2] = [Self::Refit, Self::Rebuild];
+
+    /// The name used on the command line.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Refit => "refit",
+            Self::Rebuild => "rebuild",
+        }
+    }
+
+    /// The policy called `name`, if any.
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+}
+
 /// Settings of one frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RenderSettings {
@@ -268,6 +301,23 @@ pub trait Renderer: Send + Sync {
     /// When the backend is unavailable or does not support the scene.
     fn prepare(&mut self, scene: &Arc<Scene>) -> Result<Timings, RenderError>;
 
+    /// Prepares for `scene`, another frame of the prepared scene ([`Scene::at_frame`]: the
+    /// same ids and topology), by `policy`, and returns the timing of each phase: `refit`
+    /// (bottom-up box updates), `build` (structures built anew) and, for a two-level form,
+    /// `top` (its top level, rebuilt every frame). The default rebuilds everything through
+    /// [`Renderer::prepare`] (its `build` phase), whatever the policy; so does any
+    /// renderer for a scene whose topology differs or before a first `prepare`.
+    ///
+    /// # Errors
+    /// As [`Renderer::prepare`].
+    fn update(
+        &mut self,
+        scene: &Arc<Scene>,
+        _policy: UpdatePolicy,
+    ) -> Result<Timings, RenderError> {
+        self.prepare(scene)
+    }
+
     /// Renders one frame of the prepared scene.
     ///
     /// # Errors
@@ -281,6 +331,13 @@ pub trait Renderer: Send + Sync {
     /// `prepare` and for backends without a readable structure. Samples points for the EPO:
     /// once per prepared scene, not per frame.
     fn quality(&self, _params: &QualityParams) -> Option<StructureQuality> {
+        None
+    }
+
+    /// The quality of the prepared structure over the scene's flat primitives: for a
+    /// scene with instances the bottom-level structure of its flat part (where a deformed
+    /// flat mesh's tree decays), else the same as [`Renderer::quality`]. `None` as there.
+    fn flat_quality(&self, _params: &QualityParams) -> Option<StructureQuality> {
         None
     }
 

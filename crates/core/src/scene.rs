@@ -81,6 +81,9 @@ pub struct Scene {
     /// What is legal but surely not what was meant (an object whose triangles are all
     /// degenerate, ...), one sentence each; the command line prints them as warnings.
     pub warnings: Vec<String>,
+    /// What moves over frames (`None`: a still scene); [`Scene::at_frame`] gives frame `f`,
+    /// and `geometry` is frame 0.
+    pub motion: Option<Arc<crate::Motion>>,
 }
 
 /// What a surface looks like at a hit, beyond where it is: what the integrators shade.
@@ -289,18 +292,20 @@ pub struct SceneBuilder {
     cameras: Vec<NamedCamera>,
     background: Vec3,
     environment: Option<Arc<Environment>>,
-    materials: Vec<Material>,
+    pub(crate) materials: Vec<Material>,
     lights: Vec<Light>,
-    shapes: Vec<Shape>,
-    prim_material: Vec<u32>,
-    objects: Vec<ObjectInfo>,
+    pub(crate) shapes: Vec<Shape>,
+    pub(crate) prim_material: Vec<u32>,
+    pub(crate) objects: Vec<ObjectInfo>,
     volumes: Vec<Arc<Volume>>,
     textures: Vec<Arc<Texture>>,
     texture_keys: HashMap<String, u32>,
-    attributes: ShadingAttributes,
+    pub(crate) attributes: ShadingAttributes,
+    /// What moves (`animation.rs`).
+    pub(crate) motion: crate::Motion,
     warnings: Vec<String>,
     meshes: Vec<InstanceMesh>,
-    instances: Vec<Instance>,
+    pub(crate) instances: Vec<Instance>,
     instance_materials: Vec<Option<u32>>,
     instanced: u64,
     /// For a builder from [`SceneBuilder::part`]: how many materials and textures it
@@ -367,6 +372,7 @@ impl SceneBuilder {
             textures: Vec::new(),
             texture_keys: HashMap::new(),
             attributes: ShadingAttributes::default(),
+            motion: crate::Motion::new(),
             warnings: Vec::new(),
             meshes: Vec::new(),
             instances: Vec::new(),
@@ -471,7 +477,9 @@ impl SceneBuilder {
             materials: materials.into(),
             attributes: part.attributes,
         });
-        Ok((self.meshes.len() - 1) as u32)
+        let mesh = (self.meshes.len() - 1) as u32;
+        crate::animation::adopt_deforms(&mut self.motion, part.motion, mesh);
+        Ok(mesh)
     }
 
     /// Places mesh `mesh` (from [`SceneBuilder::add_instance_mesh`]) by `to_world`, with
@@ -1091,6 +1099,7 @@ impl SceneBuilder {
             attributes: self.attributes,
             mesh_attributes,
             warnings: self.warnings,
+            motion: (!self.motion.is_empty()).then(|| Arc::new(self.motion)),
         }
     }
 }

@@ -58,6 +58,21 @@ pub trait Accel: Send + Sync + Sized + 'static {
     /// from tracing: one build serves any number of frames.
     fn build(geometry: Arc<Geometry>) -> Self;
 
+    /// True when [`Accel::refit`] is implemented (a moving scene's frames can then be
+    /// refitted instead of rebuilt).
+    const REFITS: bool = false;
+
+    /// Refits the structure to `geometry`, another frame of the geometry it was built over
+    /// ([`crate::Motion::geometry_at`]: the same ids and topology, [`crate::same_topology`]):
+    /// boxes recomputed bottom up over the new positions, the topology kept. A refitted
+    /// structure obeys the equivalence contract like a built one (its boxes hold their
+    /// primitives, so its culling stays conservative); only its quality may decay. Returns
+    /// false, and leaves the structure as it was, when the structure cannot refit (the
+    /// default) or the topology differs: the caller then rebuilds.
+    fn refit(&mut self, _geometry: Arc<Geometry>) -> bool {
+        false
+    }
+
     /// The geometry this structure was built over.
     fn geometry(&self) -> &Geometry;
 

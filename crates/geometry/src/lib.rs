@@ -34,6 +34,7 @@ mod hit;
 mod instance;
 pub mod limits;
 mod mesh;
+pub mod motion;
 mod optree;
 mod plane;
 pub mod quality;
@@ -63,6 +64,10 @@ pub use instance::{INSTANCE_BOX_PAD, Instance};
 pub use mesh::{
     MAX_EAR_CLIP_VERTICES, PolygonKind, PolygonMesh, TriangleMesh, Triangulated,
     triangulate_polygon,
+};
+pub use motion::{
+    Deform, DeformTarget, Deformation, InstanceMotion, Key, Motion, Placement, Procedural,
+    same_topology,
 };
 pub use plane::Plane;
 pub use quality::{

@@ -204,6 +204,99 @@ impl<A: Accel> TwoLevel<A> {
     pub fn meshes(&self) -> &[A] {
         &self.meshes
     }
+
+    /// Refits the bottom level to `geometry`, another frame of the same scene
+    /// ([`crate::same_topology`]): the flat part's structure, and each distinct mesh's
+    /// whose geometry changed (a mesh shared with the previous frame, the same `Arc`, is
+    /// left alone). The top level is *not* updated: call [`TwoLevel::rebuild_top`] next
+    /// (they are separate so that each can be timed). Returns false, and changes nothing,
+    /// when `A` cannot refit or the topology differs.
+    pub fn refit_bottom(&mut self, geometry: Arc<Geometry>) -> bool {
+        if !A::REFITS || !crate::same_topology(&self.geometry, &geometry) {
+            return false;
+        }
+        for (k, m) in geometry.meshes().iter().enumerate() {
+            if !Arc::ptr_eq(m, &self.geometry.meshes()[k]) && !self.meshes[k].refit(Arc::clone(m)) {
+                // An `A` that says it refits refuses only another topology, checked above.
+                self.meshes[k] = A::build(Arc::clone(m));
+            }
+        }
+        if !self.flat.refit(Arc::clone(&geometry)) {
+            self.flat = A::build(Arc::clone(&geometry));
+        }
+        self.geometry = geometry;
+        true
+    }
+
+    /// Rebuilds the bottom level for `geometry`, another frame of the same scene, with
+    /// `build`: the flat part's structure, and each distinct mesh's whose geometry changed
+    /// (a shared `Arc` is kept). The top level is not updated: call
+    /// [`TwoLevel::rebuild_top`] next. Returns false, and changes nothing, when the
+    /// topology differs (build the two-level form anew).
+    pub fn rebuild_bottom(
+        &mut self,
+        geometry: Arc<Geometry>,
+        build: impl Fn(Arc<Geometry>) -> A,
+    ) -> bool {
+        if !crate::same_topology(&self.geometry, &geometry) {
+            return false;
+        }
+        for (k, m) in geometry.meshes().iter().enumerate() {
+            if !Arc::ptr_eq(m, &self.geometry.meshes()[k]) {
+                self.meshes[k] = build(Arc::clone(m));
+            }
+        }
+        self.flat = build(Arc::clone(&geometry));
+        self.geometry = geometry;
+        true
+    }
+
+    /// Rebuilds the top level over the instances' current world boxes: a median-split tree
+    /// over the instances, cheap next to the bottom level, so moving scenes rebuild it every
+    /// frame rather than refit it.
+    pub fn rebuild_top(&mut self) {
+        let boxes: Vec<Aabb> = self
+            .geometry
+            .instances()
+            .iter()
+            .map(|i| i.bounds())
+            .collect();
+        self.top = TopLevel::build(&boxes);
+    }
+
+    /// Checks that every top-level node's box holds its children's boxes and its
+    /// instances' world boxes, and that every instance is in one leaf (the top level of a
+    /// valid, conservative two-level structure).
+    ///
+    /// # Errors
+    /// A description of the first violation.
+    pub fn validate_top(&self) -> Result<(), String> {
+        let instances = self.geometry.instances();
+        let mut seen = vec![0u32; instances.len()];
+        let holds = |n: &TopNode, b: Aabb| Aabb::new(n.min.into(), n.max.into()).contains(&b);
+        for (i, n) in self.top.nodes.iter().enumerate() {
+            if n.count > 0 {
+                let run = n.first as usize..(n.first + n.count) as usize;
+                for &k in self.top.order.get(run).ok_or("leaf out of range")? {
+                    if !holds(n, instances[k as usize].bounds()) {
+                        return Err(format!("top node {i} does not hold instance {k}"));
+                    }
+                    seen[k as usize] += 1;
+                }
+            } else {
+                for c in [n.first, n.first + 1] {
+                    let child = self.top.nodes.get(c as usize).ok_or("child out of range")?;
+                    if !holds(n, Aabb::new(child.min.into(), child.max.into())) {
+                        return Err(format!("top node {c} sticks out of node {i}"));
+                    }
+                }
+            }
+        }
+        match seen.iter().position(|&s| s != 1) {
+            Some(k) => Err(format!("instance {k} is in {} top leaves", seen[k])),
+            None => Ok(()),
+        }
+    }
 }
 
 impl<A: Accel> Accel for TwoLevel<A> {
@@ -211,6 +304,17 @@ impl<A: Accel> Accel for TwoLevel<A> {
 
     fn build(geometry: Arc<Geometry>) -> Self {
         Self::build_with(geometry, A::build)
+    }
+
+    const REFITS: bool = A::REFITS;
+
+    /// [`TwoLevel::refit_bottom`], then [`TwoLevel::rebuild_top`].
+    fn refit(&mut self, geometry: Arc<Geometry>) -> bool {
+        let refitted = self.refit_bottom(geometry);
+        if refitted {
+            self.rebuild_top();
+        }
+        refitted
     }
 
     fn geometry(&self) -> &Geometry {

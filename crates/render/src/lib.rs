@@ -25,6 +25,7 @@ use raybench_core::integrator::{assemble, render_tile, tiles};
 use raybench_core::{
     Accel, AccelStats, BatchTracer, Counters, Frame, Geometry, Hit, NoCounters, QualityParams, Ray,
     RayCounters, RenderError, RenderSettings, Renderer, Scene, StructureQuality, Timings, TwoLevel,
+    UpdatePolicy,
 };
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -205,6 +206,50 @@ impl<A: Accel> Renderer for CpuRenderer<A> {
         Ok(timings)
     }
 
+    /// Refits where `A` can ([`Accel::REFITS`]) under [`UpdatePolicy::Refit`]; a two-level
+    /// form updates its bottom level (phase `refit` or `build`: the flat part and the meshes
+    /// that deformed) and rebuilds its top level (phase `top`); anything else, and a scene
+    /// of another topology, goes through [`Renderer::prepare`].
+    fn update(&mut self, scene: &Arc<Scene>, policy: UpdatePolicy) -> Result<Timings, RenderError> {
+        let refit = policy == UpdatePolicy::Refit && A::REFITS;
+        let geometry = Arc::clone(&scene.geometry);
+        let mut timings = Timings::default();
+        let done = match self.prepared.as_mut() {
+            Some((_, Built::Flat(a))) if refit => {
+                let start = Instant::now();
+                let ok = a.refit(geometry);
+                timings.push("refit", start.elapsed().as_secs_f64());
+                ok
+            }
+            Some((_, Built::TwoLevel(two))) => {
+                let start = Instant::now();
+                let ok = if refit {
+                    two.refit_bottom(geometry)
+                } else {
+                    two.rebuild_bottom(geometry, &self.build)
+                };
+                timings.push(
+                    if refit { "refit" } else { "build" },
+                    start.elapsed().as_secs_f64(),
+                );
+                if ok {
+                    let start = Instant::now();
+                    two.rebuild_top();
+                    timings.push("top", start.elapsed().as_secs_f64());
+                }
+                ok
+            }
+            _ => false,
+        };
+        if !done {
+            return self.prepare(scene);
+        }
+        if let Some(prepared) = self.prepared.as_mut() {
+            prepared.0 = Arc::clone(scene);
+        }
+        Ok(timings)
+    }
+
     fn render(&self, settings: &RenderSettings) -> Result<Frame, RenderError> {
         let (scene, built) = self.prepared.as_ref().ok_or(RenderError::NotPrepared)?;
         with_built!(built, a => render_frame(scene, a, settings))
@@ -227,6 +272,15 @@ impl<A: Accel> Renderer for CpuRenderer<A> {
     fn quality(&self, params: &QualityParams) -> Option<StructureQuality> {
         let (_, built) = self.prepared.as_ref()?;
         with_built!(built, a => a.quality(params))
+    }
+
+    /// The structure's quality for a flat scene; the flat part's structure's for a
+    /// two-level form.
+    fn flat_quality(&self, params: &QualityParams) -> Option<StructureQuality> {
+        match self.prepared.as_ref()? {
+            (_, Built::Flat(a)) => a.quality(params),
+            (_, Built::TwoLevel(two)) => two.flat().quality(params),
+        }
     }
 
     fn trace_rays(

@@ -27,14 +27,19 @@ impl Transform {
     /// The affine map.
     #[must_use]
     pub fn affine(&self) -> Affine3A {
+        Affine3A::from_scale_rotation_translation(self.scale, self.rotation(), self.translate)
+    }
+
+    /// The rotation: about x, then y, then z.
+    #[must_use]
+    pub fn rotation(&self) -> Quat {
         let r = self.rotate_degrees;
-        let q = Quat::from_euler(
+        Quat::from_euler(
             EulerRot::ZYX,
             r.z.to_radians(),
             r.y.to_radians(),
             r.x.to_radians(),
-        );
-        Affine3A::from_scale_rotation_translation(self.scale, q, self.translate)
+        )
     }
 
     /// True for the identity (nothing to apply).

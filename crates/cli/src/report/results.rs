@@ -27,6 +27,42 @@ pub struct Results {
     /// Absent from files written before it was added: read as empty.
     #[serde(default)]
     pub skipped: Vec<Skipped>,
+    /// The `motion` experiment's frames (refit against rebuild). Absent from files written
+    /// before it was added, and when it did not run: read as empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub motion: Vec<MotionFrame>,
+}
+
+/// One frame of a moving scene in the `motion` experiment, for one backend: the update
+/// and trace times and the SAH cost of a structure refitted from frame 0 and of one rebuilt
+/// every frame (`report/experiments/motion.rs`).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct MotionFrame {
+    /// Index into [`Results::shards`].
+    pub shard: usize,
+    /// The moving scene.
+    pub scene: String,
+    /// Backend name.
+    pub backend: String,
+    /// The frame (0: both structures are the first build).
+    pub frame: u32,
+    /// Image side of the traced frames (camera rays).
+    pub size: u32,
+    /// Seconds of the refit (bottom level, phase `refit`); `None` at frame 0.
+    pub refit_seconds: Option<f64>,
+    /// Seconds of the rebuild (phase `build`; the first build at frame 0).
+    pub rebuild_seconds: f64,
+    /// Seconds of a two-level form's top-level rebuild (phase `top`, on the refitted
+    /// structure), when it has one.
+    pub top_seconds: Option<f64>,
+    /// Median seconds to trace the camera rays through the refitted structure.
+    pub trace_refitted_seconds: f64,
+    /// Median seconds to trace them through the rebuilt structure.
+    pub trace_rebuilt_seconds: f64,
+    /// SAH cost (`C_t = C_i = 1`) of the refitted structure over the flat primitives.
+    pub sah_refitted: Option<f64>,
+    /// SAH cost of the rebuilt one.
+    pub sah_rebuilt: Option<f64>,
 }
 
 /// A scene or scaling experiment of the matrix that did not run, or ran in part.
@@ -719,6 +755,10 @@ impl Results {
         self.skipped.extend(other.skipped.into_iter().map(|mut s| {
             s.shard += offset;
             s
+        }));
+        self.motion.extend(other.motion.into_iter().map(|mut m| {
+            m.shard += offset;
+            m
         }));
         self.fit();
     }

@@ -19,6 +19,7 @@ mod instance_array;
 mod light;
 mod material;
 mod mesh;
+mod motion;
 mod sdf;
 mod simple;
 mod volume;
@@ -187,6 +188,10 @@ struct InstanceDesc {
     #[serde(default)]
     transform: TransformDesc,
     material: Option<String>,
+    /// Its placement at frames, instead of `transform` (`motion.rs`).
+    keys: Option<Vec<motion::KeyDesc>>,
+    /// A procedural motion on top of its placement (`motion.rs`).
+    motion: Option<motion::MotionDesc>,
 }
 
 /// The keys every `[[object]]` may carry besides its kind's, taken out of the table before
@@ -293,9 +298,14 @@ fn add_instances(
                     .ok_or_else(|| fail(format!("material '{n}' is not defined")))?,
             ),
         };
-        let affine = d.transform.to_transform().affine();
+        let (affine, moving) =
+            motion::placement(&d.transform, d.keys.as_deref(), d.motion.as_ref()).map_err(fail)?;
         b.add_instance(mesh.1, affine, material)
             .map_err(ctx.scene_err(&what))?;
+        if let Some(m) = moving {
+            let index = (b.instance_count() - 1) as u32;
+            b.move_instance(index, m).map_err(ctx.scene_err(&what))?;
+        }
     }
     instance_array::add(arrays, &mut meshes, text, ctx, b, materials, budget)?;
     for (name, _, used) in &meshes {
@@ -585,6 +595,16 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
     let mut parts: Parts = Vec::new();
     for (index, mut table) in file.objects.into_iter().enumerate() {
         let mesh = take_instance_keys(&mut table, text, index, ctx)?;
+        let deform = motion::take_deform(
+            &mut table,
+            || {
+                header_line(text, "object", index).map_or_else(
+                    || format!("object {}", index + 1),
+                    |l| format!("line {l}: object {}", index + 1),
+                )
+            },
+            ctx,
+        )?;
         let (o, what): (ObjectDesc, _) = table_item(text, "object", index, table, ctx)?;
         let target = match mesh {
             None => &mut b,
@@ -606,6 +626,9 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
             budget: &mut budget,
             materials: &names,
         })?;
+        if let Some(d) = deform {
+            motion::deform(target, d, &what, ctx)?;
+        }
     }
     add_instances(
         file.instances,

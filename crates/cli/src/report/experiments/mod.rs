@@ -10,6 +10,7 @@ mod bezier;
 mod heightfield;
 mod instancing;
 pub(super) mod matrix;
+mod motion;
 mod pixels;
 mod presets;
 mod primitives;
@@ -30,7 +31,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// Every experiment in the order it runs and is written: the matrix, then [`SCALING`].
-pub(super) const ALL: [&dyn Experiment; 8] = [
+pub(super) const ALL: [&dyn Experiment; 9] = [
     &matrix::Matrix,
     SCALING[0],
     SCALING[1],
@@ -39,10 +40,11 @@ pub(super) const ALL: [&dyn Experiment; 8] = [
     SCALING[4],
     SCALING[5],
     SCALING[6],
+    SCALING[7],
 ];
 
 /// The scaling experiments, in the order they run (`--experiments` names them).
-pub(super) const SCALING: [&dyn Experiment; 7] = [
+pub(super) const SCALING: [&dyn Experiment; 8] = [
     &primitives::Primitives,
     &pixels::Pixels,
     &spp::Spp,
@@ -50,6 +52,7 @@ pub(super) const SCALING: [&dyn Experiment; 7] = [
     &bezier::Bezier,
     &presets::Presets,
     &instancing::Instancing,
+    &motion::Motion,
 ];
 
 /// A unit of an experiment ready to run, and how many progress steps it takes.
