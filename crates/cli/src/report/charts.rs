@@ -44,6 +44,9 @@ pub enum Plot {
     Scatter(Vec<Series>),
     /// Bars on a log axis: one group per category name, one bar per series.
     Categories(Vec<String>, Vec<Bars>),
+    /// Each series a line through its points over a linear `x` axis (a count from 0, such
+    /// as an animation's frames) and a log `y` axis.
+    Lines(Vec<Series>),
 }
 
 /// A named set of points.
@@ -238,13 +241,15 @@ pub fn styles(labels: &[&str]) -> Vec<Style> {
 // ---------------------------------------------------------------------------------------
 // Axes and tick labels.
 
-/// A log axis: its range and its ticks.
+/// An axis (log, or linear for [`Plot::Lines`]'s `x`): its range and its ticks.
 #[derive(Clone, Debug, PartialEq)]
 struct Axis {
-    /// `log10` of the lowest value shown.
+    /// `log10` of the lowest value shown (a linear axis: the value).
     lo: f64,
-    /// `log10` of the highest value shown.
+    /// `log10` of the highest value shown (a linear axis: the value).
     hi: f64,
+    /// Whether values are placed linearly rather than by their logarithm.
+    linear: bool,
     /// Labelled ticks: value and label.
     major: Vec<(f64, String)>,
     /// Unlabelled ticks.
@@ -254,7 +259,13 @@ struct Axis {
 impl Axis {
     /// Where `v` falls along the axis, 0 at its low end and 1 at its high end.
     fn frac(&self, v: f64) -> f64 {
-        (v.log10() - self.lo) / (self.hi - self.lo)
+        let v = if self.linear { v } else { v.log10() };
+        (v - self.lo) / (self.hi - self.lo)
+    }
+
+    /// Whether `v` can be placed on the axis (a log axis: positive values only).
+    fn shows(&self, v: f64) -> bool {
+        v.is_finite() && (self.linear || v > 0.0)
     }
 }
 
@@ -403,6 +414,7 @@ fn log_axis(values: impl Iterator<Item = f64>) -> Axis {
         return Axis {
             lo,
             hi,
+            linear: false,
             major: labelled(major),
             minor,
         };
@@ -412,6 +424,7 @@ fn log_axis(values: impl Iterator<Item = f64>) -> Axis {
         return Axis {
             lo,
             hi,
+            linear: false,
             major: labelled(steps),
             minor: log_candidates(lo, hi, &[3.0, 4.0, 6.0, 7.0, 8.0, 9.0]),
         };
@@ -421,6 +434,7 @@ fn log_axis(values: impl Iterator<Item = f64>) -> Axis {
         return Axis {
             lo,
             hi,
+            linear: false,
             major: labelled(integers),
             minor: Vec::new(),
         };
@@ -445,6 +459,45 @@ fn log_axis(values: impl Iterator<Item = f64>) -> Axis {
     Axis {
         lo,
         hi,
+        linear: false,
+        major,
+        minor: Vec::new(),
+    }
+}
+
+/// A linear axis over `values` (the finite ones), labelled every 1, 2 or 5 times a power of
+/// ten: the smallest such step that gives at most 8 labels.
+fn linear_axis(values: impl Iterator<Item = f64>) -> Axis {
+    let (min, max) = values
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
+    let (min, max) = if min.is_finite() {
+        (min, max)
+    } else {
+        (0.0, 1.0)
+    };
+    let span = (max - min).max(max.abs().max(1.0) * 1e-9);
+    let (lo, hi) = (min - span * 0.03, max + span * 0.03);
+    let p = power_step(span / 8.0);
+    let step = [1.0, 2.0, 5.0, 10.0]
+        .into_iter()
+        .map(|m| m * p)
+        .find(|s| span / s <= 8.0 + 1e-9)
+        .unwrap_or(10.0 * p);
+    let first = (lo / step).ceil() as i64;
+    let last = (hi / step).floor() as i64;
+    let major = (first..=last)
+        .map(|i| {
+            let v = i as f64 * step;
+            (v, number(v, step))
+        })
+        .collect();
+    Axis {
+        lo,
+        hi,
+        linear: true,
         major,
         minor: Vec::new(),
     }
@@ -531,9 +584,9 @@ struct Layout {
 fn legend_entries(chart: &Chart) -> Vec<(String, Key)> {
     let mut out = Vec::new();
     match &chart.plot {
-        Plot::LogLog(series) | Plot::Scatter(series) => {
+        Plot::LogLog(series) | Plot::Scatter(series) | Plot::Lines(series) => {
             let labels: Vec<&str> = series.iter().map(|s| s.label.as_str()).collect();
-            let lines = matches!(chart.plot, Plot::LogLog(_));
+            let lines = !matches!(chart.plot, Plot::Scatter(_));
             for (s, st) in series.iter().zip(styles(&labels)) {
                 let text = match &s.fit {
                     Some(f) => format!("{} (slope {:.2})", s.label, f.exponent),
@@ -787,6 +840,11 @@ pub fn svg(chart: &Chart) -> String {
                 .flat_map(|s| s.points.iter().map(|p| p.1).chain(fits(s, |p| p.1)));
             (Some(log_axis(xs)), log_axis(ys))
         }
+        Plot::Lines(series) => {
+            let xs = series.iter().flat_map(|s| s.points.iter().map(|p| p.0));
+            let ys = series.iter().flat_map(|s| s.points.iter().map(|p| p.1));
+            (Some(linear_axis(xs)), log_axis(ys))
+        }
         Plot::Categories(_, bars) => {
             let values: Vec<f64> = bars
                 .iter()
@@ -863,8 +921,8 @@ pub fn svg(chart: &Chart) -> String {
     }
 
     match &chart.plot {
-        Plot::LogLog(series) | Plot::Scatter(series) => {
-            let xa = x_axis.as_ref().expect("log-log charts have an x axis");
+        Plot::LogLog(series) | Plot::Scatter(series) | Plot::Lines(series) => {
+            let xa = x_axis.as_ref().expect("charts of series have an x axis");
             let x_at = |v: f64| p.x + xa.frac(v) * p.w;
             for &v in &xa.minor {
                 rule(&mut out, p, Dir::X, x_at(v), MINOR);
@@ -890,14 +948,14 @@ pub fn svg(chart: &Chart) -> String {
                 );
             }
             frame(&mut out, p);
-            let lines = matches!(chart.plot, Plot::LogLog(_));
+            let lines = !matches!(chart.plot, Plot::Scatter(_));
             let labels: Vec<&str> = series.iter().map(|s| s.label.as_str()).collect();
             for (s, st) in series.iter().zip(styles(&labels)) {
                 let pts: Vec<(f64, f64)> = s
                     .points
                     .iter()
                     .copied()
-                    .filter(|&(x, y)| x > 0.0 && y > 0.0 && x.is_finite() && y.is_finite())
+                    .filter(|&(x, y)| xa.shows(x) && y > 0.0 && y.is_finite())
                     .collect();
                 let _ = writeln!(out, "<g>");
                 if let (Some(f), Some((a, b))) = (s.fit, x_range(s)) {
@@ -1242,6 +1300,23 @@ mod tests {
         assert_eq!(labels(&big), ["10", "100", "1k", "10k", "100k", "1M"]);
         let tiny = log_axis([1e-6, 1e-3].into_iter());
         assert_eq!(labels(&tiny), ["10⁻⁶", "10⁻⁵", "0.0001", "0.001"]);
+    }
+
+    /// Frames go on a linear axis from frame 0 (a log axis cannot place 0, and squeezes the
+    /// late frames together), labelled in 1-2-5 steps; every point is drawn.
+    #[test]
+    fn line_charts_place_frames_linearly_from_zero() {
+        let pts: Vec<(f64, f64)> = (0..32)
+            .map(|f| (f64::from(f), 0.01 + f64::from(f) * 1e-3))
+            .collect();
+        let axis = linear_axis(pts.iter().map(|p| p.0));
+        assert_eq!(labels(&axis), ["0", "5", "10", "15", "20", "25", "30"]);
+        let mid = (axis.frac(0.0) + axis.frac(30.0)) / 2.0;
+        assert!((axis.frac(15.0) - mid).abs() < 1e-12, "not linear");
+        assert!(axis.frac(0.0) > 0.0 && axis.frac(31.0) < 1.0);
+        let out = svg(&chart("frames", "t", Plot::Lines(vec![series(b(1), &pts)])));
+        let markers = out.matches("\nprimitives in the scene: ").count();
+        assert_eq!(markers, 32, "every frame, frame 0 included, has its marker");
     }
 
     #[test]

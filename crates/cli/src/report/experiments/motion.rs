@@ -272,7 +272,7 @@ impl Experiment for Motion {
                 stem: format!("{stem}-time"),
                 x_label: "frame".into(),
                 y_label: "seconds".into(),
-                plot: Plot::LogLog(vec![
+                plot: Plot::Lines(vec![
                     series("refit", &|r| {
                         r.refit_seconds.map(|s| s + r.top_seconds.unwrap_or(0.0))
                     }),
@@ -286,7 +286,7 @@ impl Experiment for Motion {
                 stem: format!("{stem}-sah"),
                 x_label: "frame".into(),
                 y_label: "SAH cost (C_t = C_i = 1)".into(),
-                plot: Plot::LogLog(vec![
+                plot: Plot::Lines(vec![
                     series("refitted", &|r| r.sah_refitted),
                     series("rebuilt", &|r| r.sah_rebuilt),
                 ]),
