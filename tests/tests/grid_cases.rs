@@ -2,7 +2,7 @@
 //! grid faces, starting exactly on the grid's box, axis-aligned; a single huge triangle; a
 //! million tiny spheres in one corner with one large plane.
 
-use raybench_core::{Ray, Scene, SceneBuilder, Sphere, TriangleMesh, Vec3};
+use raybench_core::{Accel, Ray, Scene, SceneBuilder, Sphere, TriangleMesh, Vec3};
 use raybench_grid::{Grid, GridParams};
 use raybench_tests::{assert_same_ray_hits, available, prepared};
 use std::sync::Arc;
@@ -29,10 +29,11 @@ fn rays_along_cell_boundaries_and_grid_faces() {
     }
 }
 
-/// Rays from far away (up to just inside `raybench_grid::FAR_ORIGIN` grid sizes, as an
-/// instance's rays start when its mesh is small and the camera far): along the cell
-/// boundaries and grid faces, and through every vertex of watertight meshes, where the
-/// DDA's rounding of a far origin matters most; every backend against naive.
+/// Rays from far away (up to just inside the grid's `far_origin`: `FAR_ORIGIN` grid sizes
+/// for a scene, `INSTANCE_FAR_ORIGIN` for the meshes instances place, whose rays start as
+/// far from them as the camera is): along the cell boundaries and grid faces, and through
+/// the vertices of watertight meshes, where the DDA's rounding of a far origin matters
+/// most; every backend against naive, and the grid built for instances against naive.
 #[test]
 fn rays_from_far_origins() {
     for spec in ["soup:3000", "terrain:24", "icosphere:3"] {
@@ -54,14 +55,39 @@ fn rays_from_far_origins() {
             let r = (1.0 - z * z).sqrt();
             targets.push(Ray::new(v, Vec3::new(r * a.cos(), z, r * a.sin())));
         }
-        let limit = raybench_grid::FAR_ORIGIN * 0.95;
-        let mut rays = Vec::new();
-        for (k, t) in targets.iter().enumerate() {
-            let reach = [limit / 8.0, limit / 2.0, limit][k % 3] * size;
-            let dir = t.dir.normalize();
-            rays.push(Ray::new(t.origin - dir * reach, dir));
-        }
-        check(&format!("{spec}, far origins"), &scene, &rays);
+        let far = |limit: f32| -> Vec<Ray> {
+            targets
+                .iter()
+                .enumerate()
+                .map(|(k, t)| {
+                    let reach = [limit / 8.0, limit / 2.0, limit][k % 3] * 0.95 * size;
+                    let dir = t.dir.normalize();
+                    Ray::new(t.origin - dir * reach, dir)
+                })
+                .collect()
+        };
+        check(
+            &format!("{spec}, far origins"),
+            &scene,
+            &far(raybench_grid::FAR_ORIGIN),
+        );
+        // The grid over a mesh that instances place walks the DDA from much farther.
+        let rays = far(raybench_grid::INSTANCE_FAR_ORIGIN);
+        let wide = grid.for_instances();
+        let (reference, _) = prepared(raybench_tests::ORACLE, &scene)
+            .trace_rays(&rays, false)
+            .unwrap();
+        let mut counters = raybench_core::RayCounters::default();
+        let hits: Vec<_> = rays
+            .iter()
+            .map(|r| wide.intersect(r, &mut counters))
+            .collect();
+        assert_same_ray_hits(&format!("{spec}, instance grid"), &reference, &hits);
+        assert!(
+            counters.prim_tests < rays.len() as u64 * scene.geometry.len() as u64 / 4,
+            "{spec}: the instance grid tested everything ({} tests)",
+            counters.prim_tests
+        );
     }
 }
 

@@ -73,6 +73,16 @@ pub trait Accel: Send + Sync + Sized + 'static {
         false
     }
 
+    /// The structure `self` (just built by the backend's build, over a mesh that
+    /// instances place) made fit for instance-space rays, which start as many of the mesh's
+    /// sizes away from it as the camera is: a structure that tests everything for rays from
+    /// too far (the grids) widens that bound here. [`crate::TwoLevel`] calls it for each
+    /// distinct mesh; the default keeps the structure as built.
+    #[must_use]
+    fn for_instances(self) -> Self {
+        self
+    }
+
     /// The geometry this structure was built over.
     fn geometry(&self) -> &Geometry;
 

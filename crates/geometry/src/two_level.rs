@@ -182,7 +182,7 @@ impl<A: Accel> TwoLevel<A> {
         let meshes = geometry
             .meshes()
             .iter()
-            .map(|m| build(Arc::clone(m)))
+            .map(|m| build(Arc::clone(m)).for_instances())
             .collect();
         let boxes: Vec<Aabb> = geometry.instances().iter().map(|i| i.bounds()).collect();
         Self {
@@ -218,7 +218,7 @@ impl<A: Accel> TwoLevel<A> {
         for (k, m) in geometry.meshes().iter().enumerate() {
             if !Arc::ptr_eq(m, &self.geometry.meshes()[k]) && !self.meshes[k].refit(Arc::clone(m)) {
                 // An `A` that says it refits refuses only another topology, checked above.
-                self.meshes[k] = A::build(Arc::clone(m));
+                self.meshes[k] = A::build(Arc::clone(m)).for_instances();
             }
         }
         if !self.flat.refit(Arc::clone(&geometry)) {
@@ -243,7 +243,7 @@ impl<A: Accel> TwoLevel<A> {
         }
         for (k, m) in geometry.meshes().iter().enumerate() {
             if !Arc::ptr_eq(m, &self.geometry.meshes()[k]) {
-                self.meshes[k] = build(Arc::clone(m));
+                self.meshes[k] = build(Arc::clone(m)).for_instances();
             }
         }
         self.flat = build(Arc::clone(&geometry));

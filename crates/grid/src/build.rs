@@ -94,8 +94,9 @@ impl Grid {
         self.res = res;
         self.cell = e / Vec3::new(res[0] as f32, res[1] as f32, res[2] as f32);
         self.inv_cell = self.cell.recip();
-        self.pad =
-            (self.cell * (1.0 / 4096.0)).max(Vec3::splat(e.max_element() * crate::PAD_OF_SIZE));
+        self.pad = (self.cell * (1.0 / 4096.0)).max(Vec3::splat(
+            e.max_element() * crate::pad_of_size(self.params.far_origin),
+        ));
     }
 
     /// The number of cell-list entries the current resolution needs.

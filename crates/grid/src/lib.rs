@@ -13,14 +13,15 @@
 //! - **Storage**: one flat array of primitive ids and one of per-cell offsets (compressed
 //!   rows), no `Vec` per cell.
 //! - **Insertion**: each primitive goes into every cell its box, padded by `PAD` (the
-//!   larger of 1/4096 of a cell and 2^-12 of the grid's size, [`PAD_OF_SIZE`]), overlaps. The padding makes
-//!   insertion conservative against the DDA's rounding: a ray that passes through a cell
-//!   corner visits three of the four cells around it, and any primitive near that corner
-//!   is also listed in the visited ones; and the DDA's positions, off by a few ulps of the
-//!   ray origin's distance to the grid, stay within the padding for rays starting less
-//!   than [`FAR_ORIGIN`] grid sizes away. Rays starting farther away (a camera 10 km from
-//!   a 1 mm scene) cannot be located in the grid to f32 precision: they test every bounded
-//!   primitive instead, which keeps the result exact.
+//!   larger of 1/4096 of a cell and 2^-16 of the grid's size, [`pad_of_size`]; 2^-12 for
+//!   the meshes instances place), overlaps. The padding makes insertion conservative
+//!   against the DDA's rounding: a ray that passes through a cell corner visits three of
+//!   the four cells around it, and any primitive near that corner is also listed in the
+//!   visited ones; and the DDA's positions, off by a few ulps of the ray origin's distance
+//!   to the grid, stay within the padding for rays starting less than [`FAR_ORIGIN`] grid
+//!   sizes away ([`INSTANCE_FAR_ORIGIN`] for instanced meshes). Rays starting farther away
+//!   (a camera 10 km from a 1 mm scene) cannot be located in the grid to f32 precision:
+//!   they test every bounded primitive instead, which keeps the result exact.
 //! - **Traversal**: enter from outside (conservative slab test) or start inside; one
 //!   comparison per axis per step; zero direction components never step; crossing
 //!   distances recomputed from cell boundaries (no drift). The walk stops only when the
@@ -48,16 +49,25 @@ pub use two_level::{TwoLevelGrid, TwoLevelParams};
 pub const MAILBOX: usize = 8;
 
 /// Rays whose origin lies farther than this many grid sizes from the grid's centre skip
-/// the DDA and test every bounded primitive (see the crate documentation). Instances make
-/// such rays common: an instance's rays start in its mesh's space as many of the mesh's
-/// sizes away as the camera is (7 to 30 on `bunny-field`), so it is set well beyond that.
-pub const FAR_ORIGIN: f32 = 128.0;
+/// the DDA and test every bounded primitive (see the crate documentation): the default
+/// [`GridParams::far_origin`]. The DDA's positions are off by up to about 16 ulps of the
+/// origin's distance to the grid, so the insertion padding's floor is `far_origin * 16 *
+/// 2^-23` of the grid's size ([`pad_of_size`]): `2^-16` here.
+pub const FAR_ORIGIN: f32 = 8.0;
 
-/// The insertion padding's floor relative to the grid's size, from [`FAR_ORIGIN`]: the
-/// DDA's positions are off by up to about 16 ulps of the origin's distance to the grid
-/// (in grid units, `FAR_ORIGIN * 16 * 2^-23` of the grid's size), which the padding must
-/// cover: `2^-12` of the grid's size, a sixty-fourth of a cell at 64 cells per axis.
-pub const PAD_OF_SIZE: f32 = FAR_ORIGIN * 16.0 / 8_388_608.0;
+/// [`GridParams::far_origin`] of a grid over a mesh that instances place
+/// (`Accel::for_instances`): an instance's rays start in its mesh's space as many of the
+/// mesh's sizes away as the camera is (7 to 30 on `bunny-field`). Its padding floor,
+/// `2^-12` of the grid's size (a sixty-fourth of a cell at 64 cells per axis), would cost a
+/// scene's grid up to 11 % more tests per ray (sponza), so only those meshes pay it.
+pub const INSTANCE_FAR_ORIGIN: f32 = 128.0;
+
+/// The insertion padding's floor relative to the grid's size for rays from up to
+/// `far_origin` grid sizes away (see [`FAR_ORIGIN`]).
+#[must_use]
+pub fn pad_of_size(far_origin: f32) -> f32 {
+    far_origin * 16.0 / 8_388_608.0
+}
 
 /// The cell lists are kept below this many entries per primitive (plus one per cell) by
 /// coarsening the grid.

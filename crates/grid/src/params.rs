@@ -13,6 +13,12 @@ pub struct GridParams {
     /// instead of 52.7 tests per ray and 1.18x the throughput, the 100k-triangle soup 1.19x,
     /// the bunny 1.08x; builds take 5x to 9x longer (Sponza 47 ms instead of 5.5 ms).
     pub clip_triangles: bool,
+    /// Rays whose origin lies farther than this many grid sizes from the grid's centre
+    /// test every primitive instead of walking the grid; the insertion padding's floor
+    /// grows with it (`far_origin * 16 * 2^-23` of the grid's size, [`crate::FAR_ORIGIN`]).
+    /// [`crate::FAR_ORIGIN`] for a scene; [`crate::INSTANCE_FAR_ORIGIN`] for the meshes
+    /// instances place (`Accel::for_instances`).
+    pub far_origin: f32,
 }
 
 impl GridParams {
@@ -24,6 +30,7 @@ impl GridParams {
             lambda: 1.25,
             max_cells: 1 << 24,
             clip_triangles: true,
+            far_origin: crate::FAR_ORIGIN,
         }
     }
 

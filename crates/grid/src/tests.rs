@@ -91,7 +91,7 @@ fn resolution_follows_the_primitive_count_and_cap() {
         GridParams {
             lambda: 8.0,
             max_cells: 1000,
-            clip_triangles: true,
+            ..GridParams::default()
         },
     );
     assert!(cells(&capped) <= 1000);

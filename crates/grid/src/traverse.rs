@@ -1,7 +1,7 @@
 //! Walking a grid: the shared 3D-DDA in grid units, the per-ray mailbox, and the `Accel`
 //! queries through the core's traversal frame.
 
-use crate::{FAR_ORIGIN, Grid, GridParams, MAILBOX};
+use crate::{Grid, GridParams, INSTANCE_FAR_ORIGIN, MAILBOX};
 use raybench_geometry::traverse::{self, AnyHit, Closest};
 use raybench_geometry::{
     Accel, AccelStats, Counters, Geometry, GridQuality, Hit, QualityParams, Ray, SlabRay,
@@ -12,7 +12,7 @@ use std::sync::Arc;
 
 impl Grid {
     /// Whether the DDA can locate `ray` in the grid precisely enough (its origin within
-    /// [`FAR_ORIGIN`] grid sizes of the centre, and finite).
+    /// [`GridParams::far_origin`] grid sizes of the centre, and finite).
     #[inline]
     pub(crate) fn dda_is_exact_for(&self, ray: &Ray) -> bool {
         if self.ids.is_empty() {
@@ -24,7 +24,7 @@ impl Grid {
             return false;
         }
         let reach = (ray.origin - self.bounds.center()).abs().max_element();
-        reach <= FAR_ORIGIN * self.bounds.extent().max_element()
+        reach <= self.params.far_origin * self.bounds.extent().max_element()
     }
 
     /// The cells `ray` visits, in order (for tests and teaching).
@@ -110,6 +110,19 @@ impl Mailbox {
 impl Accel for Grid {
     fn build(geometry: Arc<Geometry>) -> Self {
         Self::build_with(geometry, GridParams::default())
+    }
+
+    /// The same grid (its resolution's parameters kept) with the bound and padding of
+    /// [`INSTANCE_FAR_ORIGIN`].
+    fn for_instances(self) -> Self {
+        let params = GridParams {
+            far_origin: self.params.far_origin.max(INSTANCE_FAR_ORIGIN),
+            ..self.params
+        };
+        if params == self.params {
+            return self;
+        }
+        Self::build_with(self.geometry, params)
     }
 
     fn geometry(&self) -> &Geometry {

@@ -31,6 +31,7 @@ impl Default for TwoLevelParams {
 /// A top-level uniform grid plus a sub-grid for every dense cell.
 #[derive(Clone, Debug)]
 pub struct TwoLevelGrid {
+    params: TwoLevelParams,
     top: Grid,
     /// For each top cell, an index into `subs` or `u32::MAX`.
     sub_of: Vec<u32>,
@@ -79,7 +80,12 @@ impl TwoLevelGrid {
                 }
             }
         }
-        Self { top, sub_of, subs }
+        Self {
+            params,
+            top,
+            sub_of,
+            subs,
+        }
     }
 
     /// Calls `test(ids)` for the primitive lists along `ray`, descending into sub-grids;
@@ -113,6 +119,23 @@ impl TwoLevelGrid {
 impl Accel for TwoLevelGrid {
     fn build(geometry: Arc<Geometry>) -> Self {
         Self::build_with(geometry, TwoLevelParams::default())
+    }
+
+    /// The same two-level grid, every level with the bound and padding of
+    /// [`crate::INSTANCE_FAR_ORIGIN`] (`Grid::for_instances`).
+    fn for_instances(self) -> Self {
+        let grid = GridParams {
+            far_origin: self.params.grid.far_origin.max(crate::INSTANCE_FAR_ORIGIN),
+            ..self.params.grid
+        };
+        if grid == self.params.grid {
+            return self;
+        }
+        let params = TwoLevelParams {
+            grid,
+            ..self.params
+        };
+        Self::build_with(Arc::clone(&self.top.geometry), params)
     }
 
     fn geometry(&self) -> &Geometry {
