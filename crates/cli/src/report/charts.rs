@@ -448,21 +448,25 @@ fn log_axis(values: impl Iterator<Item = f64>) -> Axis {
         .map(|m| m * p)
         .find(|s| *s <= third * (1.0 + 1e-9))
         .unwrap_or(p);
-    let first = (a / step).ceil() as i64;
-    let last = (b / step).floor() as i64;
-    let major = (first..=last)
-        .map(|i| {
-            let v = i as f64 * step;
-            (v, number(v, step))
-        })
-        .collect();
     Axis {
         lo,
         hi,
         linear: false,
-        major,
+        major: multiples(a, b, step),
         minor: Vec::new(),
     }
+}
+
+/// The multiples of `step` in `[a, b]`, labelled.
+fn multiples(a: f64, b: f64, step: f64) -> Vec<(f64, String)> {
+    let first = (a / step).ceil() as i64;
+    let last = (b / step).floor() as i64;
+    (first..=last)
+        .map(|i| {
+            let v = i as f64 * step;
+            (v, number(v, step))
+        })
+        .collect()
 }
 
 /// A linear axis over `values` (the finite ones), labelled every 1, 2 or 5 times a power of
@@ -486,19 +490,11 @@ fn linear_axis(values: impl Iterator<Item = f64>) -> Axis {
         .map(|m| m * p)
         .find(|s| span / s <= 8.0 + 1e-9)
         .unwrap_or(10.0 * p);
-    let first = (lo / step).ceil() as i64;
-    let last = (hi / step).floor() as i64;
-    let major = (first..=last)
-        .map(|i| {
-            let v = i as f64 * step;
-            (v, number(v, step))
-        })
-        .collect();
     Axis {
         lo,
         hi,
         linear: true,
-        major,
+        major: multiples(lo, hi, step),
         minor: Vec::new(),
     }
 }
