@@ -1,6 +1,6 @@
 //! The constants the WGSL kernels share with Rust, written into the kernels' source from the
 //! Rust definitions (never copied by hand): [`kernel_source`] prepends them to
-//! `kernels.wgsl`, which declares none of them itself.
+//! the kernel files (`kernels/*.wgsl`), which declare none of them themselves.
 
 use raybench_core::NO_HIT;
 use raybench_core::integrator::{AMBIENT, DIMENSIONS_PER_BOUNCE, ROULETTE_DEPTH, SHADOW_SHORTEN};
@@ -12,6 +12,14 @@ pub(crate) const KIND_TRIANGLE: u32 = 0;
 pub(crate) const KIND_SPHERE: u32 = 1;
 /// See [`KIND_TRIANGLE`].
 pub(crate) const KIND_PLANE: u32 = 2;
+/// See [`KIND_TRIANGLE`].
+pub(crate) const KIND_HEIGHTFIELD: u32 = 3;
+/// See [`KIND_TRIANGLE`].
+pub(crate) const KIND_CSG: u32 = 4;
+/// See [`KIND_TRIANGLE`].
+pub(crate) const KIND_BEZIER: u32 = 5;
+/// See [`KIND_TRIANGLE`].
+pub(crate) const KIND_SDF: u32 = 6;
 /// Material kinds as the shaders number them (`MAT_*`).
 pub(crate) const MAT_DIFFUSE: u32 = 0;
 /// See [`MAT_DIFFUSE`].
@@ -35,11 +43,19 @@ pub(crate) const WHITTED_STACK: u32 = MAX_DEPTH + 2;
 /// definition it names.
 #[must_use]
 pub fn wgsl_constants() -> String {
-    let u32s: [(&str, u32, &str); 15] = [
+    let u32s: [(&str, u32, &str); 19] = [
         ("NO_HIT", NO_HIT, "raybench_core::NO_HIT"),
         ("KIND_TRIANGLE", KIND_TRIANGLE, "data.rs primitive kinds"),
         ("KIND_SPHERE", KIND_SPHERE, "data.rs primitive kinds"),
         ("KIND_PLANE", KIND_PLANE, "data.rs primitive kinds"),
+        (
+            "KIND_HEIGHTFIELD",
+            KIND_HEIGHTFIELD,
+            "data.rs primitive kinds",
+        ),
+        ("KIND_CSG", KIND_CSG, "data.rs primitive kinds"),
+        ("KIND_BEZIER", KIND_BEZIER, "data.rs primitive kinds"),
+        ("KIND_SDF", KIND_SDF, "data.rs primitive kinds"),
         ("MAT_DIFFUSE", MAT_DIFFUSE, "data.rs material kinds"),
         ("MAT_MIRROR", MAT_MIRROR, "data.rs material kinds"),
         ("MAT_GLASS", MAT_GLASS, "data.rs material kinds"),
@@ -90,10 +106,44 @@ pub fn wgsl_constants() -> String {
     out
 }
 
-/// The complete WGSL source: the shared constants, then `kernels.wgsl`.
+/// The WGSL files of the kernels (`kernels/`), in the order [`kernel_source`] joins them:
+/// `main.wgsl` (bindings, traversal, shading, the entry points), then one file per
+/// primitive kind or mode of its own. WGSL declarations may come in any order, so the files
+/// call each other freely.
+pub const KERNEL_FILES: [(&str, &str); 5] = [
+    ("main.wgsl", include_str!("kernels/main.wgsl")),
+    ("heightfield.wgsl", include_str!("kernels/heightfield.wgsl")),
+    ("csg.wgsl", include_str!("kernels/csg.wgsl")),
+    ("bezier.wgsl", include_str!("kernels/bezier.wgsl")),
+    ("sdf.wgsl", include_str!("kernels/sdf.wgsl")),
+];
+
+/// The variable naming a folder to read the kernel files from at run time instead of the
+/// copies compiled in (for editing the kernels without rebuilding:
+/// `RAYBENCH_KERNELS_DIR=crates/wgpu/src/kernels`).
+pub const KERNELS_DIR_VAR: &str = "RAYBENCH_KERNELS_DIR";
+
+/// The complete WGSL source: the shared constants, then the [`KERNEL_FILES`] (read from
+/// [`KERNELS_DIR_VAR`]'s folder when it is set; a file that cannot be read there is taken
+/// from the compiled-in copy, with a warning).
 #[must_use]
 pub fn kernel_source() -> String {
-    wgsl_constants() + "\n" + include_str!("kernels.wgsl")
+    let dir = std::env::var_os(KERNELS_DIR_VAR).map(std::path::PathBuf::from);
+    let mut s = wgsl_constants();
+    for (name, text) in KERNEL_FILES {
+        s += &format!("\n// ---- kernels/{name}\n");
+        match dir.as_ref().map(|d| std::fs::read_to_string(d.join(name))) {
+            Some(Ok(file)) => s += &file,
+            Some(Err(e)) => {
+                eprintln!(
+                    "warning: {KERNELS_DIR_VAR}: cannot read {name} ({e}); using the built-in copy"
+                );
+                s += text;
+            }
+            None => s += text,
+        }
+    }
+    s
 }
 
 #[cfg(test)]
@@ -102,7 +152,7 @@ mod tests {
 
     #[test]
     fn every_constant_is_declared_once_and_parses_back() {
-        let kernels = include_str!("kernels.wgsl");
+        let kernels: String = KERNEL_FILES.iter().map(|(_, text)| *text).collect();
         for line in wgsl_constants().lines().skip(1) {
             let name = line
                 .strip_prefix("const ")
@@ -110,7 +160,7 @@ mod tests {
                 .expect("a const line");
             assert!(
                 !kernels.contains(&format!("const {name}:")),
-                "kernels.wgsl declares {name} by hand; it comes from constants.rs"
+                "the kernels declare {name} by hand; it comes from constants.rs"
             );
             let value = line
                 .split('=')

@@ -1,4 +1,4 @@
-//! The data shared with the shaders (`kernels.wgsl`): `#[repr(C)]` + `bytemuck::Pod`
+//! The data shared with the shaders (`kernels/*.wgsl`): `#[repr(C)]` + `bytemuck::Pod`
 //! structs laid out as WGSL lays out the matching structs, and the scene flattened into
 //! them once per `prepare`.
 
@@ -10,10 +10,11 @@ use raybench_core::{
 };
 
 use crate::constants::{
-    EMITTER_BIT, KIND_PLANE, KIND_SPHERE, KIND_TRIANGLE, LIGHT_DIRECTIONAL, LIGHT_POINT,
-    MAT_DIFFUSE, MAT_GLASS, MAT_MIRROR,
+    EMITTER_BIT, KIND_BEZIER, KIND_CSG, KIND_HEIGHTFIELD, KIND_PLANE, KIND_SDF, KIND_SPHERE,
+    KIND_TRIANGLE, LIGHT_DIRECTIONAL, LIGHT_POINT, MAT_DIFFUSE, MAT_GLASS, MAT_MIRROR,
 };
 use crate::cwbvh::WideNode;
+use crate::geo::{self, Geo};
 
 /// Per-dispatch parameters: 176 bytes, one 256-byte-aligned slot per dispatch of a frame.
 #[repr(C)]
@@ -128,8 +129,10 @@ pub struct GpuOut {
     pub v: [f32; 4],
     /// Primitive id ([`raybench_core::NO_HIT`] for a miss).
     pub id: u32,
+    /// Explicit rays: the sub-primitive id.
+    pub sub: u32,
     /// Padding.
-    pub pad: [u32; 3],
+    pub pad: [u32; 2],
 }
 
 const _: () = assert!(std::mem::size_of::<GpuOut>() == 32);
@@ -148,58 +151,65 @@ fn v4(v: Vec3, w: f32) -> [f32; 4] {
     [v.x, v.y, v.z, w]
 }
 
-/// The GPU record of a primitive, `None` for kinds without a WGSL port.
-fn prim(shape: &Shape, id: u32) -> Option<GpuPrim> {
+/// The GPU record of a primitive; the kinds of [`geo`] append their data to `geo`.
+///
+/// # Errors
+/// When the kind has no WGSL port or its data does not fit ([`geo::supports`]).
+fn prim(shape: &Shape, id: u32, geo: &mut Geo) -> Result<GpuPrim, String> {
     let idw = f32::from_bits(id);
-    Some(match shape {
-        Shape::Triangle(t) => GpuPrim {
-            a: v4(t.v[0], f32::from_bits(KIND_TRIANGLE)),
-            b: v4(t.v[1], idw),
-            c: v4(t.v[2], 0.0),
-        },
-        Shape::Sphere(s) => GpuPrim {
-            a: v4(s.center, f32::from_bits(KIND_SPHERE)),
-            b: v4(Vec3::ZERO, idw),
-            c: [s.radius, 0.0, 0.0, 0.0],
-        },
-        Shape::Plane(p) => GpuPrim {
-            a: v4(p.point, f32::from_bits(KIND_PLANE)),
-            b: v4(Vec3::ZERO, idw),
-            c: v4(p.normal, 0.0),
-        },
-        Shape::HeightField(_) | Shape::Csg(_) => return None,
-        // Bezier patches: no WGSL port of the subdivision + Newton search.
-        Shape::Bezier(_) => return None,
-        // Sphere tracing has no WGSL port.
-        Shape::Sdf(_) => return None,
-    })
+    let (mut p, kind) = match shape {
+        Shape::Triangle(t) => (
+            GpuPrim {
+                a: v4(t.v[0], 0.0),
+                b: v4(t.v[1], 0.0),
+                c: v4(t.v[2], 0.0),
+            },
+            KIND_TRIANGLE,
+        ),
+        Shape::Sphere(s) => (
+            GpuPrim {
+                a: v4(s.center, 0.0),
+                b: v4(Vec3::ZERO, 0.0),
+                c: [s.radius, 0.0, 0.0, 0.0],
+            },
+            KIND_SPHERE,
+        ),
+        Shape::Plane(p) => (
+            GpuPrim {
+                a: v4(p.point, 0.0),
+                b: v4(Vec3::ZERO, 0.0),
+                c: v4(p.normal, 0.0),
+            },
+            KIND_PLANE,
+        ),
+        Shape::HeightField(_) | Shape::Csg(_) | Shape::Bezier(_) | Shape::Sdf(_) => {
+            let kind = match shape {
+                Shape::HeightField(_) => KIND_HEIGHTFIELD,
+                Shape::Csg(_) => KIND_CSG,
+                Shape::Bezier(_) => KIND_BEZIER,
+                _ => KIND_SDF,
+            };
+            let p = geo::encode(shape, geo)?.unwrap_or_default();
+            (p, kind)
+        }
+    };
+    p.a[3] = f32::from_bits(kind);
+    p.b[3] = idw;
+    Ok(p)
 }
 
 /// Why the shaders cannot render `scene`, if they cannot: no environment map, and every
-/// primitive kind must have a
-/// WGSL port (triangles, spheres and planes do; height fields, CSG trees and SDF models do not
-/// yet).
+/// primitive kind must have a WGSL port whose data fits ([`geo::supports`]).
 ///
 /// # Errors
-/// The first primitive kind without a port.
+/// The first primitive the kernels cannot intersect, or the environment map.
 pub fn check_kinds(scene: &Scene) -> Result<(), String> {
     if scene.environment.is_some() {
         return Err(
             "the GPU kernels have no environment map (render it with a CPU backend)".into(),
         );
     }
-    match scene
-        .geometry
-        .shapes()
-        .iter()
-        .find(|s| prim(s, 0).is_none())
-    {
-        Some(s) => Err(format!(
-            "the GPU kernels have no {} intersection (render it with a CPU backend)",
-            s.kind().name()
-        )),
-        None => Ok(()),
-    }
+    scene.geometry.shapes().iter().try_for_each(geo::supports)
 }
 
 /// Whether the GPU's `path` kernel samples every light of `scene`: it ports next-event
@@ -236,6 +246,8 @@ pub struct SceneData {
     pub prim_info: Vec<u32>,
     /// Materials (four vectors each), then lights (two vectors each).
     pub shading: Vec<[f32; 4]>,
+    /// The primitives' own data beyond their records ([`geo`]).
+    pub geo: Vec<[f32; 4]>,
     /// Where the unbounded primitives start in `prims`, and how many.
     pub unbounded: (u32, u32),
     /// Where the emitter list starts in `prims`, and how many.
@@ -271,16 +283,23 @@ impl SceneData {
         leaf_order: &[u32],
     ) -> Result<Self, String> {
         check_kinds(scene)?;
-        // Kinds are checked above, so `prim` is `Some` for every primitive.
-        let flat = |id: u32| prim(scene.geometry.shape(id), id).unwrap_or_default();
         let g = &scene.geometry;
+        let mut geo = Geo::new();
         // Leaves index the primitive buffer directly: primitives are stored in leaf order.
-        let mut prims: Vec<GpuPrim> = leaf_order.iter().map(|&id| flat(id)).collect();
-        let unbounded = (prims.len() as u32, g.unbounded().len() as u32);
-        prims.extend(g.unbounded().iter().map(|&id| flat(id)));
+        let mut prims = Vec::with_capacity(leaf_order.len() + g.unbounded().len());
+        for &id in leaf_order.iter().chain(g.unbounded()) {
+            prims.push(prim(g.shape(id), id, &mut geo)?);
+        }
+        let unbounded = (leaf_order.len() as u32, g.unbounded().len() as u32);
+        // The emitter list repeats its primitives' records (data shared with the originals
+        // where the kind keeps any in `geo`: the record is copied, not re-encoded).
+        let mut slot_of = vec![u32::MAX; g.len()];
+        for (k, &id) in leaf_order.iter().chain(g.unbounded()).enumerate() {
+            slot_of[id as usize] = k as u32;
+        }
         let emitter_first = prims.len() as u32;
         for (&id, &cdf) in scene.emitters.ids.iter().zip(&scene.emitters.cdf) {
-            let mut p = flat(id);
+            let mut p = prims[slot_of[id as usize] as usize];
             p.c[3] = cdf as f32;
             prims.push(p);
         }
@@ -324,6 +343,7 @@ impl SceneData {
             prims,
             prim_info,
             shading,
+            geo,
             unbounded,
             emitters,
             lights,
@@ -337,7 +357,7 @@ impl SceneData {
             + self.wide.len() * 80
             + self.prims.len() * 48
             + self.prim_info.len() * 4) as u64
-            + self.shading.len() as u64 * 16
+            + (self.shading.len() + self.geo.len()) as u64 * 16
     }
 
     /// The parameters every dispatch of a frame shares; the caller fills in the band,

@@ -15,7 +15,7 @@
 //!   2017), finding the same hits.
 //! - Any-hit rays (`occlude_rays`) run a kernel of their own that stops at the first hit.
 //! - The intersection routines, shading, optics and the counter-based random numbers are
-//!   ports of `raybench-core`'s (`kernels.wgsl` names each original), so images match the
+//!   ports of `raybench-core`'s (`kernels/*.wgsl` name each original), so images match the
 //!   CPU's within floating-point tolerance.
 //! - Frames are split into dispatches of bounded work ([`plan`]); path tracing accumulates
 //!   its samples progressively in the output buffer.
@@ -28,10 +28,11 @@ mod constants;
 mod context;
 pub mod cwbvh;
 mod data;
+mod geo;
 pub mod plan;
 mod renderer;
 
-pub use constants::{kernel_source, wgsl_constants};
+pub use constants::{KERNEL_FILES, KERNELS_DIR_VAR, kernel_source, wgsl_constants};
 pub use context::{AdapterRequest, describe};
 pub use data::{check_kinds, check_path_emitters};
 pub use renderer::{Layout, WgpuRenderer};

@@ -96,7 +96,7 @@ impl Kernels {
         }];
         entries.extend((1..=5).map(|b| storage(b, true)));
         entries.extend((6..=7).map(|b| storage(b, false)));
-        entries.push(storage(8, true));
+        entries.extend([storage(8, true), storage(9, true)]);
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("raybench bindings"),
             entries: &entries,
@@ -173,6 +173,8 @@ struct Prepared {
     prims: wgpu::Buffer,
     prim_info: wgpu::Buffer,
     shading: wgpu::Buffer,
+    /// The primitives' own data (`geo`).
+    geo: wgpu::Buffer,
     /// One frame at a time: frames share the device's queue and the kernels.
     frame_lock: Mutex<()>,
 }
@@ -184,7 +186,7 @@ struct Prepared {
 /// ([`Renderer::occlude_rays`]) run a kernel of their own that stops at the first hit.
 ///
 /// Results match the CPU backends within floating-point tolerance, not bit for bit (see
-/// `kernels.wgsl`). Timings of a frame: `upload` (parameters), `gpu` (execution, from
+/// `kernels/main.wgsl`). Timings of a frame: `upload` (parameters), `gpu` (execution, from
 /// timestamp queries when the adapter has them, else wall time around submit and wait),
 /// `readback`, and `render` (the whole call).
 pub struct WgpuRenderer {
@@ -428,6 +430,10 @@ impl Batches<'_> {
                 binding: 8,
                 resource: p.wide.as_entire_binding(),
             },
+            wgpu::BindGroupEntry {
+                binding: 9,
+                resource: p.geo.as_entire_binding(),
+            },
         ];
         p.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("raybench frame"),
@@ -667,6 +673,7 @@ impl Renderer for WgpuRenderer {
             usage,
         );
         let shading = buffer_init(&gpu, "shading", bytemuck::cast_slice(&data.shading), usage);
+        let geo = buffer_init(&gpu, "geo", bytemuck::cast_slice(&data.geo), usage);
         // Uploads are queued; wait so that the phase measures the transfer.
         gpu.queue.submit([]);
         wait(&gpu)?;
@@ -688,6 +695,7 @@ impl Renderer for WgpuRenderer {
             prims,
             prim_info,
             shading,
+            geo,
             frame_lock: Mutex::new(()),
         });
         Ok(timings)
@@ -866,7 +874,7 @@ impl Renderer for WgpuRenderer {
                     o.id,
                     PrimHit {
                         t: o.v[0],
-                        sub: 0,
+                        sub: o.sub,
                         u: o.v[1],
                         v: o.v[2],
                     },

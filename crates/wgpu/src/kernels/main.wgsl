@@ -90,7 +90,8 @@ struct Prim {
 struct Out {
     v: vec4<f32>,
     id: u32,
-    _pad0: u32,
+    // Explicit rays: the sub-primitive id.
+    sub: u32,
     _pad1: u32,
     _pad2: u32,
 }
@@ -110,6 +111,10 @@ struct RayIn {
 @group(0) @binding(6) var<storage, read_write> out: array<Out>;
 @group(0) @binding(7) var<storage, read_write> counters: array<atomic<u32>, 6>;
 @group(0) @binding(8) var<storage, read> wide_nodes: array<WideNode>;
+// The primitives' own data beyond their 48-byte record (height-field samples, CSG trees,
+// Bezier control points, SDF programs, voxels), laid out by `crates/wgpu/src/geo/`; a
+// record points into it.
+@group(0) @binding(9) var<storage, read> geo: array<vec4<f32>>;
 
 var<private> n_rays: u32;
 var<private> n_tests: u32;
@@ -338,26 +343,64 @@ fn plane_hit(r: Ray, point: vec3<f32>, normal: vec3<f32>, t_max: f32) -> f32 {
     return -1.0;
 }
 
-// `Shape::intersect` on prims[k] with the ray clipped to t_max: (t, u, v, 1) or w = 0.
-fn prim_hit(r: Ray, k: u32, t_max: f32) -> vec4<f32> {
+// A primitive's hit (`PrimHit`): `t`, the surface parameters, the sub-primitive id; `ok`
+// false on a miss.
+struct Cand {
+    t: f32,
+    u: f32,
+    v: f32,
+    sub: u32,
+    ok: bool,
+}
+
+fn miss() -> Cand {
+    return Cand(0.0, 0.0, 0.0, 0u, false);
+}
+
+// A hit at `t` without surface parameters or sub-primitive, or a miss when `t` < 0.
+fn hit_at(t: f32) -> Cand {
+    if t >= 0.0 && !is_nan(t) {
+        return Cand(t, 0.0, 0.0, 0u, true);
+    }
+    return miss();
+}
+
+// `Shape::intersect` on prims[k] with the ray clipped to t_max. The kinds beyond triangles,
+// spheres and planes live in files of their own (`kernels/*.wgsl`), each with a
+// `*_hit(r, p, t_max) -> Cand` and a `*_normal(r, p, h) -> vec3<f32>`.
+fn prim_hit(r: Ray, k: u32, t_max: f32) -> Cand {
     let p = prims[k];
     let kind = bitcast<u32>(p.a.w);
     if COUNT {
         n_tests += 1u;
     }
-    if kind == KIND_TRIANGLE {
-        return triangle_hit(r, p.a.xyz, p.b.xyz, p.c.xyz, t_max);
+    switch kind {
+        case KIND_TRIANGLE: {
+            let h = triangle_hit(r, p.a.xyz, p.b.xyz, p.c.xyz, t_max);
+            return Cand(h.x, h.y, h.z, 0u, h.w != 0.0);
+        }
+        case KIND_SPHERE: {
+            return hit_at(sphere_hit(r, p.a.xyz, p.c.x, t_max));
+        }
+        case KIND_PLANE: {
+            return hit_at(plane_hit(r, p.a.xyz, p.c.xyz, t_max));
+        }
+        case KIND_HEIGHTFIELD: {
+            return heightfield_hit(r, p, t_max);
+        }
+        case KIND_CSG: {
+            return csg_hit(r, p, t_max);
+        }
+        case KIND_BEZIER: {
+            return bezier_hit(r, p, t_max);
+        }
+        case KIND_SDF: {
+            return sdf_hit(r, p, t_max);
+        }
+        default: {
+            return miss();
+        }
     }
-    var t = -1.0;
-    if kind == KIND_SPHERE {
-        t = sphere_hit(r, p.a.xyz, p.c.x, t_max);
-    } else if kind == KIND_PLANE {
-        t = plane_hit(r, p.a.xyz, p.c.xyz, t_max);
-    }
-    if t >= 0.0 && !is_nan(t) {
-        return vec4<f32>(t, 0.0, 0.0, 1.0);
-    }
-    return vec4<f32>(0.0);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -368,7 +411,10 @@ struct Hit {
     id: u32,
     u: f32,
     v: f32,
+    // Index of the primitive in `prims`.
     k: u32,
+    // Sub-primitive id (a height-field triangle, a CSG leaf).
+    sub: u32,
 }
 
 // `cull_bound`: the limit beyond which a box cannot hold a closer hit.
@@ -380,18 +426,18 @@ fn cull_bound(t: f32) -> f32 {
 // ties go to the smaller primitive id.
 fn test_closest(r: Ray, k: u32, best: ptr<function, Hit>) {
     let h = prim_hit(r, k, (*best).t);
-    if h.w == 0.0 {
+    if !h.ok {
         return;
     }
     let id = bitcast<u32>(prims[k].b.w);
-    if h.x < (*best).t || (h.x == (*best).t && id < (*best).id) {
-        *best = Hit(h.x, id, h.y, h.z, k);
+    if h.t < (*best).t || (h.t == (*best).t && id < (*best).id) {
+        *best = Hit(h.t, id, h.u, h.v, k, h.sub);
     }
 }
 
 // The closest hit of `r`: id NO_HIT when it hits nothing.
 fn closest(r: Ray) -> Hit {
-    var best = Hit(r.t_max, NO_HIT, 0.0, 0.0, 0u);
+    var best = Hit(r.t_max, NO_HIT, 0.0, 0.0, 0u, 0u);
     for (var k = params.unbounded_first; k < params.unbounded_first + params.unbounded_count; k++) {
         test_closest(r, k, &best);
     }
@@ -466,7 +512,7 @@ fn closest(r: Ray) -> Hit {
 // Whether anything blocks `r` within [t_min, t_max].
 fn occluded(r: Ray) -> bool {
     for (var k = params.unbounded_first; k < params.unbounded_first + params.unbounded_count; k++) {
-        if prim_hit(r, k, r.t_max).w != 0.0 {
+        if prim_hit(r, k, r.t_max).ok {
             return true;
         }
     }
@@ -492,7 +538,7 @@ fn occluded(r: Ray) -> bool {
         let node = nodes[index];
         if node.count > 0u {
             for (var k = node.first_or_right; k < node.first_or_right + node.count; k++) {
-                if prim_hit(r, k, r.t_max).w != 0.0 {
+                if prim_hit(r, k, r.t_max).ok {
                     return true;
                 }
             }
@@ -659,7 +705,7 @@ fn occluded_wide(r: Ray) -> bool {
             let info = slot_byte(n.base_meta.z, n.base_meta.w, slot);
             let first = n.base_meta.y + (info & 31u);
             for (var k = first; k < first + (info >> 5u); k++) {
-                if prim_hit(r, k, r.t_max).w != 0.0 {
+                if prim_hit(r, k, r.t_max).ok {
                     return true;
                 }
             }
@@ -671,18 +717,33 @@ fn occluded_wide(r: Ray) -> bool {
     return false;
 }
 
-// The geometric normal at a hit (`Shape::complete_hit`).
+// The unit geometric normal at a hit (`Shape::complete_hit`).
 fn hit_normal(r: Ray, h: Hit) -> vec3<f32> {
     let p = prims[h.k];
-    let kind = bitcast<u32>(p.a.w);
-    if kind == KIND_TRIANGLE {
-        return normalize_or(cross(p.b.xyz - p.a.xyz, p.c.xyz - p.a.xyz), vec3<f32>(0.0, 1.0, 0.0));
+    switch bitcast<u32>(p.a.w) {
+        case KIND_TRIANGLE: {
+            return normalize_or(cross(p.b.xyz - p.a.xyz, p.c.xyz - p.a.xyz), vec3<f32>(0.0, 1.0, 0.0));
+        }
+        case KIND_SPHERE: {
+            let at = r.o + r.d * h.t;
+            return normalize_or((at - p.a.xyz) / p.c.x, vec3<f32>(0.0, 1.0, 0.0));
+        }
+        case KIND_HEIGHTFIELD: {
+            return heightfield_normal(r, p, h);
+        }
+        case KIND_CSG: {
+            return csg_normal(r, p, h);
+        }
+        case KIND_BEZIER: {
+            return bezier_normal(r, p, h);
+        }
+        case KIND_SDF: {
+            return sdf_normal(r, p, h);
+        }
+        default: {
+            return p.c.xyz;
+        }
     }
-    if kind == KIND_SPHERE {
-        let at = r.o + r.d * h.t;
-        return normalize_or((at - p.a.xyz) / p.c.x, vec3<f32>(0.0, 1.0, 0.0));
-    }
-    return p.c.xyz;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -1260,13 +1321,14 @@ fn trace_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let q = explicit_ray(i);
-    var h = Hit(params.inf, NO_HIT, 0.0, 0.0, 0u);
+    var h = Hit(params.inf, NO_HIT, 0.0, 0.0, 0u, 0u);
     if q.valid {
         h = closest(q.r);
     }
     n_rays += 1u;
     out[i].v = vec4<f32>(select(h.t, params.inf, h.id == NO_HIT), h.u, h.v, 0.0);
     out[i].id = h.id;
+    out[i].sub = h.sub;
     flush_counters();
 }
 
