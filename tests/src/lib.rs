@@ -668,8 +668,11 @@ pub mod gpu {
             };
             assert_close_colors(&what, &reference.color, &frame.color, max_mismatch);
         }
-        let mut rays =
-            raybench_core::ray_sets::incoherent(s.geometry.bounds(), (size * size) as usize, 1);
+        let mut rays = raybench_core::ray_sets::incoherent(
+            s.geometry.world_bounds(),
+            (size * size) as usize,
+            1,
+        );
         let oracle = prepared(super::ORACLE, &s);
         let (reference, ref_counts) = oracle.trace_rays(&rays, true).unwrap();
         let (hits, counts) = gpu.trace_rays(&rays, true).unwrap();
@@ -693,7 +696,7 @@ pub mod gpu {
             "{name} on {scene}, incoherent rays: {c:?}"
         );
         // Any hit, at full length and shortened (shadow rays end before the light).
-        let short = s.geometry.bounds().extent().length() / 20.0;
+        let short = s.geometry.world_bounds().extent().length() / 20.0;
         let n = rays.len();
         rays.extend_from_within(..);
         for r in &mut rays[n..] {

@@ -34,6 +34,9 @@ gpu_tests! {
     soup => "soup:10000", false,
     icosphere => "icosphere:4", false,
     teapot_stadium => "teapot-stadium", false,
+    instances => "instances", true,
+    instance_grid => "instance-grid", true,
+    moving => "moving", true,
 }
 
 #[test]
@@ -324,9 +327,15 @@ fn the_gpu_trees_find_the_same_hits() {
     if !raybench_tests::gpu::available() {
         return;
     }
-    for scene in ["teapot", "spheres:2000", "soup:2000", "terrain:32"] {
+    for scene in [
+        "teapot",
+        "spheres:2000",
+        "soup:2000",
+        "terrain:32",
+        "instance-grid",
+    ] {
         let s = raybench_tests::load_or_skip(scene).unwrap();
-        let rays = raybench_core::ray_sets::incoherent(s.geometry.bounds(), 4096, 5);
+        let rays = raybench_core::ray_sets::incoherent(s.geometry.world_bounds(), 4096, 5);
         let results: Vec<_> = raybench_tests::DEVICES
             .iter()
             .map(|name| {

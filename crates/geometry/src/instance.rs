@@ -129,6 +129,21 @@ impl Instance {
         self.to_world
     }
 
+    /// The inverse placement, world space to mesh space ([`Instance::local_ray`] applies
+    /// it).
+    #[inline]
+    #[must_use]
+    pub fn to_local(&self) -> Affine3A {
+        self.to_local
+    }
+
+    /// The normal matrix, the inverse transpose ([`Instance::world_normal`] applies it).
+    #[inline]
+    #[must_use]
+    pub fn normal_matrix(&self) -> Mat3A {
+        self.normal
+    }
+
     /// The world box: the 8 transformed corners of the mesh's box, padded outward by
     /// [`INSTANCE_BOX_PAD`] so that it is conservative.
     #[inline]

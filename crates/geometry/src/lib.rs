@@ -79,6 +79,6 @@ pub use sdf::{March, Sdf, SdfNode, SdfOp, SdfParams, SdfPrimitive};
 pub use sphere::Sphere;
 pub use stack::{CULL_SLACK, NodeStack, cull_bound};
 pub use triangle::Triangle;
-pub use two_level::TwoLevel;
+pub use two_level::{TopLevel, TopNode, TwoLevel};
 
 pub use glam::{Affine3A, Vec2, Vec3, Vec3A};

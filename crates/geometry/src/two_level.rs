@@ -30,27 +30,42 @@ const STACK_DEPTH: usize = 64;
 
 /// One node of the top-level tree: a box and either two children or a run of instances.
 #[derive(Clone, Debug)]
-struct TopNode {
-    min: Vec3A,
-    max: Vec3A,
+pub struct TopNode {
+    /// Box minimum.
+    pub min: Vec3A,
+    /// Box maximum.
+    pub max: Vec3A,
     /// Inner node: index of the first child (the second follows it); leaf: first index
     /// into [`TopLevel::order`].
-    first: u32,
+    pub first: u32,
     /// 0 for an inner node, else the number of instances in the leaf.
-    count: u32,
+    pub count: u32,
 }
 
-/// The tree over the instances' world boxes.
+/// The tree over the instances' world boxes (the GPU backend uploads the same tree).
 #[derive(Clone, Debug, Default)]
-struct TopLevel {
+pub struct TopLevel {
     nodes: Vec<TopNode>,
     order: Vec<u32>,
 }
 
 impl TopLevel {
+    /// The nodes, root first (none without boxes).
+    #[must_use]
+    pub fn nodes(&self) -> &[TopNode] {
+        &self.nodes
+    }
+
+    /// Box indices in leaf order: leaf `n` holds `order[n.first .. n.first + n.count]`.
+    #[must_use]
+    pub fn order(&self) -> &[u32] {
+        &self.order
+    }
+
     /// Median splits along the widest axis of the boxes' centres: the same tree on any
     /// machine and thread count.
-    fn build(boxes: &[Aabb]) -> Self {
+    #[must_use]
+    pub fn build(boxes: &[Aabb]) -> Self {
         let mut top = Self {
             nodes: Vec::new(),
             order: (0..boxes.len() as u32).collect(),

@@ -43,7 +43,7 @@ pub(crate) const WHITTED_STACK: u32 = MAX_DEPTH + 2;
 /// definition it names.
 #[must_use]
 pub fn wgsl_constants() -> String {
-    let u32s: [(&str, u32, &str); 19] = [
+    let u32s: [(&str, u32, &str); 20] = [
         ("NO_HIT", NO_HIT, "raybench_core::NO_HIT"),
         ("KIND_TRIANGLE", KIND_TRIANGLE, "data.rs primitive kinds"),
         ("KIND_SPHERE", KIND_SPHERE, "data.rs primitive kinds"),
@@ -66,6 +66,11 @@ pub fn wgsl_constants() -> String {
             "data.rs light kinds",
         ),
         ("EMITTER_BIT", EMITTER_BIT, "data.rs prim_info"),
+        (
+            "INSTANCE_RECORD",
+            crate::instances::RECORD,
+            "instances.rs, geo entries per instance",
+        ),
         ("STACK_SIZE", STACK_SIZE, "BVH2 traversal stack"),
         ("WHITTED_STACK", WHITTED_STACK, "limits::MAX_DEPTH + 2"),
         (

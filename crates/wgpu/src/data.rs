@@ -15,8 +15,9 @@ use crate::constants::{
 };
 use crate::cwbvh::WideNode;
 use crate::geo::{self, Geo};
+use crate::instances::Instancing;
 
-/// Per-dispatch parameters: 176 bytes, one 256-byte-aligned slot per dispatch of a frame.
+/// Per-dispatch parameters: 192 bytes, one 256-byte-aligned slot per dispatch of a frame.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct Params {
@@ -82,11 +83,19 @@ pub struct Params {
     pub cull_slack: f32,
     /// 1 when `path` mode samples the emitters (`LightSampling::Mis` and at least one).
     pub mis: u32,
-    /// Padding.
-    pub pad: u32,
+    /// Instances ([`crate::instances::Instancing`]; 0: none).
+    pub instance_count: u32,
+    /// Index of the top level's root in the BVH2 node buffer.
+    pub top_root: u32,
+    /// Index in `geo` of the first instance record.
+    pub instance_records: u32,
+    /// Index in `geo` of the top level's order list.
+    pub instance_order: u32,
+    /// Ids below this are the flat part's.
+    pub flat_count: u32,
 }
 
-const _: () = assert!(std::mem::size_of::<Params>() == 176);
+const _: () = assert!(std::mem::size_of::<Params>() == 192);
 
 /// 32-byte BVH2 node, raybench-bvh's [`raybench_bvh::Node`] (Wald's layout).
 #[repr(C)]
@@ -155,7 +164,7 @@ fn v4(v: Vec3, w: f32) -> [f32; 4] {
 ///
 /// # Errors
 /// When the kind has no WGSL port or its data does not fit ([`geo::supports`]).
-fn prim(shape: &Shape, id: u32, geo: &mut Geo) -> Result<GpuPrim, String> {
+pub(crate) fn prim(shape: &Shape, id: u32, geo: &mut Geo) -> Result<GpuPrim, String> {
     let idw = f32::from_bits(id);
     let (mut p, kind) = match shape {
         Shape::Triangle(t) => (
@@ -254,6 +263,10 @@ pub struct SceneData {
     pub emitters: (u32, u32),
     /// Where the lights start in `shading`, and how many.
     pub lights: (u32, u32),
+    /// Nodes of the flat part's tree (the mesh trees and the top level follow them).
+    pub flat_nodes: u32,
+    /// Where the instances live ([`crate::instances`]).
+    pub instancing: Instancing,
 }
 
 /// The 32-byte nodes of `bvh`, depth first as it stores them.
@@ -304,6 +317,7 @@ impl SceneData {
             prims.push(p);
         }
         let emitters = (emitter_first, scene.emitters.ids.len() as u32);
+        let flat_nodes = (nodes.len() + wide.len()) as u32;
 
         let mut prim_info = scene.prim_material.clone();
         for &id in &scene.emitters.ids {
@@ -347,6 +361,8 @@ impl SceneData {
             unbounded,
             emitters,
             lights,
+            flat_nodes,
+            instancing: Instancing::default(),
         })
     }
 
@@ -382,7 +398,7 @@ impl SceneData {
             inf: f32::INFINITY,
             width: settings.width,
             height: settings.height,
-            node_count: (self.nodes.len() + self.wide.len()) as u32,
+            node_count: self.flat_nodes,
             unbounded_first: self.unbounded.0,
             unbounded_count: self.unbounded.1,
             emitter_first: self.emitters.0,
@@ -395,6 +411,11 @@ impl SceneData {
             ),
             far_scale: FAR_SCALE,
             cull_slack: CULL_SLACK,
+            instance_count: self.instancing.count,
+            top_root: self.instancing.top_root,
+            instance_records: self.instancing.records,
+            instance_order: self.instancing.order,
+            flat_count: self.instancing.flat_count,
             ..Params::default()
         })
     }

@@ -29,6 +29,7 @@ mod context;
 pub mod cwbvh;
 mod data;
 mod geo;
+mod instances;
 pub mod plan;
 mod renderer;
 

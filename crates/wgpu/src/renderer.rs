@@ -580,11 +580,6 @@ impl Renderer for WgpuRenderer {
 
     fn supports(&self, scene: &Scene) -> Result<(), String> {
         check_kinds(scene)?;
-        if scene.geometry.has_instances() {
-            return Err(
-                "the GPU kernels have no instances (render the scene with a CPU backend)".into(),
-            );
-        }
         if scene.has_textures() {
             return Err(
                 "the GPU kernels have no textures (render the scene with a CPU backend)".into(),
@@ -597,9 +592,11 @@ impl Renderer for WgpuRenderer {
                     .into(),
             );
         }
-        // The largest buffer: the primitives (48 bytes each, plus the emitter list).
+        // The largest buffer: the primitives (48 bytes each, plus the emitter list and each
+        // instanced mesh's primitives once).
         if let Ok(g) = gpu(&self.request) {
-            let need = (scene.geometry.len() + scene.emitters.ids.len()) as u64 * 48;
+            let meshes: usize = scene.geometry.meshes().iter().map(|m| m.len()).sum();
+            let need = (scene.geometry.len() + scene.emitters.ids.len() + meshes) as u64 * 48;
             let limit = Self::binding_limit(&g);
             if need > limit {
                 return Err(format!(
@@ -654,6 +651,9 @@ impl Renderer for WgpuRenderer {
             Tree::Cwbvh(w) => SceneData::new(scene, Vec::new(), w.nodes.clone(), &w.prim_ids),
         }
         .map_err(RenderError::Unsupported)?;
+        let mut data = data;
+        crate::instances::append(scene, self.layout, &mut data)
+            .map_err(RenderError::Unsupported)?;
         let limit = Self::binding_limit(&gpu);
         let node_bytes = (data.nodes.len() * 32 + data.wide.len() * 80) as u64;
         if node_bytes > limit {
@@ -679,9 +679,19 @@ impl Renderer for WgpuRenderer {
         wait(&gpu)?;
         device_errors(&gpu, "uploading the scene")?;
         timings.push("upload", start.elapsed().as_secs_f64());
+        let mut counts = stats.counts;
+        if data.instancing.count > 0 {
+            // As `TwoLevel::stats` counts them: the flat tree's, then the top level's.
+            let top_nodes = data.nodes.len() as u64 - u64::from(data.instancing.top_root);
+            counts.extend([
+                ("top nodes", top_nodes),
+                ("instances", u64::from(data.instancing.count)),
+                ("meshes", scene.geometry.meshes().len() as u64),
+            ]);
+        }
         let stats = AccelStats {
             memory_bytes: data.bytes() as usize,
-            counts: stats.counts,
+            counts,
         };
         self.prepared = Some(Prepared {
             gpu,
@@ -868,9 +878,9 @@ impl Renderer for WgpuRenderer {
         let g = &p.scene.geometry;
         let mut hits = Vec::with_capacity(rays.len());
         let (counters, timings) = self.explicit_rays(rays, count, entry, |o, ray| {
-            hits.push((o.id != NO_HIT).then(|| {
-                g.shape(o.id).complete_hit(
-                    ray,
+            hits.push(g.complete_global(
+                ray,
+                (o.id != NO_HIT).then_some((
                     o.id,
                     PrimHit {
                         t: o.v[0],
@@ -878,8 +888,8 @@ impl Renderer for WgpuRenderer {
                         u: o.v[1],
                         v: o.v[2],
                     },
-                )
-            }));
+                )),
+            ));
         })?;
         Ok((hits, counters, timings))
     }

@@ -54,7 +54,11 @@ struct Params {
     far_scale: f32,
     cull_slack: f32,
     mis: u32,
-    _pad1: u32,
+    instance_count: u32,
+    top_root: u32,
+    instance_records: u32,
+    instance_order: u32,
+    flat_count: u32,
 }
 
 // 32-byte BVH2 node, raybench-bvh's `Node`: interior nodes have their first child next.
@@ -415,6 +419,8 @@ struct Hit {
     k: u32,
     // Sub-primitive id (a height-field triangle, a CSG leaf).
     sub: u32,
+    // The instance hit, NO_HIT for the flat part.
+    inst: u32,
 }
 
 // `cull_bound`: the limit beyond which a box cannot hold a closer hit.
@@ -422,39 +428,52 @@ fn cull_bound(t: f32) -> f32 {
     return t + abs(t) * params.cull_slack;
 }
 
-// Tests prims[k] against the best hit so far (`Geometry::test_closest`): closest t wins,
+// Tests prims[k] against the best hit so far (`Geometry::test_closest`, and
+// `keep_closer` for an instance's primitives, whose ids start at `base`): closest t wins,
 // ties go to the smaller primitive id.
-fn test_closest(r: Ray, k: u32, best: ptr<function, Hit>) {
+fn test_closest(r: Ray, k: u32, base: u32, inst: u32, best: ptr<function, Hit>) {
     let h = prim_hit(r, k, (*best).t);
     if !h.ok {
         return;
     }
-    let id = bitcast<u32>(prims[k].b.w);
+    let id = base + bitcast<u32>(prims[k].b.w);
     if h.t < (*best).t || (h.t == (*best).t && id < (*best).id) {
-        *best = Hit(h.t, id, h.u, h.v, k, h.sub);
+        *best = Hit(h.t, id, h.u, h.v, k, h.sub, inst);
     }
 }
 
-// The closest hit of `r`: id NO_HIT when it hits nothing.
+// The closest hit of `r`: id NO_HIT when it hits nothing. The flat part (its unbounded
+// primitives, then its tree), then the instances (`TwoLevel::intersect`).
 fn closest(r: Ray) -> Hit {
-    var best = Hit(r.t_max, NO_HIT, 0.0, 0.0, 0u, 0u);
+    var best = Hit(r.t_max, NO_HIT, 0.0, 0.0, 0u, 0u, NO_HIT);
     for (var k = params.unbounded_first; k < params.unbounded_first + params.unbounded_count; k++) {
-        test_closest(r, k, &best);
+        test_closest(r, k, 0u, NO_HIT, &best);
     }
-    if params.node_count == 0u {
-        return best;
+    if params.node_count != 0u {
+        best = closest_tree(r, 0u, 0u, NO_HIT, best);
     }
+    if params.instance_count != 0u {
+        best = closest_instances(r, best);
+    }
+    return best;
+}
+
+// The closest hit of `r` in the tree rooted at node `root` (the flat part's, or an
+// instance's mesh's with ids from `base`), from the best hit so far (raybench-bvh's
+// `intersect`): a per-thread stack, near child first.
+fn closest_tree(r: Ray, root: u32, base: u32, inst: u32, best_in: Hit) -> Hit {
     if WIDE {
-        return closest_wide(r, best);
+        return closest_wide(r, root, base, inst, best_in);
     }
+    var best = best_in;
     var stack_node: array<u32, STACK_SIZE>;
     var stack_t: array<f32, STACK_SIZE>;
     var sp = 0u;
     var limit = cull_bound(best.t);
-    let root = nodes[0];
-    let t_root = box_entry(r, root.min, root.max, limit);
+    let top = nodes[root];
+    let t_root = box_entry(r, top.min, top.max, limit);
     if t_root >= 0.0 {
-        stack_node[0] = 0u;
+        stack_node[0] = root;
         stack_t[0] = t_root;
         sp = 1u;
     }
@@ -471,7 +490,7 @@ fn closest(r: Ray) -> Hit {
         let node = nodes[index];
         if node.count > 0u {
             for (var k = node.first_or_right; k < node.first_or_right + node.count; k++) {
-                test_closest(r, k, &best);
+                test_closest(r, k, base, inst, &best);
             }
             limit = cull_bound(best.t);
             continue;
@@ -509,24 +528,31 @@ fn closest(r: Ray) -> Hit {
     return best;
 }
 
-// Whether anything blocks `r` within [t_min, t_max].
+// Whether anything blocks `r` within [t_min, t_max]: the flat part, then the instances
+// (`TwoLevel::occluded`).
 fn occluded(r: Ray) -> bool {
     for (var k = params.unbounded_first; k < params.unbounded_first + params.unbounded_count; k++) {
         if prim_hit(r, k, r.t_max).ok {
             return true;
         }
     }
-    if params.node_count == 0u {
-        return false;
+    if params.node_count != 0u && occluded_tree(r, 0u) {
+        return true;
     }
+    return params.instance_count != 0u && occluded_instances(r);
+}
+
+// Whether anything in the tree rooted at node `root` blocks `r` (raybench-bvh's
+// `occluded`): the first hit ends the walk.
+fn occluded_tree(r: Ray, root: u32) -> bool {
     if WIDE {
-        return occluded_wide(r);
+        return occluded_wide(r, root);
     }
     var stack: array<u32, STACK_SIZE>;
     var sp = 0u;
-    let root = nodes[0];
-    if box_entry(r, root.min, root.max, r.t_max) >= 0.0 {
-        stack[0] = 0u;
+    let top = nodes[root];
+    if box_entry(r, top.min, top.max, r.t_max) >= 0.0 {
+        stack[0] = root;
         sp = 1u;
     }
     while sp > 0u {
@@ -557,6 +583,137 @@ fn occluded(r: Ray) -> bool {
         }
     }
     return false;
+}
+
+// ---------------------------------------------------------------------------------------
+// Instances (`TwoLevel`; the buffers are laid out by `crates/wgpu/src/instances.rs`): the
+// CPU's top-level tree in `nodes` from `params.top_root`, its leaves indexing the order
+// list in `geo`; one record of INSTANCE_RECORD entries per instance in `geo`, in id order.
+
+// `geo` index of instance k's record.
+fn instance_record(k: u32) -> u32 {
+    return params.instance_records + k * INSTANCE_RECORD;
+}
+
+// `Instance::local_ray`: `r` carried into instance k's mesh space by the inverse
+// transform (the direction not renormalised, so `t` is the same), over [t_min, t_max].
+fn instance_ray(r: Ray, k: u32, t_max: f32) -> Ray {
+    let rec = instance_record(k);
+    let m = mat3x3<f32>(geo[rec].xyz, geo[rec + 1u].xyz, geo[rec + 2u].xyz);
+    return make_ray(m * r.o + geo[rec + 3u].xyz, m * r.d, r.t_min, t_max);
+}
+
+// Entry `j` of the top level's order list: an instance index.
+fn instance_at(j: u32) -> u32 {
+    return bitcast<u32>(geo[params.instance_order + j / 4u][j % 4u]);
+}
+
+// The top level's walk (`TopLevel::walk`) shared by both queries: returns the best hit
+// (`any` false) or, with `any`, a hit whose id is not NO_HIT as soon as one blocks `r`.
+fn walk_instances(r: Ray, best_in: Hit, any: bool) -> Hit {
+    var best = best_in;
+    var stack_node: array<u32, STACK_SIZE>;
+    var stack_t: array<f32, STACK_SIZE>;
+    var sp = 0u;
+    let root = nodes[params.top_root];
+    let t_root = box_entry(r, root.min, root.max, select(cull_bound(best.t), r.t_max, any));
+    if t_root >= 0.0 {
+        stack_node[0] = params.top_root;
+        stack_t[0] = t_root;
+        sp = 1u;
+    }
+    while sp > 0u {
+        sp -= 1u;
+        let limit = select(cull_bound(best.t), r.t_max, any);
+        if stack_t[sp] > limit {
+            continue;
+        }
+        if COUNT {
+            n_visits += 1u;
+        }
+        let node = nodes[stack_node[sp]];
+        if node.count > 0u {
+            for (var j = node.first_or_right; j < node.first_or_right + node.count; j++) {
+                let k = instance_at(j);
+                let rec = instance_record(k);
+                let root_k = bitcast<u32>(geo[rec].w);
+                if any {
+                    if box_entry(r, geo[rec + 7u].xyz, geo[rec + 8u].xyz, r.t_max) >= 0.0
+                        && occluded_tree(instance_ray(r, k, r.t_max), root_k) {
+                        best.id = 0u;
+                        return best;
+                    }
+                } else if box_entry(r, geo[rec + 7u].xyz, geo[rec + 8u].xyz, cull_bound(best.t)) >= 0.0 {
+                    let base = bitcast<u32>(geo[rec + 1u].w);
+                    best = closest_tree(instance_ray(r, k, best.t), root_k, base, k, best);
+                }
+            }
+            continue;
+        }
+        let bound = select(cull_bound(best.t), r.t_max, any);
+        let a = node.first_or_right;
+        let b = a + 1u;
+        let na = nodes[a];
+        let nb = nodes[b];
+        let ta = box_entry(r, na.min, na.max, bound);
+        let tb = box_entry(r, nb.min, nb.max, bound);
+        // Near child first: the nearer is pushed last (the second child first on a tie,
+        // as `TopLevel::walk` orders them).
+        if ta >= 0.0 && tb >= 0.0 && tb > ta {
+            stack_node[sp] = b;
+            stack_t[sp] = tb;
+            stack_node[sp + 1u] = a;
+            stack_t[sp + 1u] = ta;
+            sp += 2u;
+        } else {
+            if ta >= 0.0 {
+                stack_node[sp] = a;
+                stack_t[sp] = ta;
+                sp += 1u;
+            }
+            if tb >= 0.0 {
+                stack_node[sp] = b;
+                stack_t[sp] = tb;
+                sp += 1u;
+            }
+        }
+    }
+    return best;
+}
+
+// The instances' part of `TwoLevel::intersect`, from the flat part's best hit.
+fn closest_instances(r: Ray, best: Hit) -> Hit {
+    return walk_instances(r, best, false);
+}
+
+// The instances' part of `TwoLevel::occluded`.
+fn occluded_instances(r: Ray) -> bool {
+    return walk_instances(r, Hit(r.t_max, NO_HIT, 0.0, 0.0, 0u, 0u, NO_HIT), true).id != NO_HIT;
+}
+
+// The `prim_info` entry of primitive `id` (`Scene::material_of`): a flat id's directly; an
+// instanced one's from its instance (found by its base, `Geometry::locate`): the
+// instance's material, or its mesh's material of the primitive.
+fn info_of(id: u32) -> u32 {
+    if params.instance_count == 0u || id < params.flat_count {
+        return prim_info[id];
+    }
+    var lo = 0u;
+    var hi = params.instance_count;
+    while lo < hi {
+        let mid = (lo + hi) / 2u;
+        if bitcast<u32>(geo[instance_record(mid) + 1u].w) <= id {
+            lo = mid + 1u;
+        } else {
+            hi = mid;
+        }
+    }
+    let rec = instance_record(lo - 1u);
+    let own = bitcast<u32>(geo[rec + 2u].w);
+    if own != NO_HIT {
+        return own;
+    }
+    return prim_info[bitcast<u32>(geo[rec + 3u].w) + id - bitcast<u32>(geo[rec + 1u].w)];
 }
 
 // ---------------------------------------------------------------------------------------
@@ -649,14 +806,14 @@ fn wide_advance(stack: ptr<function, WideStack>, n: WideNode, hits: u32, order: 
     return true;
 }
 
-// `closest` over the CWBVH, from the best hit among the unbounded primitives.
-fn closest_wide(r: Ray, best_in: Hit) -> Hit {
+// `closest_tree` over the CWBVH rooted at wide node `root`.
+fn closest_wide(r: Ray, root: u32, base: u32, inst: u32, best_in: Hit) -> Hit {
     var best = best_in;
     var limit = cull_bound(best.t);
     let order = wide_order(r);
     var stack: WideStack;
     stack.sp = 0u;
-    var index = 0u;
+    var index = root;
     loop {
         if COUNT {
             n_visits += 1u;
@@ -673,7 +830,7 @@ fn closest_wide(r: Ray, best_in: Hit) -> Hit {
                 let info = slot_byte(n.base_meta.z, n.base_meta.w, slot);
                 let first = n.base_meta.y + (info & 31u);
                 for (var k = first; k < first + (info >> 5u); k++) {
-                    test_closest(r, k, &best);
+                    test_closest(r, k, base, inst, &best);
                 }
             }
             limit = cull_bound(best.t);
@@ -685,12 +842,12 @@ fn closest_wide(r: Ray, best_in: Hit) -> Hit {
     return best;
 }
 
-// `occluded` over the CWBVH (the unbounded primitives already tested): the first hit ends.
-fn occluded_wide(r: Ray) -> bool {
+// `occluded_tree` over the CWBVH rooted at wide node `root`: the first hit ends.
+fn occluded_wide(r: Ray, root: u32) -> bool {
     let order = wide_order(r);
     var stack: WideStack;
     stack.sp = 0u;
-    var index = 0u;
+    var index = root;
     loop {
         if COUNT {
             n_visits += 1u;
@@ -717,8 +874,21 @@ fn occluded_wide(r: Ray) -> bool {
     return false;
 }
 
-// The unit geometric normal at a hit (`Shape::complete_hit`).
+// The unit geometric normal at a hit (`Shape::complete_hit`); an instance's mesh normal is
+// found on the instance-space ray and carried to the world by the normal matrix
+// (`Geometry::complete_global`, `Instance::world_normal`).
 fn hit_normal(r: Ray, h: Hit) -> vec3<f32> {
+    if h.inst == NO_HIT {
+        return prim_normal(r, h);
+    }
+    let rec = instance_record(h.inst);
+    let n = prim_normal(instance_ray(r, h.inst, r.t_max), h);
+    let m = mat3x3<f32>(geo[rec + 4u].xyz, geo[rec + 5u].xyz, geo[rec + 6u].xyz);
+    return normalize_or(m * n, n);
+}
+
+// The unit geometric normal of prims[h.k] at a hit of `r` (`Shape::complete_hit`).
+fn prim_normal(r: Ray, h: Hit) -> vec3<f32> {
     let p = prims[h.k];
     switch bitcast<u32>(p.a.w) {
         case KIND_TRIANGLE: {
@@ -761,7 +931,7 @@ struct Material {
 }
 
 fn material_of(id: u32) -> Material {
-    let m = (prim_info[id] & ~EMITTER_BIT) * 4u;
+    let m = (info_of(id) & ~EMITTER_BIT) * 4u;
     let m0 = shading[m];
     let m1 = shading[m + 1u];
     let m2 = shading[m + 2u];
@@ -770,7 +940,7 @@ fn material_of(id: u32) -> Material {
 }
 
 fn is_emitter(id: u32) -> bool {
-    return (prim_info[id] & EMITTER_BIT) != 0u;
+    return (info_of(id) & EMITTER_BIT) != 0u;
 }
 
 // `Material::albedo_at`.
@@ -1321,7 +1491,7 @@ fn trace_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let q = explicit_ray(i);
-    var h = Hit(params.inf, NO_HIT, 0.0, 0.0, 0u, 0u);
+    var h = Hit(params.inf, NO_HIT, 0.0, 0.0, 0u, 0u, NO_HIT);
     if q.valid {
         h = closest(q.r);
     }
