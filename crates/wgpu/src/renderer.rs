@@ -592,6 +592,19 @@ impl Renderer for WgpuRenderer {
                     .into(),
             );
         }
+        // Instanced meshes' vertex normals and texture coordinates (`Scene::mesh_attributes`)
+        // have no port yet: refused rather than shaded flat.
+        if scene
+            .mesh_attributes
+            .iter()
+            .any(|a| a.has_normals() || (!a.is_empty() && scene.has_textures()))
+        {
+            return Err(
+                "the GPU kernels have no shading attributes on instanced meshes (render the \
+                 scene with a CPU backend, or flatten it with --flatten)"
+                    .into(),
+            );
+        }
         // The largest buffer: the primitives (48 bytes each, plus the emitter list and each
         // instanced mesh's primitives once).
         if let Ok(g) = gpu(&self.request) {
