@@ -286,6 +286,147 @@ mod tests {
         assert_eq!(value_stack_need(&m, m.node_count() - 1), 2);
     }
 
+    /// `kernels/sdf.wgsl`'s `sdf_distance` and its helpers in Rust, with glam's types where
+    /// the CPU uses them: the program in `geo[first..end]` at `x`.
+    fn run(geo: &Geo, first: usize, end: usize, x: Vec3) -> f32 {
+        use raybench_core::{Vec2, Vec3A};
+        let v = |e: [f32; 4]| Vec3::new(e[0], e[1], e[2]);
+        let (mut values, mut points, mut p, mut pc) = (Vec::new(), Vec::new(), x, first);
+        while pc < end {
+            let e = geo[pc];
+            let (op, h) = (e[0].to_bits(), Vec3::new(e[1], e[2], e[3]));
+            if op <= SDF_CYLINDER {
+                let f = geo[pc + 1];
+                values.push(match op {
+                    SDF_SPHERE => (p - h).length() - f[0],
+                    SDF_BOX => {
+                        let q = (p - h).abs() - (v(f) - Vec3::splat(f[3]));
+                        q.max(Vec3::ZERO).length() + q.max_element().min(0.0) - f[3]
+                    }
+                    SDF_TORUS => {
+                        let q = p - h;
+                        Vec2::new(Vec2::new(q.x, q.z).length() - f[0], q.y).length() - f[1]
+                    }
+                    SDF_CAPSULE => {
+                        let (pa, ba) = (p - h, v(f) - h);
+                        let len2 = ba.dot(ba);
+                        let t = if len2 > 0.0 {
+                            (pa.dot(ba) / len2).clamp(0.0, 1.0)
+                        } else {
+                            0.0
+                        };
+                        (pa - ba * t).length() - f[3]
+                    }
+                    _ => {
+                        let q = p - h;
+                        let d = Vec2::new(Vec2::new(q.x, q.z).length(), q.y).abs()
+                            - Vec2::new(f[0], f[1]);
+                        d.max_element().min(0.0) + d.max(Vec2::ZERO).length()
+                    }
+                });
+                pc += 2;
+            } else if op <= SDF_BLEND {
+                let b = values.pop().unwrap();
+                let a = values.pop().unwrap();
+                let k = e[1];
+                values.push(
+                    match op {
+                        SDF_UNION => SdfOp::Union,
+                        SDF_INTERSECTION => SdfOp::Intersection,
+                        SDF_SUBTRACTION => SdfOp::Subtraction,
+                        SDF_SMOOTH_UNION => SdfOp::SmoothUnion(k),
+                        _ => SdfOp::Blend(k),
+                    }
+                    .apply(a, b),
+                );
+                pc += 1;
+            } else if op == SDF_ENTER {
+                points.push(p);
+                let c = |i: usize| Vec3A::from(v(geo[pc + i]));
+                p = (c(1) * p.x + c(2) * p.y + c(3) * p.z + Vec3A::from(h)).into();
+                pc += 4;
+            } else {
+                p = points.pop().unwrap();
+                let top = values.last_mut().unwrap();
+                *top *= e[1];
+                pc += 1;
+            }
+        }
+        assert_eq!((values.len(), points.len()), (1, 0));
+        values[0]
+    }
+
+    /// The program of a tree with every primitive, operation and nested, rotated and scaled
+    /// transforms, run as the kernel runs it, gives `Sdf::distance` bit for bit (the kernel's
+    /// differences are then only the GPU's rounding).
+    #[test]
+    fn programs_compute_the_cpu_distance() {
+        use raybench_core::Affine3A;
+        let leaf = SdfNode::Leaf;
+        let op = |o, a, b| SdfNode::Op(o, Box::new(a), Box::new(b));
+        let turned = SdfNode::Transform(
+            Affine3A::from_translation(Vec3::new(0.1, 0.2, 0.3))
+                * Affine3A::from_rotation_y(0.6)
+                * Affine3A::from_scale(Vec3::splat(1.7)),
+            Box::new(op(
+                SdfOp::Blend(0.3),
+                leaf(SdfPrimitive::Box {
+                    center: Vec3::new(0.2, 0.3, -0.4),
+                    half_extents: Vec3::new(0.5, 0.3, 0.4),
+                    rounding: 0.1,
+                }),
+                SdfNode::Transform(
+                    Affine3A::from_rotation_x(0.3) * Affine3A::from_scale(Vec3::splat(0.5)),
+                    Box::new(leaf(SdfPrimitive::Torus {
+                        center: Vec3::new(0.5, 0.0, 0.0),
+                        major_radius: 0.6,
+                        minor_radius: 0.2,
+                    })),
+                ),
+            )),
+        );
+        let capsules = op(
+            SdfOp::Union,
+            leaf(SdfPrimitive::Capsule {
+                a: Vec3::new(-1.0, 0.0, 0.0),
+                b: Vec3::new(-0.2, 0.8, 0.1),
+                radius: 0.25,
+            }),
+            leaf(SdfPrimitive::Capsule {
+                a: Vec3::new(0.3, 0.3, 0.3),
+                b: Vec3::new(0.3, 0.3, 0.3),
+                radius: 0.2,
+            }),
+        );
+        let tree = op(
+            SdfOp::SmoothUnion(0.3),
+            op(SdfOp::Intersection, turned, sphere(0.2)),
+            op(
+                SdfOp::Subtraction,
+                capsules,
+                leaf(SdfPrimitive::Cylinder {
+                    center: Vec3::new(0.0, -0.5, 0.3),
+                    radius: 0.3,
+                    half_height: 0.4,
+                }),
+            ),
+        );
+        let m = Sdf::new(&tree, SdfParams::DEFAULT).unwrap();
+        let mut geo = Geo::new();
+        let rec = encode(&m, &mut geo).unwrap();
+        let (first, end) = (rec.c[0].to_bits() as usize + 1, rec.c[1].to_bits() as usize);
+        let mut differ = 0;
+        for i in 0..20_000u32 {
+            // A Weyl sequence in [-2.5, 2.5]^3.
+            let u = |a: f32| ((i as f32 * a).fract() - 0.5) * 5.0;
+            let x = Vec3::new(u(0.754_877_7), u(0.569_840_3), u(0.438_289_4));
+            if run(&geo, first, end, x).to_bits() != m.distance(x).to_bits() {
+                differ += 1;
+            }
+        }
+        assert_eq!(differ, 0);
+    }
+
     /// The program's layout: header, the operands before their operation, transforms around
     /// their subtree.
     #[test]
