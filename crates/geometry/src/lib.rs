@@ -75,7 +75,7 @@ pub use quality::{
     TreeView,
 };
 pub use ray::Ray;
-pub use sdf::{March, Sdf, SdfNode, SdfOp, SdfParams, SdfPrimitive};
+pub use sdf::{March, Sdf, SdfNode, SdfNodeView, SdfOp, SdfParams, SdfPrimitive};
 pub use sphere::Sphere;
 pub use stack::{CULL_SLACK, NodeStack, cull_bound};
 pub use triangle::Triangle;

@@ -271,6 +271,29 @@ pub struct March {
     pub steps: u32,
 }
 
+/// A node of a validated model's tree as [`Sdf::node`] shows it to backends that evaluate
+/// the tree themselves (the GPU's flat programs); nodes are in post-order, operands before
+/// the node, the root last ([`Sdf::node_count`] `- 1`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SdfNodeView {
+    /// A primitive.
+    Leaf(SdfPrimitive),
+    /// `op.apply(f_a(p), f_b(p))` on the nodes at indices `a` and `b`.
+    Op(SdfOp, usize, usize),
+    /// `scale * f_child(q)` with `q = linear[0] p.x + linear[1] p.y + linear[2] p.z +
+    /// translation`, summed in that order (the inverse of the node's similarity).
+    Transform {
+        /// Columns of the inverse map's linear part.
+        linear: [Vec3; 3],
+        /// The inverse map's translation.
+        translation: Vec3,
+        /// The similarity's uniform scale.
+        scale: f32,
+        /// Index of the transformed subtree's root.
+        child: usize,
+    },
+}
+
 /// A validated signed-distance model: one bounded primitive.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sdf {
@@ -369,6 +392,24 @@ impl Sdf {
     #[must_use]
     pub fn node_count(&self) -> usize {
         self.tree.len()
+    }
+
+    /// Node `i` of the tree (`i < node_count()`, the root last): see [`SdfNodeView`].
+    ///
+    /// # Panics
+    /// When `i` is out of range.
+    #[must_use]
+    pub fn node(&self, i: usize) -> SdfNodeView {
+        match self.tree.node(i) {
+            Node::Leaf(s) => SdfNodeView::Leaf(*s),
+            Node::Op(op, a, b) => SdfNodeView::Op(*op, *a, *b),
+            Node::Wrap(m, child) => SdfNodeView::Transform {
+                linear: [m.linear.x_axis, m.linear.y_axis, m.linear.z_axis].map(Vec3::from),
+                translation: m.translation,
+                scale: m.scale,
+                child: *child,
+            },
+        }
     }
 
     /// Bytes held behind the primitive's `Arc`.
