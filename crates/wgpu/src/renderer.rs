@@ -585,15 +585,12 @@ impl Renderer for WgpuRenderer {
                 "the GPU kernels have no instances (render the scene with a CPU backend)".into(),
             );
         }
-        if scene.has_textures() {
+        // Textures, shading normals and the environment map are ported (`shading`); an
+        // instanced mesh's attributes are not (instances are refused above anyway).
+        if !scene.mesh_attributes.is_empty() {
             return Err(
-                "the GPU kernels have no textures (render the scene with a CPU backend)".into(),
-            );
-        }
-        if scene.attributes.has_normals() {
-            return Err(
-                "the GPU kernels have no shading normals (render the scene with a CPU \
-                        backend, or set smooth = false on its mesh objects)"
+                "the GPU kernels have no shading attributes of instanced meshes (render the \
+                 scene with a CPU backend)"
                     .into(),
             );
         }
@@ -605,6 +602,15 @@ impl Renderer for WgpuRenderer {
                 return Err(format!(
                     "the primitives need {need} bytes, more than the {limit} bytes a storage \
                      buffer may hold on {}",
+                    g.info.name
+                ));
+            }
+            // The shading data in `geo`: textures, the environment map, attributes.
+            let need = crate::shading::bytes_needed(scene);
+            if need > limit {
+                return Err(format!(
+                    "the textures, environment map and shading attributes need {need} bytes, \
+                     more than the {limit} bytes a storage buffer may hold on {}",
                     g.info.name
                 ));
             }
@@ -708,9 +714,6 @@ impl Renderer for WgpuRenderer {
         let start = Instant::now();
         let gpu = &p.gpu;
         let entry = entry_point(Some(settings.mode)).map_err(RenderError::Unsupported)?;
-        if settings.mode == Mode::Path {
-            crate::data::check_path_emitters(&p.scene).map_err(RenderError::Unsupported)?;
-        }
         let pipeline = p
             .kernels
             .pipeline(gpu, entry, settings.count, self.layout)?;
