@@ -17,8 +17,8 @@ override COUNT: bool = false;
 override WIDE: bool = false;
 
 // The constants shared with Rust (NO_HIT, KIND_*, MAT_*, LIGHT_POINT, EMITTER_BIT,
-// STACK_SIZE, WHITTED_STACK, AMBIENT, ROULETTE_DEPTH, DIMENSIONS_PER_BOUNCE, SHADOW_SHORTEN,
-// MIN_POSITIVE, INV_PI, TAU, BLOCK) are generated from the Rust definitions and prepended
+// NO_ENTRY, STACK_SIZE, WHITTED_STACK, AMBIENT, ROULETTE_DEPTH, DIMENSIONS_PER_BOUNCE,
+// SHADOW_SHORTEN, MIN_POSITIVE, INV_PI, PI, TAU, BLOCK) are generated from the Rust definitions and prepended
 // to this file by `crates/wgpu/src/constants.rs`.
 
 // Per-dispatch parameters (`data::Params`).
