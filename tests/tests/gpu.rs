@@ -114,8 +114,7 @@ fn kinds_and_modes_without_kernels_are_refused() {
     .unwrap();
     let why = raybench_wgpu::check_kinds(&b.build()).unwrap_err();
     assert!(why.contains("Bezier patch"), "{why}");
-    // Lights the path kernel cannot sample: an environment map (every mode: misses read
-    // it), an emissive sphere (path only).
+    // Environment maps and emissive spheres are ported (see the shading tests below).
     let mut b = raybench_core::SceneBuilder::new("lights");
     let lamp = b
         .add_material(raybench_core::Material {
@@ -130,12 +129,9 @@ fn kinds_and_modes_without_kernels_are_refused() {
     .unwrap();
     let lamp_scene = b.clone().build();
     assert!(raybench_wgpu::check_kinds(&lamp_scene).is_ok());
-    let why = raybench_wgpu::check_path_emitters(&lamp_scene).unwrap_err();
-    assert!(why.contains("sphere"), "{why}");
     let env = raybench_core::Environment::new(1, 1, vec![raybench_core::Vec3::ONE], 1.0, 0.0);
     b.environment(std::sync::Arc::new(env.unwrap()));
-    let why = raybench_wgpu::check_kinds(&b.build()).unwrap_err();
-    assert!(why.contains("environment map"), "{why}");
+    assert!(raybench_wgpu::check_kinds(&b.build()).is_ok());
     if !raybench_tests::gpu::available() {
         return;
     }
@@ -147,10 +143,10 @@ fn kinds_and_modes_without_kernels_are_refused() {
     ));
 }
 
-/// Textures and shading normals have no WGSL port yet: scenes with them are refused with a
-/// reason (without an adapter too), and faceted ones without textures are not.
+/// Textures and shading normals are ported (`shading.rs`): scenes with them are accepted
+/// (without an adapter too), as are faceted ones without textures.
 #[test]
-fn textures_and_shading_normals_are_refused() {
+fn textures_and_shading_normals_are_accepted() {
     use raybench_core::{
         Material, Renderer as _, SceneBuilder, Texture, TriangleMesh, Vec2, Vec3, VertexAttributes,
         Wrap,
@@ -173,10 +169,8 @@ fn textures_and_shading_normals_are_refused() {
             .unwrap();
         b.build()
     };
-    let why = r.supports(&scene(vec![], true)).unwrap_err();
-    assert!(why.contains("no textures"), "{why}");
-    let why = r.supports(&scene(vec![Vec3::Z; 3], false)).unwrap_err();
-    assert!(why.contains("no shading normals"), "{why}");
+    assert_eq!(r.supports(&scene(vec![], true)), Ok(()));
+    assert_eq!(r.supports(&scene(vec![Vec3::Z; 3], false)), Ok(()));
     // Texture coordinates alone change nothing the GPU renders.
     let plain = scene(vec![], false);
     assert!(!plain.attributes.is_empty());
@@ -616,4 +610,47 @@ fn sdf_every_operation_and_the_deepest_trees() {
             "{name} on sdf models, incoherent rays: {c:?}"
         );
     }
+}
+
+// ---------------------------------------------------------------------------------------
+// Shading: textures, shading normals, every bounded emitter as a light of `path`, the
+// environment map (`crates/wgpu/src/shading.rs`, `kernels/lights.wgsl`). The scenes are the
+// files of `tests/scenes/`; each runs `raybench_tests::gpu::check` (ray casting at 1 and 4
+// samples, Whitted, path tracing at 4 samples with MIS, explicit rays) at 32 x 32 with the
+// shared tolerances, none widened.
+
+/// The path of scene file `name` in `tests/scenes/`.
+fn scene_file(name: &str) -> String {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name);
+    path.to_str().unwrap().to_owned()
+}
+
+/// Emissive spheres (sampled by their cone) and an emissive triangle light a floor, a
+/// diffuse and a mirror sphere; no point light, black background.
+#[test]
+fn emissive_spheres_are_sampled_lights() {
+    check(&scene_file("emissive-spheres.toml"), 32, true);
+}
+
+/// A rotated 16 x 8 equirectangular map with a sun texel, and a small emissive sphere:
+/// misses read the map in every mode; path tracing samples the map's distribution and the
+/// sphere, with MIS.
+#[test]
+fn environment_map_lights_the_scene() {
+    check(&scene_file("environment.toml"), 32, true);
+}
+
+/// A UV sphere with vertex normals and texture coordinates on a floor whose coordinates
+/// repeat the texture, under a directional, a point and an emissive-sphere light.
+#[test]
+fn textured_smooth_mesh() {
+    check(&scene_file("textured-smooth.toml"), 32, true);
+}
+
+/// Suzanne with her vertex normals (the built-in scene facets her).
+#[test]
+fn smooth_suzanne() {
+    check(&scene_file("smooth-suzanne.toml"), 32, true);
 }

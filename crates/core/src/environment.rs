@@ -114,6 +114,27 @@ impl Environment {
         (self.width, self.height)
     }
 
+    /// Linear radiance per texel, rows from the top, the scale applied (for backends that
+    /// keep their own copy, such as the GPU's).
+    #[must_use]
+    pub fn texels(&self) -> &[Vec3] {
+        &self.texels
+    }
+
+    /// The rotation about `+y` as cosine and sine, as [`Environment::radiance`] applies it.
+    #[must_use]
+    pub fn rotation(&self) -> (f32, f32) {
+        self.rotation
+    }
+
+    /// The sampling tables: the rows' cumulative weights (`height` entries) and each row's
+    /// cumulative texel weights (`width` entries per row), as [`Environment::sample`]
+    /// searches them.
+    #[must_use]
+    pub fn tables(&self) -> (&[f64], &[f64]) {
+        (&self.marginal, &self.conditional)
+    }
+
     /// Mean luminance over all directions, `∫ lum(L) dω / 4π`: the environment's share in
     /// the choice of a light (`Emitters`).
     #[must_use]

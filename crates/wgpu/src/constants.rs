@@ -43,7 +43,7 @@ pub(crate) const WHITTED_STACK: u32 = MAX_DEPTH + 2;
 /// definition it names.
 #[must_use]
 pub fn wgsl_constants() -> String {
-    let u32s: [(&str, u32, &str); 20] = [
+    let u32s: [(&str, u32, &str); 21] = [
         ("NO_HIT", NO_HIT, "raybench_core::NO_HIT"),
         ("KIND_TRIANGLE", KIND_TRIANGLE, "data.rs primitive kinds"),
         ("KIND_SPHERE", KIND_SPHERE, "data.rs primitive kinds"),
@@ -71,6 +71,7 @@ pub fn wgsl_constants() -> String {
             crate::instances::RECORD,
             "instances.rs, geo entries per instance",
         ),
+        ("NO_ENTRY", crate::shading::NONE, "shading::NONE"),
         ("STACK_SIZE", STACK_SIZE, "BVH2 traversal stack"),
         ("WHITTED_STACK", WHITTED_STACK, "limits::MAX_DEPTH + 2"),
         (
@@ -89,7 +90,7 @@ pub fn wgsl_constants() -> String {
             "plan::BLOCK, pixels per block side",
         ),
     ];
-    let f32s: [(&str, f32, &str); 5] = [
+    let f32s: [(&str, f32, &str); 6] = [
         ("AMBIENT", AMBIENT, "raybench_core::integrator"),
         (
             "SHADOW_SHORTEN",
@@ -98,6 +99,7 @@ pub fn wgsl_constants() -> String {
         ),
         ("MIN_POSITIVE", f32::MIN_POSITIVE, "f32::MIN_POSITIVE"),
         ("INV_PI", std::f32::consts::FRAC_1_PI, "std::f32::consts"),
+        ("PI", std::f32::consts::PI, "std::f32::consts"),
         ("TAU", std::f32::consts::TAU, "std::f32::consts"),
     ];
     let ints = u32s.map(|(name, value, from)| (name, "u32", format!("{value}u"), from));
@@ -115,8 +117,9 @@ pub fn wgsl_constants() -> String {
 /// `main.wgsl` (bindings, traversal, shading, the entry points), then one file per
 /// primitive kind or mode of its own. WGSL declarations may come in any order, so the files
 /// call each other freely.
-pub const KERNEL_FILES: [(&str, &str); 5] = [
+pub const KERNEL_FILES: [(&str, &str); 6] = [
     ("main.wgsl", include_str!("kernels/main.wgsl")),
+    ("lights.wgsl", include_str!("kernels/lights.wgsl")),
     ("heightfield.wgsl", include_str!("kernels/heightfield.wgsl")),
     ("csg.wgsl", include_str!("kernels/csg.wgsl")),
     ("bezier.wgsl", include_str!("kernels/bezier.wgsl")),

@@ -16,8 +16,9 @@ use crate::constants::{
 use crate::cwbvh::WideNode;
 use crate::geo::{self, Geo};
 use crate::instances::Instancing;
+use crate::shading::ShadingBlock;
 
-/// Per-dispatch parameters: 192 bytes, one 256-byte-aligned slot per dispatch of a frame.
+/// Per-dispatch parameters: 240 bytes, one 256-byte-aligned slot per dispatch of a frame.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct Params {
@@ -73,7 +74,8 @@ pub struct Params {
     pub light_first: u32,
     /// How many lights.
     pub light_count: u32,
-    /// Total choice weight of the emitters (area x luminance, `Emitters::total_weight`).
+    /// Total choice weight of the emitters (area x luminance, `Emitters::total_weight`);
+    /// the kernels choose lights with [`Params::light_total`], which adds the environment.
     pub emitter_weight: f32,
     /// Explicit rays in this dispatch.
     pub ray_count: u32,
@@ -93,9 +95,34 @@ pub struct Params {
     pub instance_order: u32,
     /// Ids below this are the flat part's.
     pub flat_count: u32,
+    // ---- Shading: lights, environment, textures, attributes ([`crate::shading`]).
+    /// Total choice weight of every light, the environment included.
+    pub light_total: f32,
+    /// The probability of choosing the environment as the light (0 without one).
+    pub env_choice: f32,
+    /// First `geo` entry of the environment's texels.
+    pub env_first: u32,
+    /// Its width (0: no environment map, the constant background).
+    pub env_width: u32,
+    /// Its height.
+    pub env_height: u32,
+    /// Float index in `geo` of its marginal then conditional tables.
+    pub env_cdf: u32,
+    /// Its rotation about `+y`: cosine.
+    pub env_cos: f32,
+    /// Sine.
+    pub env_sin: f32,
+    /// First `geo` entry of the emitter table.
+    pub emitter_table: u32,
+    /// Float index in `geo` of the per-primitive attribute offsets (`u32::MAX`: none).
+    pub attr_table: u32,
+    /// Primitive ids that table covers.
+    pub attr_count: u32,
+    /// First `geo` entry of the texture table.
+    pub tex_table: u32,
 }
 
-const _: () = assert!(std::mem::size_of::<Params>() == 192);
+const _: () = assert!(std::mem::size_of::<Params>() == 240);
 
 /// 32-byte BVH2 node, raybench-bvh's [`raybench_bvh::Node`] (Wald's layout).
 #[repr(C)]
@@ -114,7 +141,7 @@ pub struct GpuNode {
 const _: () = assert!(std::mem::size_of::<GpuNode>() == 32);
 
 /// 48-byte primitive: `a.w` holds the kind, `b.w` the primitive id (as bits). Triangle:
-/// vertices in `a`, `b`, `c` (`c.w`: the cumulative area in the emitter list); sphere:
+/// vertices in `a`, `b`, `c`; sphere:
 /// centre `a`, radius `c.x`; plane: point `a`, unit normal `c`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -207,40 +234,14 @@ pub(crate) fn prim(shape: &Shape, id: u32, geo: &mut Geo) -> Result<GpuPrim, Str
     Ok(p)
 }
 
-/// Why the shaders cannot render `scene`, if they cannot: no environment map, and every
-/// primitive kind must have a WGSL port whose data fits ([`geo::supports`]).
+/// Why the shaders cannot render `scene`, if they cannot: every primitive kind must have a
+/// WGSL port whose data fits ([`geo::supports`]). (Environment maps, every bounded emitter
+/// kind as a light of `path`, textures and shading normals are ported: [`crate::shading`].)
 ///
 /// # Errors
-/// The first primitive the kernels cannot intersect, or the environment map.
+/// The first primitive the kernels cannot intersect.
 pub fn check_kinds(scene: &Scene) -> Result<(), String> {
-    if scene.environment.is_some() {
-        return Err(
-            "the GPU kernels have no environment map (render it with a CPU backend)".into(),
-        );
-    }
     scene.geometry.shapes().iter().try_for_each(geo::supports)
-}
-
-/// Whether the GPU's `path` kernel samples every light of `scene`: it ports next-event
-/// estimation for emissive triangles only.
-///
-/// # Errors
-/// The reason it does not (an emissive sphere or other non-triangle emitter).
-pub fn check_path_emitters(scene: &Scene) -> Result<(), String> {
-    match scene
-        .emitters
-        .ids
-        .iter()
-        .map(|&id| scene.geometry.shape(id))
-        .find(|s| !matches!(s, Shape::Triangle(_)))
-    {
-        Some(s) => Err(format!(
-            "the GPU path kernel samples only triangle emitters, and this scene has an emissive \
-             {} (render it with a CPU backend)",
-            s.kind().name()
-        )),
-        None => Ok(()),
-    }
 }
 
 /// The scene flattened for the GPU.
@@ -253,7 +254,7 @@ pub struct SceneData {
     pub prims: Vec<GpuPrim>,
     /// Per primitive id: material index, with [`EMITTER_BIT`] for sampled emitters.
     pub prim_info: Vec<u32>,
-    /// Materials (four vectors each), then lights (two vectors each).
+    /// Materials (five vectors each), then lights (two vectors each).
     pub shading: Vec<[f32; 4]>,
     /// The primitives' own data beyond their records ([`geo`]).
     pub geo: Vec<[f32; 4]>,
@@ -267,6 +268,8 @@ pub struct SceneData {
     pub flat_nodes: u32,
     /// Where the instances live ([`crate::instances`]).
     pub instancing: Instancing,
+    /// Where the shading data is in `geo` ([`crate::shading`]).
+    pub block: ShadingBlock,
 }
 
 /// The 32-byte nodes of `bvh`, depth first as it stores them.
@@ -305,16 +308,15 @@ impl SceneData {
         }
         let unbounded = (leaf_order.len() as u32, g.unbounded().len() as u32);
         // The emitter list repeats its primitives' records (data shared with the originals
-        // where the kind keeps any in `geo`: the record is copied, not re-encoded).
+        // where the kind keeps any in `geo`: the record is copied, not re-encoded); what
+        // light sampling needs beyond them is in the emitter table ([`crate::shading`]).
         let mut slot_of = vec![u32::MAX; g.len()];
         for (k, &id) in leaf_order.iter().chain(g.unbounded()).enumerate() {
             slot_of[id as usize] = k as u32;
         }
         let emitter_first = prims.len() as u32;
-        for (&id, &cdf) in scene.emitters.ids.iter().zip(&scene.emitters.cdf) {
-            let mut p = prims[slot_of[id as usize] as usize];
-            p.c[3] = cdf as f32;
-            prims.push(p);
+        for &id in &scene.emitters.ids {
+            prims.push(prims[slot_of[id as usize] as usize]);
         }
         let emitters = (emitter_first, scene.emitters.ids.len() as u32);
         let flat_nodes = (nodes.len() + wide.len()) as u32;
@@ -323,7 +325,8 @@ impl SceneData {
         for &id in &scene.emitters.ids {
             prim_info[id as usize] |= EMITTER_BIT;
         }
-        let mut shading = Vec::with_capacity(scene.materials.len() * 4 + scene.lights.len() * 2);
+        let block = crate::shading::encode(scene, &mut geo)?;
+        let mut shading = Vec::with_capacity(scene.materials.len() * 5 + scene.lights.len() * 2);
         for m in &scene.materials {
             let kind = match m.kind {
                 MaterialKind::Diffuse => MAT_DIFFUSE,
@@ -335,6 +338,13 @@ impl SceneData {
             shading.push(v4(m.specular, m.shininess));
             shading.push(v4(m.emission, m.ior));
             shading.push(v4(checker, size));
+            let texture = |t: Option<u32>| f32::from_bits(t.unwrap_or(crate::shading::NONE));
+            shading.push([
+                texture(m.base_color_texture),
+                texture(m.emission_texture),
+                0.0,
+                0.0,
+            ]);
         }
         let lights = (shading.len() as u32, scene.lights.len() as u32);
         for l in &scene.lights {
@@ -363,6 +373,7 @@ impl SceneData {
             lights,
             flat_nodes,
             instancing: Instancing::default(),
+            block,
         })
     }
 
@@ -407,8 +418,20 @@ impl SceneData {
             light_count: self.lights.1,
             emitter_weight: scene.emitters.total_weight(),
             mis: u32::from(
-                settings.light_sampling == LightSampling::Mis && !scene.emitters.ids.is_empty(),
+                settings.light_sampling == LightSampling::Mis && !scene.emitters.is_empty(),
             ),
+            light_total: self.block.light_total,
+            env_choice: self.block.env_choice,
+            env_first: self.block.env_first,
+            env_width: self.block.env_width,
+            env_height: self.block.env_height,
+            env_cdf: self.block.env_cdf,
+            env_cos: self.block.env_cos,
+            env_sin: self.block.env_sin,
+            emitter_table: self.block.emitter_table,
+            attr_table: self.block.attr_table,
+            attr_count: self.block.attr_count,
+            tex_table: self.block.tex_table,
             far_scale: FAR_SCALE,
             cull_slack: CULL_SLACK,
             instance_count: self.instancing.count,

@@ -32,10 +32,11 @@ mod geo;
 mod instances;
 pub mod plan;
 mod renderer;
+mod shading;
 
 pub use constants::{KERNEL_FILES, KERNELS_DIR_VAR, kernel_source, wgsl_constants};
 pub use context::{AdapterRequest, describe};
-pub use data::{check_kinds, check_path_emitters};
+pub use data::check_kinds;
 pub use renderer::{Layout, WgpuRenderer};
 
 /// Whether a wgpu adapter can be opened here (`WGPU_BACKEND`, `WGPU_ADAPTER_NAME`), or why

@@ -580,20 +580,9 @@ impl Renderer for WgpuRenderer {
 
     fn supports(&self, scene: &Scene) -> Result<(), String> {
         check_kinds(scene)?;
-        if scene.has_textures() {
-            return Err(
-                "the GPU kernels have no textures (render the scene with a CPU backend)".into(),
-            );
-        }
-        if scene.attributes.has_normals() {
-            return Err(
-                "the GPU kernels have no shading normals (render the scene with a CPU \
-                        backend, or set smooth = false on its mesh objects)"
-                    .into(),
-            );
-        }
-        // Instanced meshes' vertex normals and texture coordinates (`Scene::mesh_attributes`)
-        // have no port yet: refused rather than shaded flat.
+        // Textures, shading normals and the environment map are ported (`shading`); an
+        // instanced mesh's vertex normals and texture coordinates (`Scene::mesh_attributes`)
+        // are not yet: refused rather than shaded flat.
         if scene
             .mesh_attributes
             .iter()
@@ -615,6 +604,15 @@ impl Renderer for WgpuRenderer {
                 return Err(format!(
                     "the primitives need {need} bytes, more than the {limit} bytes a storage \
                      buffer may hold on {}",
+                    g.info.name
+                ));
+            }
+            // The shading data in `geo`: textures, the environment map, attributes.
+            let need = crate::shading::bytes_needed(scene);
+            if need > limit {
+                return Err(format!(
+                    "the textures, environment map and shading attributes need {need} bytes, \
+                     more than the {limit} bytes a storage buffer may hold on {}",
                     g.info.name
                 ));
             }
@@ -731,9 +729,6 @@ impl Renderer for WgpuRenderer {
         let start = Instant::now();
         let gpu = &p.gpu;
         let entry = entry_point(Some(settings.mode)).map_err(RenderError::Unsupported)?;
-        if settings.mode == Mode::Path {
-            crate::data::check_path_emitters(&p.scene).map_err(RenderError::Unsupported)?;
-        }
         let pipeline = p
             .kernels
             .pipeline(gpu, entry, settings.count, self.layout)?;

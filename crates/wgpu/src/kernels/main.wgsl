@@ -17,8 +17,8 @@ override COUNT: bool = false;
 override WIDE: bool = false;
 
 // The constants shared with Rust (NO_HIT, KIND_*, MAT_*, LIGHT_POINT, EMITTER_BIT,
-// STACK_SIZE, WHITTED_STACK, AMBIENT, ROULETTE_DEPTH, DIMENSIONS_PER_BOUNCE, SHADOW_SHORTEN,
-// MIN_POSITIVE, INV_PI, TAU, BLOCK) are generated from the Rust definitions and prepended
+// NO_ENTRY, STACK_SIZE, WHITTED_STACK, AMBIENT, ROULETTE_DEPTH, DIMENSIONS_PER_BOUNCE,
+// SHADOW_SHORTEN, MIN_POSITIVE, INV_PI, PI, TAU, BLOCK) are generated from the Rust definitions and prepended
 // to this file by `crates/wgpu/src/constants.rs`.
 
 // Per-dispatch parameters (`data::Params`).
@@ -59,6 +59,19 @@ struct Params {
     instance_records: u32,
     instance_order: u32,
     flat_count: u32,
+    // Shading: lights, environment, textures, attributes (`shading::ShadingBlock`).
+    light_total: f32,
+    env_choice: f32,
+    env_first: u32,
+    env_width: u32,
+    env_height: u32,
+    env_cdf: u32,
+    env_cos: f32,
+    env_sin: f32,
+    emitter_table: u32,
+    attr_table: u32,
+    attr_count: u32,
+    tex_table: u32,
 }
 
 // 32-byte BVH2 node, raybench-bvh's `Node`: interior nodes have their first child next.
@@ -82,7 +95,7 @@ struct WideNode {
 }
 
 // 48-byte primitive (`data::GpuPrim`): a.w holds the kind, b.w the primitive id.
-// Triangle: vertices a.xyz, b.xyz, c.xyz (c.w: the weight CDF in the emitter list).
+// Triangle: vertices a.xyz, b.xyz, c.xyz.
 // Sphere: centre a.xyz, radius c.x. Plane: point a.xyz, unit normal c.xyz.
 struct Prim {
     a: vec4<f32>,
@@ -928,15 +941,21 @@ struct Material {
     ior: f32,
     checker_color: vec3<f32>,
     checker_size: f32,
+    // `Material::base_color_texture` and `emission_texture` (NO_ENTRY: none).
+    base_texture: u32,
+    emission_texture: u32,
 }
 
+// `Scene::material_of` (five vectors per material, `data.rs`).
 fn material_of(id: u32) -> Material {
-    let m = (info_of(id) & ~EMITTER_BIT) * 4u;
+    let m = (info_of(id) & ~EMITTER_BIT) * 5u;
     let m0 = shading[m];
     let m1 = shading[m + 1u];
     let m2 = shading[m + 2u];
     let m3 = shading[m + 3u];
-    return Material(m0.xyz, bitcast<u32>(m0.w), m1.xyz, m1.w, m2.xyz, m2.w, m3.xyz, m3.w);
+    let m4 = shading[m + 4u];
+    return Material(m0.xyz, bitcast<u32>(m0.w), m1.xyz, m1.w, m2.xyz, m2.w, m3.xyz, m3.w,
+        bitcast<u32>(m4.x), bitcast<u32>(m4.y));
 }
 
 fn is_emitter(id: u32) -> bool {
@@ -1001,19 +1020,29 @@ fn offset_ray_origin(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return q;
 }
 
-// `optics::basis` (Duff et al. 2017).
-fn cosine_hemisphere(n: vec3<f32>, u1: f32, u2: f32) -> vec3<f32> {
+// `optics::basis` (Duff et al. 2017): two unit vectors completing unit `n` to an
+// orthonormal basis.
+fn frame_basis(n: vec3<f32>) -> array<vec3<f32>, 2> {
     let sgn = copysign(1.0, n.z);
     let a = -1.0 / (sgn + n.z);
     let b = n.x * n.y * a;
-    let t = vec3<f32>(1.0 + sgn * n.x * n.x * a, sgn * b, -sgn * n.x);
-    let bt = vec3<f32>(b, sgn + n.y * n.y * a, -n.y);
+    return array<vec3<f32>, 2>(
+        vec3<f32>(1.0 + sgn * n.x * n.x * a, sgn * b, -sgn * n.x),
+        vec3<f32>(b, sgn + n.y * n.y * a, -n.y));
+}
+
+// `optics::cosine_hemisphere`.
+fn cosine_hemisphere(n: vec3<f32>, u1: f32, u2: f32) -> vec3<f32> {
+    let tb = frame_basis(n);
+    let t = tb[0];
+    let bt = tb[1];
     let r = sqrt(u1);
     let phi = TAU * u2;
     let z = sqrt(max(1.0 - u1, 0.0));
     return normalize(t * (r * cos(phi)) + bt * (r * sin(phi)) + n * z);
 }
 
+// `optics::triangle_point`.
 fn triangle_point(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, u1: f32, u2: f32) -> vec3<f32> {
     let s = sqrt(u1);
     let w0 = 1.0 - s;
@@ -1021,8 +1050,10 @@ fn triangle_point(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, u1: f32, u2: f32) ->
     return a * w0 + b * w1 + c * (1.0 - w0 - w1);
 }
 
-// `whitted::light_ray`: a shadow ray towards light j and the unshadowed irradiance and
-// direction it would bring; `ok` is false when the light is behind the surface.
+// `whitted::light_ray`: a shadow ray towards light j and the unshadowed irradiance (on the
+// shading normal `ns`) and direction it would bring; `ok` is false when the light is behind
+// the surface: below the shading normal's hemisphere or below the geometric surface (`n`,
+// which also offsets the ray's origin), both facing the viewer.
 struct LightSample {
     ray: Ray,
     irradiance: vec3<f32>,
@@ -1030,7 +1061,7 @@ struct LightSample {
     ok: bool,
 }
 
-fn light_ray(j: u32, p: vec3<f32>, n: vec3<f32>) -> LightSample {
+fn light_ray(j: u32, p: vec3<f32>, n: vec3<f32>, ns: vec3<f32>) -> LightSample {
     let l0 = shading[params.light_first + 2u * j];
     let l1 = shading[params.light_first + 2u * j + 1u];
     let origin = offset_ray_origin(p, n);
@@ -1041,8 +1072,8 @@ fn light_ray(j: u32, p: vec3<f32>, n: vec3<f32>) -> LightSample {
         let to = position - p;
         let dist2 = dot(to, to);
         let dir = to / sqrt(dist2);
-        let cos_l = dot(n, dir);
-        if !(cos_l > 0.0 && dist2 > 0.0) {
+        let cos_l = dot(ns, dir);
+        if !(cos_l > 0.0 && dist2 > 0.0 && dot(n, dir) > 0.0) {
             return s;
         }
         s.ray = make_ray(origin, position - origin, 0.0, 1.0);
@@ -1050,8 +1081,8 @@ fn light_ray(j: u32, p: vec3<f32>, n: vec3<f32>) -> LightSample {
         s.wi = dir;
     } else {
         let dir = -l0.xyz;
-        let cos_l = dot(n, dir);
-        if cos_l <= 0.0 {
+        let cos_l = dot(ns, dir);
+        if !(cos_l > 0.0 && dot(n, dir) > 0.0) {
             return s;
         }
         s.ray = ray_new(origin, dir);
@@ -1111,41 +1142,68 @@ fn finish_pixel(p: Pixel, color: vec3<f32>) {
     flush_counters();
 }
 
-// `whitted::shading_frame` and the material: the hit point, the unit normal facing the
-// incoming ray, whether the ray arrived on the side the geometric normal points to, and
-// the unit direction of the ray.
+// `wavefront::Surface`: the material, the hit point, the unit geometric normal facing the
+// incoming ray (`nf`), the unit shading normal flipped with it (`ns`), the diffuse colour
+// and emission (textures applied), whether the ray arrived on the side the geometric
+// normal points to, and the unit direction of the ray.
 struct Surface {
     m: Material,
     at: vec3<f32>,
     nf: vec3<f32>,
+    ns: vec3<f32>,
+    albedo: vec3<f32>,
+    emission: vec3<f32>,
     front: bool,
     d: vec3<f32>,
 }
 
-fn surface(r: Ray, h: Hit) -> Surface {
-    let gn = hit_normal(r, h);
-    let front = dot(gn, r.d) < 0.0;
-    return Surface(material_of(h.id), r.o + r.d * h.t, select(-gn, gn, front), front, normalize(r.d));
+// `wavefront::facing`: the geometric normal `ng` and the shading normal `ns` (on `ng`'s
+// side) flipped together to the side a ray of unit direction `d` comes from; where the
+// shading normal then faces away from the ray, the geometric normal shades. Returns
+struct Facing {
+    nf: vec3<f32>,
+    ns: vec3<f32>,
+    front: bool,
 }
 
-// `integrator::shade_cast`.
+fn facing(ng: vec3<f32>, ns: vec3<f32>, d: vec3<f32>) -> Facing {
+    let front = dot(ng, d) < 0.0;
+    let nf = select(-ng, ng, front);
+    let s = select(-ns, ns, front);
+    return Facing(nf, select(nf, s, dot(s, d) < 0.0), front);
+}
+
+// `Wavefront::surface` for a ray that hit something.
+fn surface(r: Ray, h: Hit) -> Surface {
+    let m = material_of(h.id);
+    let at = r.o + r.d * h.t;
+    let d = normalize(r.d);
+    let gn = hit_normal(r, h);
+    let sh = scene_shading(h, m, gn, at);
+    let f = facing(gn, sh.normal, d);
+    return Surface(m, at, f.nf, f.ns, sh.albedo, sh.emission, f.front, d);
+}
+
+// `integrator::shade_cast`: the base colour (texture applied, no checkerboard) times a mix
+// of |cos| to the viewer and a directional light, with the shading normal, plus emission.
 fn shade_cast(r: Ray, h: Hit) -> vec3<f32> {
     if h.id == NO_HIT {
-        return params.background;
+        return background_along(r.d);
     }
     let m = material_of(h.id);
-    let n0 = hit_normal(r, h);
-    let view = -normalize_or(r.d, vec3<f32>(0.0));
-    let cos_view = dot(n0, view);
-    let n = select(n0, -n0, cos_view < 0.0);
+    let d = normalize_or(r.d, vec3<f32>(0.0));
+    let gn = hit_normal(r, h);
+    let sh = scene_shading(h, m, gn, r.o + r.d * h.t);
+    let n = facing(gn, sh.normal, d).ns;
+    let cos_view = -dot(n, d);
     let diffuse = max(dot(n, -params.cast_light), 0.0);
-    var albedo = m.base_color;
+    var albedo = sh.base_color;
     if m.kind == MAT_MIRROR {
         albedo = max(m.specular, vec3<f32>(0.2));
     } else if m.kind == MAT_GLASS {
         albedo = vec3<f32>(0.75, 0.85, 0.9);
     }
-    return albedo * (0.35 * abs(cos_view) + 0.65 * diffuse) + m.emission;
+    return albedo * (0.35 * abs(cos_view) + 0.65 * diffuse) + sh.emission;
 }
 
 @compute @workgroup_size(64)
@@ -1227,7 +1285,7 @@ fn whitted_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
                 n_rays += 1u;
             }
             if h.id == NO_HIT {
-                color += seg.weight * params.background;
+                color += seg.weight * background_along(r.d);
                 continue;
             }
             let sf = surface(r, h);
@@ -1235,21 +1293,22 @@ fn whitted_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
             let at = sf.at;
             let front = sf.front;
             let nf = sf.nf;
+            let ns = sf.ns;
             let d = sf.d;
             if front {
-                color += seg.weight * m.emission;
+                color += seg.weight * sf.emission;
             }
             if m.kind == MAT_DIFFUSE {
-                let albedo = albedo_at(m, at);
+                let albedo = sf.albedo;
                 color += seg.weight * albedo * AMBIENT;
                 for (var j = 0u; j < params.light_count; j++) {
-                    let l = light_ray(j, at, nf);
+                    let l = light_ray(j, at, nf, ns);
                     if !l.ok {
                         continue;
                     }
                     // Lambert plus a Blinn-Phong highlight.
                     let hv = normalize_or(l.wi - d, vec3<f32>(0.0));
-                    let c = max(dot(nf, hv), 0.0);
+                    let c = max(dot(ns, hv), 0.0);
                     var spec_pow = pow(c, m.shininess);
                     if c <= 0.0 {
                         spec_pow = select(0.0, 1.0, m.shininess == 0.0);
@@ -1261,25 +1320,29 @@ fn whitted_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
                     }
                 }
             } else if seg.depth < params.max_depth {
+                // Mirror and glass rays bent by the shading normal below the geometric
+                // surface on their side are dropped (pbrt's rule): they would start inside.
                 if m.kind == MAT_MIRROR {
                     let w = seg.weight * m.specular;
-                    if max3(w) > cut {
-                        stack[sp] = Segment(offset_ray_origin(at, nf), seg.depth + 1u, reflect_dir(d, nf), w);
+                    let dir = reflect_dir(d, ns);
+                    if max3(w) > cut && dot(dir, nf) >= 0.0 {
+                        stack[sp] = Segment(offset_ray_origin(at, nf), seg.depth + 1u, dir, w);
                         sp += 1u;
                     }
                 } else {
                     // Entering when the ray meets the side the normal points to.
                     let n1 = select(m.ior, 1.0, front);
                     let n2 = select(1.0, m.ior, front);
-                    let fr = fresnel_dielectric(-dot(d, nf), n1, n2);
+                    let fr = fresnel_dielectric(-dot(d, ns), n1, n2);
                     let wr = seg.weight * m.specular * fr;
-                    if max3(wr) > cut {
-                        stack[sp] = Segment(offset_ray_origin(at, nf), seg.depth + 1u, reflect_dir(d, nf), wr);
+                    let dr = reflect_dir(d, ns);
+                    if max3(wr) > cut && dot(dr, nf) >= 0.0 {
+                        stack[sp] = Segment(offset_ray_origin(at, nf), seg.depth + 1u, dr, wr);
                         sp += 1u;
                     }
-                    let t = refract_dir(d, nf, n1, n2);
+                    let t = refract_dir(d, ns, n1, n2);
                     let wt = seg.weight * m.specular * (1.0 - fr);
-                    if t.w != 0.0 && max3(wt) > cut {
+                    if t.w != 0.0 && max3(wt) > cut && dot(t.xyz, -nf) >= 0.0 {
                         stack[sp] = Segment(offset_ray_origin(at, -nf), seg.depth + 1u, t.xyz, wt);
                         sp += 1u;
                     }
@@ -1308,32 +1371,6 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
     return 1.0 / (1.0 + r * r);
 }
 
-// `Emitters::pdf_hit` for a triangle: choice (area x luminance / total) over area, per
-// solid angle at distance^2 `dist2` and cosine `cos_y`.
-fn triangle_light_pdf(le: vec3<f32>, dist2: f32, cos_y: f32) -> f32 {
-    if !(cos_y > 0.0) {
-        return 0.0;
-    }
-    return luminance(le) / params.emitter_weight * dist2 / cos_y;
-}
-
-// `Emitters::pick`: the emitter entry whose CDF interval holds u (binary search).
-fn pick_emitter(u: f32) -> u32 {
-    let total = prims[params.emitter_first + params.emitter_count - 1u].c.w;
-    let target_cdf = u * total;
-    var lo = 0u;
-    var hi = params.emitter_count;
-    while lo < hi {
-        let mid = (lo + hi) / 2u;
-        if prims[params.emitter_first + mid].c.w <= target_cdf {
-            lo = mid + 1u;
-        } else {
-            hi = mid;
-        }
-    }
-    return params.emitter_first + min(lo, params.emitter_count - 1u);
-}
-
 @compute @workgroup_size(64)
 fn path_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
     let p = pixel_of(gid.x);
@@ -1357,8 +1394,15 @@ fn path_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
         for (var depth = 0u; depth <= params.max_depth; depth++) {
             let h = closest(r);
             n_rays += 1u;
+            // What the ray found counts fully unless a light sample at the previous
+            // (diffuse) vertex could have found it too.
+            let weighted = params.mis != 0u && !specular;
             if h.id == NO_HIT {
-                color += weight * params.background;
+                var w = 1.0;
+                if weighted && params.env_width != 0u {
+                    w = power_heuristic(pdf_bsdf, pdf_environment(normalize(r.d)));
+                }
+                color += weight * w * background_along(r.d);
                 break;
             }
             let sf = surface(r, h);
@@ -1366,16 +1410,15 @@ fn path_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
             let at = sf.at;
             let front = sf.front;
             let nf = sf.nf;
+            let ns = sf.ns;
             let d = sf.d;
-            if front && max3(m.emission) > 0.0 {
+            if front && max3(sf.emission) > 0.0 {
                 var w = 1.0;
-                if params.mis != 0u && !specular && is_emitter(h.id) {
-                    let to = at - r.o;
-                    let dist2 = dot(to, to);
-                    let cos_y = abs(dot(nf, d));
-                    w = power_heuristic(pdf_bsdf, triangle_light_pdf(m.emission, dist2, cos_y));
+                if weighted && is_emitter(h.id) {
+                    let light = pdf_light_hit(r.o, h.id, h.k, at, hit_normal(r, h));
+                    w = power_heuristic(pdf_bsdf, light);
                 }
-                color += weight * w * m.emission;
+                color += weight * w * sf.emission;
             }
             if depth == params.max_depth {
                 break;
@@ -1390,12 +1433,13 @@ fn path_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
             let u_roulette = next_f32(&rng);
 
             let previous = weight;
-            var next: Ray;
+            var dir: vec3<f32>;
+            var side: vec3<f32>;
             if m.kind == MAT_DIFFUSE {
-                let albedo = albedo_at(m, at);
+                let albedo = sf.albedo;
                 let brdf = albedo * INV_PI;
                 for (var j = 0u; j < params.light_count; j++) {
-                    let l = light_ray(j, at, nf);
+                    let l = light_ray(j, at, nf, ns);
                     if l.ok {
                         n_rays += 1u;
                         if !occluded(l.ray) {
@@ -1404,50 +1448,57 @@ fn path_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
                     }
                 }
                 if params.mis != 0u {
-                    let e = prims[pick_emitter(u_light)];
-                    let y = triangle_point(e.a.xyz, e.b.xyz, e.c.xyz, u_point0, u_point1);
                     let origin = offset_ray_origin(at, nf);
-                    let to = y - origin;
-                    let dist2 = dot(to, to);
-                    let dist = sqrt(dist2);
-                    let wi = to / dist;
-                    let cos_x = dot(nf, wi);
-                    // One-sided: the light's front faces the shading point.
-                    let light_n = normalize_or(cross(e.b.xyz - e.a.xyz, e.c.xyz - e.a.xyz), vec3<f32>(0.0, 1.0, 0.0));
-                    let cos_y = -dot(light_n, to) / dist;
-                    if cos_x > 0.0 && cos_y > 0.0 && dist2 > 0.0 {
-                        let le = material_of(bitcast<u32>(e.b.w)).emission;
-                        let pdf = triangle_light_pdf(le, dist2, cos_y);
-                        let w = power_heuristic(pdf, cos_x * INV_PI);
-                        let value = weight * brdf * le * (cos_x * w / pdf);
+                    let ls = sample_light(origin, u_light, u_point0, u_point1);
+                    // The shading normal's cosine; a light below the geometric surface does
+                    // not light it.
+                    let cos_x = dot(ns, ls.wi);
+                    if ls.ok && cos_x > 0.0 && dot(nf, ls.wi) > 0.0 && ls.pdf > 0.0 && is_finite(ls.pdf) {
+                        let w = power_heuristic(ls.pdf, cos_x * INV_PI);
+                        let value = weight * brdf * ls.radiance * (cos_x * w / ls.pdf);
+                        var shadow: Ray;
+                        if is_finite(ls.dist) {
+                            shadow = make_ray(origin, ls.wi * ls.dist, 0.0, SHADOW_SHORTEN);
+                        } else {
+                            shadow = ray_new(origin, ls.wi);
+                        }
                         n_rays += 1u;
-                        if !occluded(make_ray(origin, wi * dist, 0.0, SHADOW_SHORTEN)) {
+                        if !occluded(shadow) {
                             color += value;
                         }
                     }
                 }
                 weight *= albedo;
                 specular = false;
-                let dir = cosine_hemisphere(nf, u_dir0, u_dir1);
-                pdf_bsdf = max(dot(nf, dir), 0.0) * INV_PI;
-                next = ray_new(offset_ray_origin(at, nf), dir);
+                dir = cosine_hemisphere(ns, u_dir0, u_dir1);
+                pdf_bsdf = max(dot(ns, dir), 0.0) * INV_PI;
+                side = nf;
             } else if m.kind == MAT_MIRROR {
                 weight *= m.specular;
                 specular = true;
-                next = ray_new(offset_ray_origin(at, nf), reflect_dir(d, nf));
+                dir = reflect_dir(d, ns);
+                side = nf;
             } else {
                 let n1 = select(m.ior, 1.0, front);
                 let n2 = select(1.0, m.ior, front);
-                let fr = fresnel_dielectric(-dot(d, nf), n1, n2);
+                let fr = fresnel_dielectric(-dot(d, ns), n1, n2);
                 weight *= m.specular;
                 specular = true;
-                let t = refract_dir(d, nf, n1, n2);
+                let t = refract_dir(d, ns, n1, n2);
                 if t.w != 0.0 && u_choice >= fr {
-                    next = ray_new(offset_ray_origin(at, -nf), t.xyz);
+                    dir = t.xyz;
+                    side = -nf;
                 } else {
-                    next = ray_new(offset_ray_origin(at, nf), reflect_dir(d, nf));
+                    dir = reflect_dir(d, ns);
+                    side = nf;
                 }
             }
+            // A direction the shading normal sent below the geometric surface on the side
+            // it leaves from ends the path (pbrt's rule).
+            if dot(dir, side) < 0.0 {
+                break;
+            }
+            let next = ray_new(offset_ray_origin(at, side), dir);
             if depth >= ROULETTE_DEPTH {
                 let q = clamp(max3(weight) / max(max3(previous), MIN_POSITIVE), 0.05, 0.95);
                 if u_roulette >= q {
