@@ -38,6 +38,8 @@ gpu_tests! {
     instance_grid => "instance-grid", true,
     moving => "moving", true,
     sdf => "sdf", true,
+    heightfield => "heightfield", true,
+    heightfield_generator => "heightfield:64", true,
 }
 
 #[test]
@@ -85,9 +87,8 @@ fn the_empty_scene_renders_background() {
     }
 }
 
-/// Height fields, CSG trees, Bezier patches and the volume modes have no WGSL port:
-/// the backend refuses them with a
-/// reason instead of rendering something else.
+/// Bilinear height-field cells, CSG trees, Bezier patches and the volume modes have no WGSL
+/// port: the backend refuses them with a reason instead of rendering something else.
 #[test]
 fn kinds_and_modes_without_kernels_are_refused() {
     let r = raybench_wgpu::WgpuRenderer::new("wgpu", "test");
@@ -95,8 +96,21 @@ fn kinds_and_modes_without_kernels_are_refused() {
         let why = r.supports_mode(mode).unwrap_err();
         assert!(why.contains(mode.name()), "{why}");
     }
-    let scene = raybench_scene::load("heightfield:8", std::path::Path::new(".")).unwrap();
-    assert!(raybench_wgpu::check_kinds(&scene).is_err());
+    let mut b = raybench_core::SceneBuilder::new("bilinear");
+    let field = raybench_core::HeightField::new(2, 2, vec![0.0; 9], None)
+        .unwrap()
+        .with_surface(raybench_core::CellSurface::Bilinear);
+    b.add_shapes(
+        "field",
+        vec![raybench_core::Shape::HeightField(std::sync::Arc::new(
+            field,
+        ))],
+        0,
+    )
+    .unwrap();
+    let scene = b.build();
+    let why = raybench_wgpu::check_kinds(&scene).unwrap_err();
+    assert!(why.contains("height field with bilinear cells"), "{why}");
     let csg = raybench_scene::load("csg", std::path::Path::new(".")).unwrap();
     let why = raybench_wgpu::check_kinds(&csg).unwrap_err();
     assert!(why.contains("CSG"), "{why}");
@@ -653,4 +667,134 @@ fn textured_smooth_mesh() {
 #[test]
 fn smooth_suzanne() {
     check(&scene_file("smooth-suzanne.toml"), 32, true);
+}
+
+// ---------------------------------------------------------------------------------------
+// Height fields (`kernels/heightfield.wgsl`).
+
+/// Height fields the built-in scenes do not cover, written as scene files and checked
+/// against naive with [`check`] (ray casting, incoherent closest and any-hit rays; Whitted
+/// and path tracing on the first):
+/// a placed field (rotated, scaled unevenly, moved) with smooth normals, the same faceted,
+/// a field that asks for the 2D-DDA walk (the GPU walks the tree: the same hits), a single
+/// cell and a single row (trees of depth 0 and of one side only), and a field of non-square
+/// cells.
+#[test]
+fn height_field_variants_match_naive() {
+    let dir = std::env::temp_dir().join(format!("raybench-gpu-hf-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let rows = |nx: u32, nz: u32| -> String {
+        let mut out = Vec::new();
+        for j in 0..=nz {
+            let row: Vec<String> = (0..=nx)
+                .map(|i| {
+                    let (x, z) = (i as f32 / nx as f32, j as f32 / nz.max(1) as f32);
+                    format!(
+                        "{:.4}",
+                        0.3 * (7.0 * x).sin() * (5.0 * z + 1.0).cos() + 0.1 * x
+                    )
+                })
+                .collect();
+            out.push(format!("[{}]", row.join(", ")));
+        }
+        format!("[{}]", out.join(", "))
+    };
+    let scene = |name: &str, object: &str| {
+        let text = format!(
+            "name = \"{name}\"\nbackground = [0.5, 0.6, 0.8]\n\
+             [camera]\nposition = [0.3, 1.6, 2.4]\nlook_at = [0.0, 0.0, 0.0]\nfov = 50\n\
+             [[material]]\nname = \"land\"\ncolor = [0.4, 0.6, 0.3]\n\
+             specular = [0.1, 0.1, 0.1]\nshininess = 16\n\
+             [[material]]\nname = \"mirror\"\nkind = \"mirror\"\nspecular = [0.9, 0.9, 0.9]\n\
+             [[light]]\nkind = \"directional\"\ndirection = [-0.4, -0.8, -0.3]\n\
+             radiance = [1.0, 1.0, 1.0]\n\
+             [[object]]\nkind = \"sphere\"\ncenter = [0.3, 0.6, -0.2]\nradius = 0.2\n\
+             material = \"mirror\"\n\
+             [[object]]\nkind = \"height_field\"\nmaterial = \"land\"\n{object}\n"
+        );
+        let path = dir.join(format!("{name}.toml"));
+        std::fs::write(&path, text).unwrap();
+        path.to_str().unwrap().to_owned()
+    };
+    let placed = "transform = { scale = [1.2, 1.5, 0.8], rotate = [10.0, 35.0, -5.0], \
+                  translate = [0.1, -0.1, 0.05] }";
+    let cases = [
+        scene(
+            "hf-placed",
+            &format!("heights = {}\n{placed}", rows(40, 40)),
+        ),
+        scene(
+            "hf-faceted",
+            &format!("heights = {}\nsmooth = false\n{placed}", rows(24, 17)),
+        ),
+        scene(
+            "hf-dda",
+            &format!("heights = {}\ntraversal = \"dda\"", rows(33, 20)),
+        ),
+        scene("hf-one-cell", &format!("heights = {}", rows(1, 1))),
+        scene("hf-one-row", &format!("heights = {}", rows(37, 1))),
+    ];
+    // Every mode on the placed field; ray casting and explicit rays on the others (naive's
+    // secondary rays are slow on lavapipe's one thread).
+    for (k, spec) in cases.iter().enumerate() {
+        check(spec, 32, k == 0);
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The sub-primitive ids (the cell triangles) and the surface parameters of height-field
+/// hits are naive's: seeded incoherent rays and rays from above aimed at every cell of the
+/// `heightfield:48` field.
+#[test]
+fn height_field_hits_carry_naive_sub_primitives() {
+    use raybench_core::{Ray, Vec3};
+    if !raybench_tests::gpu::available() {
+        return;
+    }
+    let scene = raybench_tests::load_or_skip("heightfield:48").unwrap();
+    let mut rays = raybench_core::ray_sets::incoherent(scene.geometry.bounds(), 4096, 9);
+    for j in 0..48 {
+        for i in 0..48 {
+            let target = Vec3::new(
+                -1.0 + (i as f32 + 0.3) / 24.0,
+                0.0,
+                -1.0 + (j as f32 + 0.6) / 24.0,
+            );
+            let eye = Vec3::new(0.4, 2.0, 1.5);
+            rays.push(Ray::new(eye, target - eye));
+        }
+    }
+    let (reference, _) = raybench_tests::prepared(raybench_tests::ORACLE, &scene)
+        .trace_rays(&rays, false)
+        .unwrap();
+    for name in raybench_tests::DEVICES {
+        let (hits, _) = raybench_tests::prepared(name, &scene)
+            .trace_rays(&rays, false)
+            .unwrap();
+        let (mut hit, mut same, mut max_dt, mut max_duv) = (0usize, 0usize, 0.0f32, 0.0f32);
+        for (a, b) in reference.iter().zip(&hits) {
+            assert_eq!(a.is_some(), b.is_some(), "{name}: hit or miss");
+            if let (Some(a), Some(b)) = (a, b) {
+                hit += 1;
+                if (a.prim, a.sub) == (b.prim, b.sub) {
+                    same += 1;
+                    max_dt = max_dt.max((a.t - b.t).abs() / a.t.abs());
+                    max_duv = max_duv.max((a.u - b.u).abs().max((a.v - b.v).abs()));
+                }
+            }
+        }
+        let fraction = same as f64 / hit.max(1) as f64;
+        eprintln!(
+            "{name}: {hit} hits, sub-primitives {:.4}% equal, max relative dt {max_dt:.1e}, \
+             max du, dv {max_duv:.1e}",
+            fraction * 100.0
+        );
+        assert!(hit > 2000, "{name}: too few hits ({hit})");
+        assert!(fraction >= raybench_tests::gpu::MIN_ID_MATCH, "{name}");
+        assert!(
+            f64::from(max_dt) <= raybench_tests::gpu::MAX_REL_DT,
+            "{name}"
+        );
+        assert!(max_duv <= 1e-3, "{name}: u, v differ by {max_duv}");
+    }
 }

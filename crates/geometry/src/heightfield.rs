@@ -237,6 +237,32 @@ impl HeightField {
         self.traversal
     }
 
+    /// Object-space vertex heights, row by row (`heights[j (nx + 1) + i]`), for ports of
+    /// the intersection (the GPU kernels).
+    #[must_use]
+    pub fn heights(&self) -> &[f32] {
+        &self.heights
+    }
+
+    /// The placement (`None`: object space is world space).
+    #[must_use]
+    pub fn transform(&self) -> Option<Affine3A> {
+        self.transform
+    }
+
+    /// Whether shading normals are smooth ([`HeightField::with_smooth_normals`]).
+    #[must_use]
+    pub fn smooth_normals(&self) -> bool {
+        self.smooth
+    }
+
+    /// Object-space x of vertex column `i` and z of vertex row `j`, as the intersection
+    /// and the normals use them.
+    #[must_use]
+    pub fn object_xz(&self, i: u32, j: u32) -> (f32, f32) {
+        (self.x(i), self.z(j))
+    }
+
     /// Number of sub-primitives (two triangles per cell).
     #[must_use]
     pub fn sub_count(&self) -> u64 {

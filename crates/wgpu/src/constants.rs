@@ -43,7 +43,7 @@ pub(crate) const WHITTED_STACK: u32 = MAX_DEPTH + 2;
 /// definition it names.
 #[must_use]
 pub fn wgsl_constants() -> String {
-    let u32s: [(&str, u32, &str); 21] = [
+    let u32s: [(&str, u32, &str); 22] = [
         ("NO_HIT", NO_HIT, "raybench_core::NO_HIT"),
         ("KIND_TRIANGLE", KIND_TRIANGLE, "data.rs primitive kinds"),
         ("KIND_SPHERE", KIND_SPHERE, "data.rs primitive kinds"),
@@ -72,6 +72,11 @@ pub fn wgsl_constants() -> String {
             "instances.rs, geo entries per instance",
         ),
         ("NO_ENTRY", crate::shading::NONE, "shading::NONE"),
+        (
+            "HF_STACK",
+            crate::geo::heightfield::HF_STACK,
+            "geo::heightfield, the height-field walk's stack",
+        ),
         ("STACK_SIZE", STACK_SIZE, "BVH2 traversal stack"),
         ("WHITTED_STACK", WHITTED_STACK, "limits::MAX_DEPTH + 2"),
         (

@@ -673,6 +673,15 @@ impl Renderer for WgpuRenderer {
                 gpu.info.name
             )));
         }
+        // The primitives' own data (`geo`), known once encoded.
+        let geo_bytes = data.geo.len() as u64 * 16;
+        if geo_bytes > limit {
+            return Err(RenderError::Unsupported(format!(
+                "the primitives' own data (height-field vertices and trees, ...) needs \
+                 {geo_bytes} bytes, more than a storage buffer may hold on {}",
+                gpu.info.name
+            )));
+        }
         let usage = wgpu::BufferUsages::STORAGE;
         let nodes = buffer_init(&gpu, "nodes", bytemuck::cast_slice(&data.nodes), usage);
         let wide = buffer_init(&gpu, "wide nodes", bytemuck::cast_slice(&data.wide), usage);
