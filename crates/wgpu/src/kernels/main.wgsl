@@ -55,6 +55,11 @@ struct Params {
     cull_slack: f32,
     mis: u32,
     _pad1: u32,
+    // The volume modes (`kernels/volume.wgsl`): the volume table's index in `geo`, how many.
+    volume_first: u32,
+    volume_count: u32,
+    _vpad0: u32,
+    _vpad1: u32,
 }
 
 // 32-byte BVH2 node, raybench-bvh's `Node`: interior nodes have their first child next.
