@@ -169,6 +169,12 @@ impl TransferFunction {
         (last.color, last.sigma)
     }
 
+    /// The control points, in increasing `value` order (for ports of [`Self::eval`]).
+    #[must_use]
+    pub fn points(&self) -> &[TransferPoint] {
+        &self.points
+    }
+
     /// The largest extinction over values in `[lo, hi]` (exact for a piecewise-linear map:
     /// the ends and the points between).
     #[must_use]
@@ -364,8 +370,35 @@ impl Volume {
         self.data.bytes() + self.coarse.len() * 8
     }
 
+    /// Object units per grid unit along each axis.
+    #[must_use]
+    pub fn spacing(&self) -> Vec3 {
+        self.spacing
+    }
+
+    /// The world-to-object transform.
+    #[must_use]
+    pub fn inverse(&self) -> Affine3A {
+        self.inverse
+    }
+
+    /// The transfer function.
+    #[must_use]
+    pub fn transfer(&self) -> &TransferFunction {
+        &self.transfer
+    }
+
+    /// The coarse min-max grid of empty-space skipping: its dimensions (blocks of
+    /// [`SKIP_BLOCK`]^3 voxels) and `[min, max]` per block, x fastest (for ports of
+    /// [`Self::integrate`]).
+    #[must_use]
+    pub fn coarse(&self) -> ([u32; 3], &[[f32; 2]]) {
+        (self.coarse_dims, &self.coarse)
+    }
+
     /// The object-space box.
-    fn object_box(&self) -> Aabb {
+    #[must_use]
+    pub fn object_box(&self) -> Aabb {
         let half = Vec3::new(
             self.dims[0] as f32,
             self.dims[1] as f32,

@@ -43,7 +43,7 @@ pub(crate) const WHITTED_STACK: u32 = MAX_DEPTH + 2;
 /// definition it names.
 #[must_use]
 pub fn wgsl_constants() -> String {
-    let u32s: [(&str, u32, &str); 22] = [
+    let u32s: [(&str, u32, &str); 23] = [
         ("NO_HIT", NO_HIT, "raybench_core::NO_HIT"),
         ("KIND_TRIANGLE", KIND_TRIANGLE, "data.rs primitive kinds"),
         ("KIND_SPHERE", KIND_SPHERE, "data.rs primitive kinds"),
@@ -94,8 +94,13 @@ pub fn wgsl_constants() -> String {
             crate::plan::BLOCK,
             "plan::BLOCK, pixels per block side",
         ),
+        (
+            "SKIP_BLOCK",
+            raybench_core::voxels::SKIP_BLOCK,
+            "raybench_core::voxels::SKIP_BLOCK",
+        ),
     ];
-    let f32s: [(&str, f32, &str); 6] = [
+    let f32s: [(&str, f32, &str); 7] = [
         ("AMBIENT", AMBIENT, "raybench_core::integrator"),
         (
             "SHADOW_SHORTEN",
@@ -106,6 +111,11 @@ pub fn wgsl_constants() -> String {
         ("INV_PI", std::f32::consts::FRAC_1_PI, "std::f32::consts"),
         ("PI", std::f32::consts::PI, "std::f32::consts"),
         ("TAU", std::f32::consts::TAU, "std::f32::consts"),
+        (
+            "EARLY_TERMINATION",
+            raybench_core::voxels::EARLY_TERMINATION,
+            "raybench_core::voxels::EARLY_TERMINATION",
+        ),
     ];
     let ints = u32s.map(|(name, value, from)| (name, "u32", format!("{value}u"), from));
     // `{:e}` prints the shortest digits that round-trip, so WGSL parses the same f32.
@@ -122,13 +132,14 @@ pub fn wgsl_constants() -> String {
 /// `main.wgsl` (bindings, traversal, shading, the entry points), then one file per
 /// primitive kind or mode of its own. WGSL declarations may come in any order, so the files
 /// call each other freely.
-pub const KERNEL_FILES: [(&str, &str); 6] = [
+pub const KERNEL_FILES: [(&str, &str); 7] = [
     ("main.wgsl", include_str!("kernels/main.wgsl")),
     ("lights.wgsl", include_str!("kernels/lights.wgsl")),
     ("heightfield.wgsl", include_str!("kernels/heightfield.wgsl")),
     ("csg.wgsl", include_str!("kernels/csg.wgsl")),
     ("bezier.wgsl", include_str!("kernels/bezier.wgsl")),
     ("sdf.wgsl", include_str!("kernels/sdf.wgsl")),
+    ("volume.wgsl", include_str!("kernels/volume.wgsl")),
 ];
 
 /// The variable naming a folder to read the kernel files from at run time instead of the

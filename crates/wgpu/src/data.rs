@@ -18,7 +18,7 @@ use crate::geo::{self, Geo};
 use crate::instances::Instancing;
 use crate::shading::ShadingBlock;
 
-/// Per-dispatch parameters: 240 bytes, one 256-byte-aligned slot per dispatch of a frame.
+/// Per-dispatch parameters: 256 bytes, one 256-byte-aligned slot per dispatch of a frame.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct Params {
@@ -120,9 +120,15 @@ pub struct Params {
     pub attr_count: u32,
     /// First `geo` entry of the texture table.
     pub tex_table: u32,
+    /// The volume modes: index of the volume table in `geo` ([`crate::volume`]).
+    pub volume_first: u32,
+    /// How many volumes (0 where they were not uploaded).
+    pub volume_count: u32,
+    /// Padding to a multiple of 16 bytes.
+    pub volume_pad: [u32; 2],
 }
 
-const _: () = assert!(std::mem::size_of::<Params>() == 240);
+const _: () = assert!(std::mem::size_of::<Params>() == 256);
 
 /// 32-byte BVH2 node, raybench-bvh's [`raybench_bvh::Node`] (Wald's layout).
 #[repr(C)]
@@ -270,6 +276,9 @@ pub struct SceneData {
     pub instancing: Instancing,
     /// Where the shading data is in `geo` ([`crate::shading`]).
     pub block: ShadingBlock,
+    /// Where the volume table starts in `geo` and how many volumes, or why the volume
+    /// modes cannot run ([`crate::volume`]).
+    pub volumes: crate::volume::GpuVolumes,
 }
 
 /// The 32-byte nodes of `bvh`, depth first as it stores them.
@@ -361,6 +370,8 @@ impl SceneData {
             shading.push(v4(a, f32::from_bits(kind)));
             shading.push(v4(b, 0.0));
         }
+        // The volumes last, so that they can be dropped again ([`Self::drop_volumes`]).
+        let volumes = crate::volume::append(scene, &mut geo);
         Ok(Self {
             nodes,
             wide,
@@ -374,7 +385,17 @@ impl SceneData {
             flat_nodes,
             instancing: Instancing::default(),
             block,
+            volumes,
         })
+    }
+
+    /// Takes the volumes out of `geo` (they are last in it), the volume modes refused
+    /// with `reason`.
+    pub fn drop_volumes(&mut self, reason: String) {
+        if let Ok((first, _)) = self.volumes {
+            self.geo.truncate(first as usize);
+        }
+        self.volumes = Err(reason);
     }
 
     /// Bytes of the scene buffers.
@@ -439,6 +460,8 @@ impl SceneData {
             instance_records: self.instancing.records,
             instance_order: self.instancing.order,
             flat_count: self.instancing.flat_count,
+            volume_first: self.volumes.as_ref().map_or(0, |v| v.0),
+            volume_count: self.volumes.as_ref().map_or(0, |v| v.1),
             ..Params::default()
         })
     }
@@ -450,16 +473,16 @@ pub const OCCLUDE_ENTRY: &str = "occlude_kernel";
 /// The kernel (entry point) of a mode (`None`: explicit rays), or why there is none.
 ///
 /// # Errors
-/// For the volume modes, which have no WGSL port.
+/// None today: every mode has a kernel (the volume modes' `mip_kernel` and
+/// `composite_kernel` are in `kernels/volume.wgsl`; a scene whose volumes do not fit the
+/// device is refused by the renderer, [`SceneData::volumes`]).
 pub fn entry_point(mode: Option<Mode>) -> Result<&'static str, String> {
     match mode {
         Some(Mode::Cast) => Ok("cast_kernel"),
         Some(Mode::Whitted) => Ok("whitted_kernel"),
         Some(Mode::Path) => Ok("path_kernel"),
-        Some(m @ (Mode::Mip | Mode::Composite)) => Err(format!(
-            "the GPU kernels have no volume mode '{}' (render it with a CPU backend)",
-            m.name()
-        )),
+        Some(Mode::Mip) => Ok("mip_kernel"),
+        Some(Mode::Composite) => Ok("composite_kernel"),
         None => Ok("trace_kernel"),
     }
 }

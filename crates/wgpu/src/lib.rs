@@ -1,7 +1,8 @@
 //! # raybench-wgpu
 //!
-//! The GPU backend: ray casting, Whitted ray tracing and path tracing as WGSL compute
-//! kernels on any adapter wgpu can open headless (Vulkan on Linux: an NVIDIA GPU, or Mesa's
+//! The GPU backend: ray casting, Whitted ray tracing, path tracing and the volume modes
+//! (maximum-intensity projection and compositing, `volume.rs`) as WGSL compute kernels on
+//! any adapter wgpu can open headless (Vulkan on Linux: an NVIDIA GPU, or Mesa's
 //! software lavapipe in CI; Metal; DX12).
 //!
 //! - The scene's BVH2 is built on the CPU by `raybench-bvh` (binned SAH) and flattened into
@@ -33,6 +34,7 @@ mod instances;
 pub mod plan;
 mod renderer;
 mod shading;
+mod volume;
 
 pub use constants::{KERNEL_FILES, KERNELS_DIR_VAR, kernel_source, wgsl_constants};
 pub use context::{AdapterRequest, describe};

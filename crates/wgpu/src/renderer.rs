@@ -574,8 +574,16 @@ impl Renderer for WgpuRenderer {
         gpu(&self.request).ok().map(|g| g.describe())
     }
 
+    /// Every mode has a kernel; once prepared, the volume modes are refused where the
+    /// scene's volumes did not fit the device (`SceneData::volumes`).
     fn supports_mode(&self, mode: Mode) -> Result<(), String> {
-        entry_point(Some(mode)).map(|_| ())
+        entry_point(Some(mode))?;
+        if matches!(mode, Mode::Mip | Mode::Composite)
+            && let Some(Err(why)) = self.prepared.as_ref().map(|p| &p.data.volumes)
+        {
+            return Err(why.clone());
+        }
+        Ok(())
     }
 
     fn supports(&self, scene: &Scene) -> Result<(), String> {
@@ -666,6 +674,22 @@ impl Renderer for WgpuRenderer {
         crate::instances::append(scene, self.layout, &mut data)
             .map_err(RenderError::Unsupported)?;
         let limit = Self::binding_limit(&gpu);
+        let mut data = data;
+        if let Ok((first, _)) = data.volumes {
+            // Volumes too large for a binding refuse the volume modes only.
+            let other = u64::from(first) * 16;
+            if let Err(why) = crate::volume::fit(scene, other, limit, &gpu.info.name) {
+                data.drop_volumes(why);
+            }
+        }
+        let geo_bytes = data.geo.len() as u64 * 16;
+        if geo_bytes > limit {
+            return Err(RenderError::Unsupported(format!(
+                "the primitives' data needs {geo_bytes} bytes, more than a storage buffer may \
+                 hold on {}",
+                gpu.info.name
+            )));
+        }
         let node_bytes = (data.nodes.len() * 32 + data.wide.len() * 80) as u64;
         if node_bytes > limit {
             return Err(RenderError::Unsupported(format!(
@@ -738,6 +762,9 @@ impl Renderer for WgpuRenderer {
         let start = Instant::now();
         let gpu = &p.gpu;
         let entry = entry_point(Some(settings.mode)).map_err(RenderError::Unsupported)?;
+        // The volumes that did not fit the device (`SceneData::volumes`).
+        self.supports_mode(settings.mode)
+            .map_err(RenderError::Unsupported)?;
         let pipeline = p
             .kernels
             .pipeline(gpu, entry, settings.count, self.layout)?;
@@ -795,8 +822,10 @@ impl Renderer for WgpuRenderer {
             stats: FrameStats::default(),
             timings: Timings::default(),
         };
-        // Cast mode sums its jittered samples; the CPU divides after summing, as here.
-        let scale = if settings.mode == Mode::Cast && settings.spp > 1 {
+        // Cast mode and the volume modes sum their jittered samples; the CPU divides after
+        // summing (`cast_tile`), as here.
+        let sums = matches!(settings.mode, Mode::Cast | Mode::Mip | Mode::Composite);
+        let scale = if sums && settings.spp > 1 {
             1.0 / settings.spp as f32
         } else {
             1.0

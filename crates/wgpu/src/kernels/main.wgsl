@@ -72,6 +72,11 @@ struct Params {
     attr_table: u32,
     attr_count: u32,
     tex_table: u32,
+    // The volume modes (`kernels/volume.wgsl`): the volume table's index in `geo`, how many.
+    volume_first: u32,
+    volume_count: u32,
+    _vpad0: u32,
+    _vpad1: u32,
 }
 
 // 32-byte BVH2 node, raybench-bvh's `Node`: interior nodes have their first child next.
