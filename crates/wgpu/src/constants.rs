@@ -174,6 +174,20 @@ pub fn kernel_source() -> String {
 mod tests {
     use super::*;
 
+    /// The joined kernels parse and validate as WGSL (naga, wgpu's own front end), so that a
+    /// broken kernel fails here, without an adapter, and not only in the GPU tests.
+    #[test]
+    fn the_kernels_are_valid_wgsl() {
+        let module = naga::front::wgsl::parse_str(&kernel_source())
+            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&kernel_source())));
+        naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::empty(),
+        )
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&kernel_source())));
+    }
+
     #[test]
     fn every_constant_is_declared_once_and_parses_back() {
         let kernels: String = KERNEL_FILES.iter().map(|(_, text)| *text).collect();

@@ -492,7 +492,7 @@ fn sample_light(origin: vec3<f32>, u_light: f32, u0: f32, u1: f32) -> LightSampl
             if !c.ok {
                 return out;
             }
-            normal = hit_normal(r, Hit(c.t, id, c.u, c.v, k, c.sub));
+            normal = hit_normal(r, Hit(c.t, id, c.u, c.v, k, c.sub, NO_HIT));
             y = r.o + r.d * c.t;
             uv = vec2<f32>(c.u, c.v);
             pdf = light_cone_pdf(cone);
