@@ -60,7 +60,7 @@ const TOLERANCE: f64 = 1e-7;
 /// Padding of region boxes, relative to the patch extent.
 const PAD: f32 = 1e-5;
 /// How far outside its region (in parameter space) an accepted hit may lie.
-const UV_MARGIN: f64 = 1e-6;
+pub const UV_MARGIN: f64 = 1e-6;
 
 /// Nodes of the region tree: `(4^(D+1) - 1) / 3`.
 const NODES: usize = ((1 << (2 * (REGION_DEPTH + 1))) - 1) / 3;
@@ -319,6 +319,20 @@ impl BezierPatch {
     #[must_use]
     pub fn bounds(&self) -> Aabb {
         Aabb::new(self.boxes[0][0].into(), self.boxes[0][1].into())
+    }
+
+    /// The precomputed region boxes, level by level (level `l`: `2^l x 2^l` regions,
+    /// row-major in `v`; the root first), padded by [`BezierPatch::box_pad`]: what the GPU
+    /// kernels walk.
+    #[must_use]
+    pub fn region_boxes(&self) -> &[[Vec3A; 2]] {
+        &self.boxes
+    }
+
+    /// The absolute padding of the region boxes (and of the fallback's boxes).
+    #[must_use]
+    pub fn box_pad(&self) -> f32 {
+        self.pad
     }
 
     /// Bytes held, the region boxes included.

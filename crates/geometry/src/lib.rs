@@ -50,7 +50,9 @@ mod two_level;
 
 pub use aabb::{Aabb, FAR_SCALE, SlabRay};
 pub use accel::{Accel, AccelStats, BatchTracer};
-pub use bezier::{BezierPatch, BezierStats, FALLBACK_DEPTH, MAX_NEWTON_ITERATIONS, REGION_DEPTH};
+pub use bezier::{
+    BezierPatch, BezierStats, FALLBACK_DEPTH, MAX_NEWTON_ITERATIONS, REGION_DEPTH, UV_MARGIN,
+};
 pub use bilinear::BilinearPatch;
 pub use checks::check_transform;
 pub use counters::{Counters, NoCounters, RayCounters};

@@ -43,7 +43,7 @@ pub(crate) const WHITTED_STACK: u32 = MAX_DEPTH + 2;
 /// definition it names.
 #[must_use]
 pub fn wgsl_constants() -> String {
-    let u32s: [(&str, u32, &str); 23] = [
+    let u32s: [(&str, u32, &str); 30] = [
         ("NO_HIT", NO_HIT, "raybench_core::NO_HIT"),
         ("KIND_TRIANGLE", KIND_TRIANGLE, "data.rs primitive kinds"),
         ("KIND_SPHERE", KIND_SPHERE, "data.rs primitive kinds"),
@@ -98,6 +98,41 @@ pub fn wgsl_constants() -> String {
             "SKIP_BLOCK",
             raybench_core::voxels::SKIP_BLOCK,
             "raybench_core::voxels::SKIP_BLOCK",
+        ),
+        (
+            "BEZIER_REGION_DEPTH",
+            raybench_core::REGION_DEPTH,
+            "raybench_geometry::bezier::REGION_DEPTH",
+        ),
+        (
+            "BEZIER_FALLBACK_DEPTH",
+            raybench_core::FALLBACK_DEPTH,
+            "raybench_geometry::bezier::FALLBACK_DEPTH",
+        ),
+        (
+            "BEZIER_NEWTON_ITERATIONS",
+            raybench_core::MAX_NEWTON_ITERATIONS,
+            "raybench_geometry::bezier::MAX_NEWTON_ITERATIONS",
+        ),
+        (
+            "BEZIER_STACK",
+            crate::geo::bezier::STACK,
+            "geo::bezier::STACK, 3 (REGION_DEPTH + FALLBACK_DEPTH) + 1",
+        ),
+        (
+            "BEZIER_DU",
+            crate::geo::bezier::DU,
+            "geo::bezier::DU layout",
+        ),
+        (
+            "BEZIER_DV",
+            crate::geo::bezier::DV,
+            "geo::bezier::DV layout",
+        ),
+        (
+            "BEZIER_BOXES",
+            crate::geo::bezier::BOXES,
+            "geo::bezier::BOXES layout",
         ),
     ];
     let f32s: [(&str, f32, &str); 7] = [
