@@ -281,7 +281,8 @@ pub trait Renderer: Send + Sync {
         Ok(())
     }
 
-    /// Whether the backend can render frames in `mode` (the GPU has no volume modes).
+    /// Whether the backend can render frames in `mode` (every backend of raybench can; the GPU
+    /// refuses the volume modes for a prepared scene whose volumes do not fit its buffers).
     ///
     /// # Errors
     /// The reason it cannot.

@@ -95,31 +95,8 @@ pub struct Params {
     pub instance_order: u32,
     /// Ids below this are the flat part's.
     pub flat_count: u32,
-    // ---- Shading: lights, environment, textures, attributes ([`crate::shading`]).
-    /// Total choice weight of every light, the environment included.
-    pub light_total: f32,
-    /// The probability of choosing the environment as the light (0 without one).
-    pub env_choice: f32,
-    /// First `geo` entry of the environment's texels.
-    pub env_first: u32,
-    /// Its width (0: no environment map, the constant background).
-    pub env_width: u32,
-    /// Its height.
-    pub env_height: u32,
-    /// Float index in `geo` of its marginal then conditional tables.
-    pub env_cdf: u32,
-    /// Its rotation about `+y`: cosine.
-    pub env_cos: f32,
-    /// Sine.
-    pub env_sin: f32,
-    /// First `geo` entry of the emitter table.
-    pub emitter_table: u32,
-    /// Float index in `geo` of the per-primitive attribute offsets (`u32::MAX`: none).
-    pub attr_table: u32,
-    /// Primitive ids that table covers.
-    pub attr_count: u32,
-    /// First `geo` entry of the texture table.
-    pub tex_table: u32,
+    /// Lights, environment, textures, attributes: where their tables are in `geo`.
+    pub shading: ShadingBlock,
     /// The volume modes: index of the volume table in `geo` ([`crate::volume`]).
     pub volume_first: u32,
     /// How many volumes (0 where they were not uploaded).
@@ -441,18 +418,7 @@ impl SceneData {
             mis: u32::from(
                 settings.light_sampling == LightSampling::Mis && !scene.emitters.is_empty(),
             ),
-            light_total: self.block.light_total,
-            env_choice: self.block.env_choice,
-            env_first: self.block.env_first,
-            env_width: self.block.env_width,
-            env_height: self.block.env_height,
-            env_cdf: self.block.env_cdf,
-            env_cos: self.block.env_cos,
-            env_sin: self.block.env_sin,
-            emitter_table: self.block.emitter_table,
-            attr_table: self.block.attr_table,
-            attr_count: self.block.attr_count,
-            tex_table: self.block.tex_table,
+            shading: self.block,
             far_scale: FAR_SCALE,
             cull_slack: CULL_SLACK,
             instance_count: self.instancing.count,

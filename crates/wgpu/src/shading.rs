@@ -39,9 +39,11 @@ use raybench_core::{Scene, Shape, Vec3, Wrap};
 /// No entry (a texture index, an attribute record).
 pub(crate) const NONE: u32 = u32::MAX;
 
-/// The shading block of [`crate::data::Params`]: where the tables above start and the
-/// light choice's totals.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// The shading block of [`crate::data::Params`] (48 bytes, laid out as the kernels' `Params`
+/// fields `light_total` to `tex_table`): where the tables above start and the light
+/// choice's totals.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ShadingBlock {
     /// Total choice weight of every light, the environment included (`Emitters::total`).
     pub light_total: f32,

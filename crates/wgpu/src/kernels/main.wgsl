@@ -1211,9 +1211,24 @@ fn shade_cast(r: Ray, h: Hit) -> vec3<f32> {
     return albedo * (0.35 * abs(cos_view) + 0.65 * diffuse) + sh.emission;
 }
 
-@compute @workgroup_size(64)
-fn cast_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let p = pixel_of(gid.x);
+// The shading of a camera ray in ray casting and the volume modes: `CAST`, `MIP` or
+// `COMPOSITE`.
+const CAST: u32 = 0u;
+const MIP: u32 = 1u;
+const COMPOSITE: u32 = 2u;
+
+fn shade_camera_ray(r: Ray, h: Hit, mode: u32) -> vec3<f32> {
+    if mode == CAST {
+        return shade_cast(r, h);
+    }
+    return shade_volumes(r, h, mode == COMPOSITE);
+}
+
+// `integrator::cast_tile` for thread `i`, with the shading of `mode`: the centre ray's id and
+// t, then the colour (the centre ray's, or the sum of this dispatch's jittered samples,
+// which the renderer divides by spp after readback as the CPU does).
+fn cast_pixel(i: u32, mode: u32) {
+    let p = pixel_of(i);
     if !p.ok {
         return;
     }
@@ -1221,23 +1236,27 @@ fn cast_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
     if params.s0 == 0u {
         let h = centre(p);
         if params.spp == 1u {
-            color = shade_cast(camera_ray(f32(p.x) + 0.5, f32(p.y) + 0.5), h);
+            color = shade_camera_ray(camera_ray(f32(p.x) + 0.5, f32(p.y) + 0.5), h, mode);
         }
     }
     if params.spp > 1u {
-        // Jittered samples for colour (summed here, divided by spp after readback, as the
-        // CPU does); ids and t stay those of the centre ray.
+        // Jittered samples for colour; ids and t stay those of the centre ray.
         let pixel = p.y * params.width + p.x;
         for (var s = params.s0; s < params.s1; s++) {
             var rng = Sampler(pixel, s, 0u);
             let jx = next_f32(&rng);
             let jy = next_f32(&rng);
             let r = camera_ray(f32(p.x) + jx, f32(p.y) + jy);
-            color += shade_cast(r, closest(r));
+            color += shade_camera_ray(r, closest(r), mode);
             n_rays += 1u;
         }
     }
     finish_pixel(p, color);
+}
+
+@compute @workgroup_size(64)
+fn cast_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
+    cast_pixel(gid.x, CAST);
 }
 
 // ---------------------------------------------------------------------------------------

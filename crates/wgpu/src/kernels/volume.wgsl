@@ -437,43 +437,15 @@ fn shade_volumes(r: Ray, h: Hit, composite: bool) -> vec3<f32> {
     return acc.color + surface * acc.transmittance;
 }
 
-// `integrator::cast_tile` with `shade_volumes` as its shading: the centre ray's id and t,
-// then the colour (the centre ray's, or the sum of this dispatch's jittered samples, which
-// the renderer divides by spp after readback as the CPU does).
-fn volume_pixel(i: u32, composite: bool) {
-    let p = pixel_of(i);
-    if !p.ok {
-        return;
-    }
-    var color = vec3<f32>(0.0);
-    if params.s0 == 0u {
-        let h = centre(p);
-        if params.spp == 1u {
-            color = shade_volumes(camera_ray(f32(p.x) + 0.5, f32(p.y) + 0.5), h, composite);
-        }
-    }
-    if params.spp > 1u {
-        let pixel = p.y * params.width + p.x;
-        for (var s = params.s0; s < params.s1; s++) {
-            var rng = Sampler(pixel, s, 0u);
-            let jx = next_f32(&rng);
-            let jy = next_f32(&rng);
-            let r = camera_ray(f32(p.x) + jx, f32(p.y) + jy);
-            color += shade_volumes(r, closest(r), composite);
-            n_rays += 1u;
-        }
-    }
-    finish_pixel(p, color);
-}
-
-// `Mode::Mip`: maximum-intensity projection.
+// `Mode::Mip`: maximum-intensity projection (`cast_pixel` in main.wgsl, `integrator::cast_tile`, with
+// `shade_volumes` as its shading).
 @compute @workgroup_size(64)
 fn mip_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
-    volume_pixel(gid.x, false);
+    cast_pixel(gid.x, MIP);
 }
 
 // `Mode::Composite`: emission-absorption compositing.
 @compute @workgroup_size(64)
 fn composite_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
-    volume_pixel(gid.x, true);
+    cast_pixel(gid.x, COMPOSITE);
 }
