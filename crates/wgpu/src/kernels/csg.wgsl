@@ -28,15 +28,21 @@
 //   not the origin's distance; t = ts + s with s the shifted quadratic's stable roots.
 // - Torus: the core's own formulation (origin moved to the line's point closest to the
 //   centre, lengths in units of R + r, coefficients of order one) solved by the core's
-//   derivative bracketing and safeguarded Newton, in f32.
-// Bound: for a crossing at angle theta to the surface, each of these moves t by a few
-// f32 ulps of the origin's distance, |t - t_core| <~ 8 eps (|o - c| + size) / |d| /
-// sin(theta), eps = 2^-24: relative to t, about 1e-6 for the scenes' camera and hit
-// distances away from silhouettes (the tests' MAX_REL_DT is 1e-4); the error grows only
-// as rays graze a surface (sin(theta) -> 0), where a torus' or quadric's two crossings
-// merge: a double root loses half the digits, |dt| <~ sqrt(8 eps) size / |d|. Such rays
-// lie within about 1e-5 of the solid's size of the silhouette, where the CPU and the
-// GPU may also disagree on hit or miss (the tests' MIN_ID_MATCH).
+//   derivative bracketing and safeguarded Newton, in f32, then each root polished by up
+//   to two Newton steps on the quartic's factor that vanishes there (`csg_torus_polish`),
+//   which f32 evaluates about 1 / S times more accurately than the quartic itself.
+// Bound: for a crossing at angle theta to the surface, the ray's origin relative to the
+// solid carries an f32 rounding of a few ulps of its distance |o - c|, and the solve adds
+// a few ulps of the solid's size: |t - t_core| <~ 8 eps (|o - c| + size) / (|d| sin
+// theta), eps = 2^-24 (the torus' quartic before polishing: about 1e-6 (R + r) / |d|).
+// Relative to t that is about 1e-6 for the built-in scenes' camera rays (measured on
+// lavapipe: largest relative dt 2.4e-7 on `csg`, 4.3e-7 on `quadrics`, against the
+// tests' MAX_REL_DT of 1e-4); it grows as rays graze a surface (sin theta -> 0), where a
+// quadric's or torus' two crossings merge into a double root and lose half the digits
+// (|dt| <~ sqrt(8 eps) size / |d|; such rays lie within about 1e-5 of the solid's size
+// of the silhouette, where CPU and GPU may also disagree on hit or miss), and relative to
+// t it grows for rays that start within about 1e-4 of a surface, whose t is tiny while the
+// absolute error stays at about 1e-7 of the scene's coordinates.
 
 // The kernels' array sizes, equal to raybench-geometry's limits (`geo/csg.rs` checks the
 // declarations against the Rust constants): `limits::MAX_CSG_DEPTH` results on the
@@ -502,6 +508,43 @@ fn csg_torus_normal(q: vec3<f32>, big: f32, small: f32) -> vec3<f32> {
     return normalize_or(n, CSG_Y);
 }
 
+// Newton polishing of a torus crossing `s` (no core counterpart: the core's f64 quartic
+// needs none). The quartic factors as G H with G = (rho - B)^2 + y^2 - S^2 (the tube's
+// surface) and H = (rho + B)^2 + y^2 - S^2 (its mirror image through the axis, which
+// bounds a spindle torus' inner lemon), rho = |q.xz|. Near the surface the factor that
+// vanishes is evaluated with an error of about eps S instead of the quartic's eps (order
+// one), so up to two Newton steps on it take the root from the quartic's f32 accuracy
+// (about 1e-6 of R + r) to about 1e-7. Steps larger than 1e-3 (a tangent ray, where the
+// root is ill-conditioned anyway) and non-finite ones are not taken.
+fn csg_torus_polish(p: vec3<f32>, u: vec3<f32>, big: f32, small: f32, s: f32) -> f32 {
+    var x = s;
+    for (var it = 0u; it < 2u; it++) {
+        let q = p + u * x;
+        let rho = length(q.xz);
+        if !(rho > 0.0) {
+            break;
+        }
+        let drho = dot(q.xz, u.xz) / rho;
+        let g = (rho - big) * (rho - big) + q.y * q.y - small * small;
+        let h = (rho + big) * (rho + big) + q.y * q.y - small * small;
+        var f = g;
+        var df = 2.0 * ((rho - big) * drho + q.y * u.y);
+        if abs(h) < abs(g) {
+            f = h;
+            df = 2.0 * ((rho + big) * drho + q.y * u.y);
+        }
+        if df == 0.0 {
+            break;
+        }
+        let step = f / df;
+        if !(abs(step) < 1e-3) {
+            break;
+        }
+        x -= step;
+    }
+    return x;
+}
+
 // `quartic::torus` and `solid::solid_spans` for a torus: the crossings of `o + t d` (o
 // relative to the centre) in pairs, spans appended to `e`. The origin moves to the line's
 // point closest to the centre and lengths are in units of R + r, so the quartic's
@@ -535,6 +578,19 @@ fn csg_torus(e: ptr<function, CsgEnds>, o: vec3<f32>, d: vec3<f32>, major: f32, 
     );
     var s: vec4<f32>;
     let n = csg_quartic_roots(q, -1.25, 1.25, &s);
+    // Polish each root on the factor of the quartic that vanishes there (see
+    // `csg_torus_polish`), keeping the roots' order.
+    var polished = s;
+    var ordered = true;
+    for (var k = 0u; k < n; k++) {
+        polished[k] = csg_torus_polish(p, u, big, small, s[k]);
+        if k > 0u && !(polished[k] > polished[k - 1u]) {
+            ordered = false;
+        }
+    }
+    if ordered {
+        s = polished;
+    }
     for (var k = 0u; k + 1u < n; k += 2u) {
         let sa = s[k];
         let sb = s[k + 1u];
