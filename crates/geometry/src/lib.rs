@@ -56,7 +56,7 @@ pub use bezier::{
 pub use bilinear::BilinearPatch;
 pub use checks::check_transform;
 pub use counters::{Counters, NoCounters, RayCounters};
-pub use csg::{Csg, CsgNode, CsgOp, Solid};
+pub use csg::{Csg, CsgNode, CsgOp, CsgPart, Solid};
 pub use dda::dda;
 pub use error::SceneError;
 pub use geometry::{Geometry, PrimitiveKind, Shape};

@@ -43,6 +43,16 @@ use spans::{End, Spans};
 pub use tree::{CsgNode, CsgOp};
 use tree::{Node, Tree};
 
+/// A node of a validated tree as [`Csg::parts`] lists it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CsgPart {
+    /// A solid, and when it is placed its world-to-local map and the columns of its normal
+    /// matrix (the inverse transpose of the local-to-world linear part).
+    Leaf(Solid, Option<(glam::Affine3A, [Vec3; 3])>),
+    /// An operator on the two results before it.
+    Op(CsgOp),
+}
+
 /// A validated CSG tree: one bounded primitive.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Csg {
@@ -131,6 +141,28 @@ impl Csg {
     #[must_use]
     pub fn leaf_count(&self) -> u32 {
         self.leaves
+    }
+
+    /// The validated tree in evaluation order, for backends that evaluate it themselves (the
+    /// GPU kernels): post-order, so each operator applies to the two results before it (the
+    /// first operand's first) and leaves come in the order of their ids.
+    #[must_use]
+    pub fn parts(&self) -> Vec<CsgPart> {
+        (0..self.tree.len())
+            .map(|i| match self.tree.node(i) {
+                Node::Leaf((s, place)) => CsgPart::Leaf(
+                    *s,
+                    place.map(|p| {
+                        (
+                            p.to_local,
+                            [p.normal.x_axis, p.normal.y_axis, p.normal.z_axis].map(Vec3::from),
+                        )
+                    }),
+                ),
+                Node::Op(op, _, _) => CsgPart::Op(*op),
+                Node::Wrap(never, _) => match *never {},
+            })
+            .collect()
     }
 
     /// The first span end inside `[ray.t_min, ray.t_max]`.
