@@ -40,8 +40,60 @@ pub enum Layout {
     Cwbvh,
 }
 
-/// A pipeline's entry point, whether it counts, and the tree it walks.
-type PipelineKey = (&'static str, bool, Layout);
+/// A pipeline's entry point, whether it counts, the tree it walks, and the scene's
+/// [`Features`].
+type PipelineKey = (&'static str, bool, Layout, Features);
+
+/// What a scene needs of the kernels beyond triangles, spheres and planes: each is a
+/// pipeline-override constant (`HAS_*` in `kernels/main.wgsl`), so a pipeline carries only
+/// the intersection routines of the kinds its scene holds. Shader compilers inline every
+/// routine at every call site (Mesa's always), so a kernel with every kind compiled for
+/// minutes on lavapipe.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub(crate) struct Features {
+    height_fields: bool,
+    csg: bool,
+    bezier: bool,
+    sdf: bool,
+    instances: bool,
+}
+
+impl Features {
+    /// The features of `scene`.
+    fn of(scene: &Scene) -> Self {
+        let g = &scene.geometry;
+        let mut f = Self {
+            instances: g.has_instances(),
+            ..Self::default()
+        };
+        let shapes = g
+            .shapes()
+            .iter()
+            .chain(g.meshes().iter().flat_map(|m| m.shapes()));
+        for shape in shapes {
+            match shape {
+                raybench_core::Shape::HeightField(_) => f.height_fields = true,
+                raybench_core::Shape::Csg(_) => f.csg = true,
+                raybench_core::Shape::Bezier(_) => f.bezier = true,
+                raybench_core::Shape::Sdf(_) => f.sdf = true,
+                _ => {}
+            }
+        }
+        f
+    }
+
+    /// The override constants.
+    fn constants(self) -> [(&'static str, f64); 5] {
+        let flag = |b: bool| if b { 1.0 } else { 0.0 };
+        [
+            ("HAS_HEIGHTFIELD", flag(self.height_fields)),
+            ("HAS_CSG", flag(self.csg)),
+            ("HAS_BEZIER", flag(self.bezier)),
+            ("HAS_SDF", flag(self.sdf)),
+            ("HAS_INSTANCES", flag(self.instances)),
+        ]
+    }
+}
 
 /// The compiled kernels of one device: one pipeline per (entry point, counting, layout).
 pub(crate) struct Kernels {
@@ -123,16 +175,18 @@ impl Kernels {
         entry: &'static str,
         count: bool,
         layout: Layout,
+        features: Features,
     ) -> Result<Arc<wgpu::ComputePipeline>, RenderError> {
         let mut map = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(p) = map.get(&(entry, count, layout)) {
+        if let Some(p) = map.get(&(entry, count, layout, features)) {
             return Ok(Arc::clone(p));
         }
         let flag = |b: bool| if b { 1.0 } else { 0.0 };
-        let constants = [
+        let mut constants = vec![
             ("COUNT", flag(count)),
             ("WIDE", flag(layout == Layout::Cwbvh)),
         ];
+        constants.extend(features.constants());
         let pipeline = gpu
             .device
             .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -148,7 +202,7 @@ impl Kernels {
             });
         device_errors(gpu, &format!("compiling kernel {entry}"))?;
         let pipeline = Arc::new(pipeline);
-        map.insert((entry, count, layout), Arc::clone(&pipeline));
+        map.insert((entry, count, layout, features), Arc::clone(&pipeline));
         Ok(pipeline)
     }
 }
@@ -175,6 +229,8 @@ struct Prepared {
     shading: wgpu::Buffer,
     /// The primitives' own data (`geo`).
     geo: wgpu::Buffer,
+    /// What the scene needs of the kernels.
+    features: Features,
     /// One frame at a time: frames share the device's queue and the kernels.
     frame_lock: Mutex<()>,
 }
@@ -750,6 +806,7 @@ impl Renderer for WgpuRenderer {
             prim_info,
             shading,
             geo,
+            features: Features::of(scene),
             frame_lock: Mutex::new(()),
         });
         Ok(timings)
@@ -767,7 +824,7 @@ impl Renderer for WgpuRenderer {
             .map_err(RenderError::Unsupported)?;
         let pipeline = p
             .kernels
-            .pipeline(gpu, entry, settings.count, self.layout)?;
+            .pipeline(gpu, entry, settings.count, self.layout, p.features)?;
         let (w, h) = (settings.width, settings.height);
         let out_size = std::mem::size_of::<GpuOut>() as u64;
         let band_pixels = (Self::binding_limit(gpu) / out_size).min(1 << 24);
@@ -963,7 +1020,9 @@ impl WgpuRenderer {
         let _frame = p.frame_lock.lock().unwrap_or_else(|e| e.into_inner());
         let start = Instant::now();
         let gpu = &p.gpu;
-        let pipeline = p.kernels.pipeline(gpu, entry, count, self.layout)?;
+        let pipeline = p
+            .kernels
+            .pipeline(gpu, entry, count, self.layout, p.features)?;
         let out_size = std::mem::size_of::<GpuOut>() as u64;
         let per_dispatch = u64::from(gpu.limits.max_compute_workgroups_per_dimension) * 64;
         let chunk = (Self::binding_limit(gpu) / out_size)

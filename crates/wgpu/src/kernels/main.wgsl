@@ -16,6 +16,15 @@ override COUNT: bool = false;
 // pipeline-override constant, so each pipeline carries one traversal.
 override WIDE: bool = false;
 
+// Whether the scene holds height fields, CSG trees, Bezier patches, SDF models, instances:
+// pipeline-override constants (`renderer::Features`), so a pipeline carries only the
+// routines its scene needs (shader compilers inline every routine at every call site).
+override HAS_HEIGHTFIELD: bool = true;
+override HAS_CSG: bool = true;
+override HAS_BEZIER: bool = true;
+override HAS_SDF: bool = true;
+override HAS_INSTANCES: bool = true;
+
 // The constants shared with Rust (NO_HIT, KIND_*, MAT_*, LIGHT_POINT, EMITTER_BIT,
 // NO_ENTRY, STACK_SIZE, WHITTED_STACK, AMBIENT, ROULETTE_DEPTH, DIMENSIONS_PER_BOUNCE,
 // SHADOW_SHORTEN, MIN_POSITIVE, INV_PI, PI, TAU, BLOCK) are generated from the Rust definitions and prepended
@@ -408,16 +417,28 @@ fn prim_hit(r: Ray, k: u32, t_max: f32) -> Cand {
             return hit_at(plane_hit(r, p.a.xyz, p.c.xyz, t_max));
         }
         case KIND_HEIGHTFIELD: {
-            return heightfield_hit(r, p, t_max);
+            if HAS_HEIGHTFIELD {
+                return heightfield_hit(r, p, t_max);
+            }
+            return miss();
         }
         case KIND_CSG: {
-            return csg_hit(r, p, t_max);
+            if HAS_CSG {
+                return csg_hit(r, p, t_max);
+            }
+            return miss();
         }
         case KIND_BEZIER: {
-            return bezier_hit(r, p, t_max);
+            if HAS_BEZIER {
+                return bezier_hit(r, p, t_max);
+            }
+            return miss();
         }
         case KIND_SDF: {
-            return sdf_hit(r, p, t_max);
+            if HAS_SDF {
+                return sdf_hit(r, p, t_max);
+            }
+            return miss();
         }
         default: {
             return miss();
@@ -460,17 +481,32 @@ fn test_closest(r: Ray, k: u32, base: u32, inst: u32, best: ptr<function, Hit>) 
     }
 }
 
+// `test_closest` on the unbounded primitive prims[k], which is a plane (the only unbounded
+// kind): the plane test alone, so that the kernels do not inline every kind's routine here
+// too (shader compilers inline every call).
+fn test_plane(r: Ray, k: u32, best: ptr<function, Hit>) {
+    if COUNT {
+        n_tests += 1u;
+    }
+    let p = prims[k];
+    let h = hit_at(plane_hit(r, p.a.xyz, p.c.xyz, (*best).t));
+    let id = bitcast<u32>(p.b.w);
+    if h.ok && (h.t < (*best).t || (h.t == (*best).t && id < (*best).id)) {
+        *best = Hit(h.t, id, h.u, h.v, k, h.sub, NO_HIT);
+    }
+}
+
 // The closest hit of `r`: id NO_HIT when it hits nothing. The flat part (its unbounded
 // primitives, then its tree), then the instances (`TwoLevel::intersect`).
 fn closest(r: Ray) -> Hit {
     var best = Hit(r.t_max, NO_HIT, 0.0, 0.0, 0u, 0u, NO_HIT);
     for (var k = params.unbounded_first; k < params.unbounded_first + params.unbounded_count; k++) {
-        test_closest(r, k, 0u, NO_HIT, &best);
+        test_plane(r, k, &best);
     }
     if params.node_count != 0u {
         best = closest_tree(r, 0u, 0u, NO_HIT, best);
     }
-    if params.instance_count != 0u {
+    if HAS_INSTANCES && params.instance_count != 0u {
         best = closest_instances(r, best);
     }
     return best;
@@ -550,14 +586,18 @@ fn closest_tree(r: Ray, root: u32, base: u32, inst: u32, best_in: Hit) -> Hit {
 // (`TwoLevel::occluded`).
 fn occluded(r: Ray) -> bool {
     for (var k = params.unbounded_first; k < params.unbounded_first + params.unbounded_count; k++) {
-        if prim_hit(r, k, r.t_max).ok {
+        if COUNT {
+            n_tests += 1u;
+        }
+        let p = prims[k];
+        if plane_hit(r, p.a.xyz, p.c.xyz, r.t_max) >= 0.0 {
             return true;
         }
     }
     if params.node_count != 0u && occluded_tree(r, 0u) {
         return true;
     }
-    return params.instance_count != 0u && occluded_instances(r);
+    return HAS_INSTANCES && params.instance_count != 0u && occluded_instances(r);
 }
 
 // Whether anything in the tree rooted at node `root` blocks `r` (raybench-bvh's
@@ -896,7 +936,7 @@ fn occluded_wide(r: Ray, root: u32) -> bool {
 // found on the instance-space ray and carried to the world by the normal matrix
 // (`Geometry::complete_global`, `Instance::world_normal`).
 fn hit_normal(r: Ray, h: Hit) -> vec3<f32> {
-    if h.inst == NO_HIT {
+    if !HAS_INSTANCES || h.inst == NO_HIT {
         return prim_normal(r, h);
     }
     let rec = instance_record(h.inst);
@@ -917,16 +957,28 @@ fn prim_normal(r: Ray, h: Hit) -> vec3<f32> {
             return normalize_or((at - p.a.xyz) / p.c.x, vec3<f32>(0.0, 1.0, 0.0));
         }
         case KIND_HEIGHTFIELD: {
-            return heightfield_normal(r, p, h);
+            if HAS_HEIGHTFIELD {
+                return heightfield_normal(r, p, h);
+            }
+            return p.c.xyz;
         }
         case KIND_CSG: {
-            return csg_normal(r, p, h);
+            if HAS_CSG {
+                return csg_normal(r, p, h);
+            }
+            return p.c.xyz;
         }
         case KIND_BEZIER: {
-            return bezier_normal(r, p, h);
+            if HAS_BEZIER {
+                return bezier_normal(r, p, h);
+            }
+            return p.c.xyz;
         }
         case KIND_SDF: {
-            return sdf_normal(r, p, h);
+            if HAS_SDF {
+                return sdf_normal(r, p, h);
+            }
+            return p.c.xyz;
         }
         default: {
             return p.c.xyz;
