@@ -721,23 +721,22 @@ impl Renderer for WgpuRenderer {
         };
         timings.push("build", start.elapsed().as_secs_f64());
         let start = Instant::now();
-        let data = match &tree {
+        let mut data = match &tree {
             Tree::Bvh2(bvh) => SceneData::new(scene, bvh2_nodes(bvh), Vec::new(), bvh.prim_ids()),
             Tree::Cwbvh(w) => SceneData::new(scene, Vec::new(), w.nodes.clone(), &w.prim_ids),
         }
         .map_err(RenderError::Unsupported)?;
-        let mut data = data;
-        crate::instances::append(scene, self.layout, &mut data)
-            .map_err(RenderError::Unsupported)?;
         let limit = Self::binding_limit(&gpu);
-        let mut data = data;
         if let Ok((first, _)) = data.volumes {
-            // Volumes too large for a binding refuse the volume modes only.
+            // Volumes too large for a binding refuse the volume modes only (dropped before
+            // the instances are appended: dropping truncates `geo` where they start).
             let other = u64::from(first) * 16;
             if let Err(why) = crate::volume::fit(scene, other, limit, &gpu.info.name) {
                 data.drop_volumes(why);
             }
         }
+        crate::instances::append(scene, self.layout, &mut data)
+            .map_err(RenderError::Unsupported)?;
         let geo_bytes = data.geo.len() as u64 * 16;
         if geo_bytes > limit {
             return Err(RenderError::Unsupported(format!(
