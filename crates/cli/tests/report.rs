@@ -892,21 +892,32 @@ fn the_quick_report_has_the_instancing_section() {
     let _ = std::fs::remove_dir_all(&merged);
 }
 
-/// A backend that cannot run a scene (the GPU backends have no sphere tracing: unsupported
-/// there, or unavailable without a GPU) keeps its place in the throughput charts: a marked
-/// stub whose tooltip says why, never a silent gap. Where they ran, both GPU backends
-/// (`wgpu` over the BVH2, `wgpu-cwbvh` over the CWBVH) are in the "GPU phases" table.
+/// A backend that cannot run a scene (the GPU backends have no bilinear height-field cells:
+/// unsupported there, or unavailable without a GPU) keeps its place in the throughput
+/// charts: a marked stub whose tooltip says why, never a silent gap. Where they ran, both GPU
+/// backends (`wgpu` over the BVH2, `wgpu-cwbvh` over the CWBVH) are in the "GPU phases"
+/// table.
 #[test]
 fn a_backend_that_did_not_run_is_marked_in_the_charts() {
     let dir = tmp_dir("not-run");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("bilinear.toml");
+    std::fs::write(
+        &scene,
+        "name = \"bilinear\"\n[camera]\nposition = [0, 2, 3]\nlook_at = [0, 0, 0]\nfov = 50\n\
+         [[light]]\nkind = \"point\"\nposition = [2, 4, 2]\nintensity = [20, 20, 20]\n\
+         [[object]]\nkind = \"height_field\"\nsource = \"terrain:8\"\ncells = \"bilinear\"\n",
+    )
+    .unwrap();
+    let scenes = format!("spheres,{}", scene.display());
     let out = raybench(&[
         "report",
         "--scenes",
-        "spheres,sdf",
+        &scenes,
         "--backends",
         "naive,wgpu,wgpu-cwbvh",
         "--modes",
-        "whitted",
+        "cast",
         "--size",
         "16",
         "--repeat",
@@ -922,17 +933,17 @@ fn a_backend_that_did_not_run_is_marked_in_the_charts() {
     );
     let r = results(&dir);
     let md = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
-    let svg = chart(&dir, "throughput-whitted-primary");
+    let svg = chart(&dir, "throughput-cast-primary");
     for gpu in ["wgpu", "wgpu-cwbvh"] {
         let runs = r["runs"].as_array().unwrap();
         let run = runs
             .iter()
-            .find(|r| r["backend"] == gpu && r["scene"] == "sdf")
-            .unwrap_or_else(|| panic!("a {gpu} run on sdf"));
+            .find(|r| r["backend"] == gpu && r["scene"] == "bilinear")
+            .unwrap_or_else(|| panic!("a {gpu} run on bilinear"));
         let status = run["status"].as_str().unwrap();
         assert!(status == "unsupported" || status == "unavailable", "{run}");
         assert!(
-            svg.contains(&format!("<title>{gpu} on sdf: {status}: ")),
+            svg.contains(&format!("<title>{gpu} on bilinear: {status}: ")),
             "{svg}"
         );
         let colour = backend_style(gpu).unwrap().colour;
