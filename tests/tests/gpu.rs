@@ -35,8 +35,7 @@ gpu_tests! {
     icosphere => "icosphere:4", false,
     teapot_stadium => "teapot-stadium", false,
     instances => "instances", true,
-    // `instance-grid` failed here in the last run before the stop (cause not read yet): see
-    // the closing note of issue 25; `instances` and `moving` cover the instanced walk.
+    instance_grid => "instance-grid", true,
     moving => "moving", true,
     sdf => "sdf", true,
     heightfield => "heightfield", true,
