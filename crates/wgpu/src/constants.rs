@@ -167,9 +167,10 @@ pub fn wgsl_constants() -> String {
 /// `main.wgsl` (bindings, traversal, shading, the entry points), then one file per
 /// primitive kind or mode of its own. WGSL declarations may come in any order, so the files
 /// call each other freely.
-pub const KERNEL_FILES: [(&str, &str); 7] = [
+pub const KERNEL_FILES: [(&str, &str); 8] = [
     ("main.wgsl", include_str!("kernels/main.wgsl")),
     ("lights.wgsl", include_str!("kernels/lights.wgsl")),
+    ("bilinear.wgsl", include_str!("kernels/bilinear.wgsl")),
     ("heightfield.wgsl", include_str!("kernels/heightfield.wgsl")),
     ("csg.wgsl", include_str!("kernels/csg.wgsl")),
     ("bezier.wgsl", include_str!("kernels/bezier.wgsl")),

@@ -46,7 +46,7 @@
 //! # Layout
 //!
 //! The record: `a = (header, nx, nz, kind)`, `b = (vertices, top level, smooth, id)`,
-//! `c = (xs, zs, 0, emitter weight)`, integers by their bits, each a `geo` index:
+//! `c = (xs, zs, bilinear, emitter weight)`, integers by their bits, each a `geo` index:
 //!
 //! - `header`: three entries, the columns of the normals' matrix (the inverse transpose of
 //!   the placement's linear part, the identity without one; its rows 0 and 2 turn the ray
@@ -62,8 +62,19 @@
 //! Memory: 16 bytes per vertex plus 32 bytes per block (about a third of the cells), so
 //! about 27 bytes per cell (28 MB for the 1024^2-cell `heightfield` scene).
 //!
-//! Not ported: bilinear cells ([`CellSurface::Bilinear`], a different surface; refused with
-//! the reason). The 2D-DDA traversal finds the same hits as the tree (the CPU's tests
+//! Bilinear cells ([`CellSurface::Bilinear`]) take the same walk; a cell's test is then
+//! `BilinearPatch::intersect` (`bilinear_hit` in `kernels/bilinear.wgsl`, Reshetov's
+//! quadratic in `u`) of the patch through the cell's four world vertices
+//! ([`HeightField::cell_patch`]), clipped to the best `t` so far and kept under the id `2 c`,
+//! and the normal `HeightField::normal`'s for such cells: the negated patch normal
+//! (`BilinearPatch::normal`), or with smooth normals the bilinear blend (weights of the
+//! patch's `u`, `v`) of the four vertex normals. The patch lies in the bounds of its
+//! corners, so the walk's boxes hold it. The patch test computes in f32 as the CPU's does;
+//! the GPU's quotient and square root are not correctly rounded (2.5 ULP and about 1 ULP),
+//! so `u` and `t` differ by a few ULPs of the quadratic's conditioning, as for the Bezier
+//! patches' last resort, which shares the routine.
+//!
+//! The 2D-DDA traversal finds the same hits as the tree (the CPU's tests
 //! assert it), so a field that asks for it is walked with the tree here.
 
 use super::{Geo, next_index};
@@ -114,20 +125,12 @@ fn entries(nx: u32, nz: u32) -> u64 {
         + 2 * blocks
 }
 
-/// Whether the kernels can intersect `x`, or why not: bilinear cells have no port, the
-/// walk's stack must hold the tree ([`HF_STACK`]) and the data must be addressable with
+/// Whether the kernels can intersect `x`, or why not: the walk's stack must hold the tree ([`HF_STACK`]) and the data must be addressable with
 /// `u32` indices.
 ///
 /// # Errors
 /// The reason, naming height fields.
 pub(crate) fn supports(x: &HeightField) -> Result<(), String> {
-    if x.surface() == CellSurface::Bilinear {
-        return Err(
-            "the GPU kernels have no height field with bilinear cells (render it \
-                    with a CPU backend, or use triangle cells)"
-                .into(),
-        );
-    }
     let (nx, nz) = x.cells();
     let top = top_level(nx, nz);
     if stack_need(top) > HF_STACK {
@@ -252,7 +255,12 @@ pub(crate) fn encode(x: &HeightField, geo: &mut Geo) -> Result<GpuPrim, String> 
             bits(u32::from(x.smooth_normals())),
             0.0,
         ],
-        c: [bits(xs), bits(zs), 0.0, 0.0],
+        c: [
+            bits(xs),
+            bits(zs),
+            bits(u32::from(x.surface() == CellSurface::Bilinear)),
+            0.0,
+        ],
     })
 }
 
@@ -303,8 +311,10 @@ mod tests {
         }
         assert_eq!(geo[t][..3], lo.to_array());
         assert_eq!(geo[t + 1][..3], hi.to_array());
-        // Bilinear cells are refused with the reason.
-        let why = supports(&f.clone().with_surface(CellSurface::Bilinear)).unwrap_err();
-        assert!(why.contains("bilinear"), "{why}");
+        // Bilinear cells are marked in the record.
+        let bilinear = f.clone().with_surface(CellSurface::Bilinear);
+        let mut g = Vec::new();
+        assert_eq!(encode(&bilinear, &mut g).unwrap().c[2].to_bits(), 1);
+        assert_eq!(p.c[2].to_bits(), 0);
     }
 }

@@ -1,10 +1,11 @@
 // Height fields: ports of raybench-geometry's `HeightField` (crates/geometry/src/
 // heightfield.rs): the closest hit (`HeightField::intersect` with the min-max tree walk
-// `walk_tree` and the cell test `test_cell`) and the shading normal (`HeightField::normal`).
+// `walk_tree` and the cell test `test_cell`, triangle or bilinear cells) and the shading
+// normal (`HeightField::normal`).
 // `geo/heightfield.rs` lays out the record and the `geo` data and documents the port.
 //
 // Record: a = (header, nx, nz, kind), b = (vertices, top level, smooth, id),
-// c = (xs, zs, 0, emitter weight), integers by their bits. geo[header .. header + 3]: the
+// c = (xs, zs, bilinear, emitter weight), integers by their bits. geo[header .. header + 3]: the
 // columns of the normals' matrix (inverse transpose of the placement); then the level
 // bases (level l's first box index in component (l - 1) % 4 of entry header + 3 +
 // (l - 1) / 4). xs, zs: object-space vertex x and z, four to an entry. vertices: world
@@ -25,12 +26,13 @@ struct HField {
     smooth_normals: bool,
     xs: u32,
     zs: u32,
+    bilinear: bool,
 }
 
 fn hf_field(p: Prim) -> HField {
     return HField(bitcast<u32>(p.a.x), bitcast<u32>(p.a.y), bitcast<u32>(p.a.z),
         bitcast<u32>(p.b.x), bitcast<u32>(p.b.y), bitcast<u32>(p.b.z) != 0u,
-        bitcast<u32>(p.c.x), bitcast<u32>(p.c.y));
+        bitcast<u32>(p.c.x), bitcast<u32>(p.c.y), bitcast<u32>(p.c.z) != 0u);
 }
 
 // Vertex (i, j): world position in xyz, object-space height in w (`HeightField::vertex`,
@@ -52,10 +54,11 @@ fn hf_block_entry(r: Ray, f: HField, l: u32, i: u32, j: u32, limit: f32) -> f32 
     return box_entry(r, geo[k].xyz, geo[k + 1u].xyz, limit);
 }
 
-// `HeightField::test_cell` for triangle cells, with the cell's box test of the walk first
-// (`node_box` of level 0: the bounds of its four world vertices, entered within `limit`):
-// triangles 2c = (p00, p01, p11) and 2c + 1 = (p00, p11, p10), each clipped to the best t so
-// far (inclusive), the closer kept by `keep_closer` (smaller t, ties to the smaller
+// `HeightField::test_cell`, with the cell's box test of the walk first (`node_box` of level
+// 0: the bounds of its four world vertices, entered within `limit`): triangle cells test
+// triangles 2c = (p00, p01, p11) and 2c + 1 = (p00, p11, p10), bilinear cells the patch
+// through p00, p10, p11, p01 (`cell_patch`) as sub-primitive 2c, each clipped to the best t
+// so far (inclusive), the closer kept by `keep_closer` (smaller t, ties to the smaller
 // sub-primitive id).
 fn hf_test_cell(r: Ray, f: HField, i: u32, j: u32, t_max: f32, limit: f32, best: ptr<function, Cand>) {
     let p00 = hf_vertex(f, i, j).xyz;
@@ -68,6 +71,14 @@ fn hf_test_cell(r: Ray, f: HField, i: u32, j: u32, t_max: f32, limit: f32, best:
         return;
     }
     let base = 2u * (j * f.nx + i);
+    if f.bilinear {
+        let clip = select(t_max, (*best).t, (*best).ok);
+        let h = bilinear_hit(r.o, r.d, r.t_min, p00, p10, p11, p01);
+        if h.w != 0.0 && h.x <= clip && (!(*best).ok || h.x < (*best).t || (h.x == (*best).t && base < (*best).sub)) {
+            *best = Cand(h.x, h.y, h.z, base, true);
+        }
+        return;
+    }
     for (var k = 0u; k < 2u; k++) {
         let clip = select(t_max, (*best).t, (*best).ok);
         var h: vec4<f32>;
@@ -183,7 +194,10 @@ fn hf_object_normal(f: HField, i: u32, j: u32) -> vec3<f32> {
     return normalize_or(vec3<f32>(-dhdx, 1.0, -dhdz), vec3<f32>(0.0, 1.0, 0.0));
 }
 
-// `HeightField::normal` for triangle cells: the triangle's geometric normal
+// `HeightField::normal`. Bilinear cells: the negated patch normal at the hit's (u, v) (dP/dv
+// x dP/du turns as the triangles' winding does), or with smooth normals the bilinear blend
+// of the four vertex normals, carried and oriented as below. Triangle cells: the triangle's
+// geometric normal
 // (`Triangle::normal`), or with smooth normals the barycentric blend (weights 1 - u - v, u,
 // v) of its vertices' object-space normals carried to world space by the inverse transpose
 // of the placement, normalised (the geometric normal where that fails) and on the geometric
@@ -193,6 +207,21 @@ fn heightfield_normal(r: Ray, p: Prim, h: Hit) -> vec3<f32> {
     let cell = h.sub / 2u;
     let i = cell % f.nx;
     let j = cell / f.nx;
+    if f.bilinear {
+        let q00 = hf_vertex(f, i, j).xyz;
+        let q10 = hf_vertex(f, i + 1u, j).xyz;
+        let q11 = hf_vertex(f, i + 1u, j + 1u).xyz;
+        let q01 = hf_vertex(f, i, j + 1u).xyz;
+        let geometric = -bilinear_normal(q00, q10, q11, q01, h.u, h.v);
+        if !f.smooth_normals {
+            return geometric;
+        }
+        var n = hf_object_normal(f, i, j) * ((1.0 - h.u) * (1.0 - h.v));
+        n += hf_object_normal(f, i + 1u, j) * (h.u * (1.0 - h.v));
+        n += hf_object_normal(f, i + 1u, j + 1u) * (h.u * h.v);
+        n += hf_object_normal(f, i, j + 1u) * ((1.0 - h.u) * h.v);
+        return hf_oriented_world_normal(f, n, geometric);
+    }
     let odd = (h.sub & 1u) != 0u;
     // Vertices of the triangle: (i, j), (i, j + 1), (i + 1, j + 1) for the even one,
     // (i, j), (i + 1, j + 1), (i + 1, j) for the odd one.
@@ -211,6 +240,13 @@ fn heightfield_normal(r: Ray, p: Prim, h: Hit) -> vec3<f32> {
     n += hf_object_normal(f, i, j) * (1.0 - h.u - h.v);
     n += hf_object_normal(f, i1, j1) * h.u;
     n += hf_object_normal(f, i2, j2) * h.v;
+    return hf_oriented_world_normal(f, n, geometric);
+}
+
+// `HeightField::oriented_world_normal`: the object-space normal n carried to world space by
+// the inverse transpose of the placement, normalised (the geometric normal where that
+// fails) and on the geometric normal's side.
+fn hf_oriented_world_normal(f: HField, n: vec3<f32>, geometric: vec3<f32>) -> vec3<f32> {
     let world = geo[f.header].xyz * n.x + geo[f.header + 1u].xyz * n.y + geo[f.header + 2u].xyz * n.z;
     let nw = normalize_or(world, geometric);
     if dot(nw, geometric) < 0.0 {
