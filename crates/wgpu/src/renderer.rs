@@ -100,8 +100,13 @@ pub(crate) struct Kernels {
     module: wgpu::ShaderModule,
     layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
-    pipelines: Mutex<HashMap<PipelineKey, Arc<wgpu::ComputePipeline>>>,
+    /// One slot per key, each behind its own lock: a thread compiling one pipeline (a minute
+    /// for some on lavapipe) holds only its slot, so other threads compile theirs meanwhile.
+    pipelines: Mutex<HashMap<PipelineKey, Arc<PipelineSlot>>>,
 }
+
+/// A pipeline once compiled (`None` until then, or after a failed compile).
+type PipelineSlot = Mutex<Option<Arc<wgpu::ComputePipeline>>>;
 
 fn storage(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
@@ -177,8 +182,13 @@ impl Kernels {
         layout: Layout,
         features: Features,
     ) -> Result<Arc<wgpu::ComputePipeline>, RenderError> {
-        let mut map = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(p) = map.get(&(entry, count, layout, features)) {
+        let key = (entry, count, layout, features);
+        let slot = {
+            let mut map = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
+            Arc::clone(map.entry(key).or_default())
+        };
+        let mut slot = slot.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(p) = slot.as_ref() {
             return Ok(Arc::clone(p));
         }
         let flag = |b: bool| if b { 1.0 } else { 0.0 };
@@ -202,7 +212,7 @@ impl Kernels {
             });
         device_errors(gpu, &format!("compiling kernel {entry}"))?;
         let pipeline = Arc::new(pipeline);
-        map.insert((entry, count, layout, features), Arc::clone(&pipeline));
+        *slot = Some(Arc::clone(&pipeline));
         Ok(pipeline)
     }
 }
