@@ -251,7 +251,8 @@ fn parse_metric(s: &str) -> Result<Metric, String> {
 #[derive(Args)]
 struct ReportCmd {
     /// The small matrix: under 5 minutes on a 2-core machine (what the README's main
-    /// command runs).
+    /// command runs). Without --backends it leaves the GPU backends out when their adapter
+    /// is a software one (lavapipe), saying so.
     #[arg(long)]
     quick: bool,
     /// Comma-separated scenes (default: the built-in list; see the README).

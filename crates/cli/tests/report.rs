@@ -975,6 +975,50 @@ fn a_backend_that_did_not_run_is_marked_in_the_charts() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// The main job (`report --quick`, every backend) leaves the GPU backends out when the
+/// adapter is a software one (lavapipe in CI), saying so under "Skipped"; where the adapter
+/// is a GPU they run, and where there is none they are runs marked unavailable.
+#[test]
+fn a_quick_run_leaves_software_gpus_out() {
+    let dir = tmp_dir("quick-software");
+    #[rustfmt::skip]
+    let out = raybench(&[
+        "report", "--quick", "--scenes", "spheres", "--modes", "cast", "--rays", "primary",
+        "--size", "16", "--repeat", "1", "--no-scaling", "--out", dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = results(&dir);
+    let runs = r["runs"].as_array().unwrap();
+    let skipped = r["skipped"].as_array().unwrap();
+    let md = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
+    for gpu in ["wgpu", "wgpu-cwbvh"] {
+        let ran = runs.iter().any(|r| r["backend"] == gpu);
+        let left_out = skipped
+            .iter()
+            .find(|k| k["kind"] == "backend" && k["name"] == gpu);
+        if raybench_wgpu::software_adapter().is_some() {
+            assert!(!ran, "{gpu} ran on a software adapter");
+            let k = left_out.unwrap_or_else(|| panic!("{gpu} is not listed as skipped"));
+            assert!(
+                k["reason"].as_str().unwrap().contains("software adapter"),
+                "{k}"
+            );
+            assert!(md.contains(&format!("backend `{gpu}` | skipped |")), "{md}");
+        } else {
+            assert!(ran && left_out.is_none(), "{gpu}: {skipped:?}");
+        }
+    }
+    assert!(
+        runs.iter()
+            .any(|r| r["backend"] == "bvh" && r["status"] == "ok")
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A derived set without rays (shadow rays in a scene without lights) is not timed: the
 /// workload is listed as skipped with the reason, and the other sets run.
 #[test]

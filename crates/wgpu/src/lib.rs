@@ -49,3 +49,15 @@ pub use renderer::{Layout, WgpuRenderer};
 pub fn availability() -> Result<(), String> {
     context::gpu(&AdapterRequest::from_env()).map(|_| ())
 }
+
+/// The adapter the environment selects (`WGPU_BACKEND`, `WGPU_ADAPTER_NAME`) when it is a
+/// software one that runs on the CPU (Mesa's lavapipe where there is no GPU): its
+/// description, as `raybench backends` shows it; `None` for a GPU, or when there is no
+/// adapter.
+#[must_use]
+pub fn software_adapter() -> Option<String> {
+    context::gpu(&AdapterRequest::from_env())
+        .ok()
+        .filter(|g| g.info.device_type == wgpu::DeviceType::Cpu)
+        .map(|g| g.describe())
+}

@@ -28,7 +28,8 @@ use std::time::Instant;
 /// What to run and where to write it.
 #[derive(Clone, Debug)]
 pub struct Options {
-    /// The small matrix (under 5 minutes on 2 cores).
+    /// The small matrix (under 5 minutes on 2 cores; without `backends`, the GPU backends are
+    /// left out on a software adapter).
     pub quick: bool,
     /// Scenes (default: the built-in scenes of the chosen matrix, by their `[benchmark]`
     /// tables).
@@ -148,7 +149,7 @@ pub fn run(opts: &Options) -> Result<Results> {
     if !(1..=100).contains(&repeat) {
         bail!("--repeat must be in 1..=100");
     }
-    let chosen: Vec<&'static Backend> = match &opts.backends {
+    let mut chosen: Vec<&'static Backend> = match &opts.backends {
         Some(names) => names
             .iter()
             .map(|n| backend(n.trim()))
@@ -156,6 +157,22 @@ pub fn run(opts: &Options) -> Result<Results> {
             .map_err(anyhow::Error::msg)?,
         None => BACKENDS.iter().filter(|b| !b.is(Roles::PINNED)).collect(),
     };
+    // A quick run of every backend leaves the GPU backends out when their adapter is a
+    // software one (lavapipe: about one CPU thread's speed, and every kind's kernels to
+    // compile): on two cores they would take most of the run. Named, they run.
+    let mut software = Vec::new();
+    if opts.quick
+        && opts.backends.is_none()
+        && let Some(adapter) = raybench_wgpu::software_adapter()
+    {
+        chosen.retain(|b| {
+            let device = b.is(Roles::DEVICE);
+            if device {
+                software.push((b.name, adapter.clone()));
+            }
+            !device
+        });
+    }
     if chosen.is_empty() {
         bail!("no backend to run");
     }
@@ -242,6 +259,19 @@ pub fn run(opts: &Options) -> Result<Results> {
         }],
         ..Results::default()
     };
+
+    for (name, adapter) in software {
+        skip(
+            &mut results,
+            "backend",
+            name,
+            "skipped",
+            format!(
+                "a quick run leaves the GPU backends out on a software adapter ({adapter}); \
+                 name them in --backends to include them"
+            ),
+        );
+    }
 
     // Plan every unit first (loading the matrix's scenes), so that the progress bar knows
     // the whole run.
