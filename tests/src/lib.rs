@@ -542,7 +542,8 @@ pub mod gpu {
     /// into an instance's space, or subtracting a vertex) moves `t` by a few ULPs of
     /// `|origin| / |dir|` whatever `t` is, so an incoherent ray starting close to a surface
     /// far from the world's origin sees a large error relative to its short `t`
-    /// (`instance-grid` on lavapipe: 5.2e-6 at `t` near 0.036, 1.4e-4 of `t`, at most 5.5e-7 of the reach).
+    /// (`instance-grid` on lavapipe: 5.2e-6 at `t` near 0.036, 1.4e-4 of `t`, at most 5.5e-7
+    /// of the reach).
     #[must_use]
     pub fn reach_dt(
         rays: &[raybench_core::Ray],
@@ -648,10 +649,10 @@ pub mod gpu {
         let (first, rest) = super::DEVICES.split_first().expect("a GPU backend");
         check_backend(first, scene, size, modes);
         // The other trees' kernels differ from the first's only in the tree walk, which ray
-        // casting and explicit rays exercise on every scene (and `the_gpu_trees_find_the_same_
-        // hits` bit for bit); their Whitted and path kernels are checked on scenes of
-        // triangles, spheres and planes, as each kind's pipelines take 10 s or more to
-        // compile on lavapipe.
+        // casting and explicit rays exercise on every scene (and, bit for bit,
+        // `the_gpu_trees_find_the_same_hits`); their Whitted and path kernels are checked on
+        // scenes of triangles, spheres and planes, as each kind's pipelines take 4 to 8 s
+        // each to compile on lavapipe.
         let plain = load_or_skip(scene).is_some_and(|s| {
             !s.geometry.has_instances()
                 && s.geometry.shapes().iter().all(|shape| {

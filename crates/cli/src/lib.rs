@@ -212,6 +212,14 @@ pub fn roles_of(name: &str) -> Option<Roles> {
         .or_else(|| NOT_BUILT.iter().find(|n| n.name == name).map(|n| n.roles))
 }
 
+/// The device backends' adapter when it is a software one that runs on the CPU (Mesa's
+/// lavapipe where there is no GPU): its description; `None` for a GPU or no adapter
+/// ([`raybench_wgpu::software_adapter`]).
+#[must_use]
+pub fn software_device() -> Option<String> {
+    raybench_wgpu::software_adapter()
+}
+
 /// The first backend (in registry order) with every role of `roles`, if any.
 #[must_use]
 pub fn with_role(roles: Roles) -> Option<&'static Backend> {

@@ -1000,7 +1000,7 @@ fn a_quick_run_leaves_software_gpus_out() {
         let left_out = skipped
             .iter()
             .find(|k| k["kind"] == "backend" && k["name"] == gpu);
-        if raybench_wgpu::software_adapter().is_some() {
+        if raybench::software_device().is_some() {
             assert!(!ran, "{gpu} ran on a software adapter");
             let k = left_out.unwrap_or_else(|| panic!("{gpu} is not listed as skipped"));
             assert!(

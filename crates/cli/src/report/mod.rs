@@ -163,7 +163,7 @@ pub fn run(opts: &Options) -> Result<Results> {
     let mut software = Vec::new();
     if opts.quick
         && opts.backends.is_none()
-        && let Some(adapter) = raybench_wgpu::software_adapter()
+        && let Some(adapter) = crate::software_device()
     {
         chosen.retain(|b| {
             let device = b.is(Roles::DEVICE);
