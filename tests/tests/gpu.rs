@@ -94,8 +94,7 @@ fn the_empty_scene_renders_background() {
 }
 
 /// Every kind and every mode has a kernel (height fields with bilinear cells in
-/// `kernels/bilinear.wgsl`, the volume modes in `kernels/volume.wgsl`); what remains refused
-/// (instanced meshes' shading attributes) is tested in `tests/tests/instances.rs`.
+/// `kernels/bilinear.wgsl`, the volume modes in `kernels/volume.wgsl`).
 #[test]
 fn every_kind_and_mode_has_a_kernel() {
     let r = raybench_wgpu::WgpuRenderer::new("wgpu", "test");
@@ -658,6 +657,14 @@ fn environment_map_lights_the_scene() {
 #[test]
 fn textured_smooth_mesh() {
     check(&scene_file("textured-smooth.toml"), 32, true);
+}
+
+/// A smooth textured mesh placed five times (as it is, rotated, mirrored, scaled unevenly,
+/// with a material override): each instance's vertex normals carried by its normal matrix,
+/// its texture coordinates read from the mesh's own table (`shading::mesh_attribute_tables`).
+#[test]
+fn instanced_smooth_textured_mesh() {
+    check(&scene_file("instanced-smooth.toml"), 32, true);
 }
 
 /// Suzanne with her vertex normals (the built-in scene facets her).

@@ -11,8 +11,9 @@
 //! - One record of [`RECORD`] entries per instance in `geo`, in id order: the inverse
 //!   transform's columns and translation, the normal matrix (inverse transpose), the world
 //!   box, and in the `w` lanes the mesh's root node, the base id, the instance's material
-//!   (or `NO_HIT` for the mesh's own), where the mesh's materials start in `prim_info`, and
-//!   the primitive count.
+//!   (or `NO_HIT` for the mesh's own), where the mesh's materials start in `prim_info`, the
+//!   primitive count, and the float index of the mesh's shading attribute table
+//!   ([`crate::shading::mesh_attribute_tables`]; `NONE` for a mesh without attributes).
 
 use crate::cwbvh::{self, Cwbvh};
 use crate::data::{GpuNode, SceneData, bvh2_nodes};
@@ -104,6 +105,8 @@ pub(crate) fn append(scene: &Scene, layout: Layout, data: &mut SceneData) -> Res
         data.prim_info.extend_from_slice(&scene.mesh_materials[m]);
     }
 
+    let attribute_tables = crate::shading::mesh_attribute_tables(scene, &mut data.geo)?;
+
     let instances = g.instances();
     let boxes: Vec<_> = instances.iter().map(|i| i.bounds()).collect();
     let top = TopLevel::build(&boxes);
@@ -134,7 +137,7 @@ pub(crate) fn append(scene: &Scene, layout: Layout, data: &mut SceneData) -> Res
             v4(to_local.matrix3.z_axis.into(), bits(material)),
             v4(to_local.translation.into(), bits(materials[mesh])),
             v4(normal.x_axis.into(), bits(inst.count())),
-            v4(normal.y_axis.into(), 0.0),
+            v4(normal.y_axis.into(), bits(attribute_tables[mesh])),
             v4(normal.z_axis.into(), 0.0),
             v4(b.min, 0.0),
             v4(b.max, 0.0),

@@ -654,20 +654,8 @@ impl Renderer for WgpuRenderer {
 
     fn supports(&self, scene: &Scene) -> Result<(), String> {
         check_kinds(scene)?;
-        // Textures, shading normals and the environment map are ported (`shading`); an
-        // instanced mesh's vertex normals and texture coordinates (`Scene::mesh_attributes`)
-        // are not yet: refused rather than shaded flat.
-        if scene
-            .mesh_attributes
-            .iter()
-            .any(|a| a.has_normals() || (!a.is_empty() && scene.has_textures()))
-        {
-            return Err(
-                "the GPU kernels have no shading attributes on instanced meshes (render the \
-                 scene with a CPU backend, or flatten it with --flatten)"
-                    .into(),
-            );
-        }
+        // Textures, shading normals (the instanced meshes' too) and the environment map
+        // are ported (`shading`).
         // The largest buffer: the primitives (48 bytes each, plus the emitter list and each
         // instanced mesh's primitives once).
         if let Ok(g) = gpu(&self.request) {

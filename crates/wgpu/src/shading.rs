@@ -23,7 +23,9 @@
 //! - attributes: from float index [`ShadingBlock::attr_table`], one u32 per flat primitive
 //!   id: 0, or the index of the triangle's four-entry record `(n0, uv0.x) (n1, uv0.y)
 //!   (n2, uv1.x) (uv1.y, uv2.x, uv2.y, flags)` (flags: 1 vertex normals, 2 texture
-//!   coordinates). The vertices' values are read back through the public
+//!   coordinates). Each distinct instanced mesh with attributes has a table of its own, by
+//!   the mesh's primitive index ([`mesh_attribute_tables`]; the instance record says where).
+//!   The vertices' values are read back through the public
 //!   `ShadingAttributes::at` at the triangle's corners: texture coordinates exactly (the
 //!   other weights are 0), unit normals within an ulp of the stored ones (renormalised).
 //!
@@ -34,7 +36,7 @@
 //! from the GPU's `sin`, `acos`, `atan2`, whose absolute errors are about 1e-6).
 
 use crate::geo::Geo;
-use raybench_core::{Scene, Shape, Vec3, Wrap};
+use raybench_core::{Scene, ShadingAttributes, Shape, Vec3, Wrap};
 
 /// No entry (a texture index, an attribute record).
 pub(crate) const NONE: u32 = u32::MAX;
@@ -116,11 +118,21 @@ pub fn bytes_needed(scene: &Scene) -> u64 {
         .iter()
         .map(|t| u64::from(t.width()) * u64::from(t.height()) * 16 + 16)
         .sum();
-    let attributes = if scene.attributes.is_empty() {
-        0
-    } else {
-        scene.prim_material.len() as u64 * 4 + scene.attributes.bytes() as u64 * 2
+    let table = |a: &ShadingAttributes, ids: usize| {
+        if a.is_empty() {
+            0
+        } else {
+            ids as u64 * 4 + a.bytes() as u64 * 2
+        }
     };
+    let meshes = scene.geometry.meshes();
+    let attributes = table(&scene.attributes, scene.prim_material.len())
+        + scene
+            .mesh_attributes
+            .iter()
+            .zip(meshes)
+            .map(|(a, m)| table(a, m.len()))
+            .sum::<u64>();
     env + textures + attributes + scene.emitters.ids.len() as u64 * 32
 }
 
@@ -235,40 +247,74 @@ pub fn encode(scene: &Scene, geo: &mut Geo) -> Result<ShadingBlock, String> {
     // Shading attributes of the flat primitives.
     if !scene.attributes.is_empty() {
         let n = scene.prim_material.len();
-        let mut offsets = vec![0u32; n];
-        let mut records: Vec<[f32; 4]> = Vec::new();
-        let table_entries = n.div_ceil(4);
-        let records_first = geo.len() + table_entries;
-        for (id, offset) in offsets.iter_mut().enumerate() {
-            if !matches!(scene.geometry.shape(id as u32), Shape::Triangle(_)) {
-                continue;
-            }
-            let id = id as u32;
-            let corners = [
-                scene.attributes.at(id, 0.0, 0.0),
-                scene.attributes.at(id, 1.0, 0.0),
-                scene.attributes.at(id, 0.0, 1.0),
-            ];
-            let normals = corners.iter().all(|c| c.normal.is_some());
-            let uvs = corners.iter().all(|c| c.uv.is_some());
-            if !normals && !uvs {
-                continue;
-            }
-            let nv = corners.map(|c| c.normal.unwrap_or(Vec3::ZERO));
-            let uv = corners.map(|c| c.uv.unwrap_or_default());
-            let flags = u32::from(normals) | (u32::from(uvs) << 1);
-            *offset = u32::try_from(records_first + records.len())
-                .map_err(|_| "the GPU's shading attributes exceed 2^32 entries")?;
-            records.push([nv[0].x, nv[0].y, nv[0].z, uv[0].x]);
-            records.push([nv[1].x, nv[1].y, nv[1].z, uv[0].y]);
-            records.push([nv[2].x, nv[2].y, nv[2].z, uv[1].x]);
-            records.push([uv[1].y, uv[2].x, uv[2].y, bits(flags)]);
-        }
-        let words: Vec<f32> = offsets.into_iter().map(bits).collect();
-        block.attr_table = push_floats(geo, &words)?;
+        block.attr_table = attribute_table(&scene.attributes, n, geo, |id| {
+            matches!(scene.geometry.shape(id), Shape::Triangle(_))
+        })?;
         block.attr_count = n as u32;
-        debug_assert_eq!(geo.len(), records_first);
-        geo.extend(records);
     }
     Ok(block)
+}
+
+/// Appends the attribute table of primitive ids `0..count` (`is_triangle` says which have
+/// vertices) of `attributes` to `geo`: one u32 per id, 0 or the index of its four-entry
+/// record, then the records (layout above). Returns the table's float index.
+fn attribute_table(
+    attributes: &ShadingAttributes,
+    count: usize,
+    geo: &mut Geo,
+    is_triangle: impl Fn(u32) -> bool,
+) -> Result<u32, String> {
+    let mut offsets = vec![0u32; count];
+    let mut records: Vec<[f32; 4]> = Vec::new();
+    let records_first = geo.len() + count.div_ceil(4);
+    for (id, offset) in offsets.iter_mut().enumerate() {
+        let id = id as u32;
+        if !is_triangle(id) {
+            continue;
+        }
+        let corners = [
+            attributes.at(id, 0.0, 0.0),
+            attributes.at(id, 1.0, 0.0),
+            attributes.at(id, 0.0, 1.0),
+        ];
+        let normals = corners.iter().all(|c| c.normal.is_some());
+        let uvs = corners.iter().all(|c| c.uv.is_some());
+        if !normals && !uvs {
+            continue;
+        }
+        let nv = corners.map(|c| c.normal.unwrap_or(Vec3::ZERO));
+        let uv = corners.map(|c| c.uv.unwrap_or_default());
+        let flags = u32::from(normals) | (u32::from(uvs) << 1);
+        *offset = u32::try_from(records_first + records.len())
+            .map_err(|_| "the GPU's shading attributes exceed 2^32 entries")?;
+        records.push([nv[0].x, nv[0].y, nv[0].z, uv[0].x]);
+        records.push([nv[1].x, nv[1].y, nv[1].z, uv[0].y]);
+        records.push([nv[2].x, nv[2].y, nv[2].z, uv[1].x]);
+        records.push([uv[1].y, uv[2].x, uv[2].y, bits(flags)]);
+    }
+    let words: Vec<f32> = offsets.into_iter().map(bits).collect();
+    let table = push_floats(geo, &words)?;
+    debug_assert_eq!(geo.len(), records_first);
+    geo.extend(records);
+    Ok(table)
+}
+
+/// Appends the attribute table of each distinct instanced mesh that has attributes
+/// ([`Scene::mesh_attributes`], ids in the mesh) to `geo` and returns their float indices
+/// in [`raybench_core::Geometry::meshes`] order ([`NONE`] for a mesh without any); the
+/// instance records carry them (`crate::instances`).
+///
+/// # Errors
+/// When `geo` outgrows 32-bit indices.
+pub(crate) fn mesh_attribute_tables(scene: &Scene, geo: &mut Geo) -> Result<Vec<u32>, String> {
+    let meshes = scene.geometry.meshes();
+    let mut tables = vec![NONE; meshes.len()];
+    for ((table, mesh), attributes) in tables.iter_mut().zip(meshes).zip(&scene.mesh_attributes) {
+        if !attributes.is_empty() {
+            *table = attribute_table(attributes, mesh.len(), geo, |id| {
+                matches!(mesh.shape(id), Shape::Triangle(_))
+            })?;
+        }
+    }
+    Ok(tables)
 }

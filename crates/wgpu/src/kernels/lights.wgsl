@@ -30,14 +30,33 @@ struct AttributesAt {
     has_uv: bool,
 }
 
-// `ShadingAttributes::at`: primitive `id`'s vertex normals and texture coordinates at
-// barycentric weights u (vertex 1) and v (vertex 2).
+// `Scene::attributes_at`: primitive `id`'s vertex normals and texture coordinates at
+// barycentric weights u (vertex 1) and v (vertex 2); an instanced primitive's from its
+// mesh's table, the normal carried to the world by the instance's normal matrix
+// (`Scene::instanced_attributes_at`, `Instance::world_normal`).
 fn attributes_at(id: u32, u: f32, v: f32) -> AttributesAt {
+    if !is_instanced(id) {
+        return table_attributes(params.attr_table, params.attr_count, id, u, v);
+    }
+    let rec = instance_record(instance_of(id));
+    let table = bitcast<u32>(geo[rec + 5u].w);
+    let count = bitcast<u32>(geo[rec + 4u].w);
+    var a = table_attributes(table, count, id - bitcast<u32>(geo[rec + 1u].w), u, v);
+    if a.has_normal {
+        let m = mat3x3<f32>(geo[rec + 4u].xyz, geo[rec + 5u].xyz, geo[rec + 6u].xyz);
+        a.normal = normalize_or(m * a.normal, a.normal);
+    }
+    return a;
+}
+
+// `ShadingAttributes::at` over the table at float index `table` (`NO_ENTRY`: none) of
+// `count` primitive ids (`crates/wgpu/src/shading.rs`).
+fn table_attributes(table: u32, count: u32, id: u32, u: f32, v: f32) -> AttributesAt {
     var a = AttributesAt(vec3<f32>(0.0), false, vec2<f32>(0.0), false);
-    if params.attr_table == NO_ENTRY || id >= params.attr_count {
+    if table == NO_ENTRY || id >= count {
         return a;
     }
-    let rec = bitcast<u32>(shading_f32(params.attr_table + id));
+    let rec = bitcast<u32>(shading_f32(table + id));
     if rec == 0u {
         return a;
     }

@@ -749,13 +749,9 @@ fn occluded_instances(r: Ray) -> bool {
     return walk_instances(r, Hit(r.t_max, NO_HIT, 0.0, 0.0, 0u, 0u, NO_HIT), true).id != NO_HIT;
 }
 
-// The `prim_info` entry of primitive `id` (`Scene::material_of`): a flat id's directly; an
-// instanced one's from its instance (found by its base, `Geometry::locate`): the
-// instance's material, or its mesh's material of the primitive.
-fn info_of(id: u32) -> u32 {
-    if params.instance_count == 0u || id < params.flat_count {
-        return prim_info[id];
-    }
+// The instance whose ids hold instanced primitive `id` (`Geometry::locate`: the last whose
+// base is at most `id`).
+fn instance_of(id: u32) -> u32 {
     var lo = 0u;
     var hi = params.instance_count;
     while lo < hi {
@@ -766,7 +762,22 @@ fn info_of(id: u32) -> u32 {
             hi = mid;
         }
     }
-    let rec = instance_record(lo - 1u);
+    return lo - 1u;
+}
+
+// Whether `id` is an instanced primitive's.
+fn is_instanced(id: u32) -> bool {
+    return HAS_INSTANCES && params.instance_count != 0u && id >= params.flat_count;
+}
+
+// The `prim_info` entry of primitive `id` (`Scene::material_of`): a flat id's directly; an
+// instanced one's from its instance (`instance_of`): the instance's material, or its mesh's
+// material of the primitive.
+fn info_of(id: u32) -> u32 {
+    if !is_instanced(id) {
+        return prim_info[id];
+    }
+    let rec = instance_record(instance_of(id));
     let own = bitcast<u32>(geo[rec + 2u].w);
     if own != NO_HIT {
         return own;
