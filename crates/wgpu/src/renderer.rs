@@ -831,6 +831,7 @@ impl Renderer for WgpuRenderer {
             settings.spp,
             plan::budget(settings.mode),
             band_pixels,
+            plan::max_samples(gpu.info.device_type),
             gpu.limits.max_compute_workgroups_per_dimension,
         );
 
