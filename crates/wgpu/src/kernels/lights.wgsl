@@ -38,7 +38,21 @@ fn attributes_at(id: u32, u: f32, v: f32) -> AttributesAt {
     if !is_instanced(id) {
         return table_attributes(params.attr_table, params.attr_count, id, u, v);
     }
-    let rec = instance_record(instance_of(id));
+    return instanced_attributes(instance_of(id), id, u, v);
+}
+
+// `attributes_at` for a hit: an instanced hit already knows its instance (`Hit::inst`), so
+// the search by base id is left out.
+fn hit_attributes(h: Hit) -> AttributesAt {
+    if HAS_INSTANCES && h.inst != NO_HIT {
+        return instanced_attributes(h.inst, h.id, h.u, h.v);
+    }
+    return table_attributes(params.attr_table, params.attr_count, h.id, h.u, h.v);
+}
+
+// `Scene::instanced_attributes_at`: instanced primitive `id` of instance `k`.
+fn instanced_attributes(k: u32, id: u32, u: f32, v: f32) -> AttributesAt {
+    let rec = instance_record(k);
     let table = bitcast<u32>(geo[rec + 5u].w);
     let count = bitcast<u32>(geo[rec + 4u].w);
     var a = table_attributes(table, count, id - bitcast<u32>(geo[rec + 1u].w), u, v);
@@ -151,7 +165,7 @@ struct SurfaceShading {
 
 // `Scene::shading` at hit `h` of primitive material `m`, geometric normal `gn`, point `p`.
 fn scene_shading(h: Hit, m: Material, gn: vec3<f32>, p: vec3<f32>) -> SurfaceShading {
-    let a = attributes_at(h.id, h.u, h.v);
+    let a = hit_attributes(h);
     var normal = gn;
     if a.has_normal {
         normal = select(a.normal, -a.normal, dot(a.normal, gn) < 0.0);
