@@ -15,7 +15,7 @@
 //! `embree-packet` ([`raybench_peers::EmbreePacketAccel`], 16-ray packets), both through
 //! the batch entry point.
 //!
-//! Scenes: the report's quick matrix (`raybench::report::matrix_scenes(true)`: spheres, whitted,
+//! Scenes: the report's quick matrix (`raybench_report::matrix_scenes(true)`: spheres, whitted,
 //! cornell-box, bunny, sponza; the meshes come from the assets directory, and a scene whose
 //! files are missing is skipped with a message) and the generators `terrain:708` (about a
 //! million triangles) and `soup:100000` (where a uniform grid should be close to a BVH).
@@ -284,7 +284,7 @@ fn chosen_ray_sets(scene: &Scene, bvh: &Bvh) -> Vec<(&'static str, Vec<Ray>, boo
         })
         .collect();
     if let Some(path) = std::env::var_os("RAYBENCH_RAYS_FILE") {
-        let file = raybench::rays_file::read(std::path::Path::new(&path))
+        let file = raybench_registry::rays_file::read(std::path::Path::new(&path))
             .unwrap_or_else(|e| panic!("RAYBENCH_RAYS_FILE: {e}"));
         sets.push(("file", file.rays, file.any_hit));
     }
@@ -629,7 +629,7 @@ fn bench_occlusion(
 fn benches_all(c: &mut Criterion) {
     // The phantom is a volume without primitives: its integration is benched in
     // `benches/grids.rs`.
-    let quick = raybench::report::matrix_scenes(true);
+    let quick = raybench_report::matrix_scenes(true);
     let scenes = quick
         .iter()
         .filter(|&&n| n != "phantom")

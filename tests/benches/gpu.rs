@@ -128,7 +128,7 @@ fn write_json(adapter: &str, size: u32) {
 }
 
 fn benches_all(c: &mut Criterion) {
-    let probe = (raybench::backend(raybench_tests::DEVICE)
+    let probe = (raybench_registry::backend(raybench_tests::DEVICE)
         .expect("registered")
         .make)();
     if let Err(e) = probe.availability() {
@@ -151,7 +151,9 @@ fn benches_all(c: &mut Criterion) {
         };
         let rays = raybench_core::ray_sets::incoherent(scene.geometry.bounds(), 65_536, 1);
         for backend in raybench_tests::DEVICES {
-            let mut r = (raybench::backend(backend).expect("registered").make)();
+            let mut r = (raybench_registry::backend(backend)
+                .expect("registered")
+                .make)();
             if let Err(e) = r.prepare(&scene) {
                 eprintln!("skipping {backend} on scene {name}: {e}");
                 continue;

@@ -12,25 +12,25 @@ pub mod peers;
 use raybench_core::{Frame, Hit, NO_HIT, Ray, RenderSettings, Renderer, Scene, TriangleMesh, Vec3};
 use std::sync::Arc;
 
-use raybench::Roles;
+use raybench_registry::Roles;
 
 /// The number of exact backends in the registry.
-const EXACT_COUNT: usize = raybench::count_with(Roles::EXACT);
+const EXACT_COUNT: usize = raybench_registry::count_with(Roles::EXACT);
 /// Their names, read from the registry at compile time.
-const EXACT_NAMES: [&str; EXACT_COUNT] = raybench::names_with(Roles::EXACT);
+const EXACT_NAMES: [&str; EXACT_COUNT] = raybench_registry::names_with(Roles::EXACT);
 
-/// Every backend bound by the bit-exact contract ([`Roles::EXACT`] in `raybench::BACKENDS`),
+/// Every backend bound by the bit-exact contract ([`Roles::EXACT`] in `raybench_registry::BACKENDS`),
 /// the oracle first (the reference): the suites that compare backends with the oracle or
 /// with themselves run each of these that this machine can run ([`available`]). A new
 /// backend registered as exact joins them by itself.
 pub const EXACT_BACKENDS: &[&str] = &EXACT_NAMES;
 
 /// The oracle every exact backend is compared with (naive: [`Roles::ORACLE`]).
-pub const ORACLE: &str = raybench::name_with(Roles::ORACLE);
+pub const ORACLE: &str = raybench_registry::name_with(Roles::ORACLE);
 
 /// The baseline structure (the BVH: [`Roles::BASELINE`]), for tests that need one fast
 /// exact backend rather than every one.
-pub const BASELINE: &str = raybench::name_with(Roles::BASELINE);
+pub const BASELINE: &str = raybench_registry::name_with(Roles::BASELINE);
 
 /// The most primitives (flattened) of a scene that the oracle's checks run on: 64 x 64
 /// camera rays over 2^21 primitives are already 8.6 billion naive tests. The larger built-in
@@ -39,15 +39,15 @@ pub const BASELINE: &str = raybench::name_with(Roles::BASELINE);
 pub const ORACLE_PRIMITIVES: usize = 1 << 21;
 
 /// The backend on another device (the GPU: [`Roles::DEVICE`]), the first of [`DEVICES`].
-pub const DEVICE: &str = raybench::name_with(Roles::DEVICE);
+pub const DEVICE: &str = raybench_registry::name_with(Roles::DEVICE);
 
 /// Every backend on another device (the GPU kernels over each tree), from the registry's
 /// roles: the GPU suites check each.
-pub const DEVICES: [&str; raybench::count_with(Roles::DEVICE)] =
-    raybench::names_with(Roles::DEVICE);
+pub const DEVICES: [&str; raybench_registry::count_with(Roles::DEVICE)] =
+    raybench_registry::names_with(Roles::DEVICE);
 
 /// The number of exact backends but the oracle.
-const ACCELERATED_COUNT: usize = EXACT_COUNT - raybench::count_with(Roles::ORACLE);
+const ACCELERATED_COUNT: usize = EXACT_COUNT - raybench_registry::count_with(Roles::ORACLE);
 
 /// The exact backends but the oracle (pinned variants included: each machine runs those it
 /// can, through [`available`]): the suites that compare each with the oracle.
@@ -58,7 +58,7 @@ const fn accelerated() -> [&'static str; ACCELERATED_COUNT] {
     let mut out = [""; ACCELERATED_COUNT];
     let (mut i, mut n) = (0, 0);
     while i < EXACT_COUNT {
-        if !raybench::backend_is(EXACT_NAMES[i], Roles::ORACLE) {
+        if !raybench_registry::backend_is(EXACT_NAMES[i], Roles::ORACLE) {
             out[n] = EXACT_NAMES[i];
             n += 1;
         }
@@ -103,7 +103,7 @@ pub fn available<'a>(names: &[&'a str]) -> Vec<&'a str> {
         .iter()
         .copied()
         .filter(|name| {
-            let b = raybench::backend(name).unwrap();
+            let b = raybench_registry::backend(name).unwrap();
             match (b.make)().availability() {
                 Ok(()) => true,
                 Err(e) => {
@@ -121,7 +121,7 @@ pub fn available<'a>(names: &[&'a str]) -> Vec<&'a str> {
 /// When the backend is unknown, unavailable or does not support the scene.
 #[must_use]
 pub fn prepared(name: &str, scene: &Arc<Scene>) -> Box<dyn Renderer> {
-    let b = raybench::backend(name).unwrap();
+    let b = raybench_registry::backend(name).unwrap();
     let mut r = (b.make)();
     r.availability()
         .unwrap_or_else(|e| panic!("{name} unavailable: {e}"));
@@ -516,7 +516,7 @@ pub mod gpu {
     use raybench_core::{Frame, Mode, Vec3};
 
     /// Least fraction of pixels (or rays) whose primitive id equals naive's, counting ties
-    /// (another primitive at the same distance within `raybench::TIE_TOLERANCE`: coincident
+    /// (another primitive at the same distance within `raybench_registry::TIE_TOLERANCE`: coincident
     /// faces, such as the Cornell box's, which rounding may decide either way) as equal.
     pub const MIN_ID_MATCH: f64 = 0.999;
     /// Largest relative difference of `t` where the ids agree.
@@ -567,7 +567,7 @@ pub mod gpu {
     /// Under `CI=true` when no adapter is found.
     #[must_use]
     pub fn available() -> bool {
-        match (raybench::backend(super::DEVICE).unwrap().make)().availability() {
+        match (raybench_registry::backend(super::DEVICE).unwrap().make)().availability() {
             Ok(()) => true,
             Err(e) => {
                 assert!(!in_ci(), "CI=true but the GPU backend is unavailable: {e}");
@@ -582,7 +582,7 @@ pub mod gpu {
     /// # Panics
     /// When they do not.
     pub fn assert_close_hits(what: &str, reference: &Frame, frame: &Frame) {
-        let c = raybench::compare_frames(reference, frame);
+        let c = raybench_registry::compare_frames(reference, frame);
         let n = reference.ids.len().max(1) as f64;
         let id_match = c.id_match + c.tie_mismatch as f64 / n;
         eprintln!(
@@ -726,7 +726,7 @@ pub mod gpu {
             )
         };
         let ((ri, rt), (gi, gt)) = (key(&reference), key(&hits));
-        let c = raybench::compare_hits(&ri, &rt, &gi, &gt);
+        let c = raybench_registry::compare_hits(&ri, &rt, &gi, &gt);
         eprintln!(
             "{name} on {scene}, incoherent rays: {c:?}, counters {counts:?} (naive {ref_counts:?})"
         );

@@ -496,7 +496,7 @@ impl Workload {
         let tracer = r.batch_tracer().expect("bvh is a CPU structure");
         let mut sources: Vec<(&'static str, Vec<Ray>, bool)> = Vec::new();
         if let Some(path) = &o.rays_file {
-            let file = raybench::rays_file::read(path).map_err(|e| e.to_string())?;
+            let file = raybench_registry::rays_file::read(path).map_err(|e| e.to_string())?;
             sources.push(("file", file.rays, file.any_hit));
         } else {
             let primary_hits = if o.sets.iter().any(|s| s.is_derived()) {
@@ -658,7 +658,7 @@ pub fn run(
     let threads = o.thread_counts();
     let mut report = Report {
         schema: SCHEMA,
-        machine: raybench::report::machine::describe(o.threads),
+        machine: raybench_report::machine::describe(o.threads),
         packet_isa: raybench_packet::Isa::detect().name().to_string(),
         embree: embree_description(),
         workload: WorkloadInfo {

@@ -3,7 +3,7 @@
 //! the any-hit `shadow` and `ao` rays compared on their boolean: `raybench_tests::check`)
 //! and on rays aimed at shared edges and vertices.
 //!
-//! A new backend registered as exact (`raybench::Roles::EXACT`) joins by itself:
+//! A new backend registered as exact (`raybench_registry::Roles::EXACT`) joins by itself:
 //! `raybench_tests::EXACT_BACKENDS` is read from the registry.
 
 use raybench_core::{Ray, Vec3};
@@ -103,7 +103,7 @@ const TOLERANCE_TESTED: &[(&str, &str)] = &[
 /// registry); every other one must name where it is compared with the oracle.
 #[test]
 fn every_backend_is_under_test() {
-    for b in raybench::BACKENDS.iter().filter(|b| !b.exact()) {
+    for b in raybench_registry::BACKENDS.iter().filter(|b| !b.exact()) {
         assert!(
             TOLERANCE_TESTED.iter().any(|(n, _)| *n == b.name),
             "backend {} is tested nowhere: add it to TOLERANCE_TESTED with its test",

@@ -612,7 +612,7 @@ fn sdf_every_operation_and_the_deepest_trees() {
             )
         };
         let ((ri, rt), (gi, gt)) = (key(&reference_hits), key(&hits));
-        let c = raybench::compare_hits(&ri, &rt, &gi, &gt);
+        let c = raybench_registry::compare_hits(&ri, &rt, &gi, &gt);
         let on_models = ri.iter().filter(|&&id| (1..=3).contains(&id)).count();
         eprintln!("{name} on sdf models, incoherent rays ({on_models} hit a model): {c:?}");
         let id_match = c.id_match + c.tie_mismatch as f64 / rays.len() as f64;

@@ -8,8 +8,8 @@
 //! The built-in scenes `instances` and `instance-grid` are checked by `equivalence.rs` with
 //! every other built-in.
 
-use raybench::Roles;
 use raybench_core::{RayCounters, Scene};
+use raybench_registry::Roles;
 use raybench_tests::{
     BASELINE, ORACLE, assert_same_hits, assert_same_ray_hits, available, check, check_modes,
     load_or_skip, prepared, render_with,
@@ -320,7 +320,10 @@ fn structure_counts_meshes_once_and_devices_refuse() {
         );
     }
     // The GPU backends hold the mesh once too (where an adapter is found).
-    for b in raybench::BACKENDS.iter().filter(|b| b.is(Roles::DEVICE)) {
+    for b in raybench_registry::BACKENDS
+        .iter()
+        .filter(|b| b.is(Roles::DEVICE))
+    {
         if (b.make)().availability().is_err() {
             continue;
         }
@@ -445,7 +448,10 @@ fn gltf_meshes_placed_by_several_nodes_are_instances() {
     check(&available(BACKENDS), shared.to_str().unwrap(), 48);
     // The GPU kernels shade instanced vertex normals too (against naive on a textured
     // instanced mesh: `instanced_smooth_textured_mesh` in `tests/tests/gpu.rs`).
-    for b in raybench::BACKENDS.iter().filter(|b| b.is(Roles::DEVICE)) {
+    for b in raybench_registry::BACKENDS
+        .iter()
+        .filter(|b| b.is(Roles::DEVICE))
+    {
         assert_eq!((b.make)().supports(&a), Ok(()), "{}", b.name);
     }
 

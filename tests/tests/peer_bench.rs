@@ -259,7 +259,7 @@ fn a_ray_file_replays_in_place_of_the_sets() {
     let mut o = options(&["--size", "8", "--repeat", "1", "--threads", "1"]);
     let scene = raybench_scene::load("icosphere:2", &raybench_scene::assets_dir(None)).unwrap();
     let rays = peers::ray_set(&scene, RaySet::Primary, &o, &[]).unwrap();
-    raybench::rays_file::write(&path, &rays, true).unwrap();
+    raybench_registry::rays_file::write(&path, &rays, true).unwrap();
     o.rays_file = Some(path);
     o.meshes = vec![("ico".into(), "icosphere:2".into())];
     o.contestants = Some(vec!["bvh".into()]);

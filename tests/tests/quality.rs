@@ -3,13 +3,13 @@
 //! tree without overlap has an EPO of 0, and every registered backend reports finite
 //! figures of the kind its structure has.
 
-use raybench::{BACKENDS, Roles};
 use raybench_bvh::{Bvh, ObvhsAccel};
 use raybench_core::{
     Accel, Geometry, QualityParams, Scene, Shape, Sphere, StructureQuality, TreeQuality, Vec3,
 };
 use raybench_packet::PacketAccel;
 use raybench_peers::BvhCrateAccel;
+use raybench_registry::{BACKENDS, Roles};
 use raybench_tests::load_or_skip;
 use std::sync::Arc;
 

@@ -1,20 +1,15 @@
 //! The `raybench` command end to end: happy paths, and every kind of bad input giving a
 //! one-line error and a non-zero exit, never a panic (exit code 101) or a hang.
 
+mod common;
+
+use common::raybench;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn raybench(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_raybench"))
-        .args(args)
-        .output()
-        .expect("raybench runs")
-}
-
+/// This suite's scratch folder `name` ([`common::tmp_dir`]).
 fn tmp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("raybench-cli-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::tmp_dir("cli", name)
 }
 
 fn write(dir: &Path, name: &str, content: &[u8]) -> String {
@@ -141,13 +136,13 @@ fn compare_incoherent_rays_with_every_backend() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let rows = v.as_array().unwrap();
     // Every backend but the variants, which run only when named.
-    let listed = raybench::BACKENDS
+    let listed = raybench_registry::BACKENDS
         .iter()
-        .filter(|b| !b.is(raybench::Roles::PINNED))
+        .filter(|b| !b.is(raybench_registry::Roles::PINNED))
         .count();
     assert_eq!(rows.len(), listed);
     for row in rows {
-        let b = raybench::backend(row["backend"].as_str().unwrap()).unwrap();
+        let b = raybench_registry::backend(row["backend"].as_str().unwrap()).unwrap();
         if !b.exact() && row["available"] == false {
             // A peer may refuse the scene (Embree: more spheres than it tests beside itself).
             continue;
@@ -201,7 +196,7 @@ fn derived_ray_sets_export_and_replay() {
             for k in ["rays", "tests_per_ray", "id_match", "hit_mismatch"] {
                 assert_eq!(a[k], b[k], "{set}: {k} of {}", a["backend"]);
             }
-            if raybench::backend(a["backend"].as_str().unwrap())
+            if raybench_registry::backend(a["backend"].as_str().unwrap())
                 .unwrap()
                 .exact()
             {
@@ -1267,11 +1262,15 @@ fn listings_name_unbuilt_backends_the_assets_folder_and_the_revision() {
 
     // `--version` names the revision the report records: the checkout's, or `unknown`.
     let o = raybench(&["--version"]);
-    let revision = env!("RAYBENCH_REVISION");
+    let version = raybench_registry::VERSION;
     assert_eq!(
         String::from_utf8_lossy(&o.stdout),
-        format!("raybench {} ({revision})\n", env!("CARGO_PKG_VERSION"))
+        format!("raybench {version}\n")
     );
+    let revision = version
+        .split_once(" (")
+        .and_then(|(_, r)| r.strip_suffix(')'))
+        .expect("VERSION is `X.Y.Z (revision)`");
     let git = Command::new("git")
         .args(["rev-parse", "--short", "HEAD"])
         .current_dir(env!("CARGO_MANIFEST_DIR"))

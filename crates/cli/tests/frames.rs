@@ -1,21 +1,16 @@
-//! `raybench render --frames N` (issue 23): the frames of the built-in moving scene written
+//! `raybench render --frames N`: the frames of the built-in moving scene written
 //! as numbered images, the same whether the structure is refitted or rebuilt, frame 0 the
 //! scene's plain render; a still scene and bad values refused with one error line.
 
+mod common;
+
+use common::raybench;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn raybench(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_raybench"))
-        .args(args)
-        .output()
-        .expect("raybench runs")
-}
-
+/// This suite's scratch folder `name` ([`common::tmp_dir`]).
 fn tmp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("raybench-frames-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::tmp_dir("frames", name)
 }
 
 /// Renders `moving` with `extra` options into `dir/NAME.png` (and ids beside it).

@@ -1,22 +1,17 @@
 //! `raybench report` and `raybench merge` end to end, on small matrices: the files a report
 //! promises, the results schema, sharding by scene, merging, and bad options.
 
-use raybench::report::charts::backend_style;
+mod common;
+
+use common::raybench;
+use raybench_report::charts::backend_style;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn raybench(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_raybench"))
-        .args(args)
-        .output()
-        .expect("raybench runs")
-}
-
+/// This suite's scratch folder `name` ([`common::fresh_path`]).
 fn tmp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("raybench-report-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
+    common::fresh_path("report", name)
 }
 
 /// The SVG text of chart `stem` of the report in `dir`, checked to be one SVG document
@@ -1000,7 +995,7 @@ fn a_quick_run_leaves_software_gpus_out() {
         let left_out = skipped
             .iter()
             .find(|k| k["kind"] == "backend" && k["name"] == gpu);
-        if raybench::software_device().is_some() {
+        if raybench_registry::software_device().is_some() {
             assert!(!ran, "{gpu} ran on a software adapter");
             let k = left_out.unwrap_or_else(|| panic!("{gpu} is not listed as skipped"));
             assert!(

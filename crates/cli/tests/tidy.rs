@@ -1,9 +1,9 @@
 //! Tidy: invariants of the source tree that ARCHITECTURE.md states and a test enforces (as
 //! rust-analyzer's `tidy` does; `tests/tests/tidy.rs` holds the crate-graph and code-map
-//! ones). Here: only the registry (`crates/cli/src/lib.rs`) names
+//! ones). Here: only the registry (`crates/registry/src/lib.rs`) names
 //! concrete backends. Outside it and the allow-list below, no Rust file uses a backend
 //! crate and no Rust file holds a backend's name as a string literal; the rest of the
-//! workspace reads the registry's roles (`raybench::Roles`).
+//! workspace reads the registry's roles (`raybench_registry::Roles`).
 
 use std::path::{Path, PathBuf};
 
@@ -21,11 +21,11 @@ const BACKEND_CRATES: [&str; 6] = [
 /// and names are allowed, and why.
 const ALLOWED: &[(&str, &str)] = &[
     (
-        "crates/cli/src/lib.rs",
+        "crates/registry/src/lib.rs",
         "the registry: the one place that maps names and roles to backends",
     ),
     (
-        "crates/cli/src/presets.rs",
+        "crates/registry/src/presets.rs",
         "the registry's builder presets: each backend's named build parameters",
     ),
     ("crates/bvh/", "a backend crate: it names itself"),
@@ -177,10 +177,10 @@ fn violations(text: &str, names: &[&str]) -> Vec<(usize, String)> {
 
 /// Every backend name, built or not.
 fn backend_names() -> Vec<&'static str> {
-    raybench::BACKENDS
+    raybench_registry::BACKENDS
         .iter()
         .map(|b| b.name)
-        .chain(raybench::NOT_BUILT.iter().map(|n| n.name))
+        .chain(raybench_registry::NOT_BUILT.iter().map(|n| n.name))
         .collect()
 }
 
@@ -210,8 +210,8 @@ fn only_the_registry_names_backends() {
     }
     assert!(
         problems.is_empty(),
-        "outside the registry (crates/cli/src/lib.rs), code reads the registry's roles \
-         (raybench::Roles) instead of naming backends; or add the file to ALLOWED in \
+        "outside the registry (crates/registry/src/lib.rs), code reads the registry's roles \
+         (raybench_registry::Roles) instead of naming backends; or add the file to ALLOWED in \
          crates/cli/tests/tidy.rs with the reason:\n{}",
         problems.join("\n")
     );
@@ -239,6 +239,6 @@ fn the_check_finds_what_it_looks_for() {
     assert_eq!(found.len(), 2, "{found:?}");
     assert_eq!(found[0].0, 1);
     assert_eq!(found[1].0, 2);
-    assert!(allowed("crates/cli/src/lib.rs").is_some());
-    assert!(allowed("crates/cli/src/report/mod.rs").is_none());
+    assert!(allowed("crates/registry/src/lib.rs").is_some());
+    assert!(allowed("crates/report/src/lib.rs").is_none());
 }

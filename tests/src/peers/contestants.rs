@@ -34,13 +34,13 @@ pub struct Contestant {
 }
 
 /// Every contestant, in table order: the registry's exact CPU backends except the brute
-/// force (`raybench::BACKENDS` is the one list; a new exact backend joins the benchmark by
+/// force (`raybench_registry::BACKENDS` is the one list; a new exact backend joins the benchmark by
 /// being registered), then [`PEERS`].
 #[must_use]
 pub fn all() -> Vec<Contestant> {
-    raybench::BACKENDS
+    raybench_registry::BACKENDS
         .iter()
-        .filter(|b| b.exact() && !b.is(raybench::Roles::BRUTE_FORCE))
+        .filter(|b| b.exact() && !b.is(raybench_registry::Roles::BRUTE_FORCE))
         .map(|b| Contestant {
             name: b.name,
             kind: Kind::Raybench,
@@ -72,7 +72,7 @@ pub fn select(names: &[String]) -> Result<Vec<Contestant>, String> {
 
 /// The registered peer `name` (`bvh-crate`).
 fn registered(name: &str) -> Box<dyn Renderer> {
-    (raybench::backend(name)
+    (raybench_registry::backend(name)
         .unwrap_or_else(|e| panic!("{e}"))
         .make)()
 }

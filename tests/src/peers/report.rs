@@ -34,8 +34,8 @@
 
 use super::contestants::Kind;
 use super::contestants::embree::{PACKET_DEFAULT, PACKET_ROBUST, SINGLE_DEFAULT, SINGLE_ROBUST};
-use raybench::report::results::Machine;
 use raybench_core::RaySet;
+use raybench_report::results::Machine;
 use serde::Serialize;
 use std::fmt::Write as _;
 

@@ -1,9 +1,9 @@
 //! `raybench diff A B`: how far image `B` is from the reference `A`. Errors are measured on
 //! the linear values (PNG inputs decoded from sRGB); PSNR and FLIP on the images as
 //! displayed (exposure applied, clamped, sRGB-encoded 8 bits), with the report's own metrics
-//! ([`crate::report::images`]).
+//! ([`crate::images`]).
 
-use crate::report::images::{Rgb8, flip, psnr};
+use crate::images::{Rgb8, flip, psnr};
 use raybench_render::LinearImage;
 use serde::Serialize;
 

@@ -6,14 +6,14 @@
 use super::{
     Chart, Ctx, Observed, Plot, Point, Scaling, baseline_only, power_law, scene_for, square,
 };
-use crate::Backend;
-use crate::report::charts::Series;
-use crate::report::images::{self, Rgb8};
-use crate::report::markdown::opt;
-use crate::report::results::{ImageDifference, Results, ScalingPoint};
-use crate::report::{Loaded, skip_missing_asset};
+use crate::charts::Series;
+use crate::ctx::{Loaded, skip_missing_asset};
+use crate::fmt::opt;
+use crate::images::{self, Rgb8};
+use crate::results::{ImageDifference, Results, ScalingPoint};
 use anyhow::Result;
 use raybench_core::{Mode, NO_HIT};
+use raybench_registry::Backend;
 use std::fmt::Write as _;
 
 /// Experiment `bezier`.
@@ -234,7 +234,7 @@ impl Scaling for Bezier {
                  from the direct image: mean FLIP, the fraction of pixels whose patch differs (or \
                  one hits and the other misses), and the fraction hit in both whose depth differs \
                  by more than 1%.\n",
-                crate::name_with(crate::Roles::BASELINE)
+                raybench_registry::name_with(raybench_registry::Roles::BASELINE)
             );
             let _ = writeln!(
                 s,

@@ -3,9 +3,9 @@
 //! and the SAH cost and the EPO set against the measured time of ray casting.
 
 use super::{Chart, Plot};
-use crate::report::charts::Series;
-use crate::report::markdown::backends_in;
-use crate::report::results::{GRID_COLUMNS, Quality, Results, Run, TREE_COLUMNS};
+use crate::charts::Series;
+use crate::fmt::backends_in;
+use crate::results::{GRID_COLUMNS, Quality, Results, Run, TREE_COLUMNS};
 use std::fmt::Write as _;
 
 /// The workloads (mode, ray set) whose times the charts set against SAH and EPO.

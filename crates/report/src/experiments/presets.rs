@@ -1,5 +1,5 @@
 //! Experiment `presets`: every builder preset of the chosen backends
-//! ([`crate::presets::PRESETS`]) on the scene whose `[benchmark]` table names it (the bunny;
+//! ([`raybench_registry::presets::PRESETS`]) on the scene whose `[benchmark]` table names it (the bunny;
 //! a built-in scene names each experiment once) and, in the full run, a generated triangle
 //! soup: build time (median of the run's repetitions)
 //! against the trace time of camera rays and of incoherent rays, the structure's memory,
@@ -11,15 +11,16 @@
 //! trace time, with `build_seconds` and `memory_bytes`.
 
 use super::{Chart, Experiment, Planned, Plot, skip};
-use crate::measure::{explicit_rays, median, prepare};
-use crate::presets::{PRESETS, Preset};
-use crate::progress::Progress;
-use crate::report::charts::Series;
-use crate::report::markdown::{bytes, opt};
-use crate::report::results::{Results, ScalingPoint};
-use crate::report::{Ctx, Workload, file_safe};
+use crate::charts::Series;
+use crate::ctx::{Ctx, Workload};
+use crate::fmt::file_safe;
+use crate::fmt::{bytes, opt};
+use crate::results::{Results, ScalingPoint};
 use anyhow::Result;
 use raybench_core::{Mode, RaySet};
+use raybench_registry::measure::{explicit_rays, median, prepare};
+use raybench_registry::presets::{PRESETS, Preset};
+use raybench_registry::progress::Progress;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 

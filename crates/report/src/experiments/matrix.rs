@@ -3,30 +3,31 @@
 //! phases and per-scene tables.
 
 use super::{Chart, Experiment, Planned, Plot};
-use crate::measure::{Measured, explicit_rays, prepare};
-use crate::progress::Progress;
-use crate::report::charts::{Bar, Bars};
-use crate::report::images::{self, Rgb8};
-use crate::report::markdown::{backends_in, bytes, noisy_mark, opt};
-use crate::report::results::{CameraRun, Equality, Images, Quality, Results, Run};
-use crate::report::{Ctx, PEER_MAX_FLIP, PEER_MIN_ID_MATCH, Views, Workload, file_safe, skip};
-use crate::{Backend, Roles, compare_hits};
+use crate::charts::{Bar, Bars};
+use crate::ctx::{Ctx, PEER_MAX_FLIP, PEER_MIN_ID_MATCH, Views, Workload, skip};
+use crate::fmt::file_safe;
+use crate::fmt::{backends_in, bytes, noisy_mark, opt};
+use crate::images::{self, Rgb8};
+use crate::results::{CameraRun, Equality, Images, Quality, Results, Run};
 use anyhow::Result;
 use raybench_core::ray_sets::DerivedParams;
 use raybench_core::{Mode, QualityParams, RaySet, Scene};
+use raybench_registry::measure::{Measured, explicit_rays, prepare};
+use raybench_registry::progress::Progress;
+use raybench_registry::{Backend, Roles, compare_hits};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::sync::Arc;
 
 /// The start of the lines of `REPORT.md` that `REPORT.html` replaces with the image viewer
 /// of one workload: followed by the workload's index in [`measured`] and ` -->`.
-pub(in crate::report) const VIEWER_BEGIN: &str = "<!-- raybench-viewer ";
+pub(crate) const VIEWER_BEGIN: &str = "<!-- raybench-viewer ";
 /// The end of those lines.
-pub(in crate::report) const VIEWER_END: &str = "<!-- /raybench-viewer -->";
+pub(crate) const VIEWER_END: &str = "<!-- /raybench-viewer -->";
 
 /// One workload of one scene in the results: the runs of every backend on it.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub(in crate::report) struct WorkloadKey {
+pub(crate) struct WorkloadKey {
     pub scene: String,
     pub mode: String,
     pub set: String,
@@ -53,7 +54,7 @@ impl WorkloadKey {
 
 /// The matrix's workloads in `results`, in order of first appearance (the order of the
 /// report's per-scene tables).
-pub(in crate::report) fn measured(results: &Results) -> Vec<WorkloadKey> {
+pub(crate) fn measured(results: &Results) -> Vec<WorkloadKey> {
     let mut keys: Vec<WorkloadKey> = Vec::new();
     for r in &results.runs {
         if !keys.iter().any(|k| k.holds(r)) {
@@ -86,7 +87,7 @@ impl Experiment for Matrix {
     fn units(&self, ctx: &Ctx) -> Vec<String> {
         match &ctx.opts.scenes {
             Some(s) => s.iter().map(|s| s.trim().to_string()).collect(),
-            None => crate::report::matrix_scenes(ctx.opts.quick)
+            None => crate::ctx::matrix_scenes(ctx.opts.quick)
                 .into_iter()
                 .map(String::from)
                 .collect(),
@@ -158,7 +159,8 @@ impl Experiment for Matrix {
             let series: Vec<Bars> = backends_in(&runs)
                 .into_iter()
                 .map(|b| {
-                    let brute = crate::roles_of(&b).is_some_and(|r| r.contains(Roles::BRUTE_FORCE));
+                    let brute = raybench_registry::roles_of(&b)
+                        .is_some_and(|r| r.contains(Roles::BRUTE_FORCE));
                     let values = scenes
                         .iter()
                         .map(
@@ -244,10 +246,9 @@ impl Experiment for Matrix {
             let _ = writeln!(s);
             // Ratios to the yardstick peers (Embree's single rays and packets) where they ran
             // (read from the registry, built or not: a merge may hold runs of either).
-            for base_name in backends
-                .iter()
-                .filter(|b| crate::roles_of(b).is_some_and(|r| r.contains(Roles::YARDSTICK)))
-            {
+            for base_name in backends.iter().filter(|b| {
+                raybench_registry::roles_of(b).is_some_and(|r| r.contains(Roles::YARDSTICK))
+            }) {
                 let _ = writeln!(
                     s,
                     "Throughput relative to the yardstick peer `{base_name}` on the same rays, same \
@@ -879,7 +880,7 @@ fn same_colors(a: &Measured, b: &Measured) -> bool {
 fn camera_runs(
     scene: &Scene,
     views: &Views,
-    each: &[crate::report::Measurement],
+    each: &[crate::ctx::Measurement],
     reference: Option<&[Measured]>,
 ) -> Vec<CameraRun> {
     if views.len() < 2 {

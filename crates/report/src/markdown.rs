@@ -1,11 +1,12 @@
 //! `REPORT.md` and the charts it shows, drawn from [`Results`] alone (so that a merge of
 //! shards produces the same kind of report as one run). Each experiment draws and writes
-//! its own part ([`super::experiments`]); this file holds the frame around them.
+//! its own part ([`crate::experiments`]); this file holds the frame around them.
 
-use super::charts;
-use super::experiments;
-use super::results::{Results, Run};
-use super::{PEER_MAX_FLIP, PEER_MIN_ID_MATCH};
+use crate::charts;
+use crate::ctx::{PEER_MAX_FLIP, PEER_MIN_ID_MATCH};
+use crate::experiments;
+use crate::fmt::opt;
+use crate::results::Results;
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -20,23 +21,6 @@ pub struct Drawn {
 pub struct Charts {
     pub drawn: Vec<Drawn>,
     pub problem: Option<String>,
-}
-
-/// The mark of a noisy measurement in a table (a spread between the fastest and the slowest
-/// repetition above [`super::results::NOISY_SPREAD`]), empty otherwise.
-pub(super) fn noisy_mark(t: &super::results::Timing) -> &'static str {
-    if t.noisy() { " †" } else { "" }
-}
-
-/// The backends of `runs`, in order of first appearance.
-pub(super) fn backends_in(runs: &[&Run]) -> Vec<String> {
-    let mut seen = Vec::new();
-    for r in runs {
-        if !seen.contains(&r.backend) {
-            seen.push(r.backend.clone());
-        }
-    }
-    seen
 }
 
 /// Draws every experiment's charts into `dir` as SVG, in the order of [`experiments::ALL`].
@@ -57,22 +41,6 @@ pub fn charts(results: &Results, dir: &Path) -> Charts {
         }
     }
     out
-}
-
-/// A value formatted by `f`, or `-`.
-pub(super) fn opt(v: Option<f64>, f: impl Fn(f64) -> String) -> String {
-    v.map_or_else(|| "-".into(), f)
-}
-
-/// A byte count in B, KiB or MiB.
-pub(super) fn bytes(b: u64) -> String {
-    if b >= 1 << 20 {
-        format!("{:.1} MiB", b as f64 / f64::from(1 << 20))
-    } else if b >= 1 << 10 {
-        format!("{:.1} KiB", b as f64 / 1024.0)
-    } else {
-        format!("{b} B")
-    }
 }
 
 /// The report text.
@@ -99,7 +67,7 @@ pub fn report(results: &Results, charts: &Charts) -> String {
             sh.command
         );
     }
-    super::verdict::write(results, &mut s);
+    crate::verdict::write(results, &mut s);
     let _ = writeln!(s, "## How to read this report\n");
     let _ = writeln!(
         s,
@@ -129,7 +97,7 @@ pub fn report(results: &Results, charts: &Charts) -> String {
          the average over the cameras, weighted by time), and a table per workload gives each \
          camera's own figure.\n",
         PEER_MIN_ID_MATCH * 100.0,
-        super::results::NOISY_SPREAD * 100.0
+        crate::results::NOISY_SPREAD * 100.0
     );
     if let Some(p) = &charts.problem {
         let _ = writeln!(s, "> Charts: {p}\n");

@@ -1,7 +1,7 @@
 //! The machine description at the top of every report.
 
-use super::results::Machine;
-use crate::Roles;
+use crate::results::Machine;
+use raybench_registry::Roles;
 
 /// Describes this machine; `threads` is the worker count used for rendering.
 #[must_use]
@@ -19,7 +19,7 @@ pub fn describe(threads: usize) -> Machine {
 
 /// The adapter the registry's device backend ([`Roles::DEVICE`]) uses, or why there is none.
 fn gpu() -> String {
-    let Some(b) = crate::with_role(Roles::DEVICE) else {
+    let Some(b) = raybench_registry::with_role(Roles::DEVICE) else {
         return "none (no device backend registered)".into();
     };
     let r = (b.make)();
@@ -42,10 +42,10 @@ fn cpu_model() -> String {
         .unwrap_or_else(|| format!("unknown ({})", std::env::consts::ARCH))
 }
 
-/// What the backends with a [`crate::Backend::detail`] chose (the packet backend's
+/// What the backends with a [`raybench_registry::Backend::detail`] chose (the packet backend's
 /// instruction set), and the CPU's SIMD extensions.
 fn isa() -> String {
-    let chosen: Vec<String> = crate::BACKENDS
+    let chosen: Vec<String> = raybench_registry::BACKENDS
         .iter()
         .filter(|b| !b.is(Roles::PINNED))
         .filter_map(|b| b.detail.map(|d| format!("{} backend uses {}", b.name, d())))
@@ -99,7 +99,7 @@ fn os() -> String {
 /// `raybench VERSION (REVISION)`: the revision recorded at build time, so that the report
 /// names the code that measured, whatever the current directory is.
 fn version() -> String {
-    format!("raybench {}", crate::VERSION)
+    format!("raybench {}", raybench_registry::VERSION)
 }
 
 /// The current UTC time as RFC 3339 (`2026-11-23T02:44:30Z`), from the system clock.

@@ -178,7 +178,7 @@ impl Timing {
         let min = samples.iter().copied().fold(f64::INFINITY, f64::min);
         let max = samples.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         Self {
-            median: crate::measure::median(samples.clone()),
+            median: raybench_registry::measure::median(samples.clone()),
             min,
             max,
             samples,

@@ -3,8 +3,8 @@
 //! speed-up of every backend over the oracle where it ran.
 
 use super::{Chart, Ctx, Plot, Point, Scaling, fit_chart, points_of, square};
-use crate::report::charts::Series;
-use crate::report::results::Results;
+use crate::charts::Series;
+use crate::results::Results;
 use raybench_core::Mode;
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -63,7 +63,7 @@ impl Scaling for Primitives {
         )
         .into_iter()
         .collect();
-        let oracle = crate::name_with(crate::Roles::ORACLE);
+        let oracle = raybench_registry::name_with(raybench_registry::Roles::ORACLE);
         if !backends.contains(oracle) {
             return out;
         }

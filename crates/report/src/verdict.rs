@@ -4,9 +4,9 @@
 //! the reference bit for bit, what was skipped and why, which timings were noisy, and how
 //! the scaling slopes compare with the theory the report states.
 
-use super::markdown::noisy_mark;
-use super::results::{Fit, Results, Run};
-use crate::Roles;
+use crate::fmt::noisy_mark;
+use crate::results::{Fit, Results, Run};
+use raybench_registry::Roles;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
@@ -53,8 +53,8 @@ fn fastest(results: &Results, s: &mut String) {
     if kinds.is_empty() {
         return;
     }
-    let baseline = crate::name_with(Roles::BASELINE);
-    let oracle = crate::name_with(Roles::ORACLE);
+    let baseline = raybench_registry::name_with(Roles::BASELINE);
+    let oracle = raybench_registry::name_with(Roles::ORACLE);
     let _ = writeln!(
         s,
         "**Fastest backend** per scene and workload (Mrays/s over every ray traced; only \
@@ -239,7 +239,7 @@ fn noisy(results: &Results, s: &mut String) {
             "**Noise**: every one of the {} timed runs spread by at most {:.0}% between its \
              fastest and slowest repetition.\n",
             timed.len(),
-            super::results::NOISY_SPREAD * 100.0
+            crate::results::NOISY_SPREAD * 100.0
         );
         return;
     }
@@ -264,7 +264,7 @@ fn noisy(results: &Results, s: &mut String) {
          and slowest repetition (marked † in the tables{}): {}{}.\n",
         noisy.len(),
         timed.len(),
-        super::results::NOISY_SPREAD * 100.0,
+        crate::results::NOISY_SPREAD * 100.0,
         if points > 0 {
             format!("; the scaling experiments' {points} points are single medians, not judged")
         } else {
@@ -299,7 +299,8 @@ const FIXED_COSTS: &str = "fixed per-frame and per-ray costs (camera rays, shadi
 
 /// The theory for experiment `experiment` and backend `backend`, if the report states one.
 fn theory(experiment: &str, backend: &str) -> Option<Theory> {
-    let brute = crate::roles_of(backend).is_some_and(|r| r.contains(Roles::BRUTE_FORCE));
+    let brute =
+        raybench_registry::roles_of(backend).is_some_and(|r| r.contains(Roles::BRUTE_FORCE));
     match (experiment, brute) {
         ("primitives", true) => Some(Theory {
             claim: "linear in M (slope about 1)",

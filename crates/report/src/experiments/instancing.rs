@@ -14,15 +14,15 @@
 //! run is a skip record whose reason starts `SCENE flattened: `.
 
 use super::{Chart, Experiment, Planned, Plot, scene_for, skip};
-use crate::measure::prepare;
-use crate::progress::Progress;
-use crate::report::charts::{Bar, Bars};
-use crate::report::markdown::bytes;
-use crate::report::results::{Results, ScalingPoint};
-use crate::report::{Ctx, Workload};
-use crate::{Backend, Roles};
+use crate::charts::{Bar, Bars};
+use crate::ctx::{Ctx, Workload};
+use crate::fmt::bytes;
+use crate::results::{Results, ScalingPoint};
 use anyhow::Result;
 use raybench_core::{Mode, RaySet, Scene};
+use raybench_registry::measure::prepare;
+use raybench_registry::progress::Progress;
+use raybench_registry::{Backend, Roles};
 use std::fmt::Write as _;
 use std::sync::Arc;
 

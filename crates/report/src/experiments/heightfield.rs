@@ -4,10 +4,10 @@
 //! render time.
 
 use super::{Ctx, Observed, Point, Scaling, baseline_only, square};
-use crate::Backend;
-use crate::report::markdown::{bytes, opt};
-use crate::report::results::{Results, ScalingPoint};
+use crate::fmt::{bytes, opt};
+use crate::results::{Results, ScalingPoint};
 use raybench_core::Mode;
+use raybench_registry::Backend;
 use std::fmt::Write as _;
 
 /// Experiment `heightfield`.
@@ -75,7 +75,7 @@ impl Scaling for Heightfield {
                  give the same hits and `t` bit for bit. Load: generating the heights and \
                  tessellating, or building the min-max levels; build: the BVH; memory: primitives \
                  plus structure; a height field counts as one primitive test per ray.\n",
-                crate::name_with(crate::Roles::BASELINE)
+                raybench_registry::name_with(raybench_registry::Roles::BASELINE)
             );
             let _ = writeln!(
                 s,

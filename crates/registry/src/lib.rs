@@ -1,16 +1,17 @@
-//! # raybench (library part of the command)
+//! # raybench-registry
 //!
-//! The backend registry (names to [`Renderer`]s) and the frame comparison used by
-//! `raybench compare` and by the cross-backend equivalence tests. The command line itself is
-//! in `main.rs`.
+//! The backend registry (names to [`Renderer`]s, with their roles) and the services every
+//! front end shares: the frame comparison used by `raybench compare`, the harness and the
+//! cross-backend equivalence tests; measurement ([`measure`]), backend presets
+//! ([`presets`]), progress lines ([`progress`]), frame sequences ([`frames`]) and ray files
+//! ([`rays_file`]). The command line is the `raybench` crate; the harness that times and
+//! reports is `raybench-report`.
 
-pub mod diff;
 pub mod frames;
 pub mod measure;
 pub mod presets;
 pub mod progress;
 pub mod rays_file;
-pub mod report;
 
 /// The version and the source revision it was built from (`0.1.0 (3f2a9c1)`; `unknown`
 /// outside a git checkout, see `build.rs`): what `raybench --version` prints and every

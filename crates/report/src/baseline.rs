@@ -4,7 +4,7 @@
 //! and whether it exceeds the noise of both runs: the ranges of speeds their timed
 //! repetitions span (rays over the slowest and over the fastest repetition) do not overlap.
 
-use super::results::{Results, Run};
+use crate::results::{Results, Run};
 use anyhow::{Context, Result};
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -165,7 +165,7 @@ pub fn read(path: &Path) -> Result<Results> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::report::results::Timing;
+    use crate::results::Timing;
 
     fn run(backend: &str, samples: Vec<f64>) -> Run {
         let timing = Timing::of(samples);

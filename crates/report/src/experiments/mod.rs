@@ -9,7 +9,7 @@
 mod bezier;
 mod heightfield;
 mod instancing;
-pub(super) mod matrix;
+pub(crate) mod matrix;
 mod motion;
 mod pixels;
 mod presets;
@@ -17,21 +17,22 @@ mod primitives;
 mod quality;
 mod spp;
 
-pub(super) use super::charts::{Chart, Plot};
-use super::charts::{PowerLaw, Series};
-use super::results::{Results, ScalingPoint};
-use super::{Ctx, Loaded, Measured, Workload, skip};
-use crate::Backend;
-use crate::measure::prepare;
-use crate::progress::Progress;
+pub(crate) use crate::charts::{Chart, Plot};
+use crate::charts::{PowerLaw, Series};
+use crate::ctx::{Ctx, Loaded, Workload, skip};
+use crate::results::{Results, ScalingPoint};
 use anyhow::Result;
 use raybench_core::{Mode, RaySet, Scene};
+use raybench_registry::Backend;
+use raybench_registry::measure::Measured;
+use raybench_registry::measure::prepare;
+use raybench_registry::progress::Progress;
 use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
 use std::time::Instant;
 
 /// Every experiment in the order it runs and is written: the matrix, then [`SCALING`].
-pub(super) const ALL: [&dyn Experiment; 9] = [
+pub(crate) const ALL: [&dyn Experiment; 9] = [
     &matrix::Matrix,
     SCALING[0],
     SCALING[1],
@@ -44,7 +45,7 @@ pub(super) const ALL: [&dyn Experiment; 9] = [
 ];
 
 /// The scaling experiments, in the order they run (`--experiments` names them).
-pub(super) const SCALING: [&dyn Experiment; 8] = [
+pub(crate) const SCALING: [&dyn Experiment; 8] = [
     &primitives::Primitives,
     &pixels::Pixels,
     &spp::Spp,
@@ -56,7 +57,7 @@ pub(super) const SCALING: [&dyn Experiment; 8] = [
 ];
 
 /// A unit of an experiment ready to run, and how many progress steps it takes.
-pub(super) struct Planned {
+pub(crate) struct Planned {
     /// Steps of the progress bar (one per backend and workload or point).
     pub steps: usize,
     /// Its loaded scene (the matrix's units).
@@ -66,7 +67,7 @@ pub(super) struct Planned {
 /// One part of the report: it splits into units (shards run whole units), plans and runs
 /// them into [`Results`], and draws and writes its part from [`Results`] alone (so that a
 /// merge of shards gives the same report as one run).
-pub(super) trait Experiment: Sync {
+pub(crate) trait Experiment: Sync {
     /// Its name: `experiment` in `results.json`, `--experiments`, skip records.
     fn name(&self) -> &'static str;
 
@@ -114,7 +115,7 @@ pub(super) trait Experiment: Sync {
 }
 
 /// One point of a scaling experiment's plan.
-pub(super) struct Point {
+pub(crate) struct Point {
     /// The series it belongs to (`soup`, `direct`, ...).
     pub series: String,
     /// The varied quantity.
@@ -126,7 +127,7 @@ pub(super) struct Point {
 }
 
 /// A measured point as a scaling experiment sees it, for [`Scaling::record`].
-pub(super) struct Observed<'a> {
+pub(crate) struct Observed<'a> {
     /// The point.
     pub point: &'a Point,
     /// The warm-up's ids, depths and colours.
@@ -143,7 +144,7 @@ pub(super) struct Observed<'a> {
 /// log-log axes. What it shares with the others (loading each spec once, skipping
 /// brute-force backends over budget, measuring, recording, the fits' charts) is written
 /// once here.
-pub(super) trait Scaling: Sync {
+pub(crate) trait Scaling: Sync {
     /// State carried from point to point (the `bezier` experiment's reference image).
     type State: Default;
 
@@ -324,7 +325,7 @@ fn scene_points(
 /// The baseline backend alone: for the experiments that compare two representations of
 /// one surface, not structures.
 fn baseline_only() -> Vec<&'static Backend> {
-    crate::with_role(crate::Roles::BASELINE)
+    raybench_registry::with_role(raybench_registry::Roles::BASELINE)
         .into_iter()
         .collect()
 }
@@ -374,12 +375,14 @@ fn run_scaling<E: Scaling>(
             }
         };
         for b in &backends {
-            if b.is(crate::Roles::BRUTE_FORCE) && !ctx.naive_fits(&w, scene.geometry.total_len()) {
+            if b.is(raybench_registry::Roles::BRUTE_FORCE)
+                && !ctx.naive_fits(&w, scene.geometry.total_len())
+            {
                 progress.remove(1);
                 continue;
             }
             progress.begin(format!("scaling {experiment} {spec} {}: build", b.name));
-            let Ok(crate::measure::Prepared {
+            let Ok(raybench_registry::measure::Prepared {
                 renderer: r, build, ..
             }) = prepare(b, &scene)
             else {
@@ -521,7 +524,7 @@ fn fit_chart(
 }
 
 /// The sentence before the fits table, from every scaling experiment's [`Experiment::axis`].
-pub(super) fn fits_intro() -> String {
+pub(crate) fn fits_intro() -> String {
     let axes: Vec<&str> = SCALING.iter().filter_map(|e| e.axis()).collect();
     let joined = match axes.split_last() {
         Some((last, rest)) if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
@@ -539,7 +542,7 @@ pub(super) fn fits_intro() -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::report::Options;
+    use crate::ctx::Options;
 
     fn ctx_with<R>(quick: bool, f: impl FnOnce(&Ctx) -> R) -> R {
         let opts = Options {
@@ -561,7 +564,7 @@ mod tests {
             baseline: None,
             rays_file: None,
         };
-        let chosen: Vec<&'static Backend> = crate::BACKENDS.iter().collect();
+        let chosen: Vec<&'static Backend> = raybench_registry::BACKENDS.iter().collect();
         let ctx = Ctx {
             opts: &opts,
             replay: None,
@@ -609,7 +612,7 @@ mod tests {
                     "bench-scenes/{}.toml: [benchmark] experiments: no experiment `{e}` \
                      (known: {:?})",
                     b.name,
-                    crate::report::experiments()
+                    crate::experiments()
                 );
             }
         }

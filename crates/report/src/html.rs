@@ -16,9 +16,9 @@
 //! `button.viewer-layer[data-layer=image|ids|flip]`, one `img.viewer-image` and one
 //! `.viewer-stats`; every data table a `table.sortable`, its noisy cells `td.noisy`.
 
-use super::charts::escape as esc;
-use super::experiments::matrix::{self, VIEWER_BEGIN, VIEWER_END, WorkloadKey};
-use super::results::{Results, Run};
+use crate::charts::escape as esc;
+use crate::experiments::matrix::{self, VIEWER_BEGIN, VIEWER_END, WorkloadKey};
+use crate::results::{Results, Run};
 use pulldown_cmark::{Alignment, CowStr, Event, HeadingLevel, Options, Parser, Tag, TagEnd};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -466,8 +466,8 @@ fn viewer(results: &Results, key: &WorkloadKey) -> String {
         .unwrap_or(8);
     let id = format!(
         "viewer-{}-{}",
-        super::file_safe(&key.scene),
-        super::file_safe(&key.mode)
+        crate::fmt::file_safe(&key.scene),
+        crate::fmt::file_safe(&key.mode)
     );
     let mut s = String::new();
     let _ = write!(
@@ -610,7 +610,7 @@ fn stats(p: &Pick, reference: &Run) -> String {
                 seconds(t.median),
                 seconds(t.min),
                 seconds(t.max),
-                super::markdown::noisy_mark(t)
+                crate::fmt::noisy_mark(t)
             ),
         ));
     }
@@ -669,7 +669,7 @@ fn seconds(s: f64) -> String {
 
 /// The colour keys of the two maps and the keyboard's.
 fn keys_legend() -> String {
-    let stops: Vec<String> = super::images::magma_stops(9)
+    let stops: Vec<String> = crate::images::magma_stops(9)
         .iter()
         .enumerate()
         .map(|(i, [r, g, b])| format!("rgb({r},{g},{b}) {}%", i * 100 / 8))

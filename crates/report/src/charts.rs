@@ -3,7 +3,7 @@
 //!
 //! What every chart keeps to:
 //! - **One colour and one marker per backend across every chart** ([`styles`]): keyed by
-//!   the backend's place in the registry ([`crate::BACKENDS`], then [`crate::NOT_BUILT`]), a
+//!   the backend's place in the registry ([`raybench_registry::BACKENDS`], then [`raybench_registry::NOT_BUILT`]), a
 //!   preset `BACKEND:PRESET` in its backend's colour with a marker of its own, any other
 //!   series from a separate list by its sorted name.
 //! - **Readable ticks**: log axes label every decade with minor ticks at 2..9, or 1-2-5
@@ -177,10 +177,10 @@ pub struct Style {
 /// Every backend name in registry order: the built ones, then those this build lacks (the
 /// same order either way: the lacking ones close the registry).
 fn registry() -> impl Iterator<Item = &'static str> {
-    crate::BACKENDS
+    raybench_registry::BACKENDS
         .iter()
         .map(|b| b.name)
-        .chain(crate::NOT_BUILT.iter().map(|n| n.name))
+        .chain(raybench_registry::NOT_BUILT.iter().map(|n| n.name))
 }
 
 /// A stable small hash (FNV-1a) of a name, for presets this build does not know.
@@ -203,7 +203,7 @@ pub fn backend_style(label: &str) -> Option<Style> {
     let marker = match preset {
         None => MARKERS[i % MARKERS.len()],
         Some(p) => {
-            let place = crate::presets::presets_of(base)
+            let place = raybench_registry::presets::presets_of(base)
                 .position(|q| q.preset == p)
                 .unwrap_or_else(|| fnv(p));
             MARKERS[(i + 1 + place) % MARKERS.len()]
@@ -1219,7 +1219,7 @@ mod tests {
 
     /// The `i`-th backend of the registry (tests name no backend themselves: `tests/tidy.rs`).
     fn b(i: usize) -> &'static str {
-        crate::BACKENDS[i].name
+        raybench_registry::BACKENDS[i].name
     }
 
     fn labels(axis: &Axis) -> Vec<&str> {

@@ -10,17 +10,18 @@
 //! [`MotionFrame`]s of `results.json`, so `raybench merge` redraws the part.
 
 use super::{Chart, Experiment, Planned, Plot, skip};
-use crate::Roles;
-use crate::frames::advance;
-use crate::measure::prepare;
-use crate::progress::Progress;
-use crate::report::charts::Series;
-use crate::report::results::{MotionFrame, Results};
-use crate::report::{Ctx, Workload, file_safe};
+use crate::charts::Series;
+use crate::ctx::{Ctx, Workload};
+use crate::fmt::file_safe;
+use crate::results::{MotionFrame, Results};
 use anyhow::Result;
 use raybench_core::{
     Mode, QualityParams, RaySet, Renderer, StructureQuality, Timings, UpdatePolicy,
 };
+use raybench_registry::Roles;
+use raybench_registry::frames::advance;
+use raybench_registry::measure::prepare;
+use raybench_registry::progress::Progress;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
@@ -90,7 +91,7 @@ impl Motion {
 
     /// The chosen backends it tries: exact, not brute force (naive rebuilds nothing and
     /// tests every primitive), not pinned variants of another.
-    fn backends(ctx: &Ctx) -> Vec<&'static crate::Backend> {
+    fn backends(ctx: &Ctx) -> Vec<&'static raybench_registry::Backend> {
         ctx.chosen
             .iter()
             .copied()

@@ -1,0 +1,64 @@
+//! `raybench scenes`: the built-in scenes and generators.
+
+use anyhow::Result;
+use raybench_scene::{BUILTIN_SCENES, generators::GENERATORS};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// `assets` as an absolute path without `.` or `..` (symbolic links resolved when it
+/// exists), and whether it exists.
+pub(crate) fn resolved_dir(assets: &Path) -> (PathBuf, bool) {
+    if let Ok(p) = assets.canonicalize() {
+        return (p, true);
+    }
+    let absolute = std::path::absolute(assets).unwrap_or_else(|_| assets.to_owned());
+    let mut clean = PathBuf::new();
+    for c in absolute.components() {
+        match c {
+            std::path::Component::CurDir => {}
+            std::path::Component::ParentDir => {
+                clean.pop();
+            }
+            c => clean.push(c),
+        }
+    }
+    (clean, false)
+}
+
+pub(crate) fn scenes(assets: &Path) -> Result<ExitCode> {
+    let (dir, exists) = resolved_dir(assets);
+    outln!(
+        "# built-in scenes (assets: {}{})",
+        dir.display(),
+        if exists {
+            ""
+        } else {
+            ", which does not exist: set --assets or RAYBENCH_ASSETS"
+        }
+    )?;
+    for b in BUILTIN_SCENES {
+        let missing: Vec<_> = b
+            .assets
+            .iter()
+            .filter(|a| !assets.join(a).is_file())
+            .collect();
+        let state = if missing.is_empty() {
+            "ok"
+        } else {
+            "missing-assets"
+        };
+        outln!("{:<14} {:<15} {}", b.name, state, b.description)?;
+    }
+    outln!("# generators (NAME:ARG)")?;
+    for g in GENERATORS {
+        outln!(
+            "{:<14} {:<15} {} (ARG = {}, at most {})",
+            format!("{}:ARG", g.name),
+            "ok",
+            g.description,
+            g.argument,
+            g.max
+        )?;
+    }
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,306 @@
+//! The services every experiment calls: the run's options and what was made of them
+//! ([`Ctx`]), workloads, loading with skips, the naive budget and measurement with
+//! repetitions. Experiments call down into this module; it knows no experiment.
+
+use crate::results::{Results, Skipped, Timing};
+use anyhow::Result;
+use raybench_core::{Mode, RaySet, RenderSettings, Renderer, Scene};
+use raybench_registry::Backend;
+use raybench_registry::measure::{Measured, RayBatch, measure};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// What to run and where to write it.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// The small matrix (under 5 minutes on 2 cores; without `backends`, the GPU backends are
+    /// left out on a software adapter).
+    pub quick: bool,
+    /// Scenes (default: the built-in scenes of the chosen matrix, by their `[benchmark]`
+    /// tables).
+    pub scenes: Option<Vec<String>>,
+    /// Backends (default: every backend but the variants).
+    pub backends: Option<Vec<String>>,
+    /// Modes (default: all; `mip` and `composite` run only on scenes with volumes).
+    pub modes: Option<Vec<Mode>>,
+    /// Output folder.
+    pub out: PathBuf,
+    /// This run's shard `(i, n)`, 1-based.
+    pub shard: (u32, u32),
+    /// Image side for the main matrix (default 256 quick, 512 full).
+    pub size: Option<u32>,
+    /// Timed repetitions after the warm-up (default 3 quick, 5 full).
+    pub repeat: Option<u32>,
+    /// Run the scaling experiments.
+    pub scaling: bool,
+    /// Which scaling experiments (default: all of [`experiments()`]).
+    pub experiments: Option<Vec<String>>,
+    /// The ray sets of the ray-casting workloads (default: every set, [`RaySet::ALL`]).
+    pub ray_sets: Option<Vec<RaySet>>,
+    /// Ambient-occlusion rays per primary hit of the `ao` workloads.
+    pub ao_rays: u32,
+    /// A ray file (`docs/rays-format.md`) every scene of the matrix also traces, as the
+    /// ray-casting workload `cast-file` (alone unless `ray_sets` names sets too).
+    pub rays_file: Option<PathBuf>,
+    /// Assets folder.
+    pub assets: PathBuf,
+    /// Worker threads.
+    pub threads: usize,
+    /// The command line, for the record.
+    pub command: String,
+    /// An earlier report (folder or `results.json`) to compare with ([`baseline`]).
+    pub baseline: Option<PathBuf>,
+}
+
+/// Naive's estimated ray/primitive tests per workload above which it is left out (it is
+/// then not the reference: `bvh` is, itself checked against naive by the tests).
+pub(crate) const NAIVE_BUDGET_QUICK: f64 = 2.0e9;
+pub(crate) const NAIVE_BUDGET_FULL: f64 = 2.0e10;
+
+/// The tolerance a backend outside the equivalence contract must meet: at least this
+/// fraction of identical ids ...
+pub const PEER_MIN_ID_MATCH: f64 = 0.999;
+/// ... and at most this mean FLIP error.
+pub const PEER_MAX_FLIP: f64 = 0.05;
+
+/// One render setting of a scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Workload {
+    pub(crate) mode: Mode,
+    pub(crate) rays: RaySet,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) spp: u32,
+    /// Traces the rays of the run's ray file ([`Options::rays_file`]) instead of `rays`.
+    pub(crate) replay: bool,
+}
+
+impl Workload {
+    pub(crate) fn settings(&self) -> RenderSettings {
+        RenderSettings {
+            width: self.width,
+            height: self.height,
+            spp: self.spp,
+            mode: self.mode,
+            seed: 0,
+            max_depth: 5,
+            count: false,
+            ..RenderSettings::default()
+        }
+    }
+
+    pub(crate) fn key(&self) -> String {
+        format!("{}-{}", self.mode.name(), self.ray_set())
+    }
+
+    /// The name of its rays in `results.json`: the ray set's, or `file` for a replay.
+    pub(crate) fn ray_set(&self) -> &'static str {
+        if self.replay {
+            "file"
+        } else {
+            self.rays.name()
+        }
+    }
+}
+
+/// The built-in scenes of the quick matrix (`--quick`) or the full one, in listing order
+/// (each scene's `[benchmark]` table says which).
+#[must_use]
+pub fn matrix_scenes(quick: bool) -> Vec<&'static str> {
+    raybench_scene::matrix(quick).map(|b| b.name).collect()
+}
+
+/// The cameras a workload is measured from, each with its explicit rays (`None` for a
+/// rendered frame): indices into the scene's cameras, `None` for the scene's camera.
+pub(crate) type Views = [(Option<u32>, Option<RayBatch>)];
+
+/// A loaded scene, or why it is skipped.
+pub(crate) type Loaded = Result<Arc<Scene>, String>;
+
+/// The outcome of loading `spec`: the scene; why it is skipped (a missing asset, or a scene
+/// over the memory budget); or, for any other failure and for a missing asset under
+/// `CI=true` (where every asset is installed), an error.
+pub(crate) fn skip_missing_asset(
+    spec: &str,
+    loaded: Result<Scene, raybench_scene::LoadError>,
+) -> Result<Loaded> {
+    match loaded {
+        Ok(s) => Ok(Ok(Arc::new(s))),
+        Err(e) if e.is_missing_asset() && std::env::var("CI").as_deref() != Ok("true") => {
+            Ok(Err(e.to_string()))
+        }
+        // A scene over this machine's memory budget (the largest scaling points) is skipped
+        // with the reason, CI or not: the rest of the run still means something.
+        Err(e) if e.is_over_budget() => Ok(Err(e.to_string())),
+        Err(e) => Err(anyhow::Error::new(e).context(format!("cannot load scene {spec}"))),
+    }
+}
+
+/// Records a skipped scene or experiment in `results` and says so once on stderr.
+pub(crate) fn skip(results: &mut Results, kind: &str, name: &str, status: &str, reason: String) {
+    eprintln!("skipped {kind} {name}: {reason}");
+    results.skipped.push(Skipped {
+        shard: 0,
+        kind: kind.into(),
+        name: name.into(),
+        status: status.into(),
+        reason,
+    });
+}
+
+/// What every experiment of one run shares: the options and what was made of them.
+pub(crate) struct Ctx<'a> {
+    pub(crate) opts: &'a Options,
+    /// The rays of [`Options::rays_file`], read once.
+    pub(crate) replay: Option<RayBatch>,
+    pub(crate) chosen: &'a [&'static Backend],
+    pub(crate) modes: &'a [Mode],
+    pub(crate) size: u32,
+    pub(crate) repeat: u32,
+    pub(crate) budget: f64,
+}
+
+/// A backend's measurements of one workload.
+pub(crate) struct Measurement {
+    pub(crate) warm: Measured,
+    pub(crate) timing: Timing,
+    /// Medians of the timed repetitions' phases.
+    pub(crate) phases: raybench_core::Timings,
+}
+
+impl Ctx<'_> {
+    /// The scene `name`, or (inner `Err`) why it is skipped: a missing asset, except under
+    /// `CI=true`, where that is an error too.
+    pub(crate) fn load(&self, name: &str) -> Result<Loaded> {
+        skip_missing_asset(name, raybench_scene::load(name, &self.opts.assets))
+    }
+
+    /// Whether a brute-force backend stays within its budget on `w` over a scene of `prims`
+    /// primitives.
+    pub(crate) fn naive_fits(&self, w: &Workload, prims: usize) -> bool {
+        let tests = match (&self.replay, w.replay) {
+            (Some(batch), true) => {
+                batch.rays.len() as f64 * prims as f64 * f64::from(self.repeat + 1)
+            }
+            _ => {
+                raybench_registry::brute_force_tests(&w.settings(), w.rays, prims, self.repeat + 1)
+            }
+        };
+        tests <= self.budget
+    }
+
+    /// Warm-up (counted, kept for the comparison) and timed repetitions.
+    pub(crate) fn measure(
+        &self,
+        r: &dyn Renderer,
+        w: &Workload,
+        rays: Option<&RayBatch>,
+    ) -> Result<Measurement> {
+        self.measure_settings(r, &w.settings(), rays)
+    }
+
+    /// [`Ctx::measure`] with explicit settings (a camera chosen).
+    pub(crate) fn measure_settings(
+        &self,
+        r: &dyn Renderer,
+        settings: &RenderSettings,
+        rays: Option<&RayBatch>,
+    ) -> Result<Measurement> {
+        let warm = measure(r, settings, rays, true)?;
+        let mut samples = Vec::new();
+        let mut phases = Vec::new();
+        for _ in 0..self.repeat {
+            let m = measure(r, settings, rays, false)?;
+            samples.push(m.seconds);
+            phases.push(m.phases);
+        }
+        Ok(Measurement {
+            warm,
+            timing: Timing::of(samples),
+            phases: raybench_registry::measure::median_phases(&phases),
+        })
+    }
+
+    /// [`Ctx::measure`] from each of `views` (indices into the scene's cameras; `None`: the
+    /// scene's camera), with the rays of each view: the measurement of every view, and
+    /// their sum ([`Measurement::sum`]).
+    pub(crate) fn measure_views(
+        &self,
+        r: &dyn Renderer,
+        w: &Workload,
+        views: &Views,
+    ) -> Result<(Measurement, Vec<Measurement>)> {
+        let each: Vec<Measurement> = views
+            .iter()
+            .map(|(camera, rays)| {
+                let settings = RenderSettings {
+                    camera: *camera,
+                    ..w.settings()
+                };
+                self.measure_settings(r, &settings, rays.as_ref())
+            })
+            .collect::<Result<_>>()?;
+        Ok((Measurement::sum(&each), each))
+    }
+}
+
+impl Measurement {
+    /// Several cameras' measurements of one workload as one: the warm-ups' ids, `t` and
+    /// colours concatenated in camera order, their rays and counters summed; the `i`-th
+    /// timed repetition is the sum of every camera's `i`-th (so its median is the time to
+    /// render every camera once), and each phase's median is summed likewise.
+    pub(crate) fn sum(each: &[Measurement]) -> Measurement {
+        if let [one] = each {
+            return Measurement {
+                warm: one.warm.clone(),
+                timing: one.timing.clone(),
+                phases: one.phases.clone(),
+            };
+        }
+        let mut warm = Measured {
+            ids: Vec::new(),
+            t: Vec::new(),
+            rays: 0,
+            counters: None,
+            seconds: 0.0,
+            phases: raybench_core::Timings::default(),
+            color: None,
+        };
+        let mut phases = raybench_core::Timings::default();
+        let reps = each
+            .iter()
+            .map(|m| m.timing.samples.len())
+            .min()
+            .unwrap_or(0);
+        let mut samples = vec![0.0; reps];
+        for m in each {
+            warm.ids.extend_from_slice(&m.warm.ids);
+            warm.t.extend_from_slice(&m.warm.t);
+            warm.rays += m.warm.rays;
+            warm.seconds += m.warm.seconds;
+            if let Some(c) = &m.warm.counters {
+                use raybench_core::Counters as _;
+                warm.counters
+                    .get_or_insert_with(raybench_core::RayCounters::default)
+                    .merge(c);
+            }
+            if let Some(c) = &m.warm.color {
+                warm.color.get_or_insert_with(Vec::new).extend_from_slice(c);
+            }
+            for (i, s) in samples.iter_mut().enumerate() {
+                *s += m.timing.samples[i];
+            }
+            for (name, secs) in &m.phases.0 {
+                match phases.0.iter_mut().find(|(n, _)| n == name) {
+                    Some((_, total)) => *total += secs,
+                    None => phases.push(name.clone(), *secs),
+                }
+            }
+        }
+        Measurement {
+            warm,
+            timing: Timing::of(samples),
+            phases,
+        }
+    }
+}

@@ -1,0 +1,50 @@
+//! Formatting helpers shared by the experiments and the report writers: a leaf module,
+//! it imports nothing of the crate but the results' types.
+
+use crate::results::{Run, Timing};
+
+/// A name usable in a file name (generator specs contain `:`).
+pub(crate) fn file_safe(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '.' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// The mark of a noisy measurement in a table (a spread between the fastest and the slowest
+/// repetition above [`crate::results::NOISY_SPREAD`]), empty otherwise.
+pub(crate) fn noisy_mark(t: &Timing) -> &'static str {
+    if t.noisy() { " †" } else { "" }
+}
+
+/// The backends of `runs`, in order of first appearance.
+pub(crate) fn backends_in(runs: &[&Run]) -> Vec<String> {
+    let mut seen = Vec::new();
+    for r in runs {
+        if !seen.contains(&r.backend) {
+            seen.push(r.backend.clone());
+        }
+    }
+    seen
+}
+
+/// A value formatted by `f`, or `-`.
+pub(crate) fn opt(v: Option<f64>, f: impl Fn(f64) -> String) -> String {
+    v.map_or_else(|| "-".into(), f)
+}
+
+/// A byte count in B, KiB or MiB.
+pub(crate) fn bytes(b: u64) -> String {
+    if b >= 1 << 20 {
+        format!("{:.1} MiB", b as f64 / f64::from(1 << 20))
+    } else if b >= 1 << 10 {
+        format!("{:.1} KiB", b as f64 / 1024.0)
+    } else {
+        format!("{b} B")
+    }
+}

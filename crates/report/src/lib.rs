@@ -1,0 +1,297 @@
+//! `raybench report`: renders a matrix of scenes, workloads and backends, times them, checks
+//! that the images agree, runs the scaling experiments, and writes `REPORT.md`, charts,
+//! images, `REPORT.html` (the same report as a page with an image viewer) and `results.json`
+//! into one folder. `raybench merge` joins the results of
+//! shards (parts of the matrix run on several machines or at several times).
+
+pub mod baseline;
+pub mod charts;
+mod ctx;
+pub mod diff;
+mod experiments;
+mod fmt;
+mod html;
+pub mod images;
+pub mod machine;
+mod markdown;
+pub mod results;
+mod verdict;
+
+pub use ctx::{Options, matrix_scenes};
+
+use anyhow::{Context, Result, bail};
+use ctx::{Ctx, NAIVE_BUDGET_FULL, NAIVE_BUDGET_QUICK, skip};
+use experiments::{Experiment, Planned};
+use raybench_core::Mode;
+use raybench_registry::progress::Progress;
+use raybench_registry::{BACKENDS, Backend, Roles, backend};
+use results::{Results, Shard};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The names of the scaling experiments, in the order they run (`--experiments`).
+#[must_use]
+pub fn experiments() -> Vec<&'static str> {
+    experiments::SCALING.iter().map(|e| e.name()).collect()
+}
+
+/// Runs the report and writes it; returns the results.
+///
+/// # Errors
+/// Bad options, an unwritable output folder, or a scene that fails to load for another
+/// reason than a missing asset (those are reported and skipped, except under `CI=true`).
+pub fn run(opts: &Options) -> Result<Results> {
+    let (shard, shards) = opts.shard;
+    if shards == 0 || shard == 0 || shard > shards {
+        bail!("--shard must be I/N with 1 <= I <= N (got {shard}/{shards})");
+    }
+    let size = opts.size.unwrap_or(if opts.quick { 256 } else { 512 });
+    if !(16..=4096).contains(&size) {
+        bail!("--size must be in 16..=4096");
+    }
+    let repeat = opts.repeat.unwrap_or(if opts.quick { 3 } else { 5 });
+    if !(1..=100).contains(&repeat) {
+        bail!("--repeat must be in 1..=100");
+    }
+    let mut chosen: Vec<&'static Backend> = match &opts.backends {
+        Some(names) => names
+            .iter()
+            .map(|n| backend(n.trim()))
+            .collect::<Result<_, _>>()
+            .map_err(anyhow::Error::msg)?,
+        None => BACKENDS.iter().filter(|b| !b.is(Roles::PINNED)).collect(),
+    };
+    // A quick run of every backend leaves the GPU backends out when their adapter is a
+    // software one (lavapipe: about one CPU thread's speed, and every kind's kernels to
+    // compile): on two cores they would take most of the run. Named, they run.
+    let mut software = Vec::new();
+    if opts.quick
+        && opts.backends.is_none()
+        && let Some(adapter) = raybench_registry::software_device()
+    {
+        chosen.retain(|b| {
+            let device = b.is(Roles::DEVICE);
+            if device {
+                software.push((b.name, adapter.clone()));
+            }
+            !device
+        });
+    }
+    if chosen.is_empty() {
+        bail!("no backend to run");
+    }
+    if let Some(unknown) = opts
+        .experiments
+        .iter()
+        .flatten()
+        .find(|c| !experiments().contains(&c.as_str()))
+        .filter(|_| opts.scaling)
+    {
+        bail!(
+            "unknown experiment '{unknown}' (known: {})",
+            experiments().join(", ")
+        );
+    }
+    // Read the baseline first: a bad path should fail before the measuring, not after.
+    let before = opts
+        .baseline
+        .as_deref()
+        .map(|p| baseline::read(p).map(|r| (r, p.display().to_string())))
+        .transpose()?;
+    let max_ao = raybench_core::ray_sets::MAX_AO_RAYS;
+    if !(1..=max_ao).contains(&opts.ao_rays) {
+        bail!("--ao-rays {} must be in 1..={max_ao}", opts.ao_rays);
+    }
+    let modes = opts.modes.clone().unwrap_or_else(|| Mode::ALL.to_vec());
+    // The ray file too, before any measuring.
+    let replay = opts
+        .rays_file
+        .as_deref()
+        .map(|p| {
+            raybench_registry::rays_file::read(p)
+                .map(raybench_registry::measure::RayBatch::from_file)
+        })
+        .transpose()?;
+    let ctx = Ctx {
+        opts,
+        replay,
+        chosen: &chosen,
+        modes: &modes,
+        size,
+        repeat,
+        budget: if opts.quick {
+            NAIVE_BUDGET_QUICK
+        } else {
+            NAIVE_BUDGET_FULL
+        },
+    };
+    // The units of every experiment that runs: the matrix's scenes, then one per scaling
+    // experiment. Whole units per shard, so that every backend of a scene runs on the same
+    // machine.
+    let units: Vec<(&dyn Experiment, String)> = experiments::ALL
+        .iter()
+        .filter(|e| {
+            !e.scaling()
+                || (opts.scaling
+                    && opts
+                        .experiments
+                        .as_ref()
+                        .is_none_or(|chosen| chosen.iter().any(|c| c == e.name())))
+        })
+        .flat_map(|e| e.units(&ctx).into_iter().map(move |u| (*e, u)))
+        .collect();
+    let mine: Vec<(&dyn Experiment, String)> = units
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| (*i as u32 % shards) + 1 == shard)
+        .map(|(_, u)| u)
+        .collect();
+
+    std::fs::create_dir_all(opts.out.join("images"))
+        .with_context(|| format!("cannot create {}", opts.out.display()))?;
+    std::fs::create_dir_all(opts.out.join("charts"))?;
+    let started = machine::now_utc();
+    let wall = Instant::now();
+    let mut results = Results {
+        schema: results::SCHEMA.into(),
+        raybench_version: env!("CARGO_PKG_VERSION").into(),
+        shards: vec![Shard {
+            index: shard,
+            count: shards,
+            machine: machine::describe(opts.threads),
+            started,
+            wall_seconds: 0.0,
+            command: opts.command.clone(),
+            quick: opts.quick,
+        }],
+        ..Results::default()
+    };
+
+    for (name, adapter) in software {
+        skip(
+            &mut results,
+            "backend",
+            name,
+            "skipped",
+            format!(
+                "a quick run leaves the GPU backends out on a software adapter ({adapter}); \
+                 name them in --backends to include them"
+            ),
+        );
+    }
+
+    // Plan every unit first (loading the matrix's scenes), so that the progress bar knows
+    // the whole run.
+    let mut plan: Vec<(&dyn Experiment, Planned)> = Vec::new();
+    for (e, unit) in mine {
+        if let Some(p) = e.plan(&ctx, &unit, &mut results)? {
+            plan.push((e, p));
+        }
+    }
+    let progress = Progress::new(plan.iter().map(|(_, p)| p.steps).sum());
+    for (e, p) in plan {
+        e.run(&ctx, p, &progress, &mut results)?;
+    }
+    results.shards[0].wall_seconds = wall.elapsed().as_secs_f64();
+    results.fit();
+    let appendix = before.as_ref().map(|(before, name)| {
+        baseline::markdown(
+            &baseline::compare(before, &results),
+            name,
+            &opts.out.display().to_string(),
+        )
+    });
+    if let Some(section) = &appendix {
+        use std::io::Write as _;
+        write!(std::io::stdout().lock(), "{section}")?;
+    }
+    write(&results, &opts.out, appendix.as_deref())?;
+    Ok(results)
+}
+
+/// Writes `results.json`, the charts, `REPORT.md` and `REPORT.html` into `out`;
+/// `appendix` (Markdown: the comparison with a baseline) ends both reports.
+///
+/// # Errors
+/// When a file cannot be written.
+pub fn write(results: &Results, out: &Path, appendix: Option<&str>) -> Result<()> {
+    std::fs::create_dir_all(out.join("charts"))?;
+    // Compact: a full report's results run to hundreds of kilobytes, read by tools (`jq`
+    // formats them for people).
+    let json = serde_json::to_string(results)?;
+    // Every file through a temporary name: an interrupted run leaves the previous report's
+    // files whole, never a truncated one.
+    write_text(&out.join("results.json"), &(json + "\n"))?;
+    let charts = markdown::charts(results, &out.join("charts"));
+    let mut text = markdown::report(results, &charts);
+    if let Some(appendix) = appendix {
+        text = text + "\n" + appendix;
+    }
+    write_text(&out.join("REPORT.md"), &text)?;
+    write_text(&out.join("REPORT.html"), &html::page(results, &text, out))?;
+    eprintln!(
+        "report written to {} and {}",
+        out.join("REPORT.md").display(),
+        out.join("REPORT.html").display()
+    );
+    Ok(())
+}
+
+/// Writes `text` to `path` through [`raybench_render::write_atomically`].
+fn write_text(path: &Path, text: &str) -> Result<()> {
+    raybench_render::write_atomically(path, |tmp| {
+        std::fs::write(tmp, text).with_context(|| format!("cannot write {}", path.display()))
+    })
+}
+
+/// Joins the `results.json` of several report folders into one report in `out` (images are
+/// copied; charts and `REPORT.md` are drawn anew).
+///
+/// # Errors
+/// A folder without a readable `results.json`, two folders holding the same shard or the
+/// same measurement, or an unwritable `out`.
+pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Results> {
+    if dirs.is_empty() {
+        bail!("merge needs at least one report folder");
+    }
+    let mut merged = Results {
+        schema: results::SCHEMA.into(),
+        raybench_version: env!("CARGO_PKG_VERSION").into(),
+        ..Results::default()
+    };
+    // Every input first: a shard given twice (the same folder twice, a copy of it, or a
+    // merged report with one of its parts) would double its rows.
+    let mut inputs: Vec<(&PathBuf, Results)> = Vec::new();
+    for dir in dirs {
+        let r = Results::read(&dir.join("results.json"))?;
+        for (first, earlier) in &inputs {
+            if let Some(why) = earlier.overlap(&r) {
+                bail!(
+                    "{} and {} hold the same shard ({why}); give each shard once",
+                    first.display(),
+                    dir.display()
+                );
+            }
+        }
+        inputs.push((dir, r));
+    }
+    std::fs::create_dir_all(out.join("images"))
+        .with_context(|| format!("cannot create {}", out.display()))?;
+    for (dir, r) in inputs {
+        for run in &r.runs {
+            for name in [&run.images.color, &run.images.ids_diff, &run.images.flip]
+                .into_iter()
+                .flatten()
+            {
+                let (from, to) = (dir.join(name), out.join(name));
+                if from != to {
+                    std::fs::copy(&from, &to)
+                        .with_context(|| format!("cannot copy {}", from.display()))?;
+                }
+            }
+        }
+        merged.absorb(r);
+    }
+    write(&merged, out, None)?;
+    Ok(merged)
+}
