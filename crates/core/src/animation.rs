@@ -1,7 +1,7 @@
 //! Moving scenes at the scene level: the builder's entry points for instance motions and
 //! deformed meshes, and [`Scene::at_frame`], the one function that gives a scene's state at
-//! frame `f` (its geometry through [`crate::Motion::geometry_at`]; cameras, materials, lights and
-//! ids are those of every frame).
+//! frame `f` (its geometry through [`crate::Motion::geometry_at`]; cameras, materials,
+//! lights and ids are those of every frame).
 
 use crate::scene::{Scene, SceneBuilder};
 use crate::{Deform, DeformTarget, Deformation, InstanceMotion, SceneError, Shape};

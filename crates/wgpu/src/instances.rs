@@ -8,11 +8,11 @@
 //! - The top level is the CPU's own tree ([`TopLevel::build`] over the instances' world
 //!   boxes), appended to the BVH2 node buffer (in both layouts), its leaves indexing the
 //!   instance order list in `geo`.
-//! - One record of [`crate::records::RECORD`] entries per instance in `geo`, in id order: the inverse
-//!   transform's columns and translation, the normal matrix (inverse transpose), the world
-//!   box, and in the `w` lanes the mesh's root node, the base id, the instance's material
-//!   (or `NO_HIT` for the mesh's own), where the mesh's materials start in `prim_info`, the
-//!   primitive count, and the float index of the mesh's shading attribute table
+//! - One record of [`crate::records::RECORD`] entries per instance in `geo`, in id order: the
+//!   inverse transform's columns and translation, the normal matrix (inverse transpose), the world
+//!   box, and in the `w` lanes the mesh's root node, the base id, the instance's material (or
+//!   `NO_HIT` for the mesh's own), where the mesh's materials start in `prim_info`, the primitive
+//!   count, and the float index of the mesh's shading attribute table
 //!   ([`crate::shading::mesh_attribute_tables`]; `NONE` for a mesh without attributes).
 
 use crate::cwbvh::{self, Cwbvh};
