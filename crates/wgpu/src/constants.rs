@@ -12,7 +12,7 @@ use raybench_core::integrator::{AMBIENT, DIMENSIONS_PER_BOUNCE, ROULETTE_DEPTH, 
 use raybench_core::{NO_HIT, PrimitiveKind};
 
 /// The WGSL declarations of every shared constant, one `const` per line, each from the Rust
-/// definition it names, then the pipeline-override constants of [`crate::records::Features`]
+/// definition it names, then the pipeline-override constants of `Features` (`records.rs`)
 /// (`override HAS_*: bool = true;`, every routine compiled unless a pipeline says otherwise).
 #[must_use]
 pub fn wgsl_constants() -> String {
