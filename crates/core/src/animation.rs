@@ -1,10 +1,10 @@
 //! Moving scenes at the scene level: the builder's entry points for instance motions and
 //! deformed meshes, and [`Scene::at_frame`], the one function that gives a scene's state at
-//! frame `f` (its geometry through [`Motion::geometry_at`]; cameras, materials, lights and
-//! ids are those of every frame).
+//! frame `f` (its geometry through [`crate::Motion::geometry_at`]; cameras, materials,
+//! lights and ids are those of every frame).
 
 use crate::scene::{Scene, SceneBuilder};
-use crate::{Deform, DeformTarget, Deformation, InstanceMotion, Motion, SceneError, Shape};
+use crate::{Deform, DeformTarget, Deformation, InstanceMotion, SceneError, Shape};
 use std::sync::Arc;
 
 impl Scene {
@@ -19,7 +19,7 @@ impl Scene {
     /// Frame 0 is the scene as loaded, bit for bit.
     ///
     /// # Errors
-    /// As [`Motion::geometry_at`].
+    /// As [`crate::Motion::geometry_at`].
     pub fn at_frame(&self, frame: u32) -> Result<Scene, SceneError> {
         let mut scene = self.clone();
         if let Some(m) = &self.motion {
@@ -110,14 +110,6 @@ impl SceneBuilder {
         let deform = Deform::new(DeformTarget::Flat, object.first, rest, deformation)?;
         self.motion.deform(deform);
         Ok(())
-    }
-}
-
-/// Takes the deformations of an instance mesh's builder (`part`, targeting its flat
-/// primitives) into the scene's motion, targeting distinct mesh `mesh`.
-pub(crate) fn adopt_deforms(motion: &mut Motion, part: Motion, mesh: u32) {
-    for d in part.deforms() {
-        motion.deform(d.clone().with_target(DeformTarget::Mesh(mesh)));
     }
 }
 

@@ -7,12 +7,13 @@
 //! the instanced one it replaces, and its material is its mesh's or the instance's override
 //! ([`Scene::material_of`]).
 //!
-//! Only what flattens exactly is flattened: a triangle by transforming its three vertices
-//! (pbrt-v4 and Embree do the same when they flatten), a sphere under a similarity (rotation,
-//! mirror, uniform scale, translation) into the sphere of the transformed centre and scaled
-//! radius, and any primitive under the identity. Anything else (a sphere under a
-//! non-uniform scale is an ellipsoid; a height field, CSG tree, Bezier patch or SDF model
-//! carries its own inner geometry) is an error naming the instance and the primitive.
+//! Only what flattens exactly is flattened, as each kind says ([`crate::Shape::to_world`]):
+//! a triangle by transforming its three vertices (pbrt-v4 and Embree do the same when they
+//! flatten), a sphere under a similarity (rotation, mirror, uniform scale, translation) into
+//! the sphere of the transformed centre and scaled radius, and any primitive under the
+//! identity. Anything else (a sphere under a non-uniform scale is an ellipsoid; a height
+//! field, CSG tree, Bezier patch or SDF model carries its own inner geometry) is an error
+//! naming the instance and the primitive.
 //!
 //! The flattened scene is not bit-identical with the instanced one: the instanced primitive
 //! is tested on the instance-space ray, the flattened one on the world ray against
@@ -23,55 +24,8 @@
 
 use crate::emitters::Emitters;
 use crate::limits;
-use crate::{Affine3A, Geometry, Instance, Scene, SceneError, Shape, Sphere, Triangle};
+use crate::{Geometry, Instance, Scene, SceneError};
 use std::sync::Arc;
-
-/// Relative tolerance under which a transform's linear part counts as a similarity (its
-/// columns orthogonal and of one length): Euler-angle rotations built in `f32` are
-/// orthogonal to a few ulps, far below it; a deliberate non-uniform scale is far above.
-const SIMILARITY_TOLERANCE: f32 = 1e-5;
-
-/// The uniform scale of `xf`'s linear part when it is a similarity (a rotation, possibly
-/// mirrored, times a uniform scale), else `None`.
-fn similarity_scale(xf: &Affine3A) -> Option<f32> {
-    let m = xf.matrix3;
-    let cols = [m.x_axis, m.y_axis, m.z_axis];
-    let len = cols.map(|c| c.length());
-    let s = len[0];
-    let tol = SIMILARITY_TOLERANCE * s;
-    let equal = len.iter().all(|l| (l - s).abs() <= tol);
-    let orthogonal = [(0, 1), (0, 2), (1, 2)]
-        .iter()
-        .all(|&(a, b)| cols[a].dot(cols[b]).abs() <= tol * s);
-    (equal && orthogonal && s > 0.0).then_some(s)
-}
-
-/// Primitive `shape` of an instance placed by `xf`, in world space, or why it cannot be
-/// flattened exactly.
-fn flatten_shape(shape: &Shape, xf: &Affine3A) -> Result<Shape, String> {
-    match shape {
-        Shape::Triangle(t) => Ok(Shape::Triangle(Triangle {
-            v: t.v.map(|v| xf.transform_point3(v)),
-        })),
-        Shape::Sphere(s) => match similarity_scale(xf) {
-            Some(k) => Ok(Shape::Sphere(Sphere::new(
-                xf.transform_point3(s.center),
-                s.radius * k,
-            ))),
-            None if *xf == Affine3A::IDENTITY => Ok(shape.clone()),
-            None => Err(
-                "a sphere under a non-uniform scale or shear (an ellipsoid, which \
-                 raybench stores only as a CSG solid)"
-                    .into(),
-            ),
-        },
-        _ if *xf == Affine3A::IDENTITY => Ok(shape.clone()),
-        other => Err(format!(
-            "a {} under a transform (only triangles and spheres are carried to world space)",
-            other.kind().name()
-        )),
-    }
-}
 
 /// `geometry` without instances: its flat primitives, then every instance's primitives
 /// carried to world space, in id order. `name_of(k)` names instance `k` in errors.
@@ -96,7 +50,7 @@ pub fn flatten_geometry(
         let xf = instance.to_world();
         let mesh = &geometry.meshes()[instance.mesh() as usize];
         for (local, shape) in mesh.shapes().iter().enumerate() {
-            let flat = flatten_shape(shape, &xf).map_err(|why| {
+            let flat = shape.to_world(&xf).map_err(|why| {
                 SceneError::Invalid(format!(
                     "cannot flatten {} (instance {}, primitive {}): {why}",
                     name_of(k),
@@ -170,7 +124,7 @@ pub fn flatten(scene: &Scene) -> Result<Scene, SceneError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{RayCounters, SceneBuilder, Vec3};
+    use crate::{Affine3A, RayCounters, SceneBuilder, Shape, Sphere, Triangle, Vec3};
     use glam::Quat;
 
     /// A scene of one flat sphere and a mesh (two triangles and a sphere) placed three

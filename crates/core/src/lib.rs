@@ -21,6 +21,7 @@ mod environment;
 mod flatten;
 mod frame;
 pub mod integrator;
+mod light_sampling;
 mod material;
 pub mod optics;
 pub mod ray_sets;
@@ -33,10 +34,11 @@ pub use raybench_geometry::*;
 
 pub use attributes::{AttributeRange, AttributesAt, ShadingAttributes, VertexAttributes};
 pub use camera::{Camera, CameraOverrides, CameraRays, NamedCamera};
-pub use emitters::{Chosen, Emitters, LightSample};
+pub use emitters::{Chosen, Emitters};
 pub use environment::{Environment, luminance};
 pub use flatten::{flatten, flatten_geometry};
 pub use frame::{Frame, FrameStats, NO_HIT, Timings};
+pub use light_sampling::LightSample;
 pub use material::{Checker, Light, Material, MaterialKind};
 pub use ray_sets::RaySet;
 pub use renderer::{

@@ -3,6 +3,8 @@
 
 use glam::Vec3;
 
+pub use crate::sampling::{basis, triangle_point, triangle_weights};
+
 /// Mirror reflection of direction `d` about normal `n`: `d - 2 (d . n) n` (either side of
 /// the surface; `n` unit).
 #[inline]
@@ -67,20 +69,6 @@ pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
     Vec3::new(step(p.x, n.x), step(p.y, n.y), step(p.z, n.z))
 }
 
-/// An orthonormal basis `(t, b)` completing unit `n` (Duff et al., "Building an Orthonormal
-/// Basis, Revisited", JCGT 2017).
-#[inline]
-#[must_use]
-pub fn basis(n: Vec3) -> (Vec3, Vec3) {
-    let sign = 1.0f32.copysign(n.z);
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
-    (
-        Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
-        Vec3::new(b, sign + n.y * n.y * a, -n.y),
-    )
-}
-
 /// A cosine-weighted direction on the hemisphere around unit `n` from two uniform numbers
 /// (Malley's method: a uniform disk point lifted to the hemisphere); pdf `cos / pi`.
 #[inline]
@@ -91,26 +79,6 @@ pub fn cosine_hemisphere(n: Vec3, u1: f32, u2: f32) -> Vec3 {
     let (t, b) = basis(n);
     let z = (1.0 - u1).max(0.0).sqrt();
     (t * (r * phi.cos()) + b * (r * phi.sin()) + n * z).normalize()
-}
-
-/// A uniform point on the triangle `(a, b, c)` from two uniform numbers (barycentrics
-/// `(1 - sqrt(u1), u2 sqrt(u1))`, pbrt's `SampleUniformTriangle` mapping).
-#[inline]
-#[must_use]
-pub fn triangle_point(a: Vec3, b: Vec3, c: Vec3, u1: f32, u2: f32) -> Vec3 {
-    let [w0, w1, w2] = triangle_weights(u1, u2);
-    a * w0 + b * w1 + c * w2
-}
-
-/// The barycentric weights of [`triangle_point`]'s point: `(1 - sqrt(u1), u2 sqrt(u1))` and
-/// the rest; weights 1 and 2 are the point's surface parameters `(u, v)` (as in a hit).
-#[inline]
-#[must_use]
-pub fn triangle_weights(u1: f32, u2: f32) -> [f32; 3] {
-    let s = u1.sqrt();
-    let w0 = 1.0 - s;
-    let w1 = u2 * s;
-    [w0, w1, 1.0 - w0 - w1]
 }
 
 #[cfg(test)]

@@ -102,28 +102,6 @@ pub struct SurfaceShading {
 }
 
 impl Scene {
-    /// The camera that renders a frame with `settings`: [`Scene::cameras`]`[i]` for
-    /// `settings.camera == Some(i)`, else [`Scene::camera`].
-    ///
-    /// # Errors
-    /// [`RenderError::InvalidSettings`] when the scene has no camera of that index.
-    pub fn view(&self, settings: &crate::RenderSettings) -> Result<&Camera, crate::RenderError> {
-        match settings.camera {
-            None => Ok(&self.camera),
-            Some(i) => self
-                .cameras
-                .get(i as usize)
-                .map(|c| &c.camera)
-                .ok_or_else(|| {
-                    crate::RenderError::InvalidSettings(format!(
-                        "camera index {i} is out of range: scene '{}' has {} camera(s)",
-                        self.name,
-                        self.cameras.len()
-                    ))
-                }),
-        }
-    }
-
     /// Makes camera `which` the one rendered: a name from [`Scene::cameras`], else a
     /// 0-based index into it; then applies `overrides` to it.
     ///
@@ -478,7 +456,11 @@ impl SceneBuilder {
             attributes: part.attributes,
         });
         let mesh = (self.meshes.len() - 1) as u32;
-        crate::animation::adopt_deforms(&mut self.motion, part.motion, mesh);
+        // The part's deformations target its flat primitives: now they target the mesh.
+        for d in part.motion.deforms() {
+            self.motion
+                .deform(d.clone().with_target(crate::DeformTarget::Mesh(mesh)));
+        }
         Ok(mesh)
     }
 

@@ -11,6 +11,7 @@ use crate::ray::Ray;
 use crate::sdf::Sdf;
 use crate::sphere::Sphere;
 use crate::triangle::Triangle;
+use glam::{Affine3A, Vec3};
 use std::sync::Arc;
 
 /// One primitive. A closed enum so that the per-ray path dispatches with a `match`, not a
@@ -61,7 +62,7 @@ pub enum PrimitiveKind {
 }
 
 impl PrimitiveKind {
-    /// Every kind, in a fixed order.
+    /// Every kind, in declaration order ([`PrimitiveKind::index`]).
     pub const ALL: [Self; 7] = [
         Self::Triangle,
         Self::Sphere,
@@ -71,6 +72,14 @@ impl PrimitiveKind {
         Self::Bezier,
         Self::Sdf,
     ];
+
+    /// The kind's position in [`PrimitiveKind::ALL`] (its declaration order), a dense
+    /// number for tables and for the GPU kernels' kind numbers.
+    #[inline]
+    #[must_use]
+    pub const fn index(self) -> u32 {
+        self as u32
+    }
 
     /// Lower-case name used in scene files and reports.
     #[must_use]
@@ -158,6 +167,146 @@ impl Shape {
             normal,
         }
     }
+
+    /// The surface area, for the kinds whose area is computed: a triangle's (its edges'
+    /// cross product in `f32`, halved in `f64`) and a sphere's (`4π r²`); `None` for a plane
+    /// (unbounded) and for the kinds whose area is not known (height fields, CSG trees,
+    /// Bezier patches, SDF models).
+    #[must_use]
+    pub fn area(&self) -> Option<f64> {
+        match self {
+            Self::Triangle(t) => {
+                Some(0.5 * f64::from((t.v[1] - t.v[0]).cross(t.v[2] - t.v[0]).length()))
+            }
+            Self::Sphere(s) => Some(sphere_area(s.radius)),
+            Self::Plane(_)
+            | Self::HeightField(_)
+            | Self::Csg(_)
+            | Self::Bezier(_)
+            | Self::Sdf(_) => None,
+        }
+    }
+
+    /// A sphere around the primitive, `(centre, radius)`: a sphere's own; for every other
+    /// bounded kind its box's centre and half diagonal; `None` for a plane.
+    #[must_use]
+    pub fn bounding_sphere(&self) -> Option<(Vec3, f32)> {
+        let of_box = |b: Aabb| (b.center(), 0.5 * b.extent().length());
+        match self {
+            Self::Sphere(s) => Some((s.center, s.radius)),
+            Self::Plane(_) => None,
+            Self::Triangle(_)
+            | Self::HeightField(_)
+            | Self::Csg(_)
+            | Self::Bezier(_)
+            | Self::Sdf(_) => self.bounds().map(of_box),
+        }
+    }
+
+    /// The point of the surface at the uniform numbers `(u, v)`, uniform by area, for the
+    /// kinds whose [`Shape::area`] is known: triangles by the square-root map, spheres by `z`
+    /// and the longitude; `None` for the others.
+    #[must_use]
+    pub fn uniform_point(&self, u: f32, v: f32) -> Option<Vec3> {
+        match self {
+            Self::Triangle(t) => {
+                let su = u.sqrt();
+                Some(t.v[0] * (1.0 - su) + t.v[1] * (su * (1.0 - v)) + t.v[2] * (su * v))
+            }
+            Self::Sphere(s) => {
+                let z = 1.0 - 2.0 * u;
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                let phi = std::f32::consts::TAU * v;
+                Some(s.center + s.radius * Vec3::new(r * phi.cos(), r * phi.sin(), z))
+            }
+            Self::Plane(_)
+            | Self::HeightField(_)
+            | Self::Csg(_)
+            | Self::Bezier(_)
+            | Self::Sdf(_) => None,
+        }
+    }
+
+    /// The primitive placed by `xf` in world space, where that is exact: a triangle by its
+    /// three vertices, a sphere under a similarity (rotation, mirror, uniform scale,
+    /// translation) as the sphere of the carried centre and scaled radius, and any
+    /// primitive under the identity.
+    ///
+    /// # Errors
+    /// Why it cannot be carried exactly: a sphere under a non-uniform scale is an ellipsoid;
+    /// a plane, height field, CSG tree, Bezier patch or SDF model under any other transform.
+    pub fn to_world(&self, xf: &Affine3A) -> Result<Shape, String> {
+        match self {
+            Self::Triangle(t) => Ok(Self::Triangle(Triangle {
+                v: t.v.map(|v| xf.transform_point3(v)),
+            })),
+            Self::Sphere(s) => match similarity_scale(xf) {
+                Some(k) => Ok(Self::Sphere(Sphere::new(
+                    xf.transform_point3(s.center),
+                    s.radius * k,
+                ))),
+                None if *xf == Affine3A::IDENTITY => Ok(self.clone()),
+                None => Err(
+                    "a sphere under a non-uniform scale or shear (an ellipsoid, which \
+                     raybench stores only as a CSG solid)"
+                        .into(),
+                ),
+            },
+            Self::Plane(_)
+            | Self::HeightField(_)
+            | Self::Csg(_)
+            | Self::Bezier(_)
+            | Self::Sdf(_) => {
+                if *xf == Affine3A::IDENTITY {
+                    Ok(self.clone())
+                } else {
+                    Err(format!(
+                        "a {} under a transform (only triangles and spheres are carried to \
+                         world space)",
+                        self.kind().name()
+                    ))
+                }
+            }
+        }
+    }
+
+    /// Bytes the primitive holds behind its `Arc` (0 for the kinds stored inline).
+    #[must_use]
+    pub fn heap_bytes(&self) -> usize {
+        match self {
+            Self::Triangle(_) | Self::Sphere(_) | Self::Plane(_) => 0,
+            Self::HeightField(h) => h.memory_bytes(),
+            Self::Csg(c) => c.memory_bytes(),
+            Self::Bezier(b) => b.memory_bytes(),
+            Self::Sdf(m) => m.memory_bytes(),
+        }
+    }
+}
+
+/// The area of a sphere of radius `r`, `4π r²` in `f64` (written `2 τ r²`).
+#[must_use]
+pub(crate) fn sphere_area(r: f32) -> f64 {
+    2.0 * std::f64::consts::TAU * f64::from(r).powi(2)
+}
+
+/// Relative tolerance under which a transform's linear part counts as a similarity (its
+/// columns orthogonal and of one length): Euler-angle rotations built in `f32` are
+/// orthogonal to a few ulps, far below it; a deliberate non-uniform scale is far above.
+const SIMILARITY_TOLERANCE: f32 = 1e-5;
+
+/// The uniform scale of `xf`'s linear part when it is a similarity (a rotation, possibly
+/// mirrored, times a uniform scale), else `None`.
+fn similarity_scale(xf: &Affine3A) -> Option<f32> {
+    let m = xf.matrix3;
+    let cols = [m.x_axis, m.y_axis, m.z_axis];
+    let len = cols.map(|c| c.length());
+    let s = len[0];
+    let tol = SIMILARITY_TOLERANCE * s;
+    let equal = len.iter().all(|l| (l - s).abs() <= tol);
+    let orthogonal = [(0, 1), (0, 2), (1, 2)]
+        .iter()
+        .all(|&(a, b)| cols[a].dot(cols[b]).abs() <= tol * s);
+    (equal && orthogonal && s > 0.0).then_some(s)
 }
 
 /// Every primitive of a scene, indexed by global primitive id, with the split into bounded
@@ -357,17 +506,7 @@ impl Geometry {
 
     /// [`Geometry::memory_bytes`] of the flat primitives.
     fn flat_memory_bytes(&self) -> usize {
-        let heap: usize = self
-            .shapes
-            .iter()
-            .map(|s| match s {
-                Shape::HeightField(h) => h.memory_bytes(),
-                Shape::Csg(c) => c.memory_bytes(),
-                Shape::Bezier(b) => b.memory_bytes(),
-                Shape::Sdf(m) => m.memory_bytes(),
-                _ => 0,
-            })
-            .sum();
+        let heap: usize = self.shapes.iter().map(Shape::heap_bytes).sum();
         self.shapes.len() * std::mem::size_of::<Shape>()
             + (self.bounded.len() + self.unbounded.len()) * 4
             + heap
@@ -516,5 +655,39 @@ impl Geometry {
             counters.add_tests(shapes.len() as u64);
         }
         false
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn all_kinds_are_listed_in_index_order() {
+        for (i, k) in PrimitiveKind::ALL.iter().enumerate() {
+            assert_eq!(k.index() as usize, i, "{k:?}");
+        }
+    }
+
+    /// The kinds with an area have uniform points on it, and the others none.
+    #[test]
+    fn areas_and_uniform_points_go_together() {
+        let shapes = [
+            Shape::Triangle(Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y)),
+            Shape::Sphere(Sphere::new(Vec3::ONE, 2.0)),
+            Shape::Plane(Plane::new(Vec3::ZERO, Vec3::Y)),
+        ];
+        for s in &shapes {
+            assert_eq!(
+                s.area().is_some(),
+                s.uniform_point(0.3, 0.6).is_some(),
+                "{s:?}"
+            );
+        }
+        assert_eq!(shapes[0].area(), Some(0.5));
+        let p = shapes[1].uniform_point(0.3, 0.6).unwrap();
+        assert!(((p - Vec3::ONE).length() - 2.0).abs() < 1e-5);
+        assert_eq!(shapes[1].bounding_sphere(), Some((Vec3::ONE, 2.0)));
+        assert_eq!(shapes[2].bounding_sphere(), None);
     }
 }

@@ -32,6 +32,7 @@ mod geometry;
 mod heightfield;
 mod hit;
 mod instance;
+mod light;
 pub mod limits;
 mod mesh;
 pub mod motion;
@@ -63,6 +64,7 @@ pub use geometry::{Geometry, PrimitiveKind, Shape};
 pub use heightfield::{CellSurface, HeightField, HeightFieldTraversal, MAX_HEIGHT_FIELD_VERTICES};
 pub use hit::{Hit, PrimHit, keep_closer};
 pub use instance::{INSTANCE_BOX_PAD, Instance};
+pub use light::LightPoint;
 pub use mesh::{
     MAX_EAR_CLIP_VERTICES, PolygonKind, PolygonMesh, TriangleMesh, Triangulated,
     triangulate_polygon,

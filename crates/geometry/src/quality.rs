@@ -26,7 +26,6 @@
 use crate::aabb::Aabb;
 use crate::geometry::{Geometry, Shape};
 use crate::sampling::{pcg3d, to_unit_f32};
-use glam::Vec3;
 
 /// EPO samples drawn by default ([`QualityParams::default`]): a standard error of a few per
 /// cent of the estimate on the built-in scenes, in milliseconds.
@@ -126,9 +125,9 @@ pub struct Epo {
     pub std_error: f64,
     /// Points sampled.
     pub samples: u32,
-    /// Bounded primitives left out of the sampling: those that are neither triangles nor
-    /// spheres (height fields, CSG trees, Bezier patches, SDF models), whose surface cannot
-    /// be sampled by area here. Their area is unknown, so it is their count that is stated.
+    /// Bounded primitives left out of the sampling: those whose [`Shape::area`] is not
+    /// known (height fields, CSG trees, Bezier patches, SDF models), whose surface cannot be
+    /// sampled by area here. Their area is unknown, so it is their count that is stated.
     pub excluded_primitives: u64,
 }
 
@@ -433,8 +432,9 @@ impl TreeView {
     }
 
     /// The EPO with constants `c`, estimated from `samples` points drawn uniformly by area on
-    /// the surfaces of `geometry`'s bounded triangles and spheres (the others are left out
-    /// and counted in [`Epo::excluded_primitives`]), seeded by `seed` with the counter-based
+    /// the surfaces of `geometry`'s bounded primitives whose area is known (triangles and
+    /// spheres: [`Shape::area`], [`Shape::uniform_point`]; the others are left out and
+    /// counted in [`Epo::excluded_primitives`]), seeded by `seed` with the counter-based
     /// hash of [`crate::sampling`]: the same figure on every run and thread count.
     ///
     /// For each point on primitive `q`, every node whose box contains the point (boundaries
@@ -448,18 +448,9 @@ impl TreeView {
         let mut cdf: Vec<f64> = Vec::new();
         let mut total = 0.0f64;
         for &id in geometry.bounded() {
-            let area = match geometry.shape(id) {
-                Shape::Triangle(t) => {
-                    let [a, b, c] = t.v.map(|v| v.as_dvec3());
-                    0.5 * (b - a).cross(c - a).length()
-                }
-                Shape::Sphere(s) => {
-                    4.0 * std::f64::consts::PI * f64::from(s.radius) * f64::from(s.radius)
-                }
-                _ => {
-                    epo.excluded_primitives += 1;
-                    continue;
-                }
+            let Some(area) = geometry.shape(id).area() else {
+                epo.excluded_primitives += 1;
+                continue;
             };
             if area > 0.0 && area.is_finite() {
                 total += area;
@@ -522,7 +513,13 @@ impl TreeView {
                 .partition_point(|&s| s <= pick * total)
                 .min(sampled.len() - 1);
             let q = sampled[k];
-            let p = surface_point(geometry.shape(q), to_unit_f32(u), to_unit_f32(v));
+            // Every sampled kind has an area, hence points.
+            let Some(p) = geometry
+                .shape(q)
+                .uniform_point(to_unit_f32(u), to_unit_f32(v))
+            else {
+                continue;
+            };
             let leaves = &leaf_at[offsets[q as usize] as usize..offsets[q as usize + 1] as usize];
             let mut cost = 0.0f64;
             stack.clear();
@@ -595,28 +592,10 @@ impl TreeView {
     }
 }
 
-/// The point of `shape`'s surface at the uniform numbers `(u, v)`, uniform by area:
-/// triangles by the square-root map, spheres by `z` and the longitude.
-fn surface_point(shape: &Shape, u: f32, v: f32) -> Vec3 {
-    match shape {
-        Shape::Triangle(t) => {
-            let su = u.sqrt();
-            t.v[0] * (1.0 - su) + t.v[1] * (su * (1.0 - v)) + t.v[2] * (su * v)
-        }
-        Shape::Sphere(s) => {
-            let z = 1.0 - 2.0 * u;
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            let phi = std::f32::consts::TAU * v;
-            s.center + s.radius * Vec3::new(r * phi.cos(), r * phi.sin(), z)
-        }
-        // Only triangles and spheres are sampled.
-        _ => Vec3::NAN,
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3;
 
     fn tri(a: [f32; 3], b: [f32; 3], c: [f32; 3]) -> Shape {
         Shape::Triangle(crate::Triangle::new(a.into(), b.into(), c.into()))

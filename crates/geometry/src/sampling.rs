@@ -1,6 +1,9 @@
 //! Counter-based random numbers: a pure function of (pixel, sample, dimension, seed), so
 //! images do not depend on thread count or scheduling, and the GPU can reproduce them.
-//! Pinned in `docs/sampling.md`.
+//! Pinned in `docs/sampling.md`. Also the maps from uniform numbers to points and frames
+//! that light and BSDF sampling share.
+
+use glam::Vec3;
 
 /// The `pcg3d` hash of Jarzynski and Olano, "Hash Functions for GPU Rendering", JCGT 2020:
 /// a bijection on `u32^3` with good avalanche, three multiply-adds and a shift.
@@ -75,6 +78,40 @@ impl Sampler {
         let a = self.next_f32();
         (a, self.next_f32())
     }
+}
+
+/// An orthonormal basis `(t, b)` completing unit `n` (Duff et al., "Building an Orthonormal
+/// Basis, Revisited", JCGT 2017).
+#[inline]
+#[must_use]
+pub fn basis(n: Vec3) -> (Vec3, Vec3) {
+    let sign = 1.0f32.copysign(n.z);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    (
+        Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        Vec3::new(b, sign + n.y * n.y * a, -n.y),
+    )
+}
+
+/// A uniform point on the triangle `(a, b, c)` from two uniform numbers (barycentrics
+/// `(1 - sqrt(u1), u2 sqrt(u1))`, pbrt's `SampleUniformTriangle` mapping).
+#[inline]
+#[must_use]
+pub fn triangle_point(a: Vec3, b: Vec3, c: Vec3, u1: f32, u2: f32) -> Vec3 {
+    let [w0, w1, w2] = triangle_weights(u1, u2);
+    a * w0 + b * w1 + c * w2
+}
+
+/// The barycentric weights of [`triangle_point`]'s point: `(1 - sqrt(u1), u2 sqrt(u1))` and
+/// the rest; weights 1 and 2 are the point's surface parameters `(u, v)` (as in a hit).
+#[inline]
+#[must_use]
+pub fn triangle_weights(u1: f32, u2: f32) -> [f32; 3] {
+    let s = u1.sqrt();
+    let w0 = 1.0 - s;
+    let w1 = u2 * s;
+    [w0, w1, 1.0 - w0 - w1]
 }
 
 #[cfg(test)]

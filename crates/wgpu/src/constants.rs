@@ -1,77 +1,46 @@
 //! The constants the WGSL kernels share with Rust, written into the kernels' source from the
 //! Rust definitions (never copied by hand): [`kernel_source`] prepends them to
-//! the kernel files (`kernels/*.wgsl`), which declare none of them themselves.
+//! the kernel files (`kernels/*.wgsl`), which declare none of them themselves. The
+//! primitive kinds' numbers and pipeline-override flags come from
+//! [`raybench_core::PrimitiveKind::ALL`], so a new kind is declared here by itself.
 
-use raybench_core::NO_HIT;
+use crate::records::{
+    EMITTER_BIT, HAS_INSTANCES, LIGHT_DIRECTIONAL, LIGHT_POINT, MAT_DIFFUSE, MAT_GLASS, MAT_MIRROR,
+    NONE, RECORD, STACK_SIZE, WHITTED_STACK, kind_names, kind_number,
+};
 use raybench_core::integrator::{AMBIENT, DIMENSIONS_PER_BOUNCE, ROULETTE_DEPTH, SHADOW_SHORTEN};
-use raybench_core::limits::MAX_DEPTH;
-
-/// Primitive kinds as the shaders number them (`KIND_*`).
-pub(crate) const KIND_TRIANGLE: u32 = 0;
-/// See [`KIND_TRIANGLE`].
-pub(crate) const KIND_SPHERE: u32 = 1;
-/// See [`KIND_TRIANGLE`].
-pub(crate) const KIND_PLANE: u32 = 2;
-/// See [`KIND_TRIANGLE`].
-pub(crate) const KIND_HEIGHTFIELD: u32 = 3;
-/// See [`KIND_TRIANGLE`].
-pub(crate) const KIND_CSG: u32 = 4;
-/// See [`KIND_TRIANGLE`].
-pub(crate) const KIND_BEZIER: u32 = 5;
-/// See [`KIND_TRIANGLE`].
-pub(crate) const KIND_SDF: u32 = 6;
-/// Material kinds as the shaders number them (`MAT_*`).
-pub(crate) const MAT_DIFFUSE: u32 = 0;
-/// See [`MAT_DIFFUSE`].
-pub(crate) const MAT_MIRROR: u32 = 1;
-/// See [`MAT_DIFFUSE`].
-pub(crate) const MAT_GLASS: u32 = 2;
-/// Light kinds as the shaders number them (`LIGHT_*`).
-pub(crate) const LIGHT_POINT: u32 = 0;
-/// See [`LIGHT_POINT`].
-pub(crate) const LIGHT_DIRECTIONAL: u32 = 1;
-/// Set in `prim_info` for primitives that next-event estimation samples (`EMITTER_BIT`).
-pub(crate) const EMITTER_BIT: u32 = 1 << 31;
-/// Entries of the kernels' traversal stack (`STACK_SIZE`): near-child-first traversal
-/// holds at most one entry per level plus one, so the BVH's depth must stay below.
-pub(crate) const STACK_SIZE: u32 = 64;
-/// Whitted's depth-first stack: a popped segment pushes at most two children, so the stack
-/// holds at most one entry per bounce plus one, plus one for the camera segment.
-pub(crate) const WHITTED_STACK: u32 = MAX_DEPTH + 2;
+use raybench_core::{NO_HIT, PrimitiveKind};
 
 /// The WGSL declarations of every shared constant, one `const` per line, each from the Rust
-/// definition it names.
+/// definition it names, then the pipeline-override constants of `Features` (`records.rs`)
+/// (`override HAS_*: bool = true;`, every routine compiled unless a pipeline says otherwise).
 #[must_use]
 pub fn wgsl_constants() -> String {
-    let u32s: [(&str, u32, &str); 30] = [
-        ("NO_HIT", NO_HIT, "raybench_core::NO_HIT"),
-        ("KIND_TRIANGLE", KIND_TRIANGLE, "data.rs primitive kinds"),
-        ("KIND_SPHERE", KIND_SPHERE, "data.rs primitive kinds"),
-        ("KIND_PLANE", KIND_PLANE, "data.rs primitive kinds"),
+    let kinds = PrimitiveKind::ALL.map(|k| {
         (
-            "KIND_HEIGHTFIELD",
-            KIND_HEIGHTFIELD,
-            "data.rs primitive kinds",
-        ),
-        ("KIND_CSG", KIND_CSG, "data.rs primitive kinds"),
-        ("KIND_BEZIER", KIND_BEZIER, "data.rs primitive kinds"),
-        ("KIND_SDF", KIND_SDF, "data.rs primitive kinds"),
-        ("MAT_DIFFUSE", MAT_DIFFUSE, "data.rs material kinds"),
-        ("MAT_MIRROR", MAT_MIRROR, "data.rs material kinds"),
-        ("MAT_GLASS", MAT_GLASS, "data.rs material kinds"),
-        ("LIGHT_POINT", LIGHT_POINT, "data.rs light kinds"),
+            kind_names(k).0,
+            kind_number(k),
+            "raybench_core::PrimitiveKind::index",
+        )
+    });
+    let u32s: [(&str, u32, &str); 23] = [
+        ("NO_HIT", NO_HIT, "raybench_core::NO_HIT"),
+        ("MAT_DIFFUSE", MAT_DIFFUSE, "records.rs material kinds"),
+        ("MAT_MIRROR", MAT_MIRROR, "records.rs material kinds"),
+        ("MAT_GLASS", MAT_GLASS, "records.rs material kinds"),
+        ("LIGHT_POINT", LIGHT_POINT, "records.rs light kinds"),
         (
             "LIGHT_DIRECTIONAL",
             LIGHT_DIRECTIONAL,
-            "data.rs light kinds",
+            "records.rs light kinds",
         ),
-        ("EMITTER_BIT", EMITTER_BIT, "data.rs prim_info"),
+        ("EMITTER_BIT", EMITTER_BIT, "records.rs prim_info"),
         (
             "INSTANCE_RECORD",
-            crate::instances::RECORD,
-            "instances.rs, geo entries per instance",
+            RECORD,
+            "records::RECORD, geo entries per instance",
         ),
-        ("NO_ENTRY", crate::shading::NONE, "shading::NONE"),
+        ("NO_ENTRY", NONE, "records::NONE"),
         (
             "HF_STACK",
             crate::geo::heightfield::HF_STACK,
@@ -152,13 +121,23 @@ pub fn wgsl_constants() -> String {
             "raybench_core::voxels::EARLY_TERMINATION",
         ),
     ];
-    let ints = u32s.map(|(name, value, from)| (name, "u32", format!("{value}u"), from));
+    let ints = kinds
+        .into_iter()
+        .chain(u32s)
+        .map(|(name, value, from)| (name, "u32", format!("{value}u"), from));
     // `{:e}` prints the shortest digits that round-trip, so WGSL parses the same f32.
     let floats = f32s.map(|(name, value, from)| (name, "f32", format!("{value:e}"), from));
     let mut out =
         String::from("// Generated from the Rust constants by crates/wgpu/src/constants.rs.\n");
-    for (name, ty, value, from) in ints.into_iter().chain(floats) {
+    for (name, ty, value, from) in ints.chain(floats) {
         out += &format!("const {name}: {ty} = {value}; // {from}\n");
+    }
+    let flags = PrimitiveKind::ALL
+        .iter()
+        .filter_map(|&k| kind_names(k).1)
+        .chain([HAS_INSTANCES]);
+    for name in flags {
+        out += &format!("override {name}: bool = true; // records::Features\n");
     }
     out
 }
@@ -228,14 +207,18 @@ mod tests {
     fn every_constant_is_declared_once_and_parses_back() {
         let kernels: String = KERNEL_FILES.iter().map(|(_, text)| *text).collect();
         for line in wgsl_constants().lines().skip(1) {
-            let name = line
-                .strip_prefix("const ")
-                .and_then(|l| l.split(':').next())
-                .expect("a const line");
+            let (keyword, rest) = line.split_once(' ').expect("a declaration");
+            assert!(keyword == "const" || keyword == "override", "{line}");
+            let name = rest.split(':').next().expect("a declaration");
             assert!(
-                !kernels.contains(&format!("const {name}:")),
+                !kernels.contains(&format!("const {name}:"))
+                    && !kernels.contains(&format!("override {name}:")),
                 "the kernels declare {name} by hand; it comes from constants.rs"
             );
+            if keyword == "override" {
+                assert!(line.contains(": bool = true;"), "{line}");
+                continue;
+            }
             let value = line
                 .split('=')
                 .nth(1)

@@ -1,170 +1,18 @@
-//! The data shared with the shaders (`kernels/*.wgsl`): `#[repr(C)]` + `bytemuck::Pod`
-//! structs laid out as WGSL lays out the matching structs, and the scene flattened into
-//! them once per `prepare`.
+//! The scene flattened once per `prepare` into the records the shaders read
+//! ([`crate::records`]), and the kernels' entry points.
 
-use bytemuck::{Pod, Zeroable};
 use raybench_bvh::Bvh;
 use raybench_core::{
     CULL_SLACK, CameraRays, FAR_SCALE, Light, LightSampling, MaterialKind, Mode, RenderError,
     RenderSettings, Scene, Shape, Vec3,
 };
 
-use crate::constants::{
-    EMITTER_BIT, KIND_BEZIER, KIND_CSG, KIND_HEIGHTFIELD, KIND_PLANE, KIND_SDF, KIND_SPHERE,
-    KIND_TRIANGLE, LIGHT_DIRECTIONAL, LIGHT_POINT, MAT_DIFFUSE, MAT_GLASS, MAT_MIRROR,
-};
 use crate::cwbvh::WideNode;
-use crate::geo::{self, Geo};
-use crate::instances::Instancing;
-use crate::shading::ShadingBlock;
-
-/// Per-dispatch parameters: 256 bytes, one 256-byte-aligned slot per dispatch of a frame.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct Params {
-    /// Camera origin.
-    pub origin: [f32; 3],
-    /// `1 / width`.
-    pub inv_width: f32,
-    /// Unit view direction.
-    pub forward: [f32; 3],
-    /// `1 / height`.
-    pub inv_height: f32,
-    /// Right, scaled to half the image width.
-    pub right: [f32; 3],
-    /// Seed of the random numbers.
-    pub seed: u32,
-    /// Up, scaled to half the image height.
-    pub up: [f32; 3],
-    /// Samples per pixel of the frame.
-    pub spp: u32,
-    /// Background radiance.
-    pub background: [f32; 3],
-    /// Maximum bounces.
-    pub max_depth: u32,
-    /// Light direction of ray-casting shading.
-    pub cast_light: [f32; 3],
-    /// `f32::INFINITY` (WGSL has no infinite literal).
-    pub inf: f32,
-    /// Image width.
-    pub width: u32,
-    /// Image height.
-    pub height: u32,
-    /// First row of the band held by the output buffer.
-    pub band_y0: u32,
-    /// First row of this dispatch.
-    pub y0: u32,
-    /// Rows of this dispatch.
-    pub rows: u32,
-    /// First sample of this dispatch.
-    pub s0: u32,
-    /// One past its last sample.
-    pub s1: u32,
-    /// Nodes of the BVH2 or the CWBVH (0: no bounded primitive).
-    pub node_count: u32,
-    /// Index of the first unbounded primitive (planes) in the primitive buffer.
-    pub unbounded_first: u32,
-    /// How many.
-    pub unbounded_count: u32,
-    /// Index of the first entry of the emitter list in the primitive buffer.
-    pub emitter_first: u32,
-    /// How many.
-    pub emitter_count: u32,
-    /// Index of the first light in the shading buffer (after the materials).
-    pub light_first: u32,
-    /// How many lights.
-    pub light_count: u32,
-    /// Total choice weight of the emitters (area x luminance, `Emitters::total_weight`);
-    /// the kernels choose lights with [`Params::light_total`], which adds the environment.
-    pub emitter_weight: f32,
-    /// Explicit rays in this dispatch.
-    pub ray_count: u32,
-    /// [`FAR_SCALE`] of the conservative slab test.
-    pub far_scale: f32,
-    /// [`CULL_SLACK`] of the early exits.
-    pub cull_slack: f32,
-    /// 1 when `path` mode samples the emitters (`LightSampling::Mis` and at least one).
-    pub mis: u32,
-    /// Instances ([`crate::instances::Instancing`]; 0: none).
-    pub instance_count: u32,
-    /// Index of the top level's root in the BVH2 node buffer.
-    pub top_root: u32,
-    /// Index in `geo` of the first instance record.
-    pub instance_records: u32,
-    /// Index in `geo` of the top level's order list.
-    pub instance_order: u32,
-    /// Ids below this are the flat part's.
-    pub flat_count: u32,
-    /// Lights, environment, textures, attributes: where their tables are in `geo`.
-    pub shading: ShadingBlock,
-    /// The volume modes: index of the volume table in `geo` ([`crate::volume`]).
-    pub volume_first: u32,
-    /// How many volumes (0 where they were not uploaded).
-    pub volume_count: u32,
-    /// Padding to a multiple of 16 bytes.
-    pub volume_pad: [u32; 2],
-}
-
-const _: () = assert!(std::mem::size_of::<Params>() == 256);
-
-/// 32-byte BVH2 node, raybench-bvh's [`raybench_bvh::Node`] (Wald's layout).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct GpuNode {
-    /// Box minimum.
-    pub min: [f32; 3],
-    /// Leaf: first index into the primitive buffer. Interior: the second child.
-    pub first_or_right: u32,
-    /// Box maximum.
-    pub max: [f32; 3],
-    /// Leaf: primitive count. Interior: 0.
-    pub count: u32,
-}
-
-const _: () = assert!(std::mem::size_of::<GpuNode>() == 32);
-
-/// 48-byte primitive: `a.w` holds the kind, `b.w` the primitive id (as bits). Triangle:
-/// vertices in `a`, `b`, `c`; sphere:
-/// centre `a`, radius `c.x`; plane: point `a`, unit normal `c`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct GpuPrim {
-    /// First vector.
-    pub a: [f32; 4],
-    /// Second vector.
-    pub b: [f32; 4],
-    /// Third vector.
-    pub c: [f32; 4],
-}
-
-const _: () = assert!(std::mem::size_of::<GpuPrim>() == 48);
-
-/// 32-byte output record: colour sum and `t` (pixels) or `t, u, v` (explicit rays), and
-/// the primitive id.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct GpuOut {
-    /// Colour and `t`, or `t, u, v`.
-    pub v: [f32; 4],
-    /// Primitive id ([`raybench_core::NO_HIT`] for a miss).
-    pub id: u32,
-    /// Explicit rays: the sub-primitive id.
-    pub sub: u32,
-    /// Padding.
-    pub pad: [u32; 2],
-}
-
-const _: () = assert!(std::mem::size_of::<GpuOut>() == 32);
-
-/// 32-byte explicit ray: origin and `t_min`, direction and `t_max`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct GpuRay {
-    /// Origin and `t_min`.
-    pub o: [f32; 4],
-    /// Direction and `t_max`.
-    pub d: [f32; 4],
-}
+use crate::geo;
+use crate::records::{
+    EMITTER_BIT, Geo, GpuNode, GpuPrim, Instancing, LIGHT_DIRECTIONAL, LIGHT_POINT, MAT_DIFFUSE,
+    MAT_GLASS, MAT_MIRROR, NONE, Params, ShadingBlock, kind_number,
+};
 
 fn v4(v: Vec3, w: f32) -> [f32; 4] {
     [v.x, v.y, v.z, w]
@@ -175,45 +23,28 @@ fn v4(v: Vec3, w: f32) -> [f32; 4] {
 /// # Errors
 /// When the kind has no WGSL port or its data does not fit ([`geo::supports`]).
 pub(crate) fn prim(shape: &Shape, id: u32, geo: &mut Geo) -> Result<GpuPrim, String> {
-    let idw = f32::from_bits(id);
-    let (mut p, kind) = match shape {
-        Shape::Triangle(t) => (
-            GpuPrim {
-                a: v4(t.v[0], 0.0),
-                b: v4(t.v[1], 0.0),
-                c: v4(t.v[2], 0.0),
-            },
-            KIND_TRIANGLE,
-        ),
-        Shape::Sphere(s) => (
-            GpuPrim {
-                a: v4(s.center, 0.0),
-                b: v4(Vec3::ZERO, 0.0),
-                c: [s.radius, 0.0, 0.0, 0.0],
-            },
-            KIND_SPHERE,
-        ),
-        Shape::Plane(p) => (
-            GpuPrim {
-                a: v4(p.point, 0.0),
-                b: v4(Vec3::ZERO, 0.0),
-                c: v4(p.normal, 0.0),
-            },
-            KIND_PLANE,
-        ),
+    let mut p = match shape {
+        Shape::Triangle(t) => GpuPrim {
+            a: v4(t.v[0], 0.0),
+            b: v4(t.v[1], 0.0),
+            c: v4(t.v[2], 0.0),
+        },
+        Shape::Sphere(s) => GpuPrim {
+            a: v4(s.center, 0.0),
+            b: v4(Vec3::ZERO, 0.0),
+            c: [s.radius, 0.0, 0.0, 0.0],
+        },
+        Shape::Plane(p) => GpuPrim {
+            a: v4(p.point, 0.0),
+            b: v4(Vec3::ZERO, 0.0),
+            c: v4(p.normal, 0.0),
+        },
         Shape::HeightField(_) | Shape::Csg(_) | Shape::Bezier(_) | Shape::Sdf(_) => {
-            let kind = match shape {
-                Shape::HeightField(_) => KIND_HEIGHTFIELD,
-                Shape::Csg(_) => KIND_CSG,
-                Shape::Bezier(_) => KIND_BEZIER,
-                _ => KIND_SDF,
-            };
-            let p = geo::encode(shape, geo)?.unwrap_or_default();
-            (p, kind)
+            geo::encode(shape, geo)?.unwrap_or_default()
         }
     };
-    p.a[3] = f32::from_bits(kind);
-    p.b[3] = idw;
+    p.a[3] = f32::from_bits(kind_number(shape.kind()));
+    p.b[3] = f32::from_bits(id);
     Ok(p)
 }
 
@@ -324,7 +155,7 @@ impl SceneData {
             shading.push(v4(m.specular, m.shininess));
             shading.push(v4(m.emission, m.ior));
             shading.push(v4(checker, size));
-            let texture = |t: Option<u32>| f32::from_bits(t.unwrap_or(crate::shading::NONE));
+            let texture = |t: Option<u32>| f32::from_bits(t.unwrap_or(NONE));
             shading.push([
                 texture(m.base_color_texture),
                 texture(m.emission_texture),

@@ -8,38 +8,19 @@
 //! - The top level is the CPU's own tree ([`TopLevel::build`] over the instances' world
 //!   boxes), appended to the BVH2 node buffer (in both layouts), its leaves indexing the
 //!   instance order list in `geo`.
-//! - One record of [`RECORD`] entries per instance in `geo`, in id order: the inverse
-//!   transform's columns and translation, the normal matrix (inverse transpose), the world
-//!   box, and in the `w` lanes the mesh's root node, the base id, the instance's material
-//!   (or `NO_HIT` for the mesh's own), where the mesh's materials start in `prim_info`, the
-//!   primitive count, and the float index of the mesh's shading attribute table
+//! - One record of [`crate::records::RECORD`] entries per instance in `geo`, in id order: the
+//!   inverse transform's columns and translation, the normal matrix (inverse transpose), the world
+//!   box, and in the `w` lanes the mesh's root node, the base id, the instance's material (or
+//!   `NO_HIT` for the mesh's own), where the mesh's materials start in `prim_info`, the primitive
+//!   count, and the float index of the mesh's shading attribute table
 //!   ([`crate::shading::mesh_attribute_tables`]; `NONE` for a mesh without attributes).
 
 use crate::cwbvh::{self, Cwbvh};
-use crate::data::{GpuNode, SceneData, bvh2_nodes};
-use crate::geo::next_index;
-use crate::renderer::Layout;
+use crate::data::{SceneData, bvh2_nodes};
+use crate::records::{GpuNode, Instancing, Layout, STACK_SIZE, next_index};
 use raybench_bvh::Bvh;
 use raybench_core::{Accel, NO_HIT, Scene, TopLevel, Vec3};
 use std::sync::Arc;
-
-/// `geo` entries per instance record.
-pub(crate) const RECORD: u32 = 9;
-
-/// Where the instances live in the buffers (all zero for a scene without instances).
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Instancing {
-    /// Index of the top level's root in the BVH2 node buffer.
-    pub top_root: u32,
-    /// Index in `geo` of the first instance record.
-    pub records: u32,
-    /// Instances.
-    pub count: u32,
-    /// Index in `geo` of the top level's order list (four ids per entry).
-    pub order: u32,
-    /// Ids below this are the flat part's (`prim_info` holds them directly).
-    pub flat_count: u32,
-}
 
 fn bits(x: u32) -> f32 {
     f32::from_bits(x)
@@ -60,7 +41,7 @@ pub(crate) fn append(scene: &Scene, layout: Layout, data: &mut SceneData) -> Res
     if !g.has_instances() {
         return Ok(());
     }
-    let depth_limit = crate::constants::STACK_SIZE as usize;
+    let depth_limit = STACK_SIZE as usize;
     // Per mesh: its root node index and where its materials start in `prim_info`.
     let mut roots = Vec::with_capacity(g.meshes().len());
     let mut materials = Vec::with_capacity(g.meshes().len());

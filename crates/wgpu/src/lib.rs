@@ -32,6 +32,7 @@ mod data;
 mod geo;
 mod instances;
 pub mod plan;
+mod records;
 mod renderer;
 mod shading;
 mod volume;
@@ -39,7 +40,8 @@ mod volume;
 pub use constants::{KERNEL_FILES, KERNELS_DIR_VAR, kernel_source, wgsl_constants};
 pub use context::{AdapterRequest, describe};
 pub use data::check_kinds;
-pub use renderer::{Layout, WgpuRenderer};
+pub use records::Layout;
+pub use renderer::WgpuRenderer;
 
 /// Whether a wgpu adapter can be opened here (`WGPU_BACKEND`, `WGPU_ADAPTER_NAME`), or why
 /// not.

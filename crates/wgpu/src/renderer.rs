@@ -2,10 +2,9 @@
 
 use crate::context::{AdapterRequest, Gpu, gpu};
 use crate::cwbvh::{self, Cwbvh};
-use crate::data::{
-    GpuOut, GpuRay, OCCLUDE_ENTRY, Params, SceneData, bvh2_nodes, check_kinds, entry_point,
-};
+use crate::data::{OCCLUDE_ENTRY, SceneData, bvh2_nodes, check_kinds, entry_point};
 use crate::plan;
+use crate::records::{Features, GpuOut, GpuRay, Layout, Params, STACK_SIZE};
 use raybench_bvh::Bvh;
 use raybench_core::{
     Accel, AccelStats, Frame, FrameStats, Hit, Mode, NO_HIT, OccludedRays, PrimHit, QualityParams,
@@ -18,7 +17,7 @@ use std::sync::{Arc, Mutex, mpsc};
 use std::time::{Duration, Instant};
 use wgpu::util::DeviceExt;
 
-use crate::constants::{STACK_SIZE, kernel_source};
+use crate::constants::kernel_source;
 
 /// Compute passes per submission; their timestamps are read back after each submission.
 const PASSES_PER_SUBMIT: usize = 64;
@@ -27,73 +26,9 @@ const PASSES_PER_SUBMIT: usize = 64;
 /// finishes a dispatch in milliseconds; lavapipe in seconds).
 const WAIT_LIMIT: Duration = Duration::from_secs(600);
 
-/// The tree the kernels walk, a parameter of [`WgpuRenderer`].
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub enum Layout {
-    /// raybench-bvh's BVH2 (default build), 32-byte nodes, a per-thread stack of nodes,
-    /// near child first.
-    #[default]
-    Bvh2,
-    /// The same builder's BVH2 (leaves of up to three) collapsed into a compressed 8-wide
-    /// BVH (Ylitie, Karras and Laine 2017; `cwbvh.rs`): 80-byte nodes with quantised child
-    /// boxes, a stack of child groups in octant order.
-    Cwbvh,
-}
-
 /// A pipeline's entry point, whether it counts, the tree it walks, and the scene's
 /// [`Features`].
 type PipelineKey = (&'static str, bool, Layout, Features);
-
-/// What a scene needs of the kernels beyond triangles, spheres and planes: each is a
-/// pipeline-override constant (`HAS_*` in `kernels/main.wgsl`), so a pipeline carries only
-/// the intersection routines of the kinds its scene holds. Shader compilers inline every
-/// routine at every call site (Mesa's always), so a kernel with every kind compiled for
-/// minutes on lavapipe.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub(crate) struct Features {
-    height_fields: bool,
-    csg: bool,
-    bezier: bool,
-    sdf: bool,
-    instances: bool,
-}
-
-impl Features {
-    /// The features of `scene`.
-    fn of(scene: &Scene) -> Self {
-        let g = &scene.geometry;
-        let mut f = Self {
-            instances: g.has_instances(),
-            ..Self::default()
-        };
-        let shapes = g
-            .shapes()
-            .iter()
-            .chain(g.meshes().iter().flat_map(|m| m.shapes()));
-        for shape in shapes {
-            match shape {
-                raybench_core::Shape::HeightField(_) => f.height_fields = true,
-                raybench_core::Shape::Csg(_) => f.csg = true,
-                raybench_core::Shape::Bezier(_) => f.bezier = true,
-                raybench_core::Shape::Sdf(_) => f.sdf = true,
-                _ => {}
-            }
-        }
-        f
-    }
-
-    /// The override constants.
-    fn constants(self) -> [(&'static str, f64); 5] {
-        let flag = |b: bool| if b { 1.0 } else { 0.0 };
-        [
-            ("HAS_HEIGHTFIELD", flag(self.height_fields)),
-            ("HAS_CSG", flag(self.csg)),
-            ("HAS_BEZIER", flag(self.bezier)),
-            ("HAS_SDF", flag(self.sdf)),
-            ("HAS_INSTANCES", flag(self.instances)),
-        ]
-    }
-}
 
 /// The compiled kernels of one device: one pipeline per (entry point, counting, layout).
 pub(crate) struct Kernels {

@@ -7,10 +7,11 @@
 //!
 //! - emitter table, at [`ShadingBlock::emitter_table`]: two entries per entry of the scene's
 //!   `Emitters::ids` (the order of the emitter list in `prims`): the bounding sphere
-//!   `(centre, radius)` (a sphere's own; unused for triangles), then `(cdf, choice, area, 0)`:
-//!   the cumulative choice weight (`Emitters::cdf`, rounded to f32), the probability of
-//!   choosing the emitter (its weight over the total of every light, the environment's
-//!   included, divided in f64 as `Emitters::probability` does) and a triangle's area;
+//!   `(centre, radius)` (`Shape::bounding_sphere`: a sphere's own; unused for triangles),
+//!   then `(cdf, choice, area, 0)`: the cumulative choice weight (`Emitters::cdf`, rounded to
+//!   f32), the probability of choosing the emitter (its weight over the total of every
+//!   light, the environment's included, divided in f64 as `Emitters::probability` does) and
+//!   the area where it is known (`Shape::area`, 0 otherwise; the kernels read a triangle's);
 //! - environment, at [`ShadingBlock::env_first`]: `width x height` texels `(r, g, b,
 //!   pdf_uv)`, rows from the top, where `pdf_uv` is the texel's density over the map's
 //!   `(u, v)` square (`Environment::texel_pdf` before its division by `2π² sin θ`, computed
@@ -35,43 +36,8 @@
 //! computed in f64 here and rounded once, then divided on the GPU by f32 quantities (`sin θ`
 //! from the GPU's `sin`, `acos`, `atan2`, whose absolute errors are about 1e-6).
 
-use crate::geo::Geo;
+use crate::records::{Geo, NONE, ShadingBlock};
 use raybench_core::{Scene, ShadingAttributes, Shape, Vec3, Wrap};
-
-/// No entry (a texture index, an attribute record).
-pub(crate) const NONE: u32 = u32::MAX;
-
-/// The shading block of [`crate::data::Params`] (48 bytes, laid out as the kernels' `Params`
-/// fields `light_total` to `tex_table`): where the tables above start and the light
-/// choice's totals.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct ShadingBlock {
-    /// Total choice weight of every light, the environment included (`Emitters::total`).
-    pub light_total: f32,
-    /// The probability of choosing the environment (0 without one).
-    pub env_choice: f32,
-    /// First texel of the environment map.
-    pub env_first: u32,
-    /// Its width in texels (0: no environment map).
-    pub env_width: u32,
-    /// Its height.
-    pub env_height: u32,
-    /// Float index of its marginal table, followed by the conditional ones.
-    pub env_cdf: u32,
-    /// Its rotation about `+y`: cosine.
-    pub env_cos: f32,
-    /// Sine.
-    pub env_sin: f32,
-    /// First entry of the emitter table.
-    pub emitter_table: u32,
-    /// Float index of the per-primitive attribute offsets ([`NONE`]: no attributes).
-    pub attr_table: u32,
-    /// Primitive ids the attribute table covers.
-    pub attr_count: u32,
-    /// First entry of the texture table.
-    pub tex_table: u32,
-}
 
 /// The kernels' number of a wrap mode.
 #[must_use]
@@ -136,17 +102,6 @@ pub fn bytes_needed(scene: &Scene) -> u64 {
     env + textures + attributes + scene.emitters.ids.len() as u64 * 32
 }
 
-/// The bounding sphere of a bounded primitive (`emitters::bounding_sphere`): its box's
-/// centre and half diagonal; a sphere's own.
-fn bounding_sphere(shape: &Shape) -> (Vec3, f32) {
-    match shape {
-        Shape::Sphere(s) => (s.center, s.radius),
-        other => other.bounds().map_or((Vec3::ZERO, 0.0), |b| {
-            (b.center(), 0.5 * b.extent().length())
-        }),
-    }
-}
-
 /// Appends the shading data of `scene` to `geo` and returns where it is.
 ///
 /// # Errors
@@ -177,13 +132,8 @@ pub fn encode(scene: &Scene, geo: &mut Geo) -> Result<ShadingBlock, String> {
     let mut previous = 0.0f64;
     for (&id, &cdf) in e.ids.iter().zip(&e.cdf) {
         let shape = scene.geometry.shape(id);
-        let (center, radius) = bounding_sphere(shape);
-        let area = match shape {
-            Shape::Triangle(t) => {
-                (0.5 * f64::from((t.v[1] - t.v[0]).cross(t.v[2] - t.v[0]).length())) as f32
-            }
-            _ => 0.0,
-        };
+        let (center, radius) = shape.bounding_sphere().unwrap_or((Vec3::ZERO, 0.0));
+        let area = shape.area().map_or(0.0, |a| a as f32);
         let choice = if total > 0.0 {
             ((cdf - previous) / total) as f32
         } else {

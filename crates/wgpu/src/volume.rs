@@ -48,7 +48,7 @@
 //! `phantom`, 9e-6 (8e-6) and 1.9e-5 (3.1e-5) on the tests' scene with surfaces and
 //! overlapping volumes; no pixel beyond 1e-3, ids all equal, `t` within 5e-7.
 
-use crate::geo::{Geo, next_index};
+use crate::records::{Geo, next_index};
 use raybench_core::voxels::{Sampling, Volume};
 use raybench_core::{Scene, Vec3};
 

@@ -1,7 +1,7 @@
 //! The volume modes: maximum-intensity projection and emission-absorption compositing of
 //! the scene's voxel volumes along each camera ray, cut by the first surface.
 
-use super::shade_cast;
+use super::cast::shade_cast;
 use crate::Hit;
 use crate::Ray;
 use crate::scene::Scene;

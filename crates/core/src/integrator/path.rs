@@ -15,7 +15,7 @@
 //! one-sided, as pbrt's diffuse area lights: they emit on the side their geometric normal
 //! points to (counter-clockwise winding); the Cornell box's light faces down.
 
-use super::TileOutput;
+use super::tile::TileOutput;
 use super::wavefront::{Segment, ShadowBatch, Surface, Wavefront};
 use super::whitted::light_ray;
 use crate::Ray;

@@ -4,7 +4,7 @@
 //! rays. Integrators never trace one ray at a time (ARCHITECTURE.md), so that packet
 //! backends speed up secondary rays too.
 
-use super::{Tile, TileOutput, id_t_buffers, tile_pixels};
+use super::tile::{Tile, TileOutput, id_t_buffers, tile_pixels};
 use crate::camera::CameraRays;
 use crate::material::Material;
 use crate::renderer::RenderSettings;

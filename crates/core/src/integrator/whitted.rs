@@ -1,7 +1,7 @@
 //! Whitted ray tracing, bounce by bounce over a whole tile (wavefront): every bounce's rays,
 //! and then its shadow rays, go through the accelerator's batch entry points.
 
-use super::TileOutput;
+use super::tile::TileOutput;
 use super::wavefront::{Segment, ShadowBatch, Surface, Wavefront};
 use crate::Ray;
 use crate::material::{Light, MaterialKind};

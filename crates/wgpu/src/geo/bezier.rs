@@ -28,8 +28,7 @@
 //! (min, max) per node, level by level, row-major in `v` (node `(l, iu, iv)` is
 //! `(4^l - 1) / 3 + 2^l iv + iu`).
 
-use super::Geo;
-use crate::data::GpuPrim;
+use crate::records::{Geo, GpuPrim, next_index};
 use raybench_core::{Aabb, BezierPatch, REGION_DEPTH};
 
 /// Offset of the 12 control points of `S_u`.
@@ -64,7 +63,7 @@ pub(crate) fn supports(_x: &BezierPatch) -> Result<(), String> {
 /// When `geo` has grown past `u32` entries.
 pub(crate) fn encode(x: &BezierPatch, geo: &mut Geo) -> Result<GpuPrim, String> {
     supports(x)?;
-    let index = super::next_index(geo)?;
+    let index = next_index(geo)?;
     index
         .checked_add(ENTRIES)
         .ok_or("the GPU's primitive data exceeds 2^32 entries")?;

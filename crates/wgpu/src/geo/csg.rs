@@ -21,8 +21,7 @@
 //! evaluate the further leaves again at each event time (`kernels/csg.wgsl` has the
 //! algorithm and the f32 formulation with its error bound).
 
-use super::{Geo, next_index};
-use crate::data::GpuPrim;
+use crate::records::{Geo, GpuPrim, next_index};
 use raybench_core::limits::{MAX_CSG_DEPTH, MAX_CSG_LEAVES};
 use raybench_core::{Csg, CsgOp, CsgPart, Solid, Vec3};
 

@@ -77,8 +77,7 @@
 //! The 2D-DDA traversal finds the same hits as the tree (the CPU's tests
 //! assert it), so a field that asks for it is walked with the tree here.
 
-use super::{Geo, next_index};
-use crate::data::GpuPrim;
+use crate::records::{Geo, GpuPrim, next_index};
 use raybench_core::{CellSurface, HeightField, Vec3, Vec3A};
 
 /// Entries of the kernels' walk stack (written into the kernels' source as `HF_STACK` by

@@ -5,28 +5,15 @@
 //! `<kind>_hit(r, p, t_max) -> Cand` and a `<kind>_normal(r, p, h) -> vec3<f32>`.
 //!
 //! `a.w` (the kind) and `b.w` (the primitive id) of a record are set by the caller
-//! ([`crate::data`]); the rest of the record is the kind's own.
+//! (`data.rs`); the rest of the record is the kind's own.
 
 pub(crate) mod bezier;
 pub(crate) mod csg;
 pub(crate) mod heightfield;
 pub(crate) mod sdf;
 
-use crate::data::GpuPrim;
+use crate::records::{Geo, GpuPrim};
 use raybench_core::Shape;
-
-/// The `geo` buffer being filled: 16-byte entries (`array<vec4<f32>>` in WGSL); integers
-/// are stored by their bits.
-pub(crate) type Geo = Vec<[f32; 4]>;
-
-/// Index of the next entry of `geo`, as the kernels address it.
-///
-/// # Errors
-/// When the buffer has grown past `u32` entries.
-#[allow(dead_code)] // the encoders use it as their kinds are ported
-pub(crate) fn next_index(geo: &Geo) -> Result<u32, String> {
-    u32::try_from(geo.len()).map_err(|_| "the GPU's primitive data exceeds 2^32 entries".into())
-}
 
 /// Whether the kernels can intersect `shape` (the kinds of this module; triangles, spheres
 /// and planes always), or why not.
@@ -44,7 +31,7 @@ pub(crate) fn supports(shape: &Shape) -> Result<(), String> {
 }
 
 /// The record of a shape of this module's kinds, its data appended to `geo`; `None` for
-/// triangles, spheres and planes, which [`crate::data`] writes itself.
+/// triangles, spheres and planes, which `data.rs` writes itself.
 ///
 /// # Errors
 /// When the kind has no port or its data does not fit ([`supports`]).

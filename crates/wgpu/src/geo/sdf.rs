@@ -45,8 +45,7 @@
 //! [`SDF_VALUES`] and [`SDF_POINTS`] entries, enough for every tree the loader accepts
 //! (`MAX_SDF_DEPTH`); [`supports`] still checks each tree's need and refuses beyond them.
 
-use super::{Geo, next_index};
-use crate::data::GpuPrim;
+use crate::records::{Geo, GpuPrim, next_index};
 use raybench_core::limits::{MAX_SDF_DEPTH, MAX_SDF_NODES};
 use raybench_core::{Sdf, SdfNodeView, SdfOp, SdfPrimitive, Vec3};
 

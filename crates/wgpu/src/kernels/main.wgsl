@@ -1,7 +1,7 @@
 // raybench's GPU kernels: ray casting, Whitted ray tracing, path tracing and explicit rays.
 //
 // Every routine here is a port of raybench-core's routine of the same name (the Rust
-// names are given beside each function); the buffers are laid out by `crates/wgpu/src/data.rs`.
+// names are given beside each function); the buffers are laid out by `crates/wgpu/src/records.rs`.
 // The ports keep the operations and their order, so hits differ from the CPU's only where
 // the GPU rounds differently: WGSL division and square root are not correctly rounded on
 // Vulkan (2.5 ULP and 1 ULP of the reciprocal square root), drivers may fuse a * b + c,
@@ -16,21 +16,18 @@ override COUNT: bool = false;
 // pipeline-override constant, so each pipeline carries one traversal.
 override WIDE: bool = false;
 
-// Whether the scene holds height fields, CSG trees, Bezier patches, SDF models, instances:
-// pipeline-override constants (`renderer::Features`), so a pipeline carries only the
-// routines its scene needs (shader compilers inline every routine at every call site).
-override HAS_HEIGHTFIELD: bool = true;
-override HAS_CSG: bool = true;
-override HAS_BEZIER: bool = true;
-override HAS_SDF: bool = true;
-override HAS_INSTANCES: bool = true;
+// Whether the scene holds height fields, CSG trees, Bezier patches, SDF models, instances
+// (HAS_HEIGHTFIELD, HAS_CSG, HAS_BEZIER, HAS_SDF, HAS_INSTANCES): pipeline-override
+// constants (`records::Features`), so a pipeline carries only the routines its scene needs
+// (shader compilers inline every routine at every call site). They are declared with the
+// shared constants below.
 
-// The constants shared with Rust (NO_HIT, KIND_*, MAT_*, LIGHT_POINT, EMITTER_BIT,
+// The constants shared with Rust (NO_HIT, KIND_*, HAS_*, MAT_*, LIGHT_POINT, EMITTER_BIT,
 // NO_ENTRY, STACK_SIZE, WHITTED_STACK, AMBIENT, ROULETTE_DEPTH, DIMENSIONS_PER_BOUNCE,
 // SHADOW_SHORTEN, MIN_POSITIVE, INV_PI, PI, TAU, BLOCK) are generated from the Rust definitions and prepended
 // to this file by `crates/wgpu/src/constants.rs`.
 
-// Per-dispatch parameters (`data::Params`).
+// Per-dispatch parameters (`records::Params`).
 struct Params {
     origin: vec3<f32>,
     inv_width: f32,
@@ -108,7 +105,7 @@ struct WideNode {
     q2: vec4<u32>,
 }
 
-// 48-byte primitive (`data::GpuPrim`): a.w holds the kind, b.w the primitive id.
+// 48-byte primitive (`records::GpuPrim`): a.w holds the kind, b.w the primitive id.
 // Triangle: vertices a.xyz, b.xyz, c.xyz.
 // Sphere: centre a.xyz, radius c.x. Plane: point a.xyz, unit normal c.xyz.
 struct Prim {
