@@ -96,6 +96,11 @@ const ALLOWED: &[(&str, &str)] = &[
         "the crate-graph checks name the GPU backend's folder: only it may know wgpu",
     ),
     (
+        "tests/tests/workspace/",
+        "the backend crates' rule: a GPU backend's dependencies name the `wgpu` crate, whose \
+         name is also that backend's",
+    ),
+    (
         "tests/tests/peer_bench.rs",
         "the peer benchmark: named contestants are its subject",
     ),
