@@ -5,17 +5,22 @@
 //! crate and no Rust file holds a backend's name as a string literal; the rest of the
 //! workspace reads the registry's roles (`raybench_registry::Roles`).
 
+// The workspace's crates by their Cargo.toml files, shared with `tests/tests/tidy.rs`.
+#[path = "../../../tests/tests/workspace/mod.rs"]
+mod workspace;
+
 use std::path::{Path, PathBuf};
 
-/// The backend crates, as Rust paths.
-const BACKEND_CRATES: [&str; 6] = [
-    "raybench_bvh",
-    "raybench_grid",
-    "raybench_packet",
-    "raybench_naive",
-    "raybench_peers",
-    "raybench_wgpu",
-];
+/// The backend crates ([`workspace::backend_crates`]: every crate under `crates/` that is
+/// not a layer), as Rust paths (`raybench_bvh`) and as folders (`crates/bvh/`). A backend
+/// crate may name itself and the backends it builds on (packet and wgpu on raybench-bvh's
+/// tree; the peers' tests compare with naive).
+fn backend_crates() -> Vec<(String, String)> {
+    workspace::backend_crates(&root())
+        .into_iter()
+        .map(|b| (b.package.replace('-', "_"), format!("crates/{}/", b.dir)))
+        .collect()
+}
 
 /// Paths (relative to the workspace root; a trailing `/` is a folder) where backend crates
 /// and names are allowed, and why.
@@ -27,21 +32,6 @@ const ALLOWED: &[(&str, &str)] = &[
     (
         "crates/registry/src/presets.rs",
         "the registry's builder presets: each backend's named build parameters",
-    ),
-    ("crates/bvh/", "a backend crate: it names itself"),
-    ("crates/grid/", "a backend crate: it names itself"),
-    (
-        "crates/packet/",
-        "a backend crate: it names itself and builds on raybench-bvh's tree",
-    ),
-    ("crates/naive/", "a backend crate: it names itself"),
-    (
-        "crates/peers/",
-        "the peers' crate: it names itself, and its tests compare with naive",
-    ),
-    (
-        "crates/wgpu/",
-        "a backend crate: it names itself and uploads raybench-bvh's tree",
     ),
     (
         "crates/render/src/lib.rs",
@@ -103,7 +93,12 @@ const ALLOWED: &[(&str, &str)] = &[
     ),
     (
         "tests/tests/tidy.rs",
-        "the crate-graph checks name the backend crates' folders",
+        "the crate-graph checks name the GPU backend's folder: only it may know wgpu",
+    ),
+    (
+        "tests/tests/workspace/",
+        "the backend crates' rule: a GPU backend's dependencies name the `wgpu` crate, whose \
+         name is also that backend's",
     ),
     (
         "tests/tests/peer_bench.rs",
@@ -138,8 +133,15 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
     }
 }
 
-/// The allow-list entry that covers `relative`, if any.
-fn allowed(relative: &str) -> Option<&'static str> {
+/// The allow-list entry that covers `relative`, if any; a backend crate's own folder is
+/// allowed ([`backend_crates`]).
+fn allowed(relative: &str, backends: &[(String, String)]) -> Option<&'static str> {
+    if backends
+        .iter()
+        .any(|(_, dir)| relative.starts_with(dir.as_str()))
+    {
+        return Some("a backend crate: it names itself and the backends it builds on");
+    }
     ALLOWED
         .iter()
         .find(|(p, _)| {
@@ -154,15 +156,15 @@ fn allowed(relative: &str) -> Option<&'static str> {
 
 /// The backend crates and backend-name literals on the code lines (comments aside) of
 /// `text`: `(line, what)`.
-fn violations(text: &str, names: &[&str]) -> Vec<(usize, String)> {
+fn violations(text: &str, names: &[&str], crates: &[(String, String)]) -> Vec<(usize, String)> {
     let mut found = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let code = line.trim_start();
         if code.starts_with("//") {
             continue;
         }
-        for c in BACKEND_CRATES {
-            if code.contains(c) {
+        for (c, _) in crates {
+            if code.contains(c.as_str()) {
                 found.push((i + 1, format!("uses crate {c}")));
             }
         }
@@ -188,6 +190,12 @@ fn backend_names() -> Vec<&'static str> {
 fn only_the_registry_names_backends() {
     let root = root();
     let names = backend_names();
+    let backends = backend_crates();
+    assert!(
+        backends.len() > 3,
+        "found only {} backend crates",
+        backends.len()
+    );
     let mut files = Vec::new();
     for dir in ["crates", "tests", "fuzz"] {
         rust_files(&root.join(dir), &mut files);
@@ -200,11 +208,11 @@ fn only_the_registry_names_backends() {
             .expect("under the root")
             .to_string_lossy()
             .replace('\\', "/");
-        if allowed(&relative).is_some() {
+        if allowed(&relative, &backends).is_some() {
             continue;
         }
         let text = std::fs::read_to_string(file).expect("a readable source file");
-        for (line, what) in violations(&text, &names) {
+        for (line, what) in violations(&text, &names, &backends) {
             problems.push(format!("{relative}:{line}: {what}"));
         }
     }
@@ -234,11 +242,13 @@ fn the_allow_list_names_existing_paths() {
 #[test]
 fn the_check_finds_what_it_looks_for() {
     let names = backend_names();
+    let backends = backend_crates();
     let text = "use raybench_packet::Isa;\nlet b = backend(\"bvh\");\n// \"naive\" in a comment\n";
-    let found = violations(text, &names);
+    let found = violations(text, &names, &backends);
     assert_eq!(found.len(), 2, "{found:?}");
     assert_eq!(found[0].0, 1);
     assert_eq!(found[1].0, 2);
-    assert!(allowed("crates/registry/src/lib.rs").is_some());
-    assert!(allowed("crates/report/src/lib.rs").is_none());
+    assert!(allowed("crates/registry/src/lib.rs", &backends).is_some());
+    assert!(allowed("crates/bvh/src/lib.rs", &backends).is_some());
+    assert!(allowed("crates/report/src/lib.rs", &backends).is_none());
 }

@@ -38,31 +38,12 @@ impl Sphere {
     /// ray starting inside hits the far side (the surface parameters are filled in by
     /// [`Sphere::uv`] when the hit is completed).
     ///
-    /// Stable form of Haines et al., Ray Tracing Gems ch. 7: the discriminant is computed
-    /// from the distance between the centre and the line (no cancellation for small
-    /// spheres far away), and the two roots as `c / q` and `q / a` with
-    /// `q = b + sign(b) sqrt(a * disc)` (no cancellation between `b` and the root).
+    /// The roots are [`line_in_ball`]'s, the stable form of Haines et al., Ray Tracing Gems
+    /// ch. 7.
     #[inline]
     #[must_use]
     pub fn intersect(&self, ray: &Ray) -> Option<PrimHit> {
-        let f = ray.origin - self.center;
-        let d = ray.dir;
-        let a = d.dot(d);
-        let b = -f.dot(d);
-        let l = f + d * (b / a);
-        let r2 = self.radius * self.radius;
-        let disc = r2 - l.dot(l);
-        // Also rejects NaN (`is_nan` is false for negative numbers).
-        if disc < 0.0 || disc.is_nan() {
-            return None;
-        }
-        let c = f.dot(f) - r2;
-        // sqrt(a) * sqrt(disc), not sqrt(a * disc): the product overflows f32 once
-        // |d| * r passes 1.8e19 (scenes at 1e15 with unnormalised directions).
-        let q = b + (a.sqrt() * disc.sqrt()).copysign(b);
-        let t0 = c / q;
-        let t1 = q / a;
-        let (near, far) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
+        let (near, far) = line_in_ball(ray.origin - self.center, ray.dir, self.radius)?;
         if near >= ray.t_min && near <= ray.t_max {
             Some(PrimHit::at(near))
         } else if far >= ray.t_min && far <= ray.t_max {
@@ -88,6 +69,35 @@ impl Sphere {
         let v = n.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI;
         (u, v)
     }
+}
+
+/// Where the line `f + t d` is inside the ball of `radius` about the origin: its entry and
+/// exit `t`, ascending, or `None` when it misses. The one root finder of
+/// [`Sphere::intersect`] and of the CSG sphere and ellipsoid (`f` is the line's origin
+/// relative to the centre).
+///
+/// Stable form of Haines et al., Ray Tracing Gems ch. 7: the discriminant is computed from
+/// the distance between the centre and the line (no cancellation for small spheres far
+/// away), and the two roots as `c / q` and `q / a` with `q = b + sign(b) sqrt(a * disc)` (no
+/// cancellation between `b` and the root).
+#[inline]
+#[must_use]
+pub(crate) fn line_in_ball(f: Vec3, d: Vec3, radius: f32) -> Option<(f32, f32)> {
+    let a = d.dot(d);
+    let b = -f.dot(d);
+    let l = f + d * (b / a);
+    let r2 = radius * radius;
+    let disc = r2 - l.dot(l);
+    // Also rejects NaN (`is_nan` is false for negative numbers).
+    if disc < 0.0 || disc.is_nan() {
+        return None;
+    }
+    let c = f.dot(f) - r2;
+    // sqrt(a) * sqrt(disc), not sqrt(a * disc): the product overflows f32 once |d| * r
+    // passes 1.8e19 (scenes at 1e15 with unnormalised directions).
+    let q = b + (a.sqrt() * disc.sqrt()).copysign(b);
+    let (t0, t1) = (c / q, q / a);
+    Some(if t0 <= t1 { (t0, t1) } else { (t1, t0) })
 }
 
 #[cfg(test)]

@@ -15,9 +15,9 @@
 //! coherent in that sense takes the single-ray path lane by lane.
 
 use crate::layout::{EMPTY_CHILD, LEAF_BIT, Layout, LeafRef, WIDE, WideNode};
-use crate::simd::Lanes;
+use crate::simd::{Lanes, lanes_below};
 use crate::single::{
-    self, BitIter, FAR_SCALE, STACK, Stack, block_closest, lanes_below, prim_hit, scalar_lanes,
+    self, BitIter, FAR_SCALE, STACK, Stack, block_closest, prim_hit, scalar_lanes,
 };
 use crate::tri::{RayLanes, SplatRay, rays_vs_triangle};
 use raybench_geometry::{Counters, Geometry, PrimHit, Ray, cull_bound, keep_closer};

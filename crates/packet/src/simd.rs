@@ -147,6 +147,16 @@ impl Lanes for Portable {
     }
 }
 
+/// The mask of the first `n` lanes (all when `n >= W`).
+#[inline(always)]
+pub(crate) fn lanes_below<L: Lanes>(n: usize) -> u32 {
+    if n >= L::W {
+        (1u32 << L::W) - 1
+    } else {
+        (1u32 << n) - 1
+    }
+}
+
 #[cfg(target_arch = "x86_64")]
 pub(crate) use x86::{Avx2, Avx512, Sse41, prefetch};
 

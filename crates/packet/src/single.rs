@@ -198,16 +198,6 @@ pub(crate) fn leaf_prims(layout: &Layout, leaf: LeafRef) -> u64 {
         .sum()
 }
 
-/// The mask of the first `n` lanes (all when `n >= W`).
-#[inline(always)]
-pub(crate) fn lanes_below<L: Lanes>(n: usize) -> u32 {
-    if n >= L::W {
-        (1u32 << L::W) - 1
-    } else {
-        (1u32 << n) - 1
-    }
-}
-
 /// Indices of the set bits, lowest first.
 pub(crate) struct BitIter(pub u32);
 

@@ -8,8 +8,7 @@
 //! `zero` and the caller hands them to the scalar routine itself.
 
 use crate::layout::{BLOCK, TriBlock};
-use crate::simd::Lanes;
-use crate::single::lanes_below;
+use crate::simd::{Lanes, lanes_below};
 
 /// Per-lane results of a triangle test.
 #[derive(Clone, Copy)]

@@ -27,7 +27,7 @@ pub struct BptPatch {
 /// [`LoadError::Io`] when it cannot be read, [`LoadError::Parse`] when it is too large, not
 /// UTF-8 or malformed (with a line number: see [`parse_bpt`]).
 pub fn load_bpt_file(path: &Path) -> Result<Vec<BptPatch>, LoadError> {
-    let text = crate::format::read_text(path, MAX_BPT_BYTES, "Bezier patch file")?;
+    let text = crate::io::read_text(path, MAX_BPT_BYTES, "Bezier patch file")?;
     parse_bpt(&text, path)
 }
 

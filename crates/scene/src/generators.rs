@@ -9,7 +9,9 @@ use crate::budget::{Holds, Reservation};
 use crate::error::LoadError;
 use raybench_core::HeightField;
 use raybench_core::sampling::{pcg3d, to_unit_f32};
-use raybench_core::{Camera, Material, Scene, Sphere, TriangleMesh, Vec3};
+use raybench_core::{
+    Camera, Light, Material, Scene, SceneBuilder, SceneError, Sphere, TriangleMesh, Vec3,
+};
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -376,6 +378,19 @@ fn terrain_camera() -> Camera {
     }
 }
 
+/// A builder for a scene of one mesh file (a bare mesh scene) or generator spec: a
+/// grey-blue background and one directional light from above (the camera frames the
+/// geometry by default).
+pub(crate) fn lit_builder(name: &str) -> Result<SceneBuilder, SceneError> {
+    let mut b = SceneBuilder::new(name);
+    b.background(Vec3::new(0.55, 0.65, 0.8))?;
+    b.add_light(Light::Directional {
+        direction: Vec3::new(-0.4, -1.0, -0.6),
+        radiance: Vec3::ONE,
+    })?;
+    Ok(b)
+}
+
 /// The whole scene of a generator spec: the geometry, a light, and a camera framing it
 /// (from above at an angle for terrain and height fields).
 ///
@@ -389,7 +404,7 @@ pub fn generate_scene(spec: &str) -> Result<Scene, LoadError> {
     let (info, n) = parse_spec(spec)?;
     Reservation::new()?.reserve(holds(&info, n), &format!("generator '{spec}'"))?;
     let generated = generate(spec, DEFAULT_SEED)?;
-    let mut b = crate::lit_builder(spec).map_err(scene_err)?;
+    let mut b = lit_builder(spec).map_err(scene_err)?;
     let mut mats = Vec::new();
     for m in palette() {
         mats.push(b.add_material(m).map_err(scene_err)?);

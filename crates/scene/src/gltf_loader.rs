@@ -30,7 +30,7 @@ fn read_external(
     let err = |why: String| parse_err(gltf, format!("buffer {index}: {}: {why}", full.display()));
     match std::fs::metadata(file) {
         Ok(m) if m.is_file() => {}
-        Ok(m) => return Err(err(crate::not_a_file_message(&m))),
+        Ok(m) => return Err(err(crate::io::not_a_file_message(&m))),
         Err(e) => return Err(err(e.to_string())),
     }
     let mut data = Vec::new();
@@ -130,7 +130,7 @@ fn material_of(m: &gltf::Material) -> Material {
 /// # Errors
 /// When the file is missing, malformed, truncated, or has bad indices or coordinates.
 pub fn load_gltf_file(path: &Path) -> Result<MeshData, LoadError> {
-    crate::check_regular_file(path)?;
+    crate::io::check_regular_file(path)?;
     let bytes = std::fs::read(path).map_err(|cause| LoadError::Io {
         path: path.to_owned(),
         cause,
@@ -147,7 +147,7 @@ pub fn load_gltf_file(path: &Path) -> Result<MeshData, LoadError> {
 #[doc(hidden)]
 pub fn load_gltf_bytes(bytes: &[u8], path: &Path) -> Result<MeshData, LoadError> {
     // A `.gltf` written with a byte-order mark (JSON parsers refuse one).
-    let bytes = crate::strip_bom(bytes);
+    let bytes = crate::io::strip_bom(bytes);
     // The `gltf` crate subtracts the 12-byte header from the GLB's declared length
     // unchecked (an overflow, a panic in debug builds, when it declares less).
     if let Some(header) = bytes.strip_prefix(b"glTF")

@@ -20,6 +20,7 @@ mod error;
 mod format;
 pub mod generators;
 mod gltf_loader;
+mod io;
 mod obj;
 pub mod phantom;
 mod ply;
@@ -43,7 +44,7 @@ pub use ply::{load_ply_bytes, load_ply_file};
 pub use texture::{ImageSource, TextureRef};
 pub use transform::Transform;
 
-use raybench_core::{Light, Scene, SceneBuilder, SceneError, Vec3};
+use raybench_core::Scene;
 use std::path::{Path, PathBuf};
 
 /// The environment variable naming the assets directory.
@@ -80,7 +81,7 @@ pub fn load(spec: &str, assets: &Path) -> Result<Scene, LoadError> {
         return generators::generate_scene(spec);
     }
     if let Ok(meta) = std::fs::metadata(path) {
-        return Err(not_a_file(path, &meta));
+        return Err(io::not_a_file(path, &meta));
     }
     if path.extension().is_some() || spec.contains('/') {
         return Err(LoadError::NotFound {
@@ -90,96 +91,13 @@ pub fn load(spec: &str, assets: &Path) -> Result<Scene, LoadError> {
     Err(LoadError::UnknownScene(spec.to_owned()))
 }
 
-/// A builder for a scene of one mesh file or generator spec: a grey-blue background and
-/// one directional light from above (the camera frames the geometry by default).
-pub(crate) fn lit_builder(name: &str) -> Result<SceneBuilder, SceneError> {
-    let mut b = SceneBuilder::new(name);
-    b.background(Vec3::new(0.55, 0.65, 0.8))?;
-    b.add_light(Light::Directional {
-        direction: Vec3::new(-0.4, -1.0, -0.6),
-        radiance: Vec3::ONE,
-    })?;
-    Ok(b)
-}
-
-/// What a path that exists but is no regular file is, for messages: a folder, a FIFO or a
-/// device (which may never end) is not "not found".
-pub(crate) fn not_a_file_message(meta: &std::fs::Metadata) -> String {
-    let kind = meta.file_type();
-    let what = if kind.is_dir() {
-        "a folder"
-    } else {
-        #[cfg(unix)]
-        {
-            use std::os::unix::fs::FileTypeExt as _;
-            if kind.is_fifo() {
-                "a FIFO (named pipe)"
-            } else if kind.is_char_device() || kind.is_block_device() {
-                "a device"
-            } else if kind.is_socket() {
-                "a socket"
-            } else {
-                "something other than a file"
-            }
-        }
-        #[cfg(not(unix))]
-        "something other than a file"
-    };
-    format!("is {what}, not a regular file")
-}
-
-/// The error for a path that exists but is no regular file ([`not_a_file_message`]).
-pub(crate) fn not_a_file(path: &Path, meta: &std::fs::Metadata) -> LoadError {
-    LoadError::Parse {
-        path: path.to_owned(),
-        message: not_a_file_message(meta),
-    }
-}
-
-/// Checks that `path` is a regular file before it is opened (a FIFO or `/dev/zero` would
-/// block or never end).
-///
-/// # Errors
-/// [`LoadError::NotFound`] when it does not exist, [`LoadError::Io`] when its metadata
-/// cannot be read, else [`not_a_file`]'s error for anything but a regular file.
-pub(crate) fn check_regular_file(path: &Path) -> Result<(), LoadError> {
-    match std::fs::metadata(path) {
-        Ok(meta) if meta.is_file() => Ok(()),
-        Ok(meta) => Err(not_a_file(path, &meta)),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(LoadError::NotFound {
-            path: path.to_owned(),
-        }),
-        Err(cause) => Err(LoadError::Io {
-            path: path.to_owned(),
-            cause,
-        }),
-    }
-}
-
-/// The UTF-8 byte-order mark some editors write at the start of text files.
-const UTF8_BOM: &[u8] = b"\xef\xbb\xbf";
-
-/// `bytes` without a leading UTF-8 byte-order mark: every text format (TOML, OBJ, MTL,
-/// `.bpt`, glTF JSON) accepts one.
-pub(crate) fn strip_bom(bytes: &[u8]) -> &[u8] {
-    bytes.strip_prefix(UTF8_BOM).unwrap_or(bytes)
-}
-
-/// A path's extension in lower case (empty when it has none).
-pub(crate) fn extension(path: &Path) -> String {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase)
-        .unwrap_or_default()
-}
-
 /// Loads a scene file, choosing the format by extension: `.toml` scene files; `.obj`,
 /// `.gltf`, `.glb` and `.ply` meshes get an automatic camera framing their bounding box.
 ///
 /// # Errors
 /// What the format's loader reports, or an unsupported extension.
 pub fn load_file(path: &Path, assets: &Path) -> Result<Scene, LoadError> {
-    match extension(path).as_str() {
+    match io::extension(path).as_str() {
         "toml" => load_toml_file(path, assets),
         "obj" | "gltf" | "glb" | "ply" => format::bare_mesh_scene(path),
         _ => Err(LoadError::Parse {
@@ -200,7 +118,7 @@ mod tests {
     fn every_text_format_accepts_a_byte_order_mark() {
         let dir = std::env::temp_dir().join(format!("raybench-bom-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let bom = |text: &str| [UTF8_BOM, text.as_bytes()].concat();
+        let bom = |text: &str| [io::UTF8_BOM, text.as_bytes()].concat();
         let write = |name: &str, text: &str| std::fs::write(dir.join(name), bom(text)).unwrap();
         write("m.mtl", "newmtl red\nKd 0.8 0.1 0.1\n");
         write(

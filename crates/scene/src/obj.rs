@@ -205,7 +205,7 @@ const OBJ_OPTIONS: tobj::LoadOptions = tobj::LoadOptions {
 /// # Errors
 /// When the file is missing, malformed, has out-of-range indices or non-finite coordinates.
 pub fn load_obj_file(path: &Path) -> Result<MeshData, LoadError> {
-    crate::check_regular_file(path)?;
+    crate::io::check_regular_file(path)?;
     let bytes = std::fs::read(path).map_err(|cause| LoadError::Io {
         path: path.to_owned(),
         cause,
@@ -234,10 +234,10 @@ pub fn load_obj_file(path: &Path) -> Result<MeshData, LoadError> {
 /// Largest MTL file read (material libraries are small text files).
 const MAX_MTL_BYTES: u64 = 16 << 20;
 
-/// Reads an MTL file as `tobj` would, but through [`crate::format::read_text`]: a regular
+/// Reads an MTL file as `tobj` would, but through [`crate::io::read_text`]: a regular
 /// file of bounded size, with a byte-order mark accepted.
 fn load_mtl(path: &Path) -> tobj::MTLLoadResult {
-    let text = crate::format::read_text(path, MAX_MTL_BYTES, "material library")
+    let text = crate::io::read_text(path, MAX_MTL_BYTES, "material library")
         .map_err(|_| tobj::LoadError::OpenFileFailed)?;
     tobj::load_mtl_buf(&mut text.as_bytes())
 }
@@ -401,7 +401,7 @@ fn parse_obj(
     mtl: impl Fn(&Path) -> tobj::MTLLoadResult,
     texture_dir: impl Fn(usize) -> Option<PathBuf>,
 ) -> Result<MeshData, LoadError> {
-    let bytes = crate::strip_bom(bytes);
+    let bytes = crate::io::strip_bom(bytes);
     check_index_magnitudes(bytes, path)?;
     let (models, materials) =
         tobj::load_obj_buf(&mut { bytes }, &OBJ_OPTIONS, mtl).map_err(|e| LoadError::Parse {

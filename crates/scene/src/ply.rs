@@ -47,7 +47,7 @@ pub(crate) fn load_ply_file_reserving(
     path: &Path,
     reserve: Reserve<'_>,
 ) -> Result<MeshData, LoadError> {
-    crate::check_regular_file(path)?;
+    crate::io::check_regular_file(path)?;
     let bytes = std::fs::read(path).map_err(|cause| LoadError::Io {
         path: path.to_owned(),
         cause,
@@ -654,7 +654,7 @@ fn face_indices(r: FaceRecord, plan: &Plan) -> Result<Vec<u32>, String> {
 
 /// Parses a PLY file, reserving its triangles through `reserve` before allocating them.
 fn parse_ply(bytes: &[u8], path: &Path, reserve: Reserve<'_>) -> Result<MeshData, LoadError> {
-    let bytes = crate::strip_bom(bytes);
+    let bytes = crate::io::strip_bom(bytes);
     let mut reader = Reader::new(bytes);
     let header = Parser::<Skipped>::new()
         .read_header(&mut reader)

@@ -234,7 +234,7 @@ pub(crate) fn decode_image(
         message,
     };
     // A FIFO would block the reader.
-    crate::check_regular_file(path)?;
+    crate::io::check_regular_file(path)?;
     let open = || {
         let mut r = image::ImageReader::open(path).map_err(|cause| {
             DecodeError::Fatal(LoadError::Io {

@@ -71,7 +71,7 @@ fn decode(
             let read = || -> Result<Vec<u8>, String> {
                 let meta = std::fs::metadata(path).map_err(|e| e.to_string())?;
                 if !meta.is_file() {
-                    return Err(crate::not_a_file_message(&meta));
+                    return Err(crate::io::not_a_file_message(&meta));
                 }
                 if meta.len() > MAX_IMAGE_FILE_BYTES {
                     return Err(format!(

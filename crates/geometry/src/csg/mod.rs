@@ -39,9 +39,10 @@ mod tests;
 mod tree;
 
 pub use solid::Solid;
+pub use spans::CsgOp;
 use spans::{End, Spans};
-pub use tree::{CsgNode, CsgOp};
-use tree::{Node, Tree};
+pub use tree::CsgNode;
+use tree::{CsgBuilder, Node, Tree};
 
 /// A node of a validated tree as [`Csg::parts`] lists it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -71,7 +72,7 @@ impl Csg {
     /// leaves, a tree that is not
     /// bounded (a half-space not cut by an intersection) or whose box is empty.
     pub fn new(root: &CsgNode) -> Result<Self, SceneError> {
-        let (tree, bound, leaves) = Tree::build::<_, Self>(root, &tree::LIMITS)?;
+        let (tree, bound, leaves) = Tree::build::<_, CsgBuilder>(root, &tree::LIMITS)?;
         let Some(b) = bound else {
             return Err(SceneError::Invalid(
                 "the CSG tree is unbounded (a half-space must be cut by an intersection \

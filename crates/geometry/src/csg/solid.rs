@@ -3,10 +3,10 @@
 
 use super::quartic;
 use super::spans::{End, LeafSpans, Span, finish};
-use super::tree::Bound;
 use crate::aabb::Aabb;
 use crate::checks;
 use crate::error::SceneError;
+use crate::sphere::line_in_ball;
 use glam::Vec3;
 
 /// An analytic solid, a leaf of a CSG tree. Cylinders and cones stand on the `y` axis.
@@ -167,6 +167,9 @@ pub(super) fn validate(s: Solid) -> Result<Solid, SceneError> {
     Ok(s)
 }
 
+/// A bound that may be all of space (`None`).
+pub(super) type Bound = Option<Aabb>;
+
 /// A solid's bounding box (`None`: all of space).
 pub(super) fn solid_bounds(s: &Solid) -> Bound {
     match *s {
@@ -237,25 +240,6 @@ fn slab(o: f32, d: f32, lo: f32, hi: f32) -> Option<(f32, f32, f32)> {
     })
 }
 
-/// The line `f + t d` inside the ball of `radius` about the origin, as the sphere
-/// primitive computes it: the entry and exit `t`, ascending.
-#[inline]
-fn ball(f: Vec3, d: Vec3, radius: f32) -> Option<(f32, f32)> {
-    let a = d.dot(d);
-    let b = -f.dot(d);
-    // Distance from the centre to the line, as the sphere primitive computes it.
-    let l = f + d * (b / a);
-    let r2 = radius * radius;
-    let disc = r2 - l.dot(l);
-    if disc.is_nan() || disc < 0.0 {
-        return None;
-    }
-    let c = f.dot(f) - r2;
-    let q = b + (a.sqrt() * disc.sqrt()).copysign(b);
-    let (t0, t1) = (c / q, q / a);
-    Some(if t0 <= t1 { (t0, t1) } else { (t1, t0) })
-}
-
 /// A solid of revolution about y cut by the slab `(y0, y1)` whose caps have the normals
 /// `caps` (entry, exit): the side's interval `(s0, s1)` where the caps do not cut it first.
 /// On a tie the side keeps the boundary.
@@ -318,7 +302,7 @@ fn solid_span(s: &Solid, o: Vec3, d: Vec3, leaf: u32) -> Option<Span> {
     let end = |t: f32, normal: Vec3| End { t, normal, leaf };
     let span = match *s {
         Solid::Sphere { center, radius } => {
-            let (t0, t1) = ball(o - center, d, radius)?;
+            let (t0, t1) = line_in_ball(o - center, d, radius)?;
             let n = |t: f32| ((o + d * t - center) / radius).normalize_or(Vec3::Y);
             Span {
                 enter: end(t0, n(t0)),
@@ -328,7 +312,7 @@ fn solid_span(s: &Solid, o: Vec3, d: Vec3, leaf: u32) -> Option<Span> {
         Solid::Ellipsoid { center, radii } => {
             // The unit ball in coordinates divided by the radii; t is unchanged.
             let (f, du) = ((o - center) / radii, d / radii);
-            let (t0, t1) = ball(f, du, 1.0)?;
+            let (t0, t1) = line_in_ball(f, du, 1.0)?;
             // The gradient of |p / radii|^2 is 2 p / radii^2: the unit-ball point / radii.
             let n = |t: f32| ((f + du * t) / radii).normalize_or(Vec3::Y);
             Span {

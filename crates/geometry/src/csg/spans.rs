@@ -1,7 +1,44 @@
 //! Span lists and the regularised interval algebra that combines them.
 
-use super::tree::CsgOp;
+use crate::optree::Operator;
 use glam::Vec3;
+
+/// A CSG set operation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CsgOp {
+    /// Points in either operand (`min(A, B)`).
+    Union,
+    /// Points in both operands (`max(A, B)`).
+    Intersection,
+    /// Points in the first operand and not the second (`max(A, -B)`).
+    Difference,
+}
+
+impl CsgOp {
+    /// Lower-case name used in scene files.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Union => "union",
+            Self::Intersection => "intersection",
+            Self::Difference => "difference",
+        }
+    }
+
+    #[inline]
+    pub(super) fn apply(self, a: bool, b: bool) -> bool {
+        match self {
+            Self::Union => a || b,
+            Self::Intersection => a && b,
+            Self::Difference => a && !b,
+        }
+    }
+}
+
+impl Operator for CsgOp {
+    const UNION: Self = Self::Union;
+    const DIFFERENCE: Self = Self::Difference;
+}
 
 /// One end of a span: where, the outward normal of the combined solid there, and the leaf.
 #[derive(Clone, Copy, Debug, PartialEq)]

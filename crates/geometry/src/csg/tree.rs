@@ -1,50 +1,18 @@
 //! The CSG tree: the set operations, the tree as scene files describe it, and its
 //! validated post-order form (an [`OpTree`] whose leaves are solids, placed or not).
 
-use super::Csg;
 use super::placement::Placement;
-use super::solid::{Solid, finite_point, solid_bounds, validate};
+use super::solid::{Bound, Solid, finite_point, solid_bounds, validate};
+use super::spans::CsgOp;
 use crate::aabb::Aabb;
 use crate::error::SceneError;
 use crate::limits::{MAX_CSG_DEPTH, MAX_CSG_LEAVES};
-use crate::optree::{self, Builder, Counted, Limits, OpTree, Operator, Source, View};
+use crate::optree::{self, Builder, Counted, Limits, OpTree, Source, View};
 use glam::Affine3A;
 use std::convert::Infallible;
 
-/// A CSG set operation.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum CsgOp {
-    /// Points in either operand (`min(A, B)`).
-    Union,
-    /// Points in both operands (`max(A, B)`).
-    Intersection,
-    /// Points in the first operand and not the second (`max(A, -B)`).
-    Difference,
-}
-
-impl CsgOp {
-    /// Lower-case name used in scene files.
-    #[must_use]
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Union => "union",
-            Self::Intersection => "intersection",
-            Self::Difference => "difference",
-        }
-    }
-
-    #[inline]
-    pub(super) fn apply(self, a: bool, b: bool) -> bool {
-        match self {
-            Self::Union => a || b,
-            Self::Intersection => a && b,
-            Self::Difference => a && !b,
-        }
-    }
-}
-
 /// A CSG tree as scene files describe it: operators with two operands, solids at the
-/// leaves. [`Csg::new`] validates it.
+/// leaves. [`super::Csg::new`] validates it.
 #[derive(Clone, Debug, PartialEq)]
 pub enum CsgNode {
     /// A solid.
@@ -69,11 +37,6 @@ impl CsgNode {
     }
 }
 
-impl Operator for CsgOp {
-    const UNION: Self = Self::Union;
-    const DIFFERENCE: Self = Self::Difference;
-}
-
 /// A leaf of the validated tree: a solid and its placement, if it has one.
 pub(super) type Leaf = (Solid, Option<Placement>);
 
@@ -82,9 +45,6 @@ pub(super) type Tree = OpTree<Leaf, CsgOp, Infallible>;
 
 /// A node of the validated tree.
 pub(super) type Node = optree::Node<Leaf, CsgOp, Infallible>;
-
-/// A bound that may be all of space (`None`).
-pub(super) type Bound = Option<Aabb>;
 
 /// The limits of [`super::Csg::new`].
 pub(super) const LIMITS: Limits = Limits {
@@ -108,7 +68,11 @@ impl Source for CsgNode {
     }
 }
 
-impl Builder<CsgNode> for Csg {
+/// How [`super::Csg::new`] builds the validated tree: the leaves' checks and boxes and the
+/// operators' boxes, the hooks of [`OpTree::build`].
+pub(super) struct CsgBuilder;
+
+impl Builder<CsgNode> for CsgBuilder {
     type Leaf = Leaf;
     type Wrap = Infallible;
     type Bound = Bound;

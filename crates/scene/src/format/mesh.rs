@@ -132,7 +132,7 @@ impl MeshDesc {
 /// `reserve`: a PLY file's before they are allocated (its header declares them), the other
 /// formats' once loaded. A file without triangles is refused.
 fn load_mesh_file(path: &Path, reserve: Reserve<'_>) -> Result<MeshData, LoadError> {
-    let data = match crate::extension(path).as_str() {
+    let data = match crate::io::extension(path).as_str() {
         "ply" => load_ply_file_reserving(path, reserve)?,
         ext => {
             let data = match ext {
@@ -177,7 +177,7 @@ pub(crate) fn bare_mesh_scene(path: &Path) -> Result<Scene, LoadError> {
         context: path.display().to_string(),
         cause,
     };
-    let mut b = crate::lit_builder(&name).map_err(scene_err)?;
+    let mut b = crate::generators::lit_builder(&name).map_err(scene_err)?;
     for c in &data.cameras {
         b.add_camera(Some(&c.name), c.camera).map_err(scene_err)?;
     }

@@ -28,6 +28,7 @@ pub(crate) use mesh::bare_mesh_scene;
 
 use crate::budget::Reservation;
 use crate::error::LoadError;
+use crate::io::read_text;
 use crate::transform::Transform;
 use raybench_core::{Scene, SceneBuilder, SceneError, Vec3};
 use serde::Deserialize;
@@ -445,44 +446,6 @@ impl Context<'_> {
             cause,
         }
     }
-}
-
-/// Reads a UTF-8 text file of at most `limit` bytes (checked before reading; `what` names
-/// the kind of file in the error).
-pub(crate) fn read_text(path: &Path, limit: u64, what: &str) -> Result<String, LoadError> {
-    let io = |cause| LoadError::Io {
-        path: path.to_owned(),
-        cause,
-    };
-    // A device or pipe reports no length and may never end.
-    crate::check_regular_file(path)?;
-    let len = std::fs::metadata(path).map_err(io)?.len();
-    if len > limit {
-        return Err(LoadError::Parse {
-            path: path.to_owned(),
-            message: format!("{what} of {len} bytes exceeds the limit of {limit}"),
-        });
-    }
-    // At most `limit + 1` bytes, should the file grow meanwhile.
-    let mut bytes = Vec::new();
-    std::io::Read::read_to_end(
-        &mut std::io::Read::take(std::fs::File::open(path).map_err(io)?, limit + 1),
-        &mut bytes,
-    )
-    .map_err(io)?;
-    if bytes.len() as u64 > limit {
-        return Err(LoadError::Parse {
-            path: path.to_owned(),
-            message: format!("{what} exceeds the limit of {limit} bytes"),
-        });
-    }
-    if bytes.starts_with(crate::UTF8_BOM) {
-        bytes.drain(..crate::UTF8_BOM.len());
-    }
-    String::from_utf8(bytes).map_err(|_| LoadError::Parse {
-        path: path.to_owned(),
-        message: "not UTF-8 text".into(),
-    })
 }
 
 /// Loads a `.toml` scene file; relative mesh paths resolve against its folder, then `assets`.

@@ -1,0 +1,115 @@
+//! Reading files safely: what is no regular file is refused before it is opened, text is
+//! read up to a size limit, and a UTF-8 byte-order mark is dropped. Every loader shares
+//! these; they read no scene format.
+
+use crate::error::LoadError;
+use std::path::Path;
+
+/// What a path that exists but is no regular file is, for messages: a folder, a FIFO or a
+/// device (which may never end) is not "not found".
+pub(crate) fn not_a_file_message(meta: &std::fs::Metadata) -> String {
+    let kind = meta.file_type();
+    let what = if kind.is_dir() {
+        "a folder"
+    } else {
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::FileTypeExt as _;
+            if kind.is_fifo() {
+                "a FIFO (named pipe)"
+            } else if kind.is_char_device() || kind.is_block_device() {
+                "a device"
+            } else if kind.is_socket() {
+                "a socket"
+            } else {
+                "something other than a file"
+            }
+        }
+        #[cfg(not(unix))]
+        "something other than a file"
+    };
+    format!("is {what}, not a regular file")
+}
+
+/// The error for a path that exists but is no regular file ([`not_a_file_message`]).
+pub(crate) fn not_a_file(path: &Path, meta: &std::fs::Metadata) -> LoadError {
+    LoadError::Parse {
+        path: path.to_owned(),
+        message: not_a_file_message(meta),
+    }
+}
+
+/// Checks that `path` is a regular file before it is opened (a FIFO or `/dev/zero` would
+/// block or never end).
+///
+/// # Errors
+/// [`LoadError::NotFound`] when it does not exist, [`LoadError::Io`] when its metadata
+/// cannot be read, else [`not_a_file`]'s error for anything but a regular file.
+pub(crate) fn check_regular_file(path: &Path) -> Result<(), LoadError> {
+    match std::fs::metadata(path) {
+        Ok(meta) if meta.is_file() => Ok(()),
+        Ok(meta) => Err(not_a_file(path, &meta)),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(LoadError::NotFound {
+            path: path.to_owned(),
+        }),
+        Err(cause) => Err(LoadError::Io {
+            path: path.to_owned(),
+            cause,
+        }),
+    }
+}
+
+/// The UTF-8 byte-order mark some editors write at the start of text files.
+pub(crate) const UTF8_BOM: &[u8] = b"\xef\xbb\xbf";
+
+/// `bytes` without a leading UTF-8 byte-order mark: every text format (TOML, OBJ, MTL,
+/// `.bpt`, glTF JSON) accepts one.
+pub(crate) fn strip_bom(bytes: &[u8]) -> &[u8] {
+    bytes.strip_prefix(UTF8_BOM).unwrap_or(bytes)
+}
+
+/// A path's extension in lower case (empty when it has none).
+pub(crate) fn extension(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default()
+}
+
+/// Reads a UTF-8 text file of at most `limit` bytes (checked before reading; `what` names
+/// the kind of file in the error).
+pub(crate) fn read_text(path: &Path, limit: u64, what: &str) -> Result<String, LoadError> {
+    let io = |cause| LoadError::Io {
+        path: path.to_owned(),
+        cause,
+    };
+    // A device or pipe reports no length and may never end.
+    check_regular_file(path)?;
+    let len = std::fs::metadata(path).map_err(io)?.len();
+    if len > limit {
+        return Err(LoadError::Parse {
+            path: path.to_owned(),
+            message: format!("{what} of {len} bytes exceeds the limit of {limit}"),
+        });
+    }
+    // At most `limit + 1` bytes, should the file grow meanwhile.
+    let mut bytes = Vec::new();
+    std::io::Read::read_to_end(
+        &mut std::io::Read::take(std::fs::File::open(path).map_err(io)?, limit + 1),
+        &mut bytes,
+    )
+    .map_err(io)?;
+    if bytes.len() as u64 > limit {
+        return Err(LoadError::Parse {
+            path: path.to_owned(),
+            message: format!("{what} exceeds the limit of {limit} bytes"),
+        });
+    }
+    if bytes.starts_with(UTF8_BOM) {
+        bytes.drain(..UTF8_BOM.len());
+    }
+    String::from_utf8(bytes).map_err(|_| LoadError::Parse {
+        path: path.to_owned(),
+        message: "not UTF-8 text".into(),
+    })
+}
