@@ -653,7 +653,7 @@ mod tests {
             let colour = backend_style(backend).unwrap().colour;
             let bars: Vec<&Element> = elements
                 .iter()
-                .filter(|e| e.tag == "rect" && e.get("fill") == Some(colour))
+                .filter(|e| e.tag == "rect" && e.get("fill") == Some(colour) && e.tip.is_some())
                 .collect();
             let expected = values.iter().filter(|v| **v > 0.0).count();
             assert_eq!(bars.len(), expected, "{backend}: {s}");
