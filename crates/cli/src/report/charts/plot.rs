@@ -6,8 +6,9 @@
 use super::layout::{Key, LABEL_SIZE, LEGEND_ROW, LEGEND_SIZE, Layout, TICK_SIZE, TITLE_SIZE};
 use super::ticks::{Axis, value};
 use super::tooltips::{Tips, plain};
-use super::{Bar, Chart, Marker, Plot, Series, Style, styles};
+use super::{Bar, Bars, Chart, Marker, Plot, Series, Style, styles};
 use plotters::coord::Shift;
+use plotters::coord::cartesian::Cartesian2d;
 use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -34,6 +35,8 @@ const LEGEND_FRAME: RGBColor = RGBColor(0xbb, 0xbb, 0xbb);
 const GREY: RGBColor = RGBColor(0x55, 0x55, 0x55);
 /// Height of the hatched stub that marks a series that did not run.
 const STUB: i32 = 12;
+/// The margin left of the `y` axis title.
+const MARGIN: i32 = 8;
 /// A marker's half-size.
 const R: i32 = 4;
 
@@ -288,6 +291,139 @@ fn legend(area: &Area, lay: &Layout, entries: &[(String, Key)]) -> Drawn {
     Ok(())
 }
 
+/// What a chart's marks are drawn on: the whole chart (pixels) and its plot (the axes'
+/// coordinates).
+struct Canvas<'c, 'a, 'b> {
+    /// The whole chart.
+    root: &'c Area<'b>,
+    /// The plot.
+    plot: &'c mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<Ticked, Ticked>>,
+    /// What it plots.
+    chart: &'c Chart,
+    /// Its `y` axis.
+    y: &'c Axis,
+    /// The tooltips drawn so far.
+    tips: &'c mut Tips,
+}
+
+impl Canvas<'_, '_, '_> {
+    /// Each series a line (but in a scatter plot) through its markers, its fitted power law
+    /// dashed, over `x`.
+    fn series(&mut self, series: &[Series], x: &Axis) -> Drawn {
+        let lines = !matches!(self.chart.plot, Plot::Scatter(_));
+        let labels: Vec<&str> = series.iter().map(|s| s.label.as_str()).collect();
+        let y = self.y;
+        let at = |(u, v): (f64, f64)| (x.at(u), y.at(v));
+        for (s, st) in series.iter().zip(styles(&labels)) {
+            let colour = rgb(st.colour);
+            if let (Some(f), Some((a, b))) = (s.fit, x_range(s)) {
+                let title = format!(
+                    "{}: fitted {} x^{:.3}",
+                    s.label,
+                    value(f.coefficient),
+                    f.exponent
+                );
+                let ends = [at((a, f.at(a))), at((b, f.at(b)))];
+                let plot = &mut *self.plot;
+                tip(self.root, self.tips, title, || {
+                    plot.draw_series(DashedLineSeries::new(ends, 7, 4, colour.stroke_width(2)))
+                        .map(|_| ())
+                        .map_err(failed)
+                })?;
+            }
+            let points: Vec<(f64, f64)> = s
+                .points
+                .iter()
+                .copied()
+                .filter(|&(u, v)| x.shows(u) && v > 0.0 && v.is_finite())
+                .collect();
+            if lines && points.len() > 1 {
+                self.plot
+                    .draw_series(LineSeries::new(
+                        points.iter().map(|p| at(*p)),
+                        colour.stroke_width(2),
+                    ))
+                    .map_err(failed)?;
+            }
+            for &(u, v) in &points {
+                let title = format!(
+                    "{}\n{}: {}\n{}: {}",
+                    s.label,
+                    axis_name(&self.chart.x_label, "x"),
+                    value(u),
+                    axis_name(&self.chart.y_label, "y"),
+                    value(v)
+                );
+                let centre = self.plot.backend_coord(&at((u, v)));
+                let root = self.root;
+                tip(root, self.tips, title, || marker(root, centre, st))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// One group of bars per name over a plot `width` pixels wide, a hatched stub with an
+    /// `×` where a series did not run.
+    fn bars(&mut self, names: &[String], bars: &[Bars], width: f64) -> Drawn {
+        let root = self.root;
+        let (xs, ys) = self.plot.plotting_area().get_pixel_range();
+        let px = |v: f64| v.round() as i32;
+        let slot = width / names.len().max(1) as f64;
+        let k = bars.len().max(1) as f64;
+        // At most 28 units a bar: a few wide groups would look like blocks.
+        let bar_w = ((slot - 12.0).max(1.0) / k).min(28.0);
+        let first = (slot - bar_w * k) / 2.0;
+        // Between groups, a short tick below the plot.
+        for i in 1..names.len() {
+            let x = xs.start + px(i as f64 * slot);
+            root.draw(&PathElement::new(vec![(x, ys.end), (x, ys.end + 5)], FRAME))
+                .map_err(failed)?;
+        }
+        let labels: Vec<&str> = bars.iter().map(|b| b.label.as_str()).collect();
+        for (j, (b, st)) in bars.iter().zip(styles(&labels)).enumerate() {
+            let colour = rgb(st.colour);
+            for (i, v) in b.values.iter().enumerate() {
+                let Some(name) = names.get(i) else { break };
+                let x0 = xs.start + px(i as f64 * slot + first + j as f64 * bar_w);
+                let x1 = x0 + px(bar_w - 1.0).max(1);
+                match v {
+                    Bar::Value(v) if *v > 0.0 && v.is_finite() => {
+                        let top = self.plot.backend_coord(&(0.0, self.y.at(*v))).1;
+                        let title = format!(
+                            "{} on {name}\n{}: {}",
+                            b.label,
+                            axis_name(&self.chart.y_label, "value"),
+                            value(*v)
+                        );
+                        tip(root, self.tips, title, || {
+                            root.draw(&Rectangle::new(
+                                [(x0, top.min(ys.end - 1)), (x1, ys.end)],
+                                colour.filled(),
+                            ))
+                            .map_err(failed)
+                        })?;
+                    }
+                    Bar::Unsupported(why) => {
+                        let title = format!("{} on {name}: {why}", b.label);
+                        tip(root, self.tips, title, || {
+                            hatched(root, (x0, ys.end - STUB), (x1, ys.end), colour)?;
+                            text(
+                                root,
+                                "×",
+                                ((x0 + x1) / 2, ys.end - STUB - 2),
+                                &font(TICK_SIZE).color(&colour),
+                                Pos::new(HPos::Center, VPos::Bottom),
+                            )
+                        })?;
+                    }
+                    Bar::Value(_) | Bar::Absent => {}
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
 /// The axes of `chart`: `x` (none for bars) and `y`.
 pub(super) fn axes(chart: &Chart) -> (Option<Axis>, Axis) {
     use super::ticks::{linear_axis, log_axis};
@@ -351,11 +487,12 @@ pub(super) fn draw(
     )?;
     let p = lay.plot;
     let px = |v: f64| v.round() as i32;
-    // The plot and its label areas: the plot's frame lands on `lay.plot`.
+    // The plot and its label areas, a margin left of the `y` axis title: the plot's frame
+    // lands on `lay.plot`.
     let area = root.margin(
         px(p.y),
         size.1 as i32 - px(p.bottom() + lay.below),
-        0,
+        MARGIN,
         size.0 as i32 - px(p.right()),
     );
     let categories = match &chart.plot {
@@ -397,7 +534,7 @@ pub(super) fn draw(
         light: y_axis.minor.iter().map(|v| y_axis.at(*v)).collect(),
     };
     let mut plot = ChartBuilder::on(&area)
-        .y_label_area_size(px(p.x))
+        .y_label_area_size(px(p.x) - MARGIN)
         .x_label_area_size(px(lay.below))
         .build_cartesian_2d(x_coords, y_coords)
         .map_err(failed)?;
@@ -431,119 +568,22 @@ pub(super) fn draw(
     }
     mesh.draw().map_err(failed)?;
     let (xs, ys) = plot.plotting_area().get_pixel_range();
-    // The frame, and between bar groups a short tick.
+    // The frame.
     root.draw(&Rectangle::new([(xs.start, ys.start), (xs.end, ys.end)], FRAME))
         .map_err(failed)?;
-    match &chart.plot {
-        Plot::LogLog(series) | Plot::Scatter(series) | Plot::Lines(series) => {
-            let Some(x_axis) = x_axis else {
-                return Err("a chart of series has no x axis".into());
-            };
-            let lines = !matches!(chart.plot, Plot::Scatter(_));
-            let labels: Vec<&str> = series.iter().map(|s| s.label.as_str()).collect();
-            for (s, st) in series.iter().zip(styles(&labels)) {
-                let colour = rgb(st.colour);
-                let at = |(x, y): (f64, f64)| (x_axis.at(x), y_axis.at(y));
-                if let (Some(f), Some((a, b))) = (s.fit, x_range(s)) {
-                    let title = format!(
-                        "{}: fitted {} x^{:.3}",
-                        s.label,
-                        value(f.coefficient),
-                        f.exponent
-                    );
-                    let ends = [at((a, f.at(a))), at((b, f.at(b)))];
-                    tip(&root, tips, title, || {
-                        plot.draw_series(DashedLineSeries::new(
-                            ends,
-                            7,
-                            4,
-                            colour.stroke_width(2),
-                        ))
-                        .map(|_| ())
-                        .map_err(failed)
-                    })?;
-                }
-                let points: Vec<(f64, f64)> = s
-                    .points
-                    .iter()
-                    .copied()
-                    .filter(|&(x, y)| x_axis.shows(x) && y > 0.0 && y.is_finite())
-                    .collect();
-                if lines && points.len() > 1 {
-                    plot.draw_series(LineSeries::new(
-                        points.iter().map(|p| at(*p)),
-                        colour.stroke_width(2),
-                    ))
-                    .map_err(failed)?;
-                }
-                for &(x, y) in &points {
-                    let title = format!(
-                        "{}\n{}: {}\n{}: {}",
-                        s.label,
-                        axis_name(&chart.x_label, "x"),
-                        value(x),
-                        axis_name(&chart.y_label, "y"),
-                        value(y)
-                    );
-                    let centre = plot.backend_coord(&at((x, y)));
-                    tip(&root, tips, title, || marker(&root, centre, st))?;
-                }
-            }
+    let mut canvas = Canvas {
+        root: &root,
+        plot: &mut plot,
+        chart,
+        y: y_axis,
+        tips,
+    };
+    match (&chart.plot, x_axis) {
+        (Plot::LogLog(series) | Plot::Scatter(series) | Plot::Lines(series), Some(x)) => {
+            canvas.series(series, x)?;
         }
-        Plot::Categories(names, bars) => {
-            let n = names.len().max(1) as f64;
-            let slot = p.w / n;
-            let k = bars.len().max(1) as f64;
-            // At most 28 units a bar: a few wide groups would look like blocks.
-            let bar_w = ((slot - 12.0).max(1.0) / k).min(28.0);
-            let first = (slot - bar_w * k) / 2.0;
-            for i in 1..names.len() {
-                let x = xs.start + px(i as f64 * slot);
-                root.draw(&PathElement::new(vec![(x, ys.end), (x, ys.end + 5)], FRAME))
-                    .map_err(failed)?;
-            }
-            let labels: Vec<&str> = bars.iter().map(|b| b.label.as_str()).collect();
-            for (j, (b, st)) in bars.iter().zip(styles(&labels)).enumerate() {
-                let colour = rgb(st.colour);
-                for (i, v) in b.values.iter().enumerate() {
-                    let Some(name) = names.get(i) else { break };
-                    let x0 = xs.start + px(i as f64 * slot + first + j as f64 * bar_w);
-                    let x1 = x0 + px(bar_w - 1.0).max(1);
-                    match v {
-                        Bar::Value(v) if *v > 0.0 && v.is_finite() => {
-                            let top = plot.backend_coord(&(0.0, y_axis.at(*v))).1;
-                            let title = format!(
-                                "{} on {name}\n{}: {}",
-                                b.label,
-                                axis_name(&chart.y_label, "value"),
-                                value(*v)
-                            );
-                            tip(&root, tips, title, || {
-                                root.draw(&Rectangle::new(
-                                    [(x0, top.min(ys.end - 1)), (x1, ys.end)],
-                                    colour.filled(),
-                                ))
-                                .map_err(failed)
-                            })?;
-                        }
-                        Bar::Unsupported(why) => {
-                            let title = format!("{} on {name}: {why}", b.label);
-                            tip(&root, tips, title, || {
-                                hatched(&root, (x0, ys.end - STUB), (x1, ys.end), colour)?;
-                                text(
-                                    &root,
-                                    "×",
-                                    ((x0 + x1) / 2, ys.end - STUB - 2),
-                                    &font(TICK_SIZE).color(&colour),
-                                    Pos::new(HPos::Center, VPos::Bottom),
-                                )
-                            })?;
-                        }
-                        Bar::Value(_) | Bar::Absent => {}
-                    }
-                }
-            }
-        }
+        (Plot::Categories(names, bars), _) => canvas.bars(names, bars, p.w)?,
+        _ => return Err("a chart of series has no x axis".into()),
     }
     legend(&root, lay, entries)?;
     root.present().map_err(failed)
