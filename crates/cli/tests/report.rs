@@ -158,10 +158,7 @@ fn report_writes_markdown_json_images_and_charts() {
     let svg = chart(&dir, "throughput-cast-primary");
     for backend in ["naive", "bvh", "packet"] {
         let colour = backend_style(backend).unwrap().colour;
-        assert!(
-            shows_text(&svg, backend),
-            "{backend}: {svg}"
-        );
+        assert!(shows_text(&svg, backend), "{backend}: {svg}");
         assert!(
             svg.contains(&format!("fill=\"{colour}\"")),
             "{backend}: {svg}"

@@ -245,7 +245,6 @@ pub fn styles(labels: &[&str]) -> Vec<Style> {
         .collect()
 }
 
-
 /// `s` escaped for SVG and HTML text and attribute values (`REPORT.html` uses it too).
 pub(super) fn escape(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
@@ -272,7 +271,14 @@ pub fn svg(chart: &Chart) -> Result<String, String> {
     let lay = layout::layout(chart, &y, &entries);
     let mut tips = tooltips::Tips::default();
     let mut body = String::new();
-    plot::draw(&mut body, chart, &lay, &entries, (x.as_ref(), &y), &mut tips)?;
+    plot::draw(
+        &mut body,
+        chart,
+        &lay,
+        &entries,
+        (x.as_ref(), &y),
+        &mut tips,
+    )?;
     tooltips::finish(
         &body,
         (lay.width as u32, lay.height as u32),
@@ -350,7 +356,9 @@ mod tests {
 
         /// A pixel coordinate attribute.
         fn at(&self, name: &str) -> f64 {
-            self.get(name).and_then(|v| v.parse().ok()).unwrap_or(f64::NAN)
+            self.get(name)
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(f64::NAN)
         }
     }
 
@@ -388,10 +396,10 @@ mod tests {
             if name == "g" {
                 groups.push(None);
             }
-            if name == "title" {
-                if let Some(top) = groups.last_mut() {
-                    *top = Some(text.clone());
-                }
+            if name == "title"
+                && let Some(top) = groups.last_mut()
+            {
+                *top = Some(text.clone());
             }
             let mut attributes = Vec::new();
             for part in attrs.split('"').collect::<Vec<_>>().chunks(2) {
@@ -670,7 +678,9 @@ mod tests {
         let height = |v: f64| {
             elements
                 .iter()
-                .find(|e| e.tag == "rect" && e.tip.as_deref().is_some_and(|t| t.ends_with(&value(v))))
+                .find(|e| {
+                    e.tag == "rect" && e.tip.as_deref().is_some_and(|t| t.ends_with(&value(v)))
+                })
                 .map(|e| e.at("height"))
                 .unwrap()
         };
@@ -687,7 +697,10 @@ mod tests {
             "{stub:?}"
         );
         assert!(stub.iter().any(|e| e.tag == "text" && e.text == "×"));
-        assert!(stub.iter().filter(|e| e.tag == "polyline").count() >= 2, "hatched");
+        assert!(
+            stub.iter().filter(|e| e.tag == "polyline").count() >= 2,
+            "hatched"
+        );
         let t = texts(&elements);
         assert!(t.contains(&"× did not run (hover: why)"), "{t:?}");
         assert!(t.contains(&"rays per second (millions)") && t.contains(&"spheres"));
@@ -719,17 +732,59 @@ mod tests {
         assert!(dashes >= 10, "{out}");
         assert!(texts(&elements).contains(&format!("{} (slope 0.30)", b(1)).as_str()));
         assert!(texts(&elements).contains(&"fitted y = a·x^slope"));
-        assert_eq!(out.matches(&format!("<title>{}\n", b(1))).count(), 3, "{out}");
+        assert_eq!(
+            out.matches(&format!("<title>{}\n", b(1))).count(),
+            3,
+            "{out}"
+        );
     }
 
     /// A mark's look-alike in a label stays text; the tooltips' groups are balanced.
     #[test]
     fn labels_cannot_pass_for_tooltip_marks() {
-        let mut c = chart("marks", "\u{E000}0", Plot::Scatter(vec![series("\u{E000}", &[(1.0, 2.0)])]));
+        let mut c = chart(
+            "marks",
+            "\u{E000}0",
+            Plot::Scatter(vec![series("\u{E000}", &[(1.0, 2.0)])]),
+        );
         c.x_label = "\u{E000}".into();
         let out = svg(&c).unwrap();
         assert!(!out.contains('\u{E000}'));
         assert_eq!(out.matches("<g>").count(), out.matches("</g>").count());
         assert_eq!(out.matches("<g>").count(), 1, "{out}");
+    }
+
+    /// Names too wide for their group are written upright, wholly below the plot.
+    #[test]
+    fn wide_names_stand_upright_below_the_plot() {
+        let names: Vec<String> = (0..12)
+            .map(|i| format!("a-rather-long-scene-{i}"))
+            .collect();
+        let bars: Vec<Bars> = (0..6)
+            .map(|j| Bars {
+                label: b(j).into(),
+                values: (0..12).map(|i| Bar::Value(f64::from(1 + i))).collect(),
+            })
+            .collect();
+        let out = svg(&chart("up", "t", Plot::Categories(names.clone(), bars))).unwrap();
+        let elements = parse(&out);
+        let frame = elements
+            .iter()
+            .find(|e| e.tag == "rect" && e.get("stroke") == Some("#444444"))
+            .expect("the plot's frame");
+        let bottom = frame.at("y") + frame.at("height");
+        for name in &names {
+            let t = elements
+                .iter()
+                .find(|e| e.tag == "text" && e.text == *name)
+                .unwrap_or_else(|| panic!("{name}: {out}"));
+            assert!(
+                t.get("transform")
+                    .is_some_and(|r| r.starts_with("rotate(270"))
+            );
+            // Anchored at its end below the plot, it runs downwards from there.
+            assert_eq!(t.get("text-anchor"), Some("end"));
+            assert!(t.at("y") > bottom, "{name}: {out}");
+        }
     }
 }

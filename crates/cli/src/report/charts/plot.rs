@@ -158,7 +158,10 @@ fn tick_labels(axis: &Axis, length: f64) -> Vec<(f64, String)> {
             if shown {
                 free_from = at + half + 6.0;
             }
-            (axis.at(*v), if shown { label.clone() } else { String::new() })
+            (
+                axis.at(*v),
+                if shown { label.clone() } else { String::new() },
+            )
         })
         .collect()
 }
@@ -186,9 +189,7 @@ fn marker(area: &Area, (x, y): (i32, i32), style: Style) -> Drawn {
         area.draw(&Polygon::new(pts, filled)).map_err(failed)
     };
     match style.marker {
-        Marker::Circle => area
-            .draw(&Circle::new((x, y), R, filled))
-            .map_err(failed),
+        Marker::Circle => area.draw(&Circle::new((x, y), R, filled)).map_err(failed),
         Marker::Square => polygon(&[(-0.9, -0.9), (0.9, -0.9), (0.9, 0.9), (-0.9, 0.9)]),
         Marker::TriangleUp => polygon(&[(0.0, -1.25), (1.1, 0.75), (-1.1, 0.75)]),
         Marker::TriangleDown => polygon(&[(0.0, 1.25), (1.1, -0.75), (-1.1, -0.75)]),
@@ -209,7 +210,10 @@ fn marker(area: &Area, (x, y): (i32, i32), style: Style) -> Drawn {
                 .map_err(failed)?;
             let k = R + 1;
             let strokes = if style.marker == Marker::Cross {
-                [[(x - k, y - k), (x + k, y + k)], [(x - k, y + k), (x + k, y - k)]]
+                [
+                    [(x - k, y - k), (x + k, y + k)],
+                    [(x - k, y + k), (x + k, y - k)],
+                ]
             } else {
                 [[(x - k, y), (x + k, y)], [(x, y - k), (x, y + k)]]
             };
@@ -227,8 +231,16 @@ fn hatched(area: &Area, (x0, y0): (i32, i32), (x1, y1): (i32, i32), outline: RGB
     let (w, h) = (x1 - x0, y1 - y0);
     // Lines at 45 degrees every 5 pixels, cut at the rectangle's edges.
     for t in (4..w + h).step_by(5) {
-        let from = if t <= w { (x0 + t, y0) } else { (x1, y0 + t - w) };
-        let to = if t >= h { (x0 + t - h, y1) } else { (x0, y0 + t) };
+        let from = if t <= w {
+            (x0 + t, y0)
+        } else {
+            (x1, y0 + t - w)
+        };
+        let to = if t >= h {
+            (x0 + t - h, y1)
+        } else {
+            (x0, y0 + t)
+        };
         area.draw(&PathElement::new(vec![from, to], GREY.mix(0.8)))
             .map_err(failed)?;
     }
@@ -363,8 +375,9 @@ impl Canvas<'_, '_, '_> {
     }
 
     /// One group of bars per name over a plot `width` pixels wide, a hatched stub with an
-    /// `×` where a series did not run.
-    fn bars(&mut self, names: &[String], bars: &[Bars], width: f64) -> Drawn {
+    /// `×` where a series did not run; the names written `upright` below their groups when
+    /// too wide for them.
+    fn bars(&mut self, names: &[String], bars: &[Bars], width: f64, upright: bool) -> Drawn {
         let root = self.root;
         let (xs, ys) = self.plot.plotting_area().get_pixel_range();
         let px = |v: f64| v.round() as i32;
@@ -378,6 +391,14 @@ impl Canvas<'_, '_, '_> {
             let x = xs.start + px(i as f64 * slot);
             root.draw(&PathElement::new(vec![(x, ys.end), (x, ys.end + 5)], FRAME))
                 .map_err(failed)?;
+        }
+        if upright {
+            // Read from bottom to top, ending just below the plot.
+            let style = font(TICK_SIZE).transform(FontTransform::Rotate270);
+            for (i, name) in names.iter().enumerate() {
+                let at = (xs.start + px((i as f64 + 0.5) * slot), ys.end + 8);
+                text(root, name, at, &style, Pos::new(HPos::Right, VPos::Center))?;
+            }
         }
         let labels: Vec<&str> = bars.iter().map(|b| b.label.as_str()).collect();
         for (j, (b, st)) in bars.iter().zip(styles(&labels)).enumerate() {
@@ -524,7 +545,13 @@ pub(super) fn draw(
     let x_coords = Ticked {
         lo: x_lo,
         hi: x_hi,
-        bold: x_labels.iter().map(|l| l.0).collect(),
+        // Upright names are drawn with the bars: plotters centres a label on its tick,
+        // which would put half of an upright one inside the plot.
+        bold: if lay.upright {
+            Vec::new()
+        } else {
+            x_labels.iter().map(|l| l.0).collect()
+        },
         light: x_minor,
     };
     let y_coords = Ticked {
@@ -542,16 +569,10 @@ pub(super) fn draw(
     let y_title = plain(&chart.y_label);
     let x_label = |v: &f64| label_at(&x_labels, *v);
     let y_label = |v: &f64| label_at(&y_labels, *v);
-    let mut tick_style = font(TICK_SIZE);
-    if lay.upright {
-        tick_style = tick_style
-            .transform(FontTransform::Rotate270)
-            .pos(Pos::new(HPos::Right, VPos::Center));
-    }
     let mut mesh = plot.configure_mesh();
     mesh.x_label_formatter(&x_label)
         .y_label_formatter(&y_label)
-        .x_label_style(tick_style)
+        .x_label_style(font(TICK_SIZE))
         .y_label_style(font(TICK_SIZE))
         .axis_desc_style(font(LABEL_SIZE))
         .bold_line_style(GRID)
@@ -564,13 +585,17 @@ pub(super) fn draw(
         mesh.x_desc(x_title);
     }
     if categories.is_some() {
-        mesh.disable_x_mesh().set_tick_mark_size(LabelAreaPosition::Bottom, 0);
+        mesh.disable_x_mesh()
+            .set_tick_mark_size(LabelAreaPosition::Bottom, 0);
     }
     mesh.draw().map_err(failed)?;
     let (xs, ys) = plot.plotting_area().get_pixel_range();
     // The frame.
-    root.draw(&Rectangle::new([(xs.start, ys.start), (xs.end, ys.end)], FRAME))
-        .map_err(failed)?;
+    root.draw(&Rectangle::new(
+        [(xs.start, ys.start), (xs.end, ys.end)],
+        FRAME,
+    ))
+    .map_err(failed)?;
     let mut canvas = Canvas {
         root: &root,
         plot: &mut plot,
@@ -582,7 +607,7 @@ pub(super) fn draw(
         (Plot::LogLog(series) | Plot::Scatter(series) | Plot::Lines(series), Some(x)) => {
             canvas.series(series, x)?;
         }
-        (Plot::Categories(names, bars), _) => canvas.bars(names, bars, p.w)?,
+        (Plot::Categories(names, bars), _) => canvas.bars(names, bars, p.w, lay.upright)?,
         _ => return Err("a chart of series has no x axis".into()),
     }
     legend(&root, lay, entries)?;

@@ -265,4 +265,3 @@ pub(super) fn linear_axis(values: impl Iterator<Item = f64>) -> Axis {
         minor: Vec::new(),
     }
 }
-
