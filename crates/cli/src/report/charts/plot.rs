@@ -133,7 +133,7 @@ fn axis_name<'a>(label: &'a str, fallback: &'a str) -> &'a str {
 }
 
 /// The range of a series' positive `x`.
-pub(super) fn x_range(s: &Series) -> Option<(f64, f64)> {
+fn x_range(s: &Series) -> Option<(f64, f64)> {
     let (a, b) = s
         .points
         .iter()
