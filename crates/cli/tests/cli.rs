@@ -1383,7 +1383,7 @@ fn docs_state_the_modes_and_the_defaults() {
     let bg = scene.background;
     let stated = format!("default `[{}, {}, {}]`", bg.x, bg.y, bg.z);
     assert!(read("docs/scene-format.md").contains(&stated), "{stated}");
-    assert!(read("README.md").contains(&stated), "{stated}");
+    assert!(read("docs/cli.md").contains(&stated), "{stated}");
     // The default `--max-depth` of every command that has one.
     for cmd in ["render", "compare", "info"] {
         let o = raybench(&[cmd, "--help"]);
@@ -1399,23 +1399,23 @@ fn docs_state_the_modes_and_the_defaults() {
             read("docs/scene-format.md").contains(&format!("**default {default}**")),
             "{cmd}: {default}"
         );
-        assert!(read("README.md").contains(&format!("`--max-depth {default}`")));
+        assert!(read("docs/cli.md").contains(&format!("`--max-depth {default}`")));
     }
 }
 
-/// The README's table of refused inputs stays true: every row's command is run from the
+/// The table of refused inputs in docs/cli.md stays true: every row's command is run from the
 /// workspace root and must fail cleanly with one `error:` line containing the row's
 /// message, and every fixture in `crates/cli/tests/bad-input/` is used by a row (or by a
 /// fixture a row uses), so that the table and the files cannot drift apart.
 #[test]
-fn readme_bad_input_table_is_true() {
+fn docs_bad_input_table_is_true() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
-    let table = readme
+    let doc = std::fs::read_to_string(root.join("docs/cli.md")).unwrap();
+    let table = doc
         .split_once("<!-- bad-input-table -->")
         .and_then(|(_, rest)| rest.split_once("<!-- /bad-input-table -->"))
         .map(|(table, _)| table)
-        .expect("README.md has the bad-input table between its markers");
+        .expect("docs/cli.md has the bad-input table between its markers");
     // A code span: `text`, or `` text `` when the text holds backticks.
     let code = |cell: &str| {
         let cell = cell.trim();
@@ -1468,7 +1468,7 @@ fn readme_bad_input_table_is_true() {
     }
     assert!(
         rows >= 30,
-        "only {rows} rows in the README's bad-input table"
+        "only {rows} rows in the bad-input table of docs/cli.md"
     );
     let fixtures = root.join("crates/cli/tests/bad-input");
     let used: String = std::fs::read_dir(&fixtures)
@@ -1482,7 +1482,7 @@ fn readme_bad_input_table_is_true() {
             table.contains(&format!("bad-input/{name}"))
                 || used.contains(&format!("\"{name}\""))
                 || used.contains(&format!(" {name}\n")),
-            "fixture {name} is used by no row of the README's table"
+            "fixture {name} is used by no row of the table in docs/cli.md"
         );
     }
 }
