@@ -6,7 +6,7 @@ mod common;
 
 use common::raybench;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 /// This suite's scratch folder `name` ([`common::tmp_dir`]).
 fn tmp_dir(name: &str) -> PathBuf {

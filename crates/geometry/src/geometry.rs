@@ -3,6 +3,7 @@
 use crate::aabb::Aabb;
 use crate::bezier::BezierPatch;
 use crate::csg::Csg;
+use crate::error::SceneError;
 use crate::heightfield::HeightField;
 use crate::hit::{Hit, PrimHit, keep_closer};
 use crate::instance::Instance;
@@ -655,6 +656,36 @@ impl Geometry {
             counters.add_tests(shapes.len() as u64);
         }
         false
+    }
+}
+
+impl Instance {
+    /// Instance of `mesh` (index `mesh_index` of the geometry's meshes) placed by
+    /// `to_world`. Its base id is assigned by [`Geometry::with_instances`].
+    ///
+    /// # Errors
+    /// When the transform is not finite, singular or too badly conditioned
+    /// ([`crate::checks::check_transform`]), or the mesh has no primitives, an unbounded one
+    /// or instances of its own.
+    pub fn new(mesh_index: u32, mesh: &Geometry, to_world: Affine3A) -> Result<Self, SceneError> {
+        if mesh.is_empty() {
+            return Err(SceneError::Invalid(
+                "an instance's mesh has no primitives".into(),
+            ));
+        }
+        if !mesh.unbounded().is_empty() {
+            return Err(SceneError::Invalid(
+                "an instance's mesh holds an unbounded primitive (a plane): only bounded \
+                 primitives can be instanced"
+                    .into(),
+            ));
+        }
+        if mesh.has_instances() {
+            return Err(SceneError::Invalid(
+                "an instance's mesh holds instances itself (one level only)".into(),
+            ));
+        }
+        Instance::placed(mesh_index, mesh.len() as u32, mesh.bounds(), to_world)
     }
 }
 

@@ -13,7 +13,6 @@
 use crate::aabb::Aabb;
 use crate::checks::check_transform;
 use crate::error::SceneError;
-use crate::geometry::Geometry;
 use crate::ray::Ray;
 use glam::{Affine3A, Mat3A, Vec3};
 
@@ -43,37 +42,27 @@ pub struct Instance {
 }
 
 impl Instance {
-    /// Instance of `mesh` (index `mesh_index` of the geometry's meshes) placed by
-    /// `to_world`. Its base id is assigned by [`Geometry::with_instances`].
+    /// The placement of a mesh of `count` primitives within `mesh_bounds` (index
+    /// `mesh_index` of the geometry's meshes) by `to_world`: what [`Instance::new`] (in
+    /// `geometry.rs`, which checks that the mesh may be instanced) builds on, so that this
+    /// module knows boxes and transforms and nothing of a geometry. Its base id is assigned
+    /// by `Geometry::with_instances`.
     ///
     /// # Errors
     /// When the transform is not finite, singular or too badly conditioned
-    /// ([`check_transform`]), or the mesh has no primitives, an unbounded one or instances
-    /// of its own.
-    pub fn new(mesh_index: u32, mesh: &Geometry, to_world: Affine3A) -> Result<Self, SceneError> {
-        if mesh.is_empty() {
-            return Err(SceneError::Invalid(
-                "an instance's mesh has no primitives".into(),
-            ));
-        }
-        if !mesh.unbounded().is_empty() {
-            return Err(SceneError::Invalid(
-                "an instance's mesh holds an unbounded primitive (a plane): only bounded \
-                 primitives can be instanced"
-                    .into(),
-            ));
-        }
-        if mesh.has_instances() {
-            return Err(SceneError::Invalid(
-                "an instance's mesh holds instances itself (one level only)".into(),
-            ));
-        }
+    /// ([`check_transform`]), or the world box overflows.
+    pub(crate) fn placed(
+        mesh_index: u32,
+        count: u32,
+        mesh_bounds: Aabb,
+        to_world: Affine3A,
+    ) -> Result<Self, SceneError> {
         let inverse = check_transform(to_world, "instance transform")?;
         let to_local = Affine3A {
             matrix3: inverse,
             translation: -(inverse * to_world.translation),
         };
-        let b = mesh.bounds();
+        let b = mesh_bounds;
         let corners = (0..8).map(|i| {
             let pick = |bit: u32, lo: f32, hi: f32| if i & bit == 0 { lo } else { hi };
             to_world.transform_point3(Vec3::new(
@@ -93,7 +82,7 @@ impl Instance {
         Ok(Self {
             mesh: mesh_index,
             base: 0,
-            count: mesh.len() as u32,
+            count,
             to_world,
             to_local,
             normal: inverse.transpose(),
@@ -186,7 +175,7 @@ impl Instance {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Shape, Sphere, Triangle};
+    use crate::{Geometry, Shape, Sphere, Triangle};
     use glam::Quat;
     use std::sync::Arc;
 

@@ -144,7 +144,7 @@ fn csg_quadratic(a: f32, b: f32, c: f32) -> CsgRoots {
     return CsgRoots(true, t1, t0);
 }
 
-// `solid::ball`: the line `f + t d` inside the ball of `radius` about the origin, as the
+// `sphere::line_in_ball`: the line `f + t d` inside the ball of `radius` about the origin, as the
 // sphere primitive computes it.
 fn csg_ball(f: vec3<f32>, d: vec3<f32>, radius: f32) -> CsgRoots {
     let a = dot(d, d);

@@ -1085,7 +1085,7 @@ fn offset_ray_origin(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return q;
 }
 
-// `optics::basis` (Duff et al. 2017): two unit vectors completing unit `n` to an
+// `sampling::basis` (Duff et al. 2017): two unit vectors completing unit `n` to an
 // orthonormal basis.
 fn frame_basis(n: vec3<f32>) -> array<vec3<f32>, 2> {
     let sgn = copysign(1.0, n.z);
@@ -1107,7 +1107,7 @@ fn cosine_hemisphere(n: vec3<f32>, u1: f32, u2: f32) -> vec3<f32> {
     return normalize(t * (r * cos(phi)) + bt * (r * sin(phi)) + n * z);
 }
 
-// `optics::triangle_point`.
+// `sampling::triangle_point`.
 fn triangle_point(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, u1: f32, u2: f32) -> vec3<f32> {
     let s = sqrt(u1);
     let w0 = 1.0 - s;
