@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The GPU measurement on the device (an NVIDIA H200 lent for a few minutes; see README.md,
+# The GPU measurement on the device (an NVIDIA H200 lent for a few minutes; see docs/gpu.md,
 # "GPU"): the BVH2 kernels (`wgpu`) against the CWBVH kernels (`wgpu-cwbvh`) with
 # `raybench compare` on bunny, sponza and terrain:708 (primary, incoherent and shadow rays,
 # path tracing at 1 spp), then the GPU criterion suite with short measurement times. Runs

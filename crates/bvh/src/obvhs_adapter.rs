@@ -32,7 +32,7 @@
 //! a hit, found by `tests/tests/adversarial.rs`), skip obvhs and test every primitive, as
 //! naive does.
 //!
-//! Remaining limitation (documented in the README): a hit whose padded box the ray leaves
+//! Remaining limitation (documented in docs/strategies.md): a hit whose padded box the ray leaves
 //! within about `1.5e-9` of the scene's size from its origin can be missed; the padding
 //! (`6.1e-5` of the size) makes that impossible for any hit inside the scene's box. The
 //! equivalence tests (every built-in scene, primary and incoherent rays, rays on surfaces,

@@ -323,7 +323,7 @@ mod tests {
             .sum()
     }
 
-    /// Issue 18: an L-shaped hexagon is fanned into the wrong shape (a triangle outside the
+    /// An L-shaped hexagon is fanned into the wrong shape (a triangle outside the
     /// L, one flipped); ear clipping covers the L exactly.
     #[test]
     fn non_convex_polygons_are_ear_clipped() {

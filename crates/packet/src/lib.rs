@@ -210,7 +210,7 @@ impl PacketAccel {
 }
 
 /// Vectors per packet: 16 rays with AVX2, 8 with four lanes (measured against one vector:
-/// see the crate's README section in the workspace README).
+/// see docs/strategies.md).
 const PACKET_VECTORS: usize = 2;
 
 /// The closest hits of a batch: packets where the rays are coherent, single rays otherwise.

@@ -112,7 +112,7 @@ mod tests {
     use super::*;
     use raybench_core::Vec3;
 
-    /// Every text format accepts a leading UTF-8 byte-order mark (issue 18): the first
+    /// Every text format accepts a leading UTF-8 byte-order mark: the first
     /// line is not swallowed into a garbage keyword.
     #[test]
     fn every_text_format_accepts_a_byte_order_mark() {

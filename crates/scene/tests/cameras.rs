@@ -1,4 +1,4 @@
-//! glTF cameras (issue 20): perspective cameras placed by their nodes' world transforms
+//! glTF cameras: perspective cameras placed by their nodes' world transforms
 //! become the scene's named cameras; orthographic ones are skipped with a warning.
 
 use raybench_core::Vec3;

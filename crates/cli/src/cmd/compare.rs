@@ -44,7 +44,7 @@ pub(crate) struct CompareCmd {
     pub(crate) flatten: bool,
 }
 
-/// One row of `raybench compare --json`; the key set is documented in the README.
+/// One row of `raybench compare --json`; the key set is documented in docs/cli.md.
 #[derive(Serialize)]
 pub(crate) struct CompareRow {
     pub(crate) backend: String,

@@ -15,7 +15,7 @@ pub(crate) struct ReportCmd {
     /// is a software one (lavapipe), saying so.
     #[arg(long)]
     pub(crate) quick: bool,
-    /// Comma-separated scenes (default: the built-in list; see the README).
+    /// Comma-separated scenes (default: the built-in scenes of the matrix; `raybench scenes` lists them).
     #[arg(long, value_delimiter = ',')]
     pub(crate) scenes: Option<Vec<String>>,
     /// Comma-separated backends, or build presets as BACKEND:PRESET (default: every backend

@@ -52,7 +52,7 @@ pub enum Solid {
         /// Outward normal (normalised on construction).
         normal: Vec3,
     },
-    // Issue 10, tori and quadrics.
+    // Tori and quadrics.
     /// An axis-aligned ellipsoid: the unit ball scaled by `radii`, centred at `center` (a
     /// rotated one is a [`crate::CsgNode::Placed`] ellipsoid).
     Ellipsoid {

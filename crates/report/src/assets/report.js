@@ -1,4 +1,4 @@
-// REPORT.html's script (inlined by crates/cli/src/report/html.rs): the image viewers,
+// REPORT.html's script (inlined by crates/report/src/html.rs): the image viewers,
 // sortable tables and the table of contents' highlight. Plain JavaScript, no framework.
 "use strict";
 

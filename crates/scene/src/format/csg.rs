@@ -46,7 +46,7 @@ enum CsgNodeDesc {
         normal: V3,
         transform: Option<TransformDesc>,
     },
-    // Issue 10, tori and quadrics.
+    // Tori and quadrics.
     Torus(TorusDesc),
     Ellipsoid(EllipsoidDesc),
     Paraboloid(RevolvedDesc),

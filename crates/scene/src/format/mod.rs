@@ -333,7 +333,7 @@ enum ObjectDesc {
     Generator(generator::GeneratorDesc),
     HeightField(heightfield::HeightFieldDesc),
     Csg(csg::CsgDesc),
-    // Issue 10, analytic solids as objects: each is a one-leaf CSG primitive.
+    // Analytic solids as objects: each is a one-leaf CSG primitive.
     Torus(csg::TorusDesc),
     Ellipsoid(csg::EllipsoidDesc),
     Cylinder(csg::RevolvedDesc),
@@ -734,7 +734,7 @@ mod tests {
         }
     }
 
-    /// Issue 20: a `[[camera]]` list of named cameras besides the single `[camera]` table;
+    /// A `[[camera]]` list of named cameras besides the single `[camera]` table;
     /// the first is rendered, `select_camera` picks another by name or index.
     #[test]
     fn camera_lists() {
@@ -803,7 +803,7 @@ mod tests {
         }
     }
 
-    /// Issue 18: an error in the second object names it, its kind and its line, and an
+    /// An error in the second object names it, its kind and its line, and an
     /// unknown key points at the key's own line.
     #[test]
     fn errors_point_at_the_offending_table_and_key() {
@@ -844,7 +844,7 @@ mod tests {
         assert!(e.contains("object 1 (mesh)") && e.contains("scael"), "{e}");
     }
 
-    /// Issue 23: named `instance_only` objects (one or a group) become meshes stored once,
+    /// Named `instance_only` objects (one or a group) become meshes stored once,
     /// `[[instance]]` tables place them; ids follow the flat primitives in instance order,
     /// materials come from the mesh or the instance's override.
     #[test]

@@ -1,4 +1,4 @@
-//! Motion in scene files (issue 23): an `[[instance]]`'s `keys` (its placement at frames,
+//! Motion in scene files: an `[[instance]]`'s `keys` (its placement at frames,
 //! interpolated) and `motion` (a procedural spin, orbit or bob on top of its placement), and
 //! an `[[object]]`'s `deform` (a triangle mesh twisted over frames). The motions themselves
 //! and the geometry at a frame are `raybench_core`'s ([`raybench_core::Motion`]).
