@@ -103,6 +103,50 @@ fn the_core_depends_on_what_the_architecture_allows() {
     assert!(!manifest.contains("[build-dependencies]"));
 }
 
+/// The paths of the standard library the core may not name: no clock, threads, files,
+/// processes, environment, network or SIMD intrinsics.
+const OUTSIDE_THE_CORE: [&str; 9] = [
+    "std::time",
+    "Instant",
+    "std::thread",
+    "std::fs",
+    "std::io",
+    "std::process",
+    "std::env",
+    "std::net",
+    "arch::",
+];
+
+/// Which of `files` (path, text) name, in code (comments and literals aside), one of
+/// [`OUTSIDE_THE_CORE`], each with the name it uses.
+fn outside_the_core(files: &[(String, String)]) -> Vec<String> {
+    files
+        .iter()
+        .flat_map(|(path, text)| {
+            let code = strip_comments_and_literals(text);
+            OUTSIDE_THE_CORE
+                .iter()
+                .filter(move |name| code.contains(*name))
+                .map(move |name| format!("{path}: {name}"))
+        })
+        .collect()
+}
+
+/// ARCHITECTURE.md: the core knows nothing of timing, threads, I/O, SIMD intrinsics or GPUs
+/// (the clock lives in the harness: `raybench_registry::TimedRenderer`).
+#[test]
+fn the_core_knows_no_clock_threads_or_io() {
+    let root = root();
+    let dir = root.join("crates/core");
+    let files: Vec<(String, String)> = rust_files(&dir)
+        .into_iter()
+        .map(|f| (format!("crates/core/{}", f.display()), read(&dir.join(&f))))
+        .collect();
+    assert!(files.len() > 20, "found only {} files", files.len());
+    let found = outside_the_core(&files);
+    assert!(found.is_empty(), "the core names:\n{}", found.join("\n"));
+}
+
 /// Which files of `files` (path, text) name the `wgpu` crate: a Cargo.toml with a `wgpu`
 /// dependency key in any section, or Rust code (comments and literals aside) with a path
 /// `wgpu::` that is not the end of a longer name (`raybench_wgpu::` is not `wgpu::`).
@@ -193,6 +237,20 @@ fn the_dependency_checks_can_fail() {
         ),
     ];
     assert_eq!(names_wgpu(&files), ["a/Cargo.toml", "c.rs"]);
+    let core = [
+        (
+            "e.rs".to_owned(),
+            "fn f() { let t = std::time::Instant::now(); }\n".to_owned(),
+        ),
+        (
+            "f.rs".to_owned(),
+            "// std::fs\nconst S: &str = \"std::io\";\n".to_owned(),
+        ),
+    ];
+    assert_eq!(
+        outside_the_core(&core),
+        ["e.rs: std::time", "e.rs: Instant"]
+    );
     assert!(LAYERS.iter().any(|(l, _)| *l == "core"));
 }
 

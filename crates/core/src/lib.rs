@@ -41,10 +41,7 @@ pub use frame::{Frame, FrameStats, NO_HIT, Timings};
 pub use light_sampling::LightSample;
 pub use material::{Checker, Light, Material, MaterialKind};
 pub use ray_sets::RaySet;
-pub use renderer::{
-    LightSampling, Mode, OccludedRays, RenderError, RenderSettings, Renderer, TracedRays,
-    UpdatePolicy,
-};
+pub use renderer::{LightSampling, Mode, RenderError, RenderSettings, Renderer, UpdatePolicy};
 pub use scene::{ObjectInfo, Scene, SceneBuilder, SurfaceShading};
 pub use texture::{MAX_TEXTURE_SIZE, Texture, Wrap, srgb_to_linear};
 pub use voxels::{

@@ -241,17 +241,13 @@ impl fmt::Display for RenderError {
 
 impl std::error::Error for RenderError {}
 
-/// What [`Renderer::trace_rays_timed`] returns: a closest hit per ray, the work counters
-/// when counted, and the timing phases.
-pub type TracedRays = (Vec<Option<Hit>>, Option<RayCounters>, Timings);
-
-/// What [`Renderer::occlude_rays_timed`] returns: per ray whether anything lies in its
-/// interval, the work counters when counted, and the timing phases.
-pub type OccludedRays = (Vec<bool>, Option<RayCounters>, Timings);
-
 /// A frame-level renderer: one backend, prepared once for a scene, then rendering any number
-/// of frames. The harness picks renderers by name (`Box<dyn Renderer>`); the CPU backends
-/// share one generic implementation over [`crate::Accel`].
+/// of frames. The CPU backends share one generic implementation over [`crate::Accel`].
+///
+/// This is what an integrator and a front end need; the clock stays outside core. A backend
+/// reports the phases it alone can see ([`Timings`]: a GPU's upload, execution and readback)
+/// as plain durations, and the harness's own contract (timed ray batches, the device a
+/// backend runs on) is `raybench_registry::TimedRenderer`, built on this trait.
 pub trait Renderer: Send + Sync {
     /// Short name (`naive`, `bvh`, ...).
     fn name(&self) -> &str;
@@ -265,12 +261,6 @@ pub trait Renderer: Send + Sync {
     /// The reason it cannot run.
     fn availability(&self) -> Result<(), String> {
         Ok(())
-    }
-
-    /// The device the backend runs on, when it is not this machine's CPU (a GPU adapter's
-    /// name, type and driver), for `raybench backends` and the report's machine section.
-    fn device(&self) -> Option<String> {
-        None
     }
 
     /// Whether the backend supports every primitive kind and feature of `scene`.
@@ -365,20 +355,6 @@ pub trait Renderer: Send + Sync {
         )))
     }
 
-    /// [`Renderer::trace_rays`] with the timing of its phases, named as a frame's
-    /// [`Frame::timings`] are. The default times the whole call as `render`; a backend on
-    /// another device splits it into `upload`, `gpu` (execution) and `readback`.
-    ///
-    /// # Errors
-    /// As [`Renderer::trace_rays`].
-    fn trace_rays_timed(&self, rays: &[Ray], count: bool) -> Result<TracedRays, RenderError> {
-        let start = std::time::Instant::now();
-        let (hits, counters) = self.trace_rays(rays, count)?;
-        let mut timings = Timings::default();
-        timings.push("render", start.elapsed().as_secs_f64());
-        Ok((hits, counters, timings))
-    }
-
     /// Any-hit queries (shadow and ambient-occlusion rays): per ray, whether any primitive
     /// is hit within its `[t_min, t_max]`, with the work counters when `count` is set and
     /// the backend counts. The answer must equal `trace_rays(..)[i].is_some()` for every
@@ -397,20 +373,5 @@ pub trait Renderer: Send + Sync {
     ) -> Result<(Vec<bool>, Option<RayCounters>), RenderError> {
         let (hits, counters) = self.trace_rays(rays, count)?;
         Ok((hits.iter().map(Option::is_some).collect(), counters))
-    }
-
-    /// [`Renderer::occlude_rays`] with the timing of its phases, as
-    /// [`Renderer::trace_rays_timed`]. The default times the whole call as `render`; a
-    /// backend on another device that answers through [`Renderer::trace_rays_timed`]
-    /// overrides it to keep its phases.
-    ///
-    /// # Errors
-    /// As [`Renderer::trace_rays`].
-    fn occlude_rays_timed(&self, rays: &[Ray], count: bool) -> Result<OccludedRays, RenderError> {
-        let start = std::time::Instant::now();
-        let (occluded, counters) = self.occlude_rays(rays, count)?;
-        let mut timings = Timings::default();
-        timings.push("render", start.elapsed().as_secs_f64());
-        Ok((occluded, counters, timings))
     }
 }

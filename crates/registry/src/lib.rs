@@ -12,6 +12,9 @@ pub mod measure;
 pub mod presets;
 pub mod progress;
 pub mod rays_file;
+mod timed;
+
+pub use timed::{OccludedRays, TimedRenderer, TracedRays};
 
 /// The version and the source revision it was built from (`0.1.0 (3f2a9c1)`; `unknown`
 /// outside a git checkout, see `build.rs`): what `raybench --version` prints and every
@@ -24,7 +27,7 @@ pub const VERSION: &str = concat!(
 );
 
 use raybench_bvh::{Bvh, ObvhsAccel};
-use raybench_core::{Frame, Mode, NO_HIT, RaySet, RenderSettings, Renderer};
+use raybench_core::{Frame, Mode, NO_HIT, RaySet, RenderSettings};
 use raybench_grid::{Grid, TwoLevelGrid};
 use raybench_naive::NaiveAccel;
 use raybench_packet::{Isa, PacketAccel, PacketParams};
@@ -122,7 +125,7 @@ pub struct Backend {
     /// backend's instruction set and lanes: `avx2 (8 lanes)`); `None` for most.
     pub detail: Option<fn() -> String>,
     /// Makes a fresh, unprepared renderer.
-    pub make: fn() -> Box<dyn Renderer>,
+    pub make: fn() -> Box<dyn TimedRenderer>,
 }
 
 impl Backend {
@@ -412,7 +415,7 @@ fn packet_detail() -> String {
 }
 
 /// The packet backend pinned to `isa`, unavailable where the CPU lacks it.
-fn packet_with(isa: Isa, name: &'static str, description: &'static str) -> Box<dyn Renderer> {
+fn packet_with(isa: Isa, name: &'static str, description: &'static str) -> Box<dyn TimedRenderer> {
     let check = match isa {
         Isa::Sse41 => || {
             Isa::Sse41

@@ -1,12 +1,11 @@
 //! Measuring one workload with one backend: the shared core of `compare`, `info` and
 //! `report`.
 
+use crate::TimedRenderer;
 use crate::{Backend, Roles};
 use anyhow::{Result, anyhow, bail};
 use raybench_core::ray_sets::{self, DerivedParams};
-use raybench_core::{
-    NO_HIT, Ray, RayCounters, RaySet, RenderSettings, Renderer, Scene, Timings, limits,
-};
+use raybench_core::{NO_HIT, Ray, RayCounters, RaySet, RenderSettings, Scene, Timings, limits};
 use raybench_render::TILE_SIZE;
 use std::sync::Arc;
 
@@ -23,8 +22,8 @@ pub const OCCLUDED: u32 = 0;
 pub struct RayBatch {
     /// The rays.
     pub rays: Vec<Ray>,
-    /// Any hit ([`Renderer::occlude_rays_timed`]) rather than the closest hit
-    /// ([`Renderer::trace_rays_timed`]).
+    /// Any hit ([`TimedRenderer::occlude_rays_timed`]) rather than the closest hit
+    /// ([`TimedRenderer::trace_rays_timed`]).
     pub any_hit: bool,
 }
 
@@ -151,7 +150,7 @@ pub struct Measured {
 /// # Errors
 /// When rendering or tracing fails.
 pub fn measure(
-    r: &dyn Renderer,
+    r: &dyn TimedRenderer,
     settings: &RenderSettings,
     rays: Option<&RayBatch>,
     count: bool,
@@ -213,7 +212,7 @@ pub fn timed_seconds(phases: &Timings) -> f64 {
 /// A renderer prepared for a scene.
 pub struct Prepared {
     /// The renderer.
-    pub renderer: Box<dyn Renderer>,
+    pub renderer: Box<dyn TimedRenderer>,
     /// Seconds of preparation, all phases.
     pub build: f64,
     /// The phases (`build`; a GPU backend adds `upload`).

@@ -10,9 +10,9 @@
 //! run only when named. Every backend's default preset ([`Preset::default`]) builds what
 //! its entry in [`crate::BACKENDS`] builds.
 
-use crate::{Backend, Roles};
+use crate::{Backend, Roles, TimedRenderer};
 use raybench_bvh::{Bvh, BvhParams, ObvhsAccel, ObvhsBuildParams};
-use raybench_core::Renderer;
+
 use raybench_grid::{Grid, GridParams};
 use raybench_packet::{PacketAccel, PacketParams};
 #[cfg(feature = "embree")]
@@ -53,7 +53,7 @@ macro_rules! preset {
                         concat!($backend, ":", $preset),
                         $description,
                         Box::new($build),
-                    )) as Box<dyn Renderer>
+                    )) as Box<dyn TimedRenderer>
                 },
             },
         }

@@ -4,9 +4,9 @@
 
 use crate::results::{Results, Skipped, Timing};
 use anyhow::Result;
-use raybench_core::{Mode, RaySet, RenderSettings, Renderer, Scene};
-use raybench_registry::Backend;
+use raybench_core::{Mode, RaySet, RenderSettings, Scene};
 use raybench_registry::measure::{Measured, RayBatch, measure};
+use raybench_registry::{Backend, TimedRenderer};
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -192,7 +192,7 @@ impl Ctx<'_> {
     /// Warm-up (counted, kept for the comparison) and timed repetitions.
     pub(crate) fn measure(
         &self,
-        r: &dyn Renderer,
+        r: &dyn TimedRenderer,
         w: &Workload,
         rays: Option<&RayBatch>,
     ) -> Result<Measurement> {
@@ -202,7 +202,7 @@ impl Ctx<'_> {
     /// [`Ctx::measure`] with explicit settings (a camera chosen).
     pub(crate) fn measure_settings(
         &self,
-        r: &dyn Renderer,
+        r: &dyn TimedRenderer,
         settings: &RenderSettings,
         rays: Option<&RayBatch>,
     ) -> Result<Measurement> {
@@ -226,7 +226,7 @@ impl Ctx<'_> {
     /// their sum ([`Measurement::sum`]).
     pub(crate) fn measure_views(
         &self,
-        r: &dyn Renderer,
+        r: &dyn TimedRenderer,
         w: &Workload,
         views: &Views,
     ) -> Result<(Measurement, Vec<Measurement>)> {

@@ -41,7 +41,7 @@ pub use constants::{KERNEL_FILES, KERNELS_DIR_VAR, kernel_source, wgsl_constants
 pub use context::{AdapterRequest, describe};
 pub use data::check_kinds;
 pub use records::Layout;
-pub use renderer::WgpuRenderer;
+pub use renderer::{Phased, WgpuRenderer};
 
 /// Whether a wgpu adapter can be opened here (`WGPU_BACKEND`, `WGPU_ADAPTER_NAME`), or why
 /// not.

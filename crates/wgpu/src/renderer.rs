@@ -7,9 +7,9 @@ use crate::plan;
 use crate::records::{Features, GpuOut, GpuRay, Layout, Params, STACK_SIZE};
 use raybench_bvh::Bvh;
 use raybench_core::{
-    Accel, AccelStats, Frame, FrameStats, Hit, Mode, NO_HIT, OccludedRays, PrimHit, QualityParams,
-    Ray, RayCounters, RenderError, RenderSettings, Renderer, Scene, StructureQuality, Timings,
-    TracedRays, Vec3, limits,
+    Accel, AccelStats, Frame, FrameStats, Hit, Mode, NO_HIT, PrimHit, QualityParams, Ray,
+    RayCounters, RenderError, RenderSettings, Renderer, Scene, StructureQuality, Timings, Vec3,
+    limits,
 };
 use std::collections::HashMap;
 use std::num::NonZeroU64;
@@ -571,10 +571,6 @@ impl Renderer for WgpuRenderer {
         gpu(&self.request).map(|_| ())
     }
 
-    fn device(&self) -> Option<String> {
-        gpu(&self.request).ok().map(|g| g.describe())
-    }
-
     /// Every mode has a kernel; once prepared, the volume modes are refused where the
     /// scene's volumes did not fit the device (`SceneData::volumes`).
     fn supports_mode(&self, mode: Mode) -> Result<(), String> {
@@ -886,21 +882,41 @@ impl Renderer for WgpuRenderer {
         rays: &[Ray],
         count: bool,
     ) -> Result<(Vec<Option<Hit>>, Option<RayCounters>), RenderError> {
-        self.trace_rays_timed(rays, count).map(|(h, c, _)| (h, c))
+        self.trace_rays_phased(rays, count).map(|(h, c, _)| (h, c))
     }
 
-    /// Any hit through the any-hit kernel ([`Renderer::occlude_rays_timed`]).
+    /// Any hit through the any-hit kernel ([`WgpuRenderer::occlude_rays_phased`]).
     fn occlude_rays(
         &self,
         rays: &[Ray],
         count: bool,
     ) -> Result<(Vec<bool>, Option<RayCounters>), RenderError> {
-        self.occlude_rays_timed(rays, count).map(|(b, c, _)| (b, c))
+        self.occlude_rays_phased(rays, count)
+            .map(|(b, c, _)| (b, c))
+    }
+}
+
+/// An answer per ray of an explicit batch, the work counters when counted, and the
+/// `upload`, `gpu` and `readback` phases.
+pub type Phased<T> = (Vec<T>, Option<RayCounters>, Timings);
+
+impl WgpuRenderer {
+    /// The adapter's name, type and driver, when one can be had.
+    #[must_use]
+    pub fn adapter(&self) -> Option<String> {
+        gpu(&self.request).ok().map(|g| g.describe())
     }
 
     /// Any hit through the any-hit kernel (`occlude_kernel`: the traversal stops at the
     /// first hit), with `upload`, `gpu` and `readback` phases.
-    fn occlude_rays_timed(&self, rays: &[Ray], count: bool) -> Result<OccludedRays, RenderError> {
+    ///
+    /// # Errors
+    /// As [`Renderer::trace_rays`].
+    pub fn occlude_rays_phased(
+        &self,
+        rays: &[Ray],
+        count: bool,
+    ) -> Result<Phased<bool>, RenderError> {
         let mut blocked = Vec::with_capacity(rays.len());
         let (counters, timings) = self.explicit_rays(rays, count, OCCLUDE_ENTRY, |o, _| {
             blocked.push(o.id != NO_HIT)
@@ -908,7 +924,16 @@ impl Renderer for WgpuRenderer {
         Ok((blocked, counters, timings))
     }
 
-    fn trace_rays_timed(&self, rays: &[Ray], count: bool) -> Result<TracedRays, RenderError> {
+    /// Closest hits of `rays` through the closest-hit kernel, with `upload`, `gpu` and
+    /// `readback` phases.
+    ///
+    /// # Errors
+    /// As [`Renderer::trace_rays`].
+    pub fn trace_rays_phased(
+        &self,
+        rays: &[Ray],
+        count: bool,
+    ) -> Result<Phased<Option<Hit>>, RenderError> {
         let p = self.prepared.as_ref().ok_or(RenderError::NotPrepared)?;
         let entry = entry_point(None).map_err(RenderError::Unsupported)?;
         let g = &p.scene.geometry;
@@ -929,9 +954,7 @@ impl Renderer for WgpuRenderer {
         })?;
         Ok((hits, counters, timings))
     }
-}
 
-impl WgpuRenderer {
     /// Runs kernel `entry` on explicit `rays` in chunks that fit a dispatch and the output
     /// buffer, handing each ray's output record to `each` in order; returns the counters and
     /// the `upload`, `gpu`, `readback` and `render` phases.

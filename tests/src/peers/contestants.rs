@@ -5,7 +5,7 @@
 use crate::obvhs_peer::{ObvhsPeer, ObvhsTree};
 use obvhs::bvh2::Bvh2;
 use obvhs::cwbvh::CwBvh;
-use raybench_core::Renderer;
+use raybench_registry::TimedRenderer;
 use raybench_render::CpuRenderer;
 use serde::Serialize;
 
@@ -30,7 +30,7 @@ pub struct Contestant {
     /// One line of description.
     pub description: &'static str,
     /// Makes a fresh, unprepared renderer.
-    pub make: fn() -> Box<dyn Renderer>,
+    pub make: fn() -> Box<dyn TimedRenderer>,
 }
 
 /// Every contestant, in table order: the registry's exact CPU backends except the brute
@@ -71,14 +71,14 @@ pub fn select(names: &[String]) -> Result<Vec<Contestant>, String> {
 }
 
 /// The registered peer `name` (`bvh-crate`).
-fn registered(name: &str) -> Box<dyn Renderer> {
+fn registered(name: &str) -> Box<dyn TimedRenderer> {
     (raybench_registry::backend(name)
         .unwrap_or_else(|e| panic!("{e}"))
         .make)()
 }
 
 /// An obvhs tree of type `T` behind a renderer.
-fn obvhs_renderer<T: ObvhsTree>(description: &'static str) -> Box<dyn Renderer> {
+fn obvhs_renderer<T: ObvhsTree>(description: &'static str) -> Box<dyn TimedRenderer> {
     Box::new(
         CpuRenderer::<ObvhsPeer<T>>::with_default_build(T::NAME, description)
             .with_support_check(ObvhsPeer::<T>::supports)
@@ -151,7 +151,9 @@ pub mod embree {
     pub const PACKET_DEFAULT: &str = "embree16-default";
 
     #[cfg(feature = "embree")]
-    use raybench_core::{Accel, Geometry, Renderer};
+    use super::TimedRenderer;
+    #[cfg(feature = "embree")]
+    use raybench_core::{Accel, Geometry};
     #[cfg(feature = "embree")]
     use raybench_peers::{EmbreeAccel, EmbreeMode, EmbreePacketAccel};
     #[cfg(feature = "embree")]
@@ -163,7 +165,7 @@ pub mod embree {
     fn renderer<A: Accel>(
         name: &'static str,
         build: impl Fn(Arc<Geometry>) -> A + Send + Sync + 'static,
-    ) -> Box<dyn Renderer> {
+    ) -> Box<dyn TimedRenderer> {
         Box::new(
             raybench_render::CpuRenderer::<A>::new(name, name, Box::new(build))
                 .with_availability(raybench_peers::embree_availability)
@@ -174,13 +176,13 @@ pub mod embree {
 
     /// Single rays in `mode`.
     #[cfg(feature = "embree")]
-    pub(super) fn single(name: &'static str, mode: EmbreeMode) -> Box<dyn Renderer> {
+    pub(super) fn single(name: &'static str, mode: EmbreeMode) -> Box<dyn TimedRenderer> {
         renderer(name, move |g| EmbreeAccel::build_with_mode(g, mode))
     }
 
     /// 16-ray packets in `mode`.
     #[cfg(feature = "embree")]
-    pub(super) fn packet(name: &'static str, mode: EmbreeMode) -> Box<dyn Renderer> {
+    pub(super) fn packet(name: &'static str, mode: EmbreeMode) -> Box<dyn TimedRenderer> {
         renderer(name, move |g| {
             EmbreePacketAccel::build_with(g, raybench_peers::DEFAULT_PACKET_WIDTH, mode)
         })
