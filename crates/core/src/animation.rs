@@ -3,7 +3,8 @@
 //! frame `f` (its geometry through [`crate::Motion::geometry_at`]; cameras, materials,
 //! lights and ids are those of every frame).
 
-use crate::scene::{Scene, SceneBuilder};
+use crate::builder::SceneBuilder;
+use crate::scene::Scene;
 use crate::{Deform, DeformTarget, Deformation, InstanceMotion, SceneError, Shape};
 use std::sync::Arc;
 

@@ -15,6 +15,7 @@
 
 mod animation;
 mod attributes;
+mod builder;
 mod camera;
 mod emitters;
 mod environment;
@@ -33,6 +34,7 @@ pub mod voxels;
 pub use raybench_geometry::*;
 
 pub use attributes::{AttributeRange, AttributesAt, ShadingAttributes, VertexAttributes};
+pub use builder::SceneBuilder;
 pub use camera::{Camera, CameraOverrides, CameraRays, NamedCamera};
 pub use emitters::{Chosen, Emitters};
 pub use environment::{Environment, luminance};
@@ -42,7 +44,7 @@ pub use light_sampling::LightSample;
 pub use material::{Checker, Light, Material, MaterialKind};
 pub use ray_sets::RaySet;
 pub use renderer::{LightSampling, Mode, RenderError, RenderSettings, Renderer, UpdatePolicy};
-pub use scene::{ObjectInfo, Scene, SceneBuilder, SurfaceShading};
+pub use scene::{ObjectInfo, Scene, SurfaceShading};
 pub use texture::{MAX_TEXTURE_SIZE, Texture, Wrap, srgb_to_linear};
 pub use voxels::{
     Sampling, TransferFunction, TransferPoint, Volume, VolumeData, VolumeParams, VolumeSample,

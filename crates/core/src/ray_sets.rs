@@ -400,8 +400,8 @@ mod tests {
         assert_eq!(rays[5], cam.rays(4, 3).center_ray(1, 1));
     }
 
+    use crate::builder::SceneBuilder;
     use crate::material::Material;
-    use crate::scene::SceneBuilder;
     use crate::{Shape, Sphere, Triangle};
 
     /// A unit sphere at the origin, a point light, a directional light and an emissive
