@@ -8,6 +8,7 @@
 //! reports is `raybench-report`.
 
 pub mod frames;
+pub mod interference;
 pub mod measure;
 pub mod presets;
 pub mod progress;

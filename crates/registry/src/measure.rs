@@ -2,6 +2,7 @@
 //! `report`.
 
 use crate::TimedRenderer;
+use crate::interference::{self, Interference};
 use crate::{Backend, Roles};
 use anyhow::{Result, anyhow, bail};
 use raybench_core::ray_sets::{self, DerivedParams};
@@ -142,6 +143,9 @@ pub struct Measured {
     pub phases: Timings,
     /// The frame's linear colours (primary rays only).
     pub color: Option<Vec<raybench_core::Vec3>>,
+    /// What the scheduler says of the call: how long the threads waited for a CPU
+    /// ([`crate::interference`]); `None` where the kernel does not tell.
+    pub interference: Option<Interference>,
 }
 
 /// Renders a frame (primary rays) or traces the given rays once: closest hits, or any
@@ -157,7 +161,8 @@ pub fn measure(
 ) -> Result<Measured> {
     let settings = RenderSettings { count, ..*settings };
     let Some(batch) = rays else {
-        let f = r.render(&settings)?;
+        let (f, interference) = interference::during(|| r.render(&settings));
+        let f = f?;
         return Ok(Measured {
             seconds: timed_seconds(&f.timings),
             phases: f.timings,
@@ -166,8 +171,18 @@ pub fn measure(
             ids: f.ids,
             t: f.t,
             color: Some(f.color),
+            interference,
         });
     };
+    let (result, interference) = interference::during(|| traced(r, batch, count));
+    Ok(Measured {
+        interference,
+        ..result?
+    })
+}
+
+/// `batch` traced once (without the scheduler's account).
+fn traced(r: &dyn TimedRenderer, batch: &RayBatch, count: bool) -> Result<Measured> {
     let (ids, t, counters, phases) = if batch.any_hit {
         let (occluded, counters, phases) = r.occlude_rays_timed(&batch.rays, count)?;
         let ids = occluded
@@ -196,6 +211,7 @@ pub fn measure(
         rays: batch.rays.len() as u64,
         counters,
         color: None,
+        interference: None,
     })
 }
 

@@ -1,10 +1,12 @@
 //! Before and after: a report's runs set beside an earlier `results.json`
 //! (`raybench compare-results OLD NEW`, `raybench report --baseline DIR`), the way a change
-//! is judged. Per workload (scene, mode, ray set, size, samples, backend) the speed ratio,
-//! and whether it exceeds the noise of both runs: the ranges of speeds their timed
-//! repetitions span (rays over the slowest and over the fastest repetition) do not overlap.
+//! is judged. Per workload (scene, mode, ray set, size, samples, backend) the speed ratio
+//! with its confidence interval, and a change only where that interval excludes parity and
+//! the change is at least [`crate::stats::MIN_EFFECT`] ([`crate::stats::change`]); where
+//! either run has a single repetition, the noise is unknown and no change is claimed.
 
 use crate::results::{Results, Run};
+use crate::stats;
 use anyhow::{Context, Result};
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -21,9 +23,12 @@ pub struct Change {
     pub after: f64,
     /// `after / before`: above 1 is faster.
     pub ratio: f64,
-    /// The repetitions' speed ranges do not overlap: the change exceeds both runs' noise.
+    /// The confidence interval of [`Change::ratio`] (`null` when either run has a single
+    /// repetition).
+    pub interval: Option<[f64; 2]>,
+    /// The change exceeds the noise of both runs and the minimum effect.
     pub significant: bool,
-    /// `faster`, `slower` or `within noise`.
+    /// `faster`, `slower`, `within noise` or `noise unknown`.
     pub verdict: &'static str,
 }
 
@@ -40,11 +45,12 @@ pub struct Comparison {
     pub geomean_ratio: Option<f64>,
 }
 
-/// The speeds (Mrays/s) a run's repetitions span: rays over the slowest and the fastest.
-fn speed_range(r: &Run) -> Option<(f64, f64)> {
-    let t = r.seconds.as_ref()?;
-    let rays = r.rays? as f64;
-    (t.min > 0.0 && t.max > 0.0).then(|| (rays / t.max / 1e6, rays / t.min / 1e6))
+/// Seconds per ray of each timed repetition of `r`.
+fn per_ray(r: &Run) -> Vec<f64> {
+    match (&r.seconds, r.rays) {
+        (Some(t), Some(rays)) if rays > 0 => t.samples.iter().map(|s| s / rays as f64).collect(),
+        _ => Vec::new(),
+    }
 }
 
 /// Compares the timed runs of `after` with those of `before`.
@@ -64,22 +70,22 @@ pub fn compare(before: &Results, after: &Results) -> Comparison {
         if vb <= 0.0 {
             continue;
         }
-        let ratio = va / vb;
-        let significant = match (speed_range(b), speed_range(a)) {
-            (Some((b_lo, b_hi)), Some((a_lo, a_hi))) => a_lo > b_hi || a_hi < b_lo,
-            _ => false,
-        };
-        let verdict = match (significant, ratio > 1.0) {
-            (false, _) => "within noise",
-            (true, true) => "faster",
-            (true, false) => "slower",
+        let (before_t, after_t) = (per_ray(b), per_ray(a));
+        // Speed is the inverse of time: before's time over after's is after's speed-up.
+        let (_, interval) = stats::ratio_interval(&before_t, &after_t);
+        let verdict = match stats::change(&after_t, &before_t) {
+            stats::Change::Faster => "faster",
+            stats::Change::Slower => "slower",
+            stats::Change::Same => "within noise",
+            stats::Change::Unknown => "noise unknown",
         };
         out.changes.push(Change {
             workload: key,
             before: vb,
             after: va,
-            ratio,
-            significant,
+            ratio: va / vb,
+            interval: interval.map(|i| [i.lo, i.hi]),
+            significant: matches!(verdict, "faster" | "slower"),
             verdict,
         });
     }
@@ -105,15 +111,18 @@ pub fn compare(before: &Results, after: &Results) -> Comparison {
 pub fn markdown(c: &Comparison, before: &str, after: &str) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "## Before and after\n");
-    let faster = c.changes.iter().filter(|x| x.verdict == "faster").count();
-    let slower = c.changes.iter().filter(|x| x.verdict == "slower").count();
+    let count = |v: &str| c.changes.iter().filter(|x| x.verdict == v).count();
+    let (faster, slower, unknown) = (count("faster"), count("slower"), count("noise unknown"));
     let _ = writeln!(
         s,
         "`{after}` against `{before}`: {} workloads in both, {faster} faster and {slower} slower \
-         beyond the noise of both runs (their repetitions' speed ranges do not overlap), the \
-         rest within noise; geometric mean of the speed ratios {}. Workloads only before: {}; \
-         only after: {}.\n",
+         (the {:.0}% interval of the speed ratio excludes 1 and the change is at least {:.0}%), \
+         {unknown} with a single repetition on either side (noise unknown, no change claimed), \
+         the rest within noise; geometric mean of the speed ratios {}. Workloads only before: \
+         {}; only after: {}.\n",
         c.changes.len(),
+        stats::CONFIDENCE * 100.0,
+        stats::MIN_EFFECT * 100.0,
         c.geomean_ratio
             .map_or_else(|| "-".into(), |g| format!("{g:.3}")),
         c.only_before.len(),
@@ -124,18 +133,21 @@ pub fn markdown(c: &Comparison, before: &str, after: &str) -> String {
     }
     let _ = writeln!(
         s,
-        "| workload | before Mrays/s | after Mrays/s | after / before | verdict |"
+        "| workload | before Mrays/s | after Mrays/s | after / before | interval | verdict |"
     );
-    let _ = writeln!(s, "|---|---:|---:|---:|---|");
+    let _ = writeln!(s, "|---|---:|---:|---:|---|---|");
     for x in &c.changes {
         let verdict = if x.significant {
             format!("**{}**", x.verdict)
         } else {
             x.verdict.to_string()
         };
+        let interval = x
+            .interval
+            .map_or_else(|| "-".into(), |[lo, hi]| format!("{lo:.3}-{hi:.3}"));
         let _ = writeln!(
             s,
-            "| {} | {:.3} | {:.3} | {:.3} | {verdict} |",
+            "| {} | {:.3} | {:.3} | {:.3} | {interval} | {verdict} |",
             x.workload, x.before, x.after, x.ratio
         );
     }
@@ -188,20 +200,23 @@ mod tests {
         }
     }
 
-    /// A change beyond both runs' spreads is faster or slower; one inside them is noise;
-    /// workloads in one run only are listed.
+    /// A change whose ratio interval excludes 1 by the minimum effect is faster or slower;
+    /// one inside the noise is not; a single repetition is noise unknown; workloads in one
+    /// run only are listed.
     #[test]
     fn judges_changes_against_both_runs_noise() {
         let before = results(vec![
-            run("a", vec![1.0, 1.05, 0.98]),
-            run("b", vec![1.0, 1.02, 0.99]),
-            run("c", vec![1.0, 1.01, 0.99]),
+            run("a", vec![1.0, 1.05, 0.98, 1.01, 0.99, 1.02]),
+            run("b", vec![1.0, 1.02, 0.99, 1.01, 1.0, 0.98]),
+            run("c", vec![1.0, 1.01, 0.99, 1.0, 1.02, 0.98]),
+            run("one", vec![1.0]),
             run("gone", vec![1.0]),
         ]);
         let after = results(vec![
-            run("a", vec![0.5, 0.52, 0.51]),
-            run("b", vec![1.01, 0.97, 1.03]),
-            run("c", vec![1.5, 1.4, 1.45]),
+            run("a", vec![0.5, 0.52, 0.51, 0.5, 0.49, 0.51]),
+            run("b", vec![1.01, 0.97, 1.03, 1.0, 0.99, 1.02]),
+            run("c", vec![1.5, 1.4, 1.45, 1.48, 1.42, 1.46]),
+            run("one", vec![0.5]),
             run("new", vec![1.0]),
         ]);
         let c = compare(&before, &after);
@@ -212,16 +227,25 @@ mod tests {
             .collect();
         assert_eq!(
             verdicts,
-            [("a", "faster"), ("b", "within noise"), ("c", "slower")]
+            [
+                ("a", "faster"),
+                ("b", "within noise"),
+                ("c", "slower"),
+                ("one", "noise unknown")
+            ]
         );
-        assert!((c.changes[0].ratio - 1.0 / 0.51).abs() < 1e-9);
+        assert!((c.changes[0].ratio - 1.005 / 0.505).abs() < 1e-9);
+        let [lo, hi] = c.changes[0].interval.unwrap();
+        assert!(lo > 1.0 && lo <= c.changes[0].ratio && c.changes[0].ratio <= hi);
+        assert_eq!(c.changes[3].interval, None);
         assert_eq!(c.only_before.len(), 1);
         assert_eq!(c.only_after.len(), 1);
         let g = c.geomean_ratio.unwrap();
-        let expected = (c.changes.iter().map(|x| x.ratio.ln()).sum::<f64>() / 3.0).exp();
+        let expected = (c.changes.iter().map(|x| x.ratio.ln()).sum::<f64>() / 4.0).exp();
         assert!((g - expected).abs() < 1e-12);
         let md = markdown(&c, "old", "new");
         assert!(md.contains("1 faster and 1 slower"), "{md}");
+        assert!(md.contains("1 with a single repetition"), "{md}");
         assert!(md.contains("| **faster** |"), "{md}");
     }
 }

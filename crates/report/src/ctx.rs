@@ -265,6 +265,7 @@ impl Measurement {
             seconds: 0.0,
             phases: raybench_core::Timings::default(),
             color: None,
+            interference: None,
         };
         let mut phases = raybench_core::Timings::default();
         let reps = each

@@ -1,7 +1,7 @@
 //! Formatting helpers shared by the experiments and the report writers: a leaf module,
 //! it imports nothing of the crate but the results' types.
 
-use crate::results::{Run, Timing};
+use crate::results::{Noise, Run, Timing};
 
 /// A name usable in a file name (generator specs contain `:`).
 pub(crate) fn file_safe(s: &str) -> String {
@@ -16,10 +16,15 @@ pub(crate) fn file_safe(s: &str) -> String {
         .collect()
 }
 
-/// The mark of a noisy measurement in a table (a spread between the fastest and the slowest
-/// repetition above [`crate::results::NOISY_SPREAD`]), empty otherwise.
+/// The mark of a timing's noise in a table: ` †` where the median's interval is wider than
+/// [`crate::results::NOISY_HALF_WIDTH`], ` ?` where a single repetition leaves the noise
+/// unknown, empty otherwise.
 pub(crate) fn noisy_mark(t: &Timing) -> &'static str {
-    if t.noisy() { " †" } else { "" }
+    match t.noise() {
+        Noise::Wide(_) => " †",
+        Noise::Unknown => " ?",
+        Noise::Narrow(_) => "",
+    }
 }
 
 /// The backends of `runs`, in order of first appearance.

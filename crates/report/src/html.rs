@@ -383,7 +383,7 @@ fn table(align: &[Alignment], events: &[Event], s: &mut String) {
                 } else {
                     if text.contains('†') {
                         attrs.push_str(
-                            " class=\"noisy\" title=\"Noisy: the timed repetitions spread by more than 10 %\"",
+                            " class=\"noisy\" title=\"Noisy: the median's 95 % interval is wider than ±5 %\"",
                         );
                     }
                     let _ = write!(s, "<td{attrs}>{inner}</td>");
@@ -606,10 +606,17 @@ fn stats(p: &Pick, reference: &Run) -> String {
         rows.push((
             "render time",
             format!(
-                "{} [{} - {}]{}",
+                "{}{}{}",
                 seconds(t.median),
-                seconds(t.min),
-                seconds(t.max),
+                t.interval.map_or_else(
+                    || " (one repetition: noise unknown)".to_string(),
+                    |[lo, hi]| format!(
+                        " [{} - {}] at {:.0}%",
+                        seconds(lo),
+                        seconds(hi),
+                        t.confidence.unwrap_or(0.0) * 100.0
+                    )
+                ),
                 crate::fmt::noisy_mark(t)
             ),
         ));

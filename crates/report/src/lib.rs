@@ -15,6 +15,7 @@ pub mod images;
 pub mod machine;
 mod markdown;
 pub mod results;
+pub mod stats;
 mod verdict;
 
 pub use ctx::{Options, matrix_scenes};
@@ -23,6 +24,7 @@ use anyhow::{Context, Result, bail};
 use ctx::{Ctx, NAIVE_BUDGET_FULL, NAIVE_BUDGET_QUICK, skip};
 use experiments::{Experiment, Planned};
 use raybench_core::Mode;
+use raybench_registry::interference;
 use raybench_registry::progress::Progress;
 use raybench_registry::{BACKENDS, Backend, Roles, backend};
 use results::{Results, Shard};
@@ -152,6 +154,7 @@ pub fn run(opts: &Options) -> Result<Results> {
     std::fs::create_dir_all(opts.out.join("charts"))?;
     let started = machine::now_utc();
     let wall = Instant::now();
+    let load_before = interference::load_average();
     let mut results = Results {
         schema: results::SCHEMA.into(),
         raybench_version: env!("CARGO_PKG_VERSION").into(),
@@ -163,6 +166,7 @@ pub fn run(opts: &Options) -> Result<Results> {
             wall_seconds: 0.0,
             command: opts.command.clone(),
             quick: opts.quick,
+            load: None,
         }],
         ..Results::default()
     };
@@ -193,6 +197,9 @@ pub fn run(opts: &Options) -> Result<Results> {
         e.run(&ctx, p, &progress, &mut results)?;
     }
     results.shards[0].wall_seconds = wall.elapsed().as_secs_f64();
+    results.shards[0].load = load_before
+        .zip(interference::load_average())
+        .map(|(before, after)| [before, after]);
     results.fit();
     let appendix = before.as_ref().map(|(before, name)| {
         baseline::markdown(

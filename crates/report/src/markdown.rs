@@ -51,7 +51,7 @@ pub fn report(results: &Results, charts: &Charts) -> String {
         let m = &sh.machine;
         let _ = writeln!(
             s,
-            "**Shard {}/{}**{}: {}, {} logical cores ({} worker threads); {}; GPU: {}; {}; {}. Started {} UTC, took {:.0} s.\n\n`{}`\n",
+            "**Shard {}/{}**{}: {}, {} logical cores ({} worker threads); {}; GPU: {}; {}; {}. Started {} UTC, took {:.0} s{}.\n\n`{}`\n",
             sh.index,
             sh.count,
             if sh.quick { " (quick)" } else { "" },
@@ -64,6 +64,10 @@ pub fn report(results: &Results, charts: &Charts) -> String {
             m.version,
             sh.started.trim_end_matches('Z').replace('T', " "),
             sh.wall_seconds,
+            sh.load.map_or_else(String::new, |[before, after]| format!(
+                "; load average {:.2} before, {:.2} after (1 minute)",
+                before[0], after[0]
+            )),
             sh.command
         );
     }
@@ -90,14 +94,14 @@ pub fn report(results: &Results, charts: &Charts) -> String {
          primitive at the same distance, within 1e-4 relative: coincident surfaces, where each \
          library breaks the tie its own way) as matches, with a mean FLIP error of at most \
          {PEER_MAX_FLIP}. PSNR is of the 8-bit sRGB images (`inf`: identical); FLIP is NVIDIA's \
-         perceptual difference (0 = indistinguishable). **†** marks a noisy time: its timed \
-         repetitions spread by more than {:.0}% (slowest over fastest); compare such figures \
-         with care. A scene with several cameras renders every one of them in each \
+         perceptual difference (0 = indistinguishable). **†** marks a noisy time: the 95% \
+         confidence interval of its median is wider than ±{:.0}%; **?** a single repetition, \
+         whose noise is unknown; compare such figures with care. A scene with several cameras renders every one of them in each \
          repetition: its time is that of all its cameras, its Mrays/s their rays over it (so \
          the average over the cameras, weighted by time), and a table per workload gives each \
          camera's own figure.\n",
         PEER_MIN_ID_MATCH * 100.0,
-        crate::results::NOISY_SPREAD * 100.0
+        crate::results::NOISY_HALF_WIDTH * 100.0
     );
     if let Some(p) = &charts.problem {
         let _ = writeln!(s, "> Charts: {p}\n");

@@ -97,6 +97,11 @@ pub struct Shard {
     pub command: String,
     /// Whether it was a `--quick` run.
     pub quick: bool,
+    /// The machine's load averages (1, 5, 15 minutes) when the shard started and when it
+    /// ended; `null` where the system does not tell, and in files written before they were
+    /// recorded.
+    #[serde(default)]
+    pub load: Option<[[f64; 3]; 2]>,
 }
 
 impl Shard {
@@ -138,7 +143,8 @@ pub struct Machine {
     pub version: String,
 }
 
-/// Median, minimum and maximum of the timed repetitions.
+/// The timed repetitions of one workload: their median with its confidence interval, the
+/// extremes, and what the machine did meanwhile.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Timing {
     /// Median seconds.
@@ -147,13 +153,40 @@ pub struct Timing {
     pub min: f64,
     /// Slowest repetition.
     pub max: f64,
-    /// Every repetition, in order.
+    /// Every repetition kept, in order.
     pub samples: Vec<f64>,
+    /// The median's distribution-free confidence interval `[lo, hi]`
+    /// ([`crate::stats::median_interval`]); `null` for a single repetition (noise unknown)
+    /// and in files written before intervals were recorded.
+    #[serde(default)]
+    pub interval: Option<[f64; 2]>,
+    /// The probability that [`Timing::interval`] holds the true median (0.95 or more from
+    /// six repetitions; less with fewer, as stated).
+    #[serde(default)]
+    pub confidence: Option<f64>,
+    /// Repetitions kept although the machine interfered with them (the redo budget was
+    /// spent): see [`raybench_registry::interference`].
+    #[serde(default)]
+    pub contended: u32,
+    /// Repetitions discarded because the machine interfered, and run again.
+    #[serde(default)]
+    pub redone: u32,
 }
 
-/// The spread of timed repetitions, `(max - min) / min`, above which a measurement is
-/// flagged as noisy in the report.
-pub const NOISY_SPREAD: f64 = 0.10;
+/// The half-width of a median's interval, relative to the median, above which a timing is
+/// flagged as noisy in the report: 5 %.
+pub const NOISY_HALF_WIDTH: f64 = 0.05;
+
+/// What a timing says about its own noise.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Noise {
+    /// A single repetition: nothing.
+    Unknown,
+    /// The interval's half-width relative to the median, at most [`NOISY_HALF_WIDTH`].
+    Narrow(f64),
+    /// Wider than that.
+    Wide(f64),
+}
 
 impl Timing {
     /// `(max - min) / min` of the repetitions (0 for one repetition).
@@ -166,22 +199,51 @@ impl Timing {
         }
     }
 
-    /// Whether the repetitions spread by more than [`NOISY_SPREAD`].
+    /// The noise the median's interval shows; for files without intervals, the interval
+    /// computed from the samples.
     #[must_use]
-    pub fn noisy(&self) -> bool {
-        self.spread() > NOISY_SPREAD
+    pub fn noise(&self) -> Noise {
+        let interval = self
+            .interval
+            .or_else(|| crate::stats::median_interval(&self.samples).map(|i| [i.lo, i.hi]));
+        match interval {
+            None => Noise::Unknown,
+            Some([lo, hi]) => {
+                let half = if self.median > 0.0 {
+                    0.5 * (hi - lo) / self.median
+                } else {
+                    0.0
+                };
+                if half > NOISY_HALF_WIDTH {
+                    Noise::Wide(half)
+                } else {
+                    Noise::Narrow(half)
+                }
+            }
+        }
     }
 
-    /// The timing of `samples` (at least one).
+    /// Whether the median's interval is wider than [`NOISY_HALF_WIDTH`].
+    #[must_use]
+    pub fn noisy(&self) -> bool {
+        matches!(self.noise(), Noise::Wide(_))
+    }
+
+    /// The timing of `samples` (at least one), none contended.
     #[must_use]
     pub fn of(samples: Vec<f64>) -> Self {
         let min = samples.iter().copied().fold(f64::INFINITY, f64::min);
         let max = samples.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let interval = crate::stats::median_interval(&samples);
         Self {
-            median: raybench_registry::measure::median(samples.clone()),
+            median: crate::stats::median(&samples).unwrap_or(0.0),
             min,
             max,
+            interval: interval.map(|i| [i.lo, i.hi]),
+            confidence: interval.map(|i| i.confidence),
             samples,
+            contended: 0,
+            redone: 0,
         }
     }
 }
@@ -827,8 +889,22 @@ mod tests {
     }
 
     #[test]
-    fn timing_median_and_spread() {
+    fn timing_median_interval_and_noise() {
         let t = Timing::of(vec![3.0, 1.0, 2.0]);
         assert_eq!((t.median, t.min, t.max), (2.0, 1.0, 3.0));
+        assert_eq!((t.interval, t.confidence), (Some([1.0, 3.0]), Some(0.75)));
+        assert_eq!(t.noise(), Noise::Wide(0.5));
+        let one = Timing::of(vec![1.0]);
+        assert_eq!((one.interval, one.noise()), (None, Noise::Unknown));
+        assert!(!one.noisy());
+        let quiet = Timing::of(vec![1.0, 1.01, 0.99, 1.0, 1.02, 0.98]);
+        assert!(matches!(quiet.noise(), Noise::Narrow(h) if (h - 0.02).abs() < 1e-9));
+        // A file written before intervals: computed from its samples.
+        let old: Timing = serde_json::from_str(
+            r#"{"median": 2.0, "min": 1.0, "max": 3.0, "samples": [1.0, 2.0, 3.0]}"#,
+        )
+        .unwrap();
+        assert_eq!((old.interval, old.contended, old.redone), (None, 0, 0));
+        assert_eq!(old.noise(), Noise::Wide(0.5));
     }
 }

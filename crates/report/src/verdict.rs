@@ -5,7 +5,8 @@
 //! the scaling slopes compare with the theory the report states.
 
 use crate::fmt::noisy_mark;
-use crate::results::{Fit, Results, Run};
+use crate::results::{Fit, NOISY_HALF_WIDTH, Noise, Results, Run, Timing};
+use crate::stats::{self, Fastest};
 use raybench_registry::Roles;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -47,7 +48,91 @@ fn valid(r: &Run) -> bool {
     r.status == "ok" && r.mrays_per_s.is_some() && r.equality.as_ref().is_none_or(|e| e.pass)
 }
 
-/// The fastest valid backend per scene and workload kind, and its speed-ups.
+/// Seconds per ray of each timed repetition of `r` (the repetitions of backends that trace
+/// the same rays compare directly; Mrays/s is their inverse).
+fn per_ray(r: &Run) -> Vec<f64> {
+    match (&r.seconds, r.rays) {
+        (Some(t), Some(rays)) if rays > 0 => t.samples.iter().map(|s| s / rays as f64).collect(),
+        _ => Vec::new(),
+    }
+}
+
+/// `x` as a speed-up factor: two decimals below 10, none above.
+fn factor(x: f64) -> String {
+    if x >= 10.0 {
+        format!("{x:.0}")
+    } else {
+        format!("{x:.2}")
+    }
+}
+
+/// How much faster `best` is than `other`, with the ratio's interval where both have
+/// repetitions enough: `1.95x [1.90-2.01] bvh`.
+fn speed_up(best: &Run, other: &Run) -> String {
+    let (ratio, interval) = stats::ratio_interval(&per_ray(other), &per_ray(best));
+    match interval {
+        Some(i) => format!(
+            "{}x [{}-{}] {}",
+            factor(ratio),
+            factor(i.lo),
+            factor(i.hi),
+            other.backend
+        ),
+        None => format!("{}x {}", factor(ratio), other.backend),
+    }
+}
+
+/// The verdict's cell for one scene and workload kind: the fastest valid backend where its
+/// interval separates it from every other, else the backends that tie with it.
+fn fastest_cell(runs: &[&Run], baseline: &str, oracle: &str) -> String {
+    let valid: Vec<&Run> = runs.iter().copied().filter(|r| valid(r)).collect();
+    let times: Vec<Vec<f64>> = valid.iter().map(|r| per_ray(r)).collect();
+    let refs: Vec<&[f64]> = times.iter().map(Vec::as_slice).collect();
+    let Some(verdict) = stats::fastest(&refs) else {
+        return if runs.is_empty() {
+            String::new()
+        } else {
+            "none passed".into()
+        };
+    };
+    let (best, prefix) = match &verdict {
+        Fastest::Clear(i) => (valid[*i], String::new()),
+        Fastest::Unknown(i) => (valid[*i], String::new()),
+        Fastest::Tie(tied) => (
+            valid[tied[0]],
+            format!(
+                "tie: {} within noise; ",
+                tied.iter()
+                    .map(|&i| format!("`{}`", valid[i].backend))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        ),
+    };
+    let v = best.mrays_per_s.unwrap_or(0.0);
+    let ups: Vec<String> = [baseline, oracle]
+        .iter()
+        .filter(|name| **name != best.backend)
+        .filter_map(|name| valid.iter().find(|r| r.backend == *name))
+        .filter(|r| r.mrays_per_s.is_some_and(|m| m > 0.0))
+        .map(|r| speed_up(best, r))
+        .collect();
+    format!(
+        "{prefix}`{}` {v:.2}{}{}",
+        best.backend,
+        match verdict {
+            Fastest::Unknown(_) => " ? (noise unknown)",
+            _ => best.seconds.as_ref().map_or("", noisy_mark),
+        },
+        if ups.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", ups.join(", "))
+        }
+    )
+}
+
+/// The fastest valid backend per scene and workload kind, or the tie, and its speed-ups.
 fn fastest(results: &Results, s: &mut String) {
     let (kinds, scenes) = kinds_and_scenes(&results.runs);
     if kinds.is_empty() {
@@ -60,7 +145,12 @@ fn fastest(results: &Results, s: &mut String) {
         "**Fastest backend** per scene and workload (Mrays/s over every ray traced; only \
          backends whose result passed the equality check count), with its speed-up over \
          `{baseline}` (the baseline structure) and `{oracle}` (the oracle, where it fitted \
-         its time budget). † marks a noisy time.\n"
+         its time budget) and the {:.0}% interval of each speed-up. A backend is named \
+         fastest only where the interval of its lead over every other excludes parity and the \
+         lead is at least {:.0}%; otherwise the cell names the backends that **tie** within the noise. † marks a \
+         noisy time, ? a single repetition (noise unknown).\n",
+        stats::CONFIDENCE * 100.0,
+        stats::MIN_EFFECT * 100.0
     );
     let _ = writeln!(
         s,
@@ -81,48 +171,7 @@ fn fastest(results: &Results, s: &mut String) {
                     .iter()
                     .filter(|r| &r.scene == scene && &r.mode == mode && &r.ray_set == set)
                     .collect();
-                let speed = |name: &str| {
-                    runs.iter()
-                        .find(|r| r.backend == name && valid(r))
-                        .and_then(|r| r.mrays_per_s)
-                };
-                let Some(best) = runs.iter().filter(|r| valid(r)).max_by(|a, b| {
-                    a.mrays_per_s
-                        .unwrap_or(0.0)
-                        .total_cmp(&b.mrays_per_s.unwrap_or(0.0))
-                }) else {
-                    return if runs.is_empty() {
-                        String::new()
-                    } else {
-                        "none passed".into()
-                    };
-                };
-                let v = best.mrays_per_s.unwrap_or(0.0);
-                let over = |name: &str| {
-                    let other = (name != best.backend).then(|| speed(name)).flatten();
-                    other.filter(|b| *b > 0.0).map(|b| {
-                        let x = v / b;
-                        if x >= 10.0 {
-                            format!("{x:.0}x {name}")
-                        } else {
-                            format!("{x:.2}x {name}")
-                        }
-                    })
-                };
-                let ups: Vec<String> = [over(baseline), over(oracle)]
-                    .into_iter()
-                    .flatten()
-                    .collect();
-                format!(
-                    "`{}` {v:.2}{}{}",
-                    best.backend,
-                    best.seconds.as_ref().map_or("", noisy_mark),
-                    if ups.is_empty() {
-                        String::new()
-                    } else {
-                        format!(" ({})", ups.join(", "))
-                    }
-                )
+                fastest_cell(&runs, baseline, oracle)
             })
             .collect();
         let _ = writeln!(s, "| {scene} | {} |", cells.join(" | "));
@@ -217,66 +266,83 @@ fn skipped(results: &Results, s: &mut String) {
     }
 }
 
-/// The noisy timings, named (the tables mark them in place).
+/// The noise of the timings: how many have a wide interval (named, widest first), how many
+/// a single repetition, and how many repetitions the machine interfered with.
 fn noisy(results: &Results, s: &mut String) {
-    let timed: Vec<&Run> = results
+    let timed: Vec<(&Run, &Timing)> = results
         .runs
         .iter()
-        .filter(|r| r.seconds.is_some())
+        .filter_map(|r| Some((r, r.seconds.as_ref()?)))
         .collect();
-    let mut noisy: Vec<(&Run, f64)> = timed
-        .iter()
-        .filter_map(|r| {
-            let t = r.seconds.as_ref()?;
-            t.noisy().then(|| (*r, t.spread()))
-        })
-        .collect();
-    noisy.sort_by(|a, b| b.1.total_cmp(&a.1));
-    let points = results.scaling.len();
-    if noisy.is_empty() {
-        let _ = writeln!(
-            s,
-            "**Noise**: every one of the {} timed runs spread by at most {:.0}% between its \
-             fastest and slowest repetition.\n",
-            timed.len(),
-            crate::results::NOISY_SPREAD * 100.0
-        );
-        return;
-    }
-    let named: Vec<String> = noisy
-        .iter()
-        .take(NOISY_NAMED)
-        .map(|(r, spread)| {
-            format!(
-                "{} {}-{} `{}` ({:.0}%)",
-                r.scene,
-                r.mode,
-                r.ray_set,
-                r.backend,
-                spread * 100.0
-            )
-        })
-        .collect();
-    let more = noisy.len().saturating_sub(NOISY_NAMED);
-    let _ = writeln!(
-        s,
-        "**Noise**: {} of the {} timed runs spread by more than {:.0}% between their fastest \
-         and slowest repetition (marked † in the tables{}): {}{}.\n",
-        noisy.len(),
-        timed.len(),
-        crate::results::NOISY_SPREAD * 100.0,
-        if points > 0 {
-            format!("; the scaling experiments' {points} points are single medians, not judged")
-        } else {
-            String::new()
-        },
-        named.join(", "),
-        if more > 0 {
-            format!(", and {more} more")
-        } else {
-            String::new()
+    let mut wide: Vec<(&Run, f64)> = Vec::new();
+    let mut unknown = 0;
+    for (r, t) in &timed {
+        match t.noise() {
+            Noise::Wide(half) => wide.push((r, half)),
+            Noise::Unknown => unknown += 1,
+            Noise::Narrow(_) => {}
         }
-    );
+    }
+    wide.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let redone: u32 = timed.iter().map(|(_, t)| t.redone).sum();
+    let contended: u32 = timed.iter().map(|(_, t)| t.contended).sum();
+    let kept: usize = timed.iter().map(|(_, t)| t.samples.len()).sum();
+    let mut parts = vec![format!(
+        "{} timed runs, {kept} timed repetitions",
+        timed.len()
+    )];
+    if wide.is_empty() {
+        parts.push(format!(
+            "no median's {:.0}% interval is wider than ±{:.0}%",
+            stats::CONFIDENCE * 100.0,
+            NOISY_HALF_WIDTH * 100.0
+        ));
+    } else {
+        let named: Vec<String> = wide
+            .iter()
+            .take(NOISY_NAMED)
+            .map(|(r, half)| {
+                format!(
+                    "{} {}-{} `{}` (±{:.0}%)",
+                    r.scene,
+                    r.mode,
+                    r.ray_set,
+                    r.backend,
+                    half * 100.0
+                )
+            })
+            .collect();
+        let more = wide.len().saturating_sub(NOISY_NAMED);
+        parts.push(format!(
+            "{} with a median's interval wider than ±{:.0}% (marked †): {}{}",
+            wide.len(),
+            NOISY_HALF_WIDTH * 100.0,
+            named.join(", "),
+            if more > 0 {
+                format!(", and {more} more")
+            } else {
+                String::new()
+            }
+        ));
+    }
+    if unknown > 0 {
+        parts.push(format!(
+            "{unknown} with a single repetition, whose noise is unknown (marked ?)"
+        ));
+    }
+    parts.push(format!(
+        "{redone} repetitions redone because the machine interfered (their threads waited \
+         for a CPU more than {:.0}% of the time), {contended} kept contended when the redo \
+         budget was spent",
+        raybench_registry::interference::CONTENDED_WAIT_SHARE * 100.0
+    ));
+    let points = results.scaling.len();
+    if points > 0 {
+        parts.push(format!(
+            "the scaling experiments' {points} points are single medians, not judged"
+        ));
+    }
+    let _ = writeln!(s, "**Noise**: {}.\n", parts.join("; "));
 }
 
 /// The slope a scaling fit should have by the theory the report states, with the range a

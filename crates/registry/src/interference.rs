@@ -1,0 +1,131 @@
+//! Whether the machine interfered with a timed run: how long this process's threads waited
+//! for a CPU while they were ready to run (the kernel's run-queue delay, Linux
+//! `/proc/self/task/*/schedstat`), against the CPU time they got.
+//!
+//! A repetition on a quiet machine waits well under 1 % of its running time; with one other
+//! busy process on two cores, about a third. The share of waiting is a sharper signal than
+//! CPU time over wall time x threads, which also falls when a frame's serial part (assembly)
+//! runs or when a GPU backend sleeps on its device, with nobody else on the machine.
+
+use std::collections::HashMap;
+
+/// The run-queue delay, as a share of the time the threads wanted a CPU, above which a
+/// repetition counts as contended: 10 %.
+pub const CONTENDED_WAIT_SHARE: f64 = 0.10;
+
+/// What the scheduler says of one timed call.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Interference {
+    /// Seconds of CPU the process's threads got.
+    pub cpu_seconds: f64,
+    /// Seconds its threads were ready to run but waited for a CPU.
+    pub wait_seconds: f64,
+}
+
+impl Interference {
+    /// The share of the wanted CPU time spent waiting: `wait / (cpu + wait)`.
+    #[must_use]
+    pub fn wait_share(&self) -> f64 {
+        let wanted = self.cpu_seconds + self.wait_seconds;
+        if wanted > 0.0 {
+            self.wait_seconds / wanted
+        } else {
+            0.0
+        }
+    }
+
+    /// Whether the waiting passed [`CONTENDED_WAIT_SHARE`].
+    #[must_use]
+    pub fn contended(&self) -> bool {
+        self.wait_share() > CONTENDED_WAIT_SHARE
+    }
+}
+
+/// CPU and run-queue nanoseconds per thread of this process; `None` where the kernel does
+/// not expose them (not Linux, or schedstats off).
+fn per_thread() -> Option<HashMap<u64, (u64, u64)>> {
+    let mut out = HashMap::new();
+    for entry in std::fs::read_dir("/proc/self/task").ok()? {
+        let entry = entry.ok()?;
+        let Some(tid) = entry.file_name().to_str().and_then(|s| s.parse().ok()) else {
+            continue;
+        };
+        // A thread may end between the listing and the read: skip it.
+        let Ok(text) = std::fs::read_to_string(entry.path().join("schedstat")) else {
+            continue;
+        };
+        let mut fields = text.split_whitespace().map(str::parse::<u64>);
+        if let (Some(Ok(cpu)), Some(Ok(wait))) = (fields.next(), fields.next()) {
+            out.insert(tid, (cpu, wait));
+        }
+    }
+    (!out.is_empty()).then_some(out)
+}
+
+/// Runs `f` and says how much the machine interfered with it; `None` where the kernel does
+/// not tell.
+pub fn during<T>(f: impl FnOnce() -> T) -> (T, Option<Interference>) {
+    let before = per_thread();
+    let value = f();
+    let after = per_thread();
+    let interference = before.zip(after).map(|(before, after)| {
+        let (mut cpu, mut wait) = (0u64, 0u64);
+        for (tid, (c, w)) in after {
+            let (c0, w0) = before.get(&tid).copied().unwrap_or((0, 0));
+            cpu += c.saturating_sub(c0);
+            wait += w.saturating_sub(w0);
+        }
+        Interference {
+            cpu_seconds: cpu as f64 * 1e-9,
+            wait_seconds: wait as f64 * 1e-9,
+        }
+    });
+    (value, interference)
+}
+
+/// The machine's load averages over 1, 5 and 15 minutes (`/proc/loadavg`), where known.
+#[must_use]
+pub fn load_average() -> Option<[f64; 3]> {
+    let text = std::fs::read_to_string("/proc/loadavg").ok()?;
+    let mut it = text.split_whitespace().map(str::parse::<f64>);
+    Some([it.next()?.ok()?, it.next()?.ok()?, it.next()?.ok()?])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shares_and_the_threshold() {
+        let quiet = Interference {
+            cpu_seconds: 1.0,
+            wait_seconds: 0.01,
+        };
+        let hogged = Interference {
+            cpu_seconds: 1.0,
+            wait_seconds: 0.5,
+        };
+        assert!(!quiet.contended() && hogged.contended());
+        assert!((hogged.wait_share() - 1.0 / 3.0).abs() < 1e-12);
+        assert_eq!(Interference::default().wait_share(), 0.0);
+    }
+
+    #[test]
+    fn a_busy_call_is_seen_by_the_scheduler() {
+        // About 50 ms of work the optimiser cannot fold: several scheduler ticks.
+        let start = std::time::Instant::now();
+        let (_, i) = during(|| {
+            let mut a = 0u64;
+            while start.elapsed().as_secs_f64() < 0.05 {
+                a = std::hint::black_box(a.wrapping_mul(31) ^ 7);
+            }
+            a
+        });
+        if std::path::Path::new("/proc/self/task").is_dir() {
+            let i = i.expect("schedstat on Linux");
+            assert!(i.cpu_seconds > 0.0 && i.wait_seconds >= 0.0, "{i:?}");
+        }
+        let load = load_average();
+        assert!(load.is_none_or(|l| l.iter().all(|x| *x >= 0.0)));
+    }
+}

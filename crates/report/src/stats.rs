@@ -1,0 +1,367 @@
+//! The statistics of timed repetitions, a leaf: a median's confidence interval, the interval
+//! of a ratio of two medians, and the rules that turn them into words (a fastest backend or a
+//! tie, a change or none, noise unknown).
+//!
+//! The median's interval is distribution-free: the order statistics `x(k)` and `x(n+1-k)`
+//! bracket the true median with probability `1 - 2 P(Binomial(n, 1/2) < k)`, whatever the
+//! distribution of the times (Hollander and Wolfe; what `pyperf` and `hyperfine` leave out
+//! and criterion replaces by a bootstrap of the mean). The interval of a ratio of two medians
+//! comes from a bootstrap that resamples both sides independently, seeded, so a report is
+//! reproducible from its samples.
+
+/// The confidence of every interval the report gives.
+pub const CONFIDENCE: f64 = 0.95;
+
+/// Bootstrap resamples for the interval of a ratio.
+pub const RESAMPLES: usize = 2000;
+
+/// The smallest relative change `compare-results` and `--baseline` call a change, whatever
+/// the intervals say: 2 %.
+pub const MIN_EFFECT: f64 = 0.02;
+
+/// An interval and the confidence it actually has (below [`CONFIDENCE`] where too few
+/// repetitions allow no more: `[min, max]` of 5 repetitions covers the median with
+/// probability 0.9375).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Interval {
+    /// Lower end.
+    pub lo: f64,
+    /// Upper end.
+    pub hi: f64,
+    /// The probability that the interval holds the true value.
+    pub confidence: f64,
+}
+
+impl Interval {
+    /// Whether `x` lies inside.
+    #[must_use]
+    pub fn contains(&self, x: f64) -> bool {
+        self.lo <= x && x <= self.hi
+    }
+
+    /// Half the width, relative to `centre`: the precision the adaptive repetitions aim at.
+    #[must_use]
+    pub fn relative_half_width(&self, centre: f64) -> f64 {
+        if centre > 0.0 {
+            0.5 * (self.hi - self.lo) / centre
+        } else {
+            f64::INFINITY
+        }
+    }
+}
+
+/// `P(Binomial(n, 1/2) < k)`.
+fn binomial_below(n: usize, k: usize) -> f64 {
+    let mut term = 0.5f64.powi(n as i32); // C(n, 0) / 2^n
+    let mut sum = 0.0;
+    for i in 0..k.min(n + 1) {
+        sum += term;
+        term *= (n - i) as f64 / (i + 1) as f64;
+    }
+    sum
+}
+
+/// The sorted copy of `samples`.
+fn sorted(samples: &[f64]) -> Vec<f64> {
+    let mut v = samples.to_vec();
+    v.sort_by(f64::total_cmp);
+    v
+}
+
+/// The median of `samples` (mean of the middle two for an even count); `None` for none.
+#[must_use]
+pub fn median(samples: &[f64]) -> Option<f64> {
+    let v = sorted(samples);
+    let n = v.len();
+    match n {
+        0 => None,
+        _ if n % 2 == 1 => Some(v[n / 2]),
+        _ => Some(0.5 * (v[n / 2 - 1] + v[n / 2])),
+    }
+}
+
+/// The distribution-free interval of the median of `samples`: the narrowest pair of order
+/// statistics with at least [`CONFIDENCE`], or `[min, max]` with the confidence it has when
+/// there are too few. `None` below two samples: one repetition says nothing of the noise.
+#[must_use]
+pub fn median_interval(samples: &[f64]) -> Option<Interval> {
+    let v = sorted(samples);
+    let n = v.len();
+    if n < 2 {
+        return None;
+    }
+    // The largest k (1-based) whose [x(k), x(n+1-k)] still has the confidence.
+    let mut k = 1;
+    while k < n / 2 && 1.0 - 2.0 * binomial_below(n, k + 1) >= CONFIDENCE {
+        k += 1;
+    }
+    Some(Interval {
+        lo: v[k - 1],
+        hi: v[n - k],
+        confidence: 1.0 - 2.0 * binomial_below(n, k),
+    })
+}
+
+/// SplitMix64: a counter-based generator, so every interval is a function of its samples.
+struct SplitMix(u64);
+
+impl SplitMix {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+
+    /// An index below `n`.
+    fn below(&mut self, n: usize) -> usize {
+        ((u128::from(self.next()) * n as u128) >> 64) as usize
+    }
+}
+
+/// The seed of a bootstrap: a hash of the samples' bits, so the same samples always give
+/// the same interval and different ones independent resamples.
+fn seed_of(a: &[f64], b: &[f64]) -> u64 {
+    let mut g = SplitMix(0x05ee_d0f7_a7e5);
+    for x in a.iter().chain([f64::NAN].iter()).chain(b) {
+        g.0 ^= x.to_bits();
+        g.next();
+    }
+    g.0
+}
+
+/// The median of one bootstrap resample of `v` into `buf`.
+fn resampled_median(v: &[f64], g: &mut SplitMix, buf: &mut Vec<f64>) -> f64 {
+    buf.clear();
+    buf.extend((0..v.len()).map(|_| v[g.below(v.len())]));
+    median(buf).unwrap_or(f64::NAN)
+}
+
+/// The ratio of the medians `median(a) / median(b)` and its [`CONFIDENCE`] interval by a
+/// seeded percentile bootstrap that resamples `a` and `b` independently. The interval is
+/// `None` when either side has fewer than two samples (noise unknown).
+#[must_use]
+pub fn ratio_interval(a: &[f64], b: &[f64]) -> (f64, Option<Interval>) {
+    let (Some(ma), Some(mb)) = (median(a), median(b)) else {
+        return (f64::NAN, None);
+    };
+    let ratio = ma / mb;
+    if a.len() < 2 || b.len() < 2 {
+        return (ratio, None);
+    }
+    let mut g = SplitMix(seed_of(a, b));
+    let (mut ba, mut bb) = (Vec::new(), Vec::new());
+    let mut ratios: Vec<f64> = (0..RESAMPLES)
+        .map(|_| resampled_median(a, &mut g, &mut ba) / resampled_median(b, &mut g, &mut bb))
+        .collect();
+    ratios.sort_by(f64::total_cmp);
+    let tail = (1.0 - CONFIDENCE) / 2.0;
+    let at = |q: f64| ratios[((q * RESAMPLES as f64) as usize).min(RESAMPLES - 1)];
+    (
+        ratio,
+        Some(Interval {
+            lo: at(tail),
+            hi: at(1.0 - tail),
+            confidence: CONFIDENCE,
+        }),
+    )
+}
+
+/// What two sets of times say about each other: `a` against `b`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Change {
+    /// `a` takes less time: the interval of the ratio lies below 1 and the change is at
+    /// least [`MIN_EFFECT`].
+    Faster,
+    /// `a` takes more time, likewise.
+    Slower,
+    /// Within the noise or below the minimum effect.
+    Same,
+    /// One side has a single repetition: its noise is unknown, so no change is claimed.
+    Unknown,
+}
+
+/// Whether times `a` differ from times `b` beyond both the noise (the ratio's interval
+/// excludes 1) and [`MIN_EFFECT`].
+#[must_use]
+pub fn change(a: &[f64], b: &[f64]) -> Change {
+    let (ratio, interval) = ratio_interval(a, b);
+    let Some(i) = interval else {
+        return Change::Unknown;
+    };
+    if i.hi < 1.0 && ratio <= 1.0 - MIN_EFFECT {
+        Change::Faster
+    } else if i.lo > 1.0 && ratio >= 1.0 + MIN_EFFECT {
+        Change::Slower
+    } else {
+        Change::Same
+    }
+}
+
+/// Who is fastest on one workload.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Fastest {
+    /// One backend, separated from every other: each other's time over its own has an
+    /// interval above 1.
+    Clear(usize),
+    /// The backends (indices, fastest median first) that tie within the noise with the one of
+    /// the lowest median.
+    Tie(Vec<usize>),
+    /// Some backend has a single repetition: the noise is unknown; the index of the lowest
+    /// median.
+    Unknown(usize),
+}
+
+/// The fastest of `times` (one set of repetitions per backend; empty sets are ignored), or
+/// the backends that tie with it; `None` when no backend has times.
+#[must_use]
+pub fn fastest(times: &[&[f64]]) -> Option<Fastest> {
+    let mut order: Vec<(usize, f64)> = times
+        .iter()
+        .enumerate()
+        .filter_map(|(i, t)| median(t).map(|m| (i, m)))
+        .collect();
+    order.sort_by(|a, b| a.1.total_cmp(&b.1));
+    let &(best, _) = order.first()?;
+    if order.iter().any(|&(i, _)| times[i].len() < 2) {
+        return Some(Fastest::Unknown(best));
+    }
+    let tied: Vec<usize> = order
+        .iter()
+        .map(|&(i, _)| i)
+        .filter(|&i| i == best || change(times[i], times[best]) != Change::Slower)
+        .collect();
+    Some(if tied.len() == 1 {
+        Fastest::Clear(best)
+    } else {
+        Fastest::Tie(tied)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Times from a skewed distribution (a floor plus exponential noise, as a busy machine
+    /// gives): `floor * (1 + scale * Exp(1))`.
+    fn skewed(g: &mut SplitMix, n: usize, floor: f64, scale: f64) -> Vec<f64> {
+        (0..n)
+            .map(|_| {
+                let u = (g.next() >> 11) as f64 / (1u64 << 53) as f64;
+                floor * (1.0 - scale * (1.0 - u).max(1e-300).ln())
+            })
+            .collect()
+    }
+
+    /// The median of `floor * (1 + scale * Exp(1))`: `floor * (1 + scale * ln 2)`.
+    fn true_median(floor: f64, scale: f64) -> f64 {
+        floor * (1.0 + scale * std::f64::consts::LN_2)
+    }
+
+    #[test]
+    fn medians_and_small_intervals() {
+        assert_eq!(median(&[]), None);
+        assert_eq!(median(&[3.0, 1.0, 2.0]), Some(2.0));
+        assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), Some(2.5));
+        assert_eq!(median_interval(&[1.0]), None);
+        let two = median_interval(&[2.0, 1.0]).unwrap();
+        assert_eq!((two.lo, two.hi, two.confidence), (1.0, 2.0, 0.5));
+        let five = median_interval(&[5.0, 1.0, 4.0, 2.0, 3.0]).unwrap();
+        assert_eq!((five.lo, five.hi, five.confidence), (1.0, 5.0, 0.9375));
+        // Six samples reach 95 % with the extremes (96.9 %); nine with the second ones.
+        assert!((median_interval(&[1.0; 6]).unwrap().confidence - 0.96875).abs() < 1e-12);
+        let nine: Vec<f64> = (1..=9).map(f64::from).collect();
+        let i = median_interval(&nine).unwrap();
+        assert_eq!((i.lo, i.hi), (2.0, 8.0));
+        assert!((i.confidence - 0.9609375).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_median_interval_covers_as_stated() {
+        let mut g = SplitMix(1);
+        for n in [6, 11, 20] {
+            let trials = 4000;
+            let truth = true_median(1.0, 0.3);
+            let mut covered = 0;
+            let mut stated = 0.0;
+            for _ in 0..trials {
+                let i = median_interval(&skewed(&mut g, n, 1.0, 0.3)).unwrap();
+                covered += usize::from(i.contains(truth));
+                stated = i.confidence;
+            }
+            let rate = covered as f64 / trials as f64;
+            assert!(stated >= CONFIDENCE, "n={n}: {stated}");
+            // The binomial standard error over 4000 trials is about 0.3 %.
+            assert!(
+                (rate - stated).abs() < 0.015,
+                "n={n}: {rate} against {stated}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_ratio_interval_covers_close_to_its_confidence() {
+        let mut g = SplitMix(2);
+        let (trials, n) = (400, 12);
+        let truth = true_median(1.0, 0.2) / true_median(1.25, 0.2);
+        let mut covered = 0;
+        for _ in 0..trials {
+            let a = skewed(&mut g, n, 1.0, 0.2);
+            let b = skewed(&mut g, n, 1.25, 0.2);
+            let (_, i) = ratio_interval(&a, &b);
+            covered += usize::from(i.unwrap().contains(truth));
+        }
+        let rate = covered as f64 / trials as f64;
+        // Percentile bootstraps of medians are a little liberal or conservative with few
+        // samples; within 5 points of 95 % over 400 trials.
+        assert!((rate - CONFIDENCE).abs() < 0.05, "coverage {rate}");
+    }
+
+    #[test]
+    fn intervals_are_reproducible_from_their_samples() {
+        let a = [1.0, 1.1, 0.9, 1.05, 1.2, 0.95];
+        let b = [2.0, 2.1, 1.9, 2.2, 2.05, 1.95];
+        assert_eq!(ratio_interval(&a, &b), ratio_interval(&a, &b));
+        assert_ne!(ratio_interval(&a, &b).1, ratio_interval(&b, &a).1);
+    }
+
+    #[test]
+    fn changes_need_the_interval_and_the_minimum_effect() {
+        let a: Vec<f64> = (0..10).map(|i| 1.0 + 0.001 * f64::from(i)).collect();
+        let half: Vec<f64> = a.iter().map(|x| x * 0.5).collect();
+        let slight: Vec<f64> = a.iter().map(|x| x * 1.01).collect();
+        assert_eq!(change(&half, &a), Change::Faster);
+        assert_eq!(change(&a, &half), Change::Slower);
+        // Separated by the intervals, but 1 % is below the minimum effect.
+        assert_eq!(change(&slight, &a), Change::Same);
+        assert_eq!(change(&[0.5], &a), Change::Unknown);
+        // The same distribution twice claims no change nearly always (an A/A test).
+        let mut g = SplitMix(3);
+        let trials = 300;
+        let claimed = (0..trials)
+            .filter(|_| {
+                change(&skewed(&mut g, 8, 1.0, 0.2), &skewed(&mut g, 8, 1.0, 0.2)) != Change::Same
+            })
+            .count();
+        assert!(
+            claimed * 20 <= trials,
+            "{claimed} of {trials} A/A pairs called a change"
+        );
+    }
+
+    #[test]
+    fn the_fastest_is_named_only_when_separated() {
+        let fast = [1.0, 1.01, 0.99, 1.02, 0.98, 1.0];
+        let close = [1.01, 1.0, 1.02, 0.99, 1.03, 1.0];
+        let slow = [2.0, 2.02, 1.98, 2.01, 1.99, 2.0];
+        assert_eq!(fastest(&[&slow, &fast]), Some(Fastest::Clear(1)));
+        assert_eq!(
+            fastest(&[&slow, &close, &fast]),
+            Some(Fastest::Tie(vec![2, 1]))
+        );
+        assert_eq!(fastest(&[&slow, &[1.0]]), Some(Fastest::Unknown(1)));
+        assert_eq!(fastest(&[&[], &slow]), Some(Fastest::Clear(1)));
+        assert_eq!(fastest(&[]), None);
+    }
+}
