@@ -209,14 +209,27 @@ impl Ctx<'_> {
         let warm = measure(r, settings, rays, true)?;
         let mut samples = Vec::new();
         let mut phases = Vec::new();
-        for _ in 0..self.repeat {
+        // A repetition another process interfered with is run again, up to as many times
+        // as there are repetitions; past that budget it is kept and counted.
+        let (mut redone, mut contended) = (0, 0);
+        while samples.len() < self.repeat as usize {
             let m = measure(r, settings, rays, false)?;
+            let busy = m.interference.is_some_and(|i| i.contended());
+            if busy && redone < self.repeat {
+                redone += 1;
+                continue;
+            }
+            contended += u32::from(busy);
             samples.push(m.seconds);
             phases.push(m.phases);
         }
         Ok(Measurement {
             warm,
-            timing: Timing::of(samples),
+            timing: Timing {
+                redone,
+                contended,
+                ..Timing::of(samples)
+            },
             phases: raybench_registry::measure::median_phases(&phases),
         })
     }
@@ -300,7 +313,11 @@ impl Measurement {
         }
         Measurement {
             warm,
-            timing: Timing::of(samples),
+            timing: Timing {
+                redone: each.iter().map(|m| m.timing.redone).sum(),
+                contended: each.iter().map(|m| m.timing.contended).sum(),
+                ..Timing::of(samples)
+            },
             phases,
         }
     }
