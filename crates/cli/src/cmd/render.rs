@@ -4,7 +4,7 @@ use crate::args::{CameraArgs, Exposure, FrameArgs, check_mode_fits, load_scene, 
 use anyhow::Result;
 use clap::Args;
 use raybench_core::{Mode, RenderSettings, Scene, UpdatePolicy};
-use raybench_registry::measure::{prepare, timed_seconds};
+use raybench_registry::measure::{device_seconds, prepare, timed_seconds};
 use raybench_registry::progress::Progress;
 use raybench_registry::{backend, default_backend};
 use std::path::{Path, PathBuf};
@@ -104,15 +104,12 @@ pub(crate) fn render(cmd: &RenderCmd, assets: &Path) -> Result<ExitCode> {
     drop(progress);
     let secs = timed_seconds(&frame.timings);
     eprintln!(
-        "{}: build {:.3} s, {} {:.3} s, {} rays, {:.2} Mrays/s",
+        "{}: build {:.3} s, render {:.3} s{}, {} rays, {:.2} Mrays/s",
         b.name,
         p.build,
-        if frame.timings.get("gpu").is_some() {
-            "GPU execution"
-        } else {
-            "render"
-        },
         secs,
+        device_seconds(&frame.timings)
+            .map_or_else(String::new, |g| format!(" (device {g:.3} s)")),
         frame.stats.rays,
         frame.stats.rays as f64 / secs.max(1e-12) / 1e6
     );
