@@ -101,6 +101,16 @@ pub struct Bars {
 pub enum Bar {
     /// A measured value (not positive: drawn as [`Bar::Absent`]).
     Value(f64),
+    /// A measured value with its confidence interval `[lo, hi]`, drawn as an error bar over
+    /// the bar and named in its tooltip.
+    Interval {
+        /// The value (the bar's height).
+        value: f64,
+        /// Lower end of the interval.
+        lo: f64,
+        /// Upper end.
+        hi: f64,
+    },
     /// The series did not run there (unsupported, unavailable): why. Drawn as a hatched
     /// stub with an `×`, the reason its tooltip.
     Unsupported(String),
@@ -640,7 +650,14 @@ mod tests {
                     },
                     Bars {
                         label: b(3).into(),
-                        values: vec![Bar::Value(30.0), Bar::Unsupported("no <SDF>".into())],
+                        values: vec![
+                            Bar::Interval {
+                                value: 30.0,
+                                lo: 27.0,
+                                hi: 33.0,
+                            },
+                            Bar::Unsupported("no <SDF>".into()),
+                        ],
                     },
                 ],
             ),
@@ -679,12 +696,40 @@ mod tests {
             elements
                 .iter()
                 .find(|e| {
-                    e.tag == "rect" && e.tip.as_deref().is_some_and(|t| t.ends_with(&value(v)))
+                    e.tag == "rect"
+                        && e.tip.as_deref().is_some_and(|t| {
+                            t.ends_with(&value(v)) || t.contains(&format!("{} (95%", value(v)))
+                        })
                 })
                 .map(|e| e.at("height"))
                 .unwrap()
         };
         assert!(height(1.5) < height(2.0) && height(2.0) < height(30.0));
+        // The interval's error bar: a vertical line and two caps over the bar, and the
+        // interval in the bar's tooltip.
+        let with_interval = format!("{} on spheres", b(3));
+        assert!(elements.iter().any(|e| e.tip.as_deref().is_some_and(|t| {
+            t.starts_with(&with_interval)
+                && t.ends_with(&format!(
+                    "(95% interval {} to {})",
+                    value(27.0),
+                    value(33.0)
+                ))
+        })));
+        // Vertical lines: the y axis, the tick between the two groups, and the error bar.
+        let vertical = elements
+            .iter()
+            .filter(|e| e.tag == "polyline")
+            .filter_map(|e| {
+                let xs: Vec<&str> = e
+                    .get("points")?
+                    .split_whitespace()
+                    .filter_map(|p| p.split(',').next())
+                    .collect();
+                (xs.len() == 2 && xs[0] == xs[1]).then_some(())
+            })
+            .count();
+        assert_eq!(vertical, 3, "{s}");
         let why = format!("{} on x&y: no <SDF>", b(3));
         let stub: Vec<&Element> = elements
             .iter()

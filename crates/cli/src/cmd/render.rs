@@ -108,8 +108,7 @@ pub(crate) fn render(cmd: &RenderCmd, assets: &Path) -> Result<ExitCode> {
         b.name,
         p.build,
         secs,
-        device_seconds(&frame.timings)
-            .map_or_else(String::new, |g| format!(" (device {g:.3} s)")),
+        device_seconds(&frame.timings).map_or_else(String::new, |g| format!(" (device {g:.3} s)")),
         frame.stats.rays,
         frame.stats.rays as f64 / secs.max(1e-12) / 1e6
     );

@@ -407,15 +407,28 @@ impl Canvas<'_, '_, '_> {
                 let Some(name) = names.get(i) else { break };
                 let x0 = xs.start + px(i as f64 * slot + first + j as f64 * bar_w);
                 let x1 = x0 + px(bar_w - 1.0).max(1);
+                let interval = match v {
+                    Bar::Interval { lo, hi, .. } if lo.is_finite() && hi.is_finite() => {
+                        Some((*lo, *hi))
+                    }
+                    _ => None,
+                };
                 match v {
-                    Bar::Value(v) if *v > 0.0 && v.is_finite() => {
+                    Bar::Value(v) | Bar::Interval { value: v, .. } if *v > 0.0 && v.is_finite() => {
                         let top = self.plot.backend_coord(&(0.0, self.y.at(*v))).1;
-                        let title = format!(
+                        let mut title = format!(
                             "{} on {name}\n{}: {}",
                             b.label,
                             axis_name(&self.chart.y_label, "value"),
                             value(*v)
                         );
+                        if let Some((lo, hi)) = interval {
+                            title.push_str(&format!(
+                                " (95% interval {} to {})",
+                                value(lo),
+                                value(hi)
+                            ));
+                        }
                         tip(root, self.tips, title, || {
                             root.draw(&Rectangle::new(
                                 [(x0, top.min(ys.end - 1)), (x1, ys.end)],
@@ -423,6 +436,9 @@ impl Canvas<'_, '_, '_> {
                             ))
                             .map_err(failed)
                         })?;
+                        if let Some((lo, hi)) = interval.filter(|(lo, _)| *lo > 0.0) {
+                            self.whisker((x0 + x1) / 2, (lo, hi), (x1 - x0) / 3)?;
+                        }
                     }
                     Bar::Unsupported(why) => {
                         let title = format!("{} on {name}: {why}", b.label);
@@ -437,9 +453,32 @@ impl Canvas<'_, '_, '_> {
                             )
                         })?;
                     }
-                    Bar::Value(_) | Bar::Absent => {}
+                    Bar::Value(_) | Bar::Interval { .. } | Bar::Absent => {}
                 }
             }
+        }
+        Ok(())
+    }
+
+    /// An error bar at pixel column `x` from value `lo` to `hi`, with caps `half` pixels to
+    /// each side, in the frame's colour over the bar.
+    fn whisker(&mut self, x: i32, (lo, hi): (f64, f64), half: i32) -> Drawn {
+        let root = self.root;
+        let (_, ys) = self.plot.plotting_area().get_pixel_range();
+        let at = |v: f64| {
+            self.plot
+                .backend_coord(&(0.0, self.y.at(v)))
+                .1
+                .clamp(ys.start, ys.end)
+        };
+        let (bottom, top) = (at(lo), at(hi));
+        let half = half.max(2);
+        for line in [
+            vec![(x, bottom), (x, top)],
+            vec![(x - half, top), (x + half, top)],
+            vec![(x - half, bottom), (x + half, bottom)],
+        ] {
+            root.draw(&PathElement::new(line, FRAME)).map_err(failed)?;
         }
         Ok(())
     }
@@ -473,10 +512,14 @@ pub(super) fn axes(chart: &Chart) -> (Option<Axis>, Axis) {
             let values: Vec<f64> = bars
                 .iter()
                 .flat_map(|b| &b.values)
-                .filter_map(|v| match v {
-                    Bar::Value(v) if *v > 0.0 && v.is_finite() => Some(*v),
-                    _ => None,
+                .flat_map(|v| match v {
+                    Bar::Value(v) if *v > 0.0 && v.is_finite() => vec![*v],
+                    Bar::Interval { value, hi, .. } if *value > 0.0 && value.is_finite() => {
+                        vec![*value, *hi]
+                    }
+                    _ => Vec::new(),
                 })
+                .filter(|v| *v > 0.0 && v.is_finite())
                 .collect();
             // Bars rise from the bottom of a log axis: room below the lowest value keeps its
             // bar tall enough to read (and unlike a stub).
