@@ -74,7 +74,7 @@ const ALLOWED: &[(&str, &str)] = &[
         "tests/tests/equivalence.rs",
         "validates raybench-bvh's invariants and maps each non-exact backend to its tolerance test",
     ),
-    ("tests/tests/gpu.rs", "the GPU backend is its subject"),
+    ("tests/tests/gpu/", "the GPU backend is its subject"),
     (
         "tests/tests/grid_cases.rs",
         "the uniform grid's resolution and cell cases are its subject",
