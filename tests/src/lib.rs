@@ -561,6 +561,20 @@ pub mod gpu {
         worst
     }
 
+    /// The primitive ids and distances of `hits` (a miss as `NO_HIT` at infinity), as
+    /// `raybench_registry::compare_hits` takes them.
+    #[must_use]
+    pub fn hit_keys(hits: &[Option<raybench_core::Hit>]) -> (Vec<u32>, Vec<f32>) {
+        (
+            hits.iter()
+                .map(|h| h.map_or(raybench_core::NO_HIT, |h| h.prim))
+                .collect(),
+            hits.iter()
+                .map(|h| h.map_or(f32::INFINITY, |h| h.t))
+                .collect(),
+        )
+    }
+
     /// Whether the GPU backend can run; under `CI=true` (lavapipe installed) it must.
     ///
     /// # Panics
@@ -717,15 +731,7 @@ pub mod gpu {
         let (reference, ref_counts) = oracle.trace_rays(&rays, true).unwrap();
         let (hits, counts) = gpu.trace_rays(&rays, true).unwrap();
         assert_eq!(hits.len(), rays.len());
-        let key = |h: &[Option<raybench_core::Hit>]| -> (Vec<u32>, Vec<f32>) {
-            (
-                h.iter()
-                    .map(|h| h.map_or(raybench_core::NO_HIT, |h| h.prim))
-                    .collect(),
-                h.iter().map(|h| h.map_or(f32::INFINITY, |h| h.t)).collect(),
-            )
-        };
-        let ((ri, rt), (gi, gt)) = (key(&reference), key(&hits));
+        let ((ri, rt), (gi, gt)) = (hit_keys(&reference), hit_keys(&hits));
         let c = raybench_registry::compare_hits(&ri, &rt, &gi, &gt);
         eprintln!(
             "{name} on {scene}, incoherent rays: {c:?}, counters {counts:?} (naive {ref_counts:?})"

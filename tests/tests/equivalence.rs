@@ -89,8 +89,8 @@ fn modes_on_builtin_scenes() {
 /// Backends not bound by the bit-exact contract, and where each is compared with naive
 /// within its tolerance.
 const TOLERANCE_TESTED: &[(&str, &str)] = &[
-    ("wgpu", "tests/tests/gpu.rs"),
-    ("wgpu-cwbvh", "tests/tests/gpu.rs"),
+    ("wgpu", "tests/tests/gpu/"),
+    ("wgpu-cwbvh", "tests/tests/gpu/"),
     ("bvh-crate", "crates/peers/tests/naive.rs"),
     ("embree", "crates/peers/tests/naive.rs (feature embree)"),
     (

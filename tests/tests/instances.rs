@@ -447,7 +447,7 @@ fn gltf_meshes_placed_by_several_nodes_are_instances() {
     );
     check(&available(BACKENDS), shared.to_str().unwrap(), 48);
     // The GPU kernels shade instanced vertex normals too (against naive on a textured
-    // instanced mesh: `instanced_smooth_textured_mesh` in `tests/tests/gpu.rs`).
+    // instanced mesh: `instanced_smooth_textured_mesh` in `tests/tests/gpu/shading.rs`).
     for b in raybench_registry::BACKENDS
         .iter()
         .filter(|b| b.is(Roles::DEVICE))

@@ -27,6 +27,28 @@ const MARGIN: f64 = 1.0 / 16384.0;
 /// Cases per property.
 const CASES: u32 = 20_000;
 
+/// Triangle `t` error bound (distance along the ray, relative to the scale, the largest
+/// distance among origin and vertices, or to the hit's distance if larger), at angles of incidence over 1e-3 (grazing rays
+/// are skipped with the edge cases: [`MARGIN`] moves their hit point far).
+const TRIANGLE_T_ERROR: f64 = 1e-5;
+
+/// Sphere `t` error bound (relative to `|o - c| + r` or the hit's distance, the larger, as
+/// every bound here: see [`agree`]): the stable quadratic loses at most
+/// half the bits of the discriminant, and the margin keeps the rays off the silhouette.
+const SPHERE_T_ERROR: f64 = 1e-5;
+
+/// Plane `t` error bound (relative to the larger of the hit's distance and the scale),
+/// divided by the cosine of the angle between ray and normal (skipped below 1e-3): one dot
+/// product and one division, about 16 ulps.
+const PLANE_T_ERROR: f64 = 1e-6;
+
+/// Largest entry-distance error of the slab test, relative to the distance to the box.
+const SLAB_T_ERROR: f64 = 1e-6;
+
+/// CSG leaves' `t` error bound (relative to the scale): the box by slabs, the ellipsoid by
+/// a quadratic in its unit-sphere space, the torus by its f64 quartic.
+const CSG_T_ERROR: f64 = 1e-5;
+
 fn config(seed: u64) -> Config {
     Config {
         cases: CASES,
@@ -144,11 +166,6 @@ fn agree(
     }
 }
 
-/// Triangle `t` error bound (distance along the ray, relative to the scale, the largest
-/// distance among origin and vertices, or to the hit's distance if larger), at angles of incidence over 1e-3 (grazing rays
-/// are skipped with the edge cases: [`MARGIN`] moves their hit point far).
-const TRIANGLE_T_ERROR: f64 = 1e-5;
-
 proptest! {
     #![proptest_config(config(11))]
 
@@ -189,11 +206,6 @@ proptest! {
     }
 }
 
-/// Sphere `t` error bound (relative to `|o - c| + r` or the hit's distance, the larger, as
-/// every bound here: see [`agree`]): the stable quadratic loses at most
-/// half the bits of the discriminant, and the margin keeps the rays off the silhouette.
-const SPHERE_T_ERROR: f64 = 1e-5;
-
 proptest! {
     #![proptest_config(config(12))]
 
@@ -213,11 +225,6 @@ proptest! {
         agree("sphere", got, &r, dv.length(), scale, SPHERE_T_ERROR)?;
     }
 }
-
-/// Plane `t` error bound (relative to the larger of the hit's distance and the scale),
-/// divided by the cosine of the angle between ray and normal (skipped below 1e-3): one dot
-/// product and one division, about 16 ulps.
-const PLANE_T_ERROR: f64 = 1e-6;
 
 proptest! {
     #![proptest_config(config(13))]
@@ -245,9 +252,6 @@ proptest! {
     }
 }
 
-/// Largest entry-distance error of the slab test, relative to the distance to the box.
-const SLAB_T_ERROR: f64 = 1e-6;
-
 proptest! {
     #![proptest_config(config(14))]
 
@@ -273,12 +277,7 @@ proptest! {
             }
         }
         prop_assume!(dir != Vec3::ZERO);
-        let ray = Ray::new(o, dir);
-        let got = Aabb::new(min, max).intersect(&ray, f32::INFINITY);
-        let (ov, dv) = (d(o), d(dir));
-        let exact = slab(ov, dv, d(min), d(max), 0.0);
-        let scale = (d(max) - d(min)).length() + ov.length() + d(max).length();
-        check_slab(got, exact, ov, dv, (min, max), scale)?;
+        check_slab(o, dir, (min, max))?;
     }
 
     /// Rays that touch the box only along an edge (exactly, up to the rounding of their
@@ -306,49 +305,35 @@ proptest! {
         dir[u] = su * slope;
         dir[v] = -sv;
         dir[axis] = across;
-        let o = target - dir * back;
-        let ray = Ray::new(o, dir);
-        let got = Aabb::new(min, max).intersect(&ray, f32::INFINITY);
-        let (ov, dv) = (d(o), d(dir));
-        let exact = slab(ov, dv, d(min), d(max), 0.0);
-        let scale = (d(max) - d(min)).length() + ov.length() + d(max).length();
-        check_slab(got, exact, ov, dv, (min, max), scale)?;
+        check_slab(target - dir * back, dir, (min, max))?;
     }
 }
 
-/// The slab properties: an exact hit is accepted with an entry at most the exact one (plus
-/// rounding); an accepted ray meets the box grown by the margin.
-fn check_slab(
-    got: Option<f32>,
-    exact: Option<(f64, f64)>,
-    ov: DVec3,
-    dv: DVec3,
-    (min, max): (Vec3, Vec3),
-    scale: f64,
-) -> Result<(), TestCaseError> {
-    {
-        if let Some((t0, _)) = exact {
-            prop_assert!(
-                got.is_some(),
-                "a ray meeting the box was rejected: exact entry {t0}"
-            );
-            let err = (f64::from(got.unwrap()) - t0) * dv.length() / scale;
-            prop_assert!(err <= SLAB_T_ERROR, "entry {:?} after the exact {t0}", got);
-        }
-        if got.is_some() && exact.is_none() {
-            let grow = DVec3::splat(MARGIN * scale);
-            prop_assert!(
-                slab(ov, dv, d(min) - grow, d(max) + grow, 0.0).is_some(),
-                "accepted a ray that misses the box by more than the margin"
-            );
-        }
-        Ok(())
+/// The slab properties of the ray from `o` along `dir` and the box `min`, `max`: an exact
+/// hit is accepted with an entry at most the exact one (plus rounding); an accepted ray
+/// meets the box grown by the margin.
+fn check_slab(o: Vec3, dir: Vec3, (min, max): (Vec3, Vec3)) -> Result<(), TestCaseError> {
+    let got = Aabb::new(min, max).intersect(&Ray::new(o, dir), f32::INFINITY);
+    let (ov, dv) = (d(o), d(dir));
+    let exact = slab(ov, dv, d(min), d(max), 0.0);
+    let scale = (d(max) - d(min)).length() + ov.length() + d(max).length();
+    if let Some((t0, _)) = exact {
+        prop_assert!(
+            got.is_some(),
+            "a ray meeting the box was rejected: exact entry {t0}"
+        );
+        let err = (f64::from(got.unwrap()) - t0) * dv.length() / scale;
+        prop_assert!(err <= SLAB_T_ERROR, "entry {:?} after the exact {t0}", got);
     }
+    if got.is_some() && exact.is_none() {
+        let grow = DVec3::splat(MARGIN * scale);
+        prop_assert!(
+            slab(ov, dv, d(min) - grow, d(max) + grow, 0.0).is_some(),
+            "accepted a ray that misses the box by more than the margin"
+        );
+    }
+    Ok(())
 }
-
-/// CSG leaves' `t` error bound (relative to the scale): the box by slabs, the ellipsoid by
-/// a quadratic in its unit-sphere space, the torus by its f64 quartic.
-const CSG_T_ERROR: f64 = 1e-5;
 
 fn csg_t(solid: Solid, ray: &Ray) -> Option<f32> {
     Csg::new(&CsgNode::Leaf(solid))

@@ -44,15 +44,8 @@ fn linear(q: usize) -> Vec3 {
 fn quad_scene(dir: &Path, mesh: &str, extra: &str) -> Arc<Scene> {
     let toml = format!(
         r#"
-[camera]
-position = [0.0, 0.0, 300.0]
-look_at = [0.0, 0.0, 0.0]
-fov = {fov}
-
-[[light]]
-kind = "directional"
-direction = [0.0, 0.0, -1.0]
-radiance = [1.0, 1.0, 1.0]
+camera = {{ position = [0.0, 0.0, 300.0], look_at = [0.0, 0.0, 0.0], fov = {fov} }}
+light = [{{ kind = "directional", direction = [0.0, 0.0, -1.0], radiance = [1.0, 1.0, 1.0] }}]
 
 [[object]]
 kind = "mesh"

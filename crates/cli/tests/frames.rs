@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::raybench;
+use common::{assert_clean_error, assert_success, merge, raybench, raybench_ok};
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
@@ -13,26 +13,12 @@ fn tmp_dir(name: &str) -> PathBuf {
     common::tmp_dir("frames", name)
 }
 
-/// Renders `moving` with `extra` options into `dir/NAME.png` (and ids beside it).
+/// Renders `moving` at 40 x 30 with `extra` options into `dir/NAME.png` (and ids beside it).
 fn render(dir: &Path, name: &str, extra: &[&str]) -> Output {
-    let out = dir.join(format!("{name}.png"));
     let ids = dir.join(format!("{name}-ids.png"));
-    let mut args = vec![
-        "render",
-        "moving",
-        "--width",
-        "40",
-        "--height",
-        "30",
-        "--out",
-        out.to_str().unwrap(),
-        "--ids",
-        ids.to_str().unwrap(),
-    ];
+    let mut args = vec!["--ids", ids.to_str().unwrap()];
     args.extend_from_slice(extra);
-    let o = raybench(&args);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    o
+    common::render("moving", (40, 30), &dir.join(format!("{name}.png")), &args)
 }
 
 fn bytes(p: PathBuf) -> Vec<u8> {
@@ -94,13 +80,7 @@ fn bad_frame_options_give_one_line_errors() {
             "unknown update policy 'refresh'",
         ),
     ] {
-        let o = raybench(&args);
-        let stderr = String::from_utf8_lossy(&o.stderr);
-        assert!(!o.status.success(), "{args:?} succeeded");
-        assert_ne!(o.status.code(), Some(101), "panicked: {stderr}");
-        let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
-        assert_eq!(errors.len(), 1, "{args:?}: {stderr}");
-        assert!(errors[0].contains(needle), "{args:?}: {stderr}");
+        assert_clean_error(&raybench(&args), needle);
     }
     assert!(!Path::new(out).exists());
 }
@@ -111,7 +91,7 @@ fn bad_frame_options_give_one_line_errors() {
 fn the_motion_experiment_survives_a_merge() {
     let dir = tmp_dir("report");
     let (out, merged) = (dir.join("run"), dir.join("merged"));
-    let o = raybench(&[
+    let o = raybench_ok(&[
         "report",
         "--quick",
         "--scenes",
@@ -132,10 +112,8 @@ fn the_motion_experiment_survives_a_merge() {
         out.to_str().unwrap(),
     ]);
     let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{stderr}");
     assert!(stderr.contains("motion: grid cannot refit"), "{stderr}");
-    let results: serde_json::Value =
-        serde_json::from_slice(&bytes(out.join("results.json"))).unwrap();
+    let results = common::results(&out);
     let frames = results["motion"].as_array().expect("motion frames");
     assert_eq!(frames.len(), 8, "bvh's 8 frames, grid left out");
     for (f, m) in frames.iter().enumerate() {
@@ -145,15 +123,9 @@ fn the_motion_experiment_survives_a_merge() {
         assert!(m["sah_refitted"].as_f64().unwrap() > 0.0);
     }
     assert!(results["skipped"].as_array().unwrap().is_empty());
-    let o = raybench(&[
-        "merge",
-        out.to_str().unwrap(),
-        "--out",
-        merged.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&merge(&[&out], &merged));
     let section = |d: &Path| {
-        let md = String::from_utf8(bytes(d.join("REPORT.md"))).unwrap();
+        let md = common::read(d, "REPORT.md");
         let start = md.find("## Moving scenes").expect("the motion section");
         let end = md[start..]
             .find("\n## Charts")

@@ -1,11 +1,11 @@
 //! Tidy: invariants of the source tree that ARCHITECTURE.md states and a test enforces (as
-//! rust-analyzer's `tidy` does; `tests/tests/tidy.rs` holds the crate-graph and code-map
+//! rust-analyzer's `tidy` does; `tests/tests/tidy/` holds the crate-graph and code-map
 //! ones). Here: only the registry (`crates/registry/src/lib.rs`) names
 //! concrete backends. Outside it and the allow-list below, no Rust file uses a backend
 //! crate and no Rust file holds a backend's name as a string literal; the rest of the
 //! workspace reads the registry's roles (`raybench_registry::Roles`).
 
-// The workspace's crates by their Cargo.toml files, shared with `tests/tests/tidy.rs`.
+// The workspace's crates by their Cargo.toml files, shared with `tests/tests/tidy/`.
 #[path = "../../../tests/tests/workspace/mod.rs"]
 mod workspace;
 
@@ -74,7 +74,7 @@ const ALLOWED: &[(&str, &str)] = &[
         "tests/tests/equivalence.rs",
         "validates raybench-bvh's invariants and maps each non-exact backend to its tolerance test",
     ),
-    ("tests/tests/gpu.rs", "the GPU backend is its subject"),
+    ("tests/tests/gpu/", "the GPU backend is its subject"),
     (
         "tests/tests/grid_cases.rs",
         "the uniform grid's resolution and cell cases are its subject",
@@ -92,7 +92,7 @@ const ALLOWED: &[(&str, &str)] = &[
         "each tree's own view (raybench-bvh, obvhs's adapter, the bvh crate, packet) is its subject",
     ),
     (
-        "tests/tests/tidy.rs",
+        "tests/tests/tidy/",
         "the crate-graph checks name the GPU backend's folder: only it may know wgpu",
     ),
     (

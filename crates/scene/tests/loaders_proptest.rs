@@ -592,25 +592,22 @@ fn gltf_parts() -> impl Strategy<Value = GltfParts> {
                 any::<bool>(),
                 any::<bool>(),
             ),
-            maybe(level, prop_oneof![0u64..80, huge()]),
-            [view(), view()],
-            [accessor(), accessor()],
-            maybe(level, prop_oneof![Just(0u32), Just(5), Just(9)]),
-            maybe(
-                level,
-                prop_oneof![Just("[1e39, 0, 0]"), Just("[-3e38, 0, 0]")],
+            (
+                maybe(level, prop_oneof![0u64..80, huge()]),
+                [view(), view()],
+                [accessor(), accessor()],
+                maybe(level, prop_oneof![Just(0u32), Just(5), Just(9)]),
+                maybe(
+                    level,
+                    prop_oneof![Just("[1e39, 0, 0]"), Just("[-3e38, 0, 0]")],
+                ),
+                maybe(level, 1usize..40),
             ),
-            maybe(level, 1usize..40),
         )
             .prop_map(
                 |(
                     (floats, indices, glb, child, indexed),
-                    buffer_length,
-                    views,
-                    accessors,
-                    mode,
-                    translation,
-                    cut,
+                    (buffer_length, views, accessors, mode, translation, cut),
                 )| GltfParts {
                     floats,
                     indices,

@@ -43,7 +43,7 @@
 //! sample that lands on the other side of a voxel border or of a sharp step of the
 //! transfer function, a ray that grazes a block edge, or early termination one segment
 //! earlier can change a pixel more; the tests allow a small fraction of such pixels.
-//! Measured on lavapipe against naive (`tests/tests/gpu.rs`), largest relative colour
+//! Measured on lavapipe against naive (`tests/tests/gpu/shading.rs`), largest relative colour
 //! difference at 32 x 32 (64 x 64): MIP 1.2e-5 (1.4e-5) and compositing 4.7e-5 (8.6e-5) on
 //! `phantom`, 9e-6 (8e-6) and 1.9e-5 (3.1e-5) on the tests' scene with surfaces and
 //! overlapping volumes; no pixel beyond 1e-3, ids all equal, `t` within 5e-7.

@@ -1,5 +1,5 @@
 //! The workspace's crates as their `Cargo.toml` files describe them: which are layers and
-//! which are backends. Shared by the tidy tests (`tests/tests/tidy.rs`, and
+//! which are backends. Shared by the tidy tests (`tests/tests/tidy/`, and
 //! `crates/cli/tests/tidy.rs` through a `#[path]` attribute), so that both derive the
 //! backend crates by one rule instead of keeping lists by hand.
 

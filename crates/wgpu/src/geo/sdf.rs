@@ -27,11 +27,11 @@
 //! operand. See `kernels/sdf.wgsl` for what that does to the march: at worst one step more
 //! or fewer, which moves `t` by about `eps / (L |dir|)`, i.e. a relative `eps / distance`.
 //!
-//! **Measured** (`tests/tests/gpu.rs`, lavapipe, both GPU backends against naive): on `sdf`
+//! **Measured** (`tests/tests/gpu/`, lavapipe, both GPU backends against naive): on `sdf`
 //! ids agree on 100% of pixels in cast, Whitted and path modes with a largest relative `t`
 //! difference of 2.0e-7; colours differ on 0% (cast, path) and 0.098% (Whitted: one pixel
 //! of 1,024); incoherent closest hits are bit-identical and any-hit rays agree on 100%. On
-//! the deepest-trees scene of the same file: 100% ids, 1.7e-7, 0% colours, identical
+//! the deepest-trees scene of `tests/tests/gpu/sdf.rs`: 100% ids, 1.7e-7, 0% colours, identical
 //! incoherent hits. A real GPU (approximate `sqrt` and division) was not available; by the
 //! bound above a camera ray of `sdf` stays below the shared 1e-4 (`eps / distance` is at
 //! most about 4e-5 there), while an explicit ray that hits within `eps / 1e-4` of its

@@ -1,0 +1,93 @@
+//! Sharding by scene and merging back: every shard's runs and images in the merged report,
+//! a shard given twice refused, and bad `report` and `merge` options refused cleanly.
+
+use crate::common::{assert_clean_error, assert_success, merge, raybench, results};
+use crate::{markdown, small_report, tmp_dir};
+use std::path::Path;
+
+#[test]
+fn shards_split_by_scene_and_merge_back() {
+    let (a, b, m) = (tmp_dir("shard1"), tmp_dir("shard2"), tmp_dir("merged"));
+    for (dir, shard) in [(&a, "1/2"), (&b, "2/2")] {
+        small_report(dir, &["--shard", shard]);
+    }
+    let scenes = |dir: &Path| -> Vec<String> {
+        let mut s: Vec<String> = results(dir)["runs"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|r| r["scene"].as_str().unwrap().to_string())
+            .collect();
+        s.dedup();
+        s
+    };
+    assert_eq!(scenes(&a), ["spheres"]);
+    assert_eq!(scenes(&b), ["cornell-box"]);
+    assert_success(&merge(&[&a, &b], &m));
+    let r = results(&m);
+    assert_eq!(r["shards"].as_array().unwrap().len(), 2);
+    assert_eq!(r["shards"][1]["index"], 2);
+    let runs = r["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), (6 + 7) * 3);
+    assert!(
+        runs.iter()
+            .any(|r| r["scene"] == "cornell-box" && r["shard"] == 1)
+    );
+    for run in runs {
+        if let Some(img) = run["images"]["color"].as_str() {
+            assert!(m.join(img).is_file(), "{img} not copied");
+        }
+    }
+    assert!(markdown(&m).contains("Shard 2/2"));
+    // A shard given twice, as the same folder or inside a merged report, is refused: it
+    // would double its rows.
+    let again = tmp_dir("merged-again");
+    for pair in [[&a, &a], [&m, &b]] {
+        assert_clean_error(&merge(&[pair[0], pair[1]], &again), "same shard");
+        assert!(!again.join("results.json").exists());
+    }
+    // A copy of a shard (another run of the same part) measures the same runs.
+    let rerun = tmp_dir("shard1-rerun");
+    small_report(&rerun, &["--shard", "1/2"]);
+    assert_clean_error(&merge(&[&a, &rerun], &again), "both measure spheres");
+    for d in [a, b, m, again, rerun] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}
+
+#[test]
+fn bad_report_options_are_refused_cleanly() {
+    let dir = tmp_dir("bad");
+    let d = dir.to_str().unwrap();
+    for args in [
+        vec!["report", "--shard", "3/2", "--out", d],
+        vec!["report", "--shard", "0/2", "--out", d],
+        vec!["report", "--shard", "x", "--out", d],
+        vec!["report", "--backends", "nope", "--out", d],
+        vec![
+            "report",
+            "--scenes",
+            "no-such-scene",
+            "--no-scaling",
+            "--out",
+            d,
+        ],
+        vec!["report", "--size", "5", "--out", d],
+        vec!["report", "--modes", "raster", "--out", d],
+        vec!["report", "--rays", "sideways", "--out", d],
+        vec!["report", "--ao-rays", "0", "--out", d],
+        vec!["merge", "/nonexistent-raybench-dir", "--out", d],
+    ] {
+        let out = raybench(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert_ne!(out.status.code(), Some(101), "{args:?} panicked: {stderr}");
+        assert!(stderr.contains("error"), "{args:?}: {stderr}");
+    }
+    // A results file of another schema is refused.
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("results.json"), r#"{"schema": "other/9"}"#).unwrap();
+    let out = raybench(&["merge", d, "--out", &format!("{d}-out")]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("schema"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
