@@ -34,6 +34,10 @@ const ALLOWED: &[(&str, &str)] = &[
         "the registry's builder presets: each backend's named build parameters",
     ),
     (
+        "crates/registry/src/timed.rs",
+        "the registry's timed view of its two renderer kinds (the CPU's and the GPU's)",
+    ),
+    (
         "crates/render/src/lib.rs",
         "CpuRenderer's unit tests need one Accel below the registry: naive (a dev-dependency)",
     ),
