@@ -6,7 +6,7 @@ use bvh::bvh::{Bvh as CrateBvh, BvhNode};
 use raybench_geometry::traverse::{self, AnyHit, Closest};
 use raybench_geometry::{
     Aabb, Accel, AccelStats, Counters, Geometry, Hit, QualityParams, Ray, StructureQuality,
-    TreeView, Vec3,
+    TreeView, Vec3, ray_by_ray,
 };
 use std::sync::Arc;
 
@@ -282,20 +282,18 @@ impl Accel for BvhCrateAccel {
         hits: &mut [Option<Hit>],
         counters: &mut C,
     ) {
-        assert_eq!(rays.len(), hits.len());
         let mut stack = Vec::with_capacity(STACK_CAPACITY);
-        for (ray, hit) in rays.iter().zip(hits) {
-            *hit = self.intersect_with(ray, &mut stack, counters);
-        }
+        ray_by_ray(rays, hits, |ray| {
+            self.intersect_with(ray, &mut stack, counters)
+        });
     }
 
     /// Single rays one after the other, sharing one traversal stack.
     fn occluded_batch<C: Counters>(&self, rays: &[Ray], occluded: &mut [bool], counters: &mut C) {
-        assert_eq!(rays.len(), occluded.len());
         let mut stack = Vec::with_capacity(STACK_CAPACITY);
-        for (ray, o) in rays.iter().zip(occluded) {
-            *o = self.occluded_with(ray, &mut stack, counters);
-        }
+        ray_by_ray(rays, occluded, |ray| {
+            self.occluded_with(ray, &mut stack, counters)
+        });
     }
 
     fn stats(&self) -> AccelStats {
