@@ -213,7 +213,7 @@ pub(super) fn add(
 
 #[cfg(test)]
 mod tests {
-    use super::super::load_test_scene as load;
+    use super::super::{assert_refused, load_test_scene as load};
 
     /// An icosphere mesh named `m` and a material `red`, for the arrays below.
     const MESH: &str = "[[material]]\nname = \"red\"\ncolor = [1, 0, 0]\n\
@@ -357,14 +357,7 @@ mod tests {
                 "line 9: instance_array 1: instance 2 (cell [1, 0, 0]): instance transform",
             ),
         ];
-        for (text, needle) in cases {
-            let e = load(&text)
-                .err()
-                .unwrap_or_else(|| panic!("accepted: {text}"))
-                .to_string();
-            assert!(e.contains(needle), "{text:?} -> {e}");
-            assert!(e.starts_with("t.toml: "), "{e}");
-        }
+        assert_refused(&cases);
     }
 
     /// The limit on instanced primitives is checked before anything is added: a million

@@ -625,9 +625,23 @@ fn load_test_scene(text: &str) -> Result<Scene, LoadError> {
     load_scene_str(text, "t", None, Path::new("/nonexistent"))
 }
 
+/// Checks that [`load_test_scene`] refuses each scene text of `cases` with an error that
+/// names the file and contains the case's needle (for the unit tests of every kind's file).
+#[cfg(test)]
+fn assert_refused(cases: &[(String, &str)]) {
+    for (text, needle) in cases {
+        let e = load_test_scene(text)
+            .err()
+            .unwrap_or_else(|| panic!("accepted: {text}"))
+            .to_string();
+        assert!(e.contains(needle), "{text:?} -> {e}");
+        assert!(e.starts_with("t.toml: "), "{e}");
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use super::load_test_scene as load;
+    use super::{assert_refused, load_test_scene as load};
     use raybench_core::MaterialKind;
 
     #[test]
@@ -945,13 +959,6 @@ mod tests {
                 "`name` must be a string",
             ),
         ];
-        for (text, needle) in cases {
-            let e = load(&text)
-                .err()
-                .unwrap_or_else(|| panic!("accepted: {text}"))
-                .to_string();
-            assert!(e.contains(needle), "{text:?} -> {e}");
-            assert!(e.starts_with("t.toml: "), "{e}");
-        }
+        assert_refused(&cases);
     }
 }
