@@ -52,9 +52,11 @@ pub struct Options {
     pub baseline: Option<PathBuf>,
 }
 
-/// Naive's estimated ray/primitive tests per workload above which it is left out (it is
-/// then not the reference: `bvh` is, itself checked against naive by the tests).
-pub(crate) const NAIVE_BUDGET_QUICK: f64 = 2.0e9;
+/// Naive's estimated ray/primitive tests per workload above which the quick run leaves it
+/// out (it is then not the reference: `bvh` is, itself checked against naive by the
+/// tests): the budget `compare` and `info` keep to by default as well.
+pub(crate) const NAIVE_BUDGET_QUICK: f64 = raybench_registry::BRUTE_FORCE_BUDGET_TESTS;
+/// [`NAIVE_BUDGET_QUICK`] for the full run.
 pub(crate) const NAIVE_BUDGET_FULL: f64 = 2.0e10;
 
 /// The tolerance a backend outside the equivalence contract must meet: at least this
