@@ -3,7 +3,7 @@
 //! (`terrain:N`), both in the baseline backend, for growing grids: load, build, memory and
 //! render time.
 
-use super::{Ctx, Observed, Point, Scaling, baseline_only, square};
+use super::{About, Ctx, Observed, Point, Scaling, baseline_only, square};
 use crate::fmt::{bytes, opt};
 use crate::results::{Results, ScalingPoint};
 use raybench_core::Mode;
@@ -13,19 +13,18 @@ use std::fmt::Write as _;
 /// Experiment `heightfield`.
 pub(super) struct Heightfield;
 
+/// Its name and axes.
+const ABOUT: About = About {
+    name: "heightfield",
+    x_label: "height-field cells (N²)",
+    axis: Some("the height-field cell count N^2 (direct and tessellated, see below)"),
+};
+
 impl Scaling for Heightfield {
     type State = ();
 
-    fn name(&self) -> &'static str {
-        "heightfield"
-    }
-
-    fn x_label(&self) -> &'static str {
-        "height-field cells (N²)"
-    }
-
-    fn axis(&self) -> Option<&'static str> {
-        Some("the height-field cell count N^2 (direct and tessellated, see below)")
+    fn about(&self) -> &About {
+        &ABOUT
     }
 
     fn points(&self, ctx: &Ctx) -> Result<Vec<Point>, String> {
@@ -63,7 +62,7 @@ impl Scaling for Heightfield {
         let hf: Vec<_> = results
             .scaling
             .iter()
-            .filter(|p| p.experiment == self.name())
+            .filter(|p| p.experiment == ABOUT.name)
             .collect();
         if !hf.is_empty() {
             let _ = writeln!(s, "## Height fields: direct against tessellated\n");
