@@ -107,19 +107,13 @@ impl Experiment for Matrix {
         })
     }
 
-    fn run(
-        &self,
-        ctx: &Ctx,
-        planned: Planned,
-        progress: &Progress,
-        results: &mut Results,
-    ) -> Result<()> {
-        if let Some(scene) = &planned.scene {
+    fn run(&self, ctx: &Ctx, unit: Planned, progress: &Progress, out: &mut Results) -> Result<()> {
+        if let Some(scene) = &unit.scene {
             let (runs, empty) = run_scene(ctx, scene, progress)?;
-            results.runs.extend(runs);
+            out.runs.extend(runs);
             for (workload, why) in empty {
                 skip(
-                    results,
+                    out,
                     "workload",
                     &format!("{} {workload}", scene.name),
                     "skipped",

@@ -19,7 +19,7 @@ mod spp;
 
 pub(crate) use crate::charts::{Chart, Plot};
 use crate::charts::{PowerLaw, Series};
-use crate::ctx::{Ctx, Loaded, Workload, skip};
+use crate::ctx::{Ctx, Loaded, Workload, memory_bytes, skip};
 use crate::results::{Results, ScalingPoint};
 use anyhow::Result;
 use raybench_core::{Mode, RaySet, Scene};
@@ -64,6 +64,18 @@ pub(crate) struct Planned {
     pub scene: Option<Arc<Scene>>,
 }
 
+/// The plan of an experiment's unit that loads what it needs when it runs: `steps`
+/// progress steps, or (`Err`) why it cannot run, which is recorded in `results` as a skip.
+fn planned(results: &mut Results, unit: &str, steps: Result<usize, String>) -> Option<Planned> {
+    match steps {
+        Ok(steps) => Some(Planned { steps, scene: None }),
+        Err(why) => {
+            skip(results, "experiment", unit, "skipped", why);
+            None
+        }
+    }
+}
+
 /// One part of the report: it splits into units (shards run whole units), plans and runs
 /// them into [`Results`], and draws and writes its part from [`Results`] alone (so that a
 /// merge of shards gives the same report as one run).
@@ -96,7 +108,7 @@ pub(crate) trait Experiment: Sync {
     fn run(
         &self,
         ctx: &Ctx,
-        planned: Planned,
+        unit: Planned,
         progress: &Progress,
         results: &mut Results,
     ) -> Result<()>;
@@ -221,25 +233,13 @@ impl<T: Scaling> Experiment for T {
     }
 
     fn plan(&self, ctx: &Ctx, unit: &str, results: &mut Results) -> Result<Option<Planned>> {
-        match self.points(ctx) {
-            Ok(points) => Ok(Some(Planned {
-                steps: points.len() * self.backends(ctx.chosen).len(),
-                scene: None,
-            })),
-            Err(reason) => {
-                skip(results, "experiment", unit, "skipped", reason);
-                Ok(None)
-            }
-        }
+        let steps = self
+            .points(ctx)
+            .map(|points| points.len() * self.backends(ctx.chosen).len());
+        Ok(planned(results, unit, steps))
     }
 
-    fn run(
-        &self,
-        ctx: &Ctx,
-        _planned: Planned,
-        progress: &Progress,
-        results: &mut Results,
-    ) -> Result<()> {
+    fn run(&self, ctx: &Ctx, _: Planned, progress: &Progress, results: &mut Results) -> Result<()> {
         let name = self.about().name;
         let (points, skipped) = run_scaling(self, ctx, progress)?;
         if !skipped.is_empty() {
@@ -418,34 +418,13 @@ fn run_scaling<E: Scaling>(
             let x = point.x;
             progress.begin(format!("scaling {experiment} {spec} x={x} {}", b.name));
             let m = ctx.measure(r.as_ref(), &w, None)?;
-            let rays = m.warm.rays.max(1);
-            let mut p = ScalingPoint {
-                shard: 0,
-                experiment: experiment.into(),
-                series: point.series.clone(),
-                backend: b.name.into(),
-                x,
-                seconds: m.timing.median,
-                rays: m.warm.rays,
-                tests_per_ray: m
-                    .warm
-                    .counters
-                    .filter(|_| r.counts_tests())
-                    .map(|c| c.prim_tests as f64 / rays as f64),
-                load_seconds: None,
-                build_seconds: None,
-                memory_bytes: None,
-                difference: None,
-                stored_primitives: None,
-            };
+            let mut p = m.point(r.as_ref(), experiment, point.series.clone(), b.name, x);
             let seen = Observed {
                 point,
                 warm: &m.warm,
                 load_seconds,
                 build_seconds: build,
-                memory_bytes: (scene.geometry.memory_bytes()
-                    + r.structure().map_or(0, |s| s.memory_bytes))
-                    as u64,
+                memory_bytes: memory_bytes(&scene, r.as_ref()),
             };
             e.record(&mut state, &seen, &mut p);
             points.push(p);

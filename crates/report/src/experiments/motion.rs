@@ -9,7 +9,7 @@
 //! policies are left out, with a line on stderr). The frames are
 //! [`MotionFrame`]s of `results.json`, so `raybench merge` redraws the part.
 
-use super::{Chart, Experiment, Planned, Plot, skip};
+use super::{Chart, Experiment, Planned, Plot, planned, skip};
 use crate::charts::Series;
 use crate::ctx::{Ctx, Workload};
 use crate::fmt::file_safe;
@@ -106,40 +106,17 @@ impl Experiment for Motion {
     }
 
     fn plan(&self, ctx: &Ctx, unit: &str, results: &mut Results) -> Result<Option<Planned>> {
-        let Some((_, frames, _)) = Self::plan_of(ctx) else {
-            skip(
-                results,
-                "experiment",
-                unit,
-                "skipped",
-                "no built-in scene names experiment `motion` in its [benchmark] table".into(),
-            );
-            return Ok(None);
+        let steps = match (Self::plan_of(ctx), Self::backends(ctx).len()) {
+            (None, _) => {
+                Err("no built-in scene names experiment `motion` in its [benchmark] table".into())
+            }
+            (Some(_), 0) => Err("no chosen backend is an exact, accelerated one".into()),
+            (Some((_, frames, _)), backends) => Ok(backends * frames as usize),
         };
-        let backends = Self::backends(ctx);
-        if backends.is_empty() {
-            skip(
-                results,
-                "experiment",
-                unit,
-                "skipped",
-                "no chosen backend is an exact, accelerated one".into(),
-            );
-            return Ok(None);
-        }
-        Ok(Some(Planned {
-            steps: backends.len() * frames as usize,
-            scene: None,
-        }))
+        Ok(planned(results, unit, steps))
     }
 
-    fn run(
-        &self,
-        ctx: &Ctx,
-        _planned: Planned,
-        progress: &Progress,
-        results: &mut Results,
-    ) -> Result<()> {
+    fn run(&self, ctx: &Ctx, _: Planned, progress: &Progress, results: &mut Results) -> Result<()> {
         let Some((spec, frames, size)) = Self::plan_of(ctx) else {
             return Ok(());
         };
