@@ -8,7 +8,7 @@ use super::{
 };
 use crate::charts::Series;
 use crate::ctx::{Loaded, skip_missing_asset};
-use crate::fmt::opt;
+use crate::fmt::{opt, section};
 use crate::images::{self, Rgb8};
 use crate::results::{ImageDifference, Results, ScalingPoint};
 use anyhow::Result;
@@ -223,17 +223,19 @@ impl Scaling for Bezier {
             .filter(|p| p.experiment == ABOUT.name)
             .collect();
         if !bz.is_empty() {
-            let _ = writeln!(s, "## Bezier patches: direct against tessellated\n");
-            let _ = writeln!(
+            section(
                 s,
-                "The Utah teapot's 32 bicubic patches (`teapot-bezier`) intersected directly \
-                 (subdivision of the control-point boxes, then Newton iteration on (u, v, t)) against \
-                 the same patches tessellated into N x N quads (2 N^2 triangles) each, vertices on \
-                 the exact surface, both in the `{}` backend; 256 x 256 camera rays. Difference \
-                 from the direct image: mean FLIP, the fraction of pixels whose patch differs (or \
-                 one hits and the other misses), and the fraction hit in both whose depth differs \
-                 by more than 1%.\n",
-                raybench_registry::name_with(raybench_registry::Roles::BASELINE)
+                "Bezier patches: direct against tessellated",
+                &format!(
+                    "The Utah teapot's 32 bicubic patches (`teapot-bezier`) intersected directly \
+                     (subdivision of the control-point boxes, then Newton iteration on (u, v, t)) \
+                     against the same patches tessellated into N x N quads (2 N^2 triangles) each, \
+                     vertices on the exact surface, both in the `{}` backend; 256 x 256 camera \
+                     rays. Difference from the direct image: mean FLIP, the fraction of pixels \
+                     whose patch differs (or one hits and the other misses), and the fraction hit \
+                     in both whose depth differs by more than 1%.",
+                    raybench_registry::name_with(raybench_registry::Roles::BASELINE)
+                ),
             );
             let _ = writeln!(
                 s,

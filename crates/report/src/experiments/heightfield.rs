@@ -4,7 +4,7 @@
 //! render time.
 
 use super::{About, Ctx, Observed, Point, Scaling, baseline_only, square};
-use crate::fmt::{bytes, opt};
+use crate::fmt::{bytes, opt, section};
 use crate::results::{Results, ScalingPoint};
 use raybench_core::Mode;
 use raybench_registry::Backend;
@@ -65,16 +65,19 @@ impl Scaling for Heightfield {
             .filter(|p| p.experiment == ABOUT.name)
             .collect();
         if !hf.is_empty() {
-            let _ = writeln!(s, "## Height fields: direct against tessellated\n");
-            let _ = writeln!(
+            section(
                 s,
-                "The `terrain:N` heights as one height-field primitive intersected directly (min-max \
-                 quadtree over the cells, `heightfield:N`) against the same terrain tessellated into \
-                 2 N^2 triangles (`terrain:N`), both in the `{}` backend; 256 x 256 camera rays. Both \
-                 give the same hits and `t` bit for bit. Load: generating the heights and \
-                 tessellating, or building the min-max levels; build: the BVH; memory: primitives \
-                 plus structure; a height field counts as one primitive test per ray.\n",
-                raybench_registry::name_with(raybench_registry::Roles::BASELINE)
+                "Height fields: direct against tessellated",
+                &format!(
+                    "The `terrain:N` heights as one height-field primitive intersected directly \
+                     (min-max quadtree over the cells, `heightfield:N`) against the same terrain \
+                     tessellated into 2 N^2 triangles (`terrain:N`), both in the `{}` backend; 256 \
+                     x 256 camera rays. Both give the same hits and `t` bit for bit. Load: \
+                     generating the heights and tessellating, or building the min-max levels; \
+                     build: the BVH; memory: primitives plus structure; a height field counts as \
+                     one primitive test per ray.",
+                    raybench_registry::name_with(raybench_registry::Roles::BASELINE)
+                ),
             );
             let _ = writeln!(
                 s,

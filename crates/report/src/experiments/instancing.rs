@@ -16,7 +16,7 @@
 use super::{Chart, Experiment, Planned, Plot, planned, scene_for, skip};
 use crate::charts::{Bar, Bars};
 use crate::ctx::{Ctx, Workload, memory_bytes};
-use crate::fmt::bytes;
+use crate::fmt::{bytes, section};
 use crate::results::{Results, ScalingPoint};
 use anyhow::Result;
 use raybench_core::{Mode, RaySet, Scene};
@@ -157,6 +157,19 @@ fn mrays(p: &ScalingPoint) -> f64 {
     p.rays as f64 / p.seconds.max(1e-12) / 1e6
 }
 
+/// The first paragraph of its section of `REPORT.md`.
+const INTRO: &str = "\
+    Each scene as loaded, its instances placing meshes stored once under a two-level \
+    structure (a tree over the instances, one structure per distinct mesh), against \
+    the same scene flattened: every instanced primitive carried to world space and \
+    stored flat under one structure. Both have the same primitives under the same \
+    ids (flattening rounds differently, so a few hits may differ in their last \
+    bits). Memory: primitives plus structure (Embree's own BVH is not counted); per \
+    instanced primitive it is divided by the flattened count, per stored primitive \
+    by the primitives actually stored. Build: one build, all threads; trace: camera \
+    rays at the report's image size, ray casting, median of the run's repetitions. \
+    The flattened form runs only where the memory budget allows it.";
+
 impl Experiment for Instancing {
     fn name(&self) -> &'static str {
         NAME
@@ -282,20 +295,7 @@ impl Experiment for Instancing {
         if scenes.is_empty() {
             return;
         }
-        let _ = writeln!(s, "## Instancing: instanced against flattened\n");
-        let _ = writeln!(
-            s,
-            "Each scene as loaded, its instances placing meshes stored once under a two-level \
-             structure (a tree over the instances, one structure per distinct mesh), against \
-             the same scene flattened: every instanced primitive carried to world space and \
-             stored flat under one structure. Both have the same primitives under the same \
-             ids (flattening rounds differently, so a few hits may differ in their last \
-             bits). Memory: primitives plus structure (Embree's own BVH is not counted); per \
-             instanced primitive it is divided by the flattened count, per stored primitive \
-             by the primitives actually stored. Build: one build, all threads; trace: camera \
-             rays at the report's image size, ray casting, median of the run's repetitions. \
-             The flattened form runs only where the memory budget allows it.\n"
-        );
+        section(s, "Instancing: instanced against flattened", INTRO);
         let _ = writeln!(
             s,
             "| scene | form | backend | stored | instanced | memory | B/instanced prim | \

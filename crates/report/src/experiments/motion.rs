@@ -12,7 +12,7 @@
 use super::{Chart, Experiment, Planned, Plot, planned, skip};
 use crate::charts::Series;
 use crate::ctx::{Ctx, Workload};
-use crate::fmt::file_safe;
+use crate::fmt::{file_safe, section};
 use crate::results::{MotionFrame, Results};
 use anyhow::Result;
 use raybench_core::{
@@ -99,6 +99,19 @@ impl Motion {
             .collect()
     }
 }
+
+/// The first paragraph of its section of `REPORT.md`.
+const INTRO: &str = "\
+    The frames of a moving scene, followed by two structures of each backend that \
+    refits: one built at frame 0 and refitted every frame (boxes recomputed bottom \
+    up, the tree's topology kept; a two-level form refits its flat part and the \
+    meshes that deform, and rebuilds its top level over the instances: `top`), and \
+    one rebuilt every frame (its flat part, the deformed meshes and the top level). \
+    Per frame: the update's seconds, the median trace time of the camera rays (ray \
+    casting) through each, and each one's SAH cost over the flat primitives (where \
+    the twisting mesh is). Both give the same ids and `t` on every frame (checked \
+    here, and against naive by `tests/tests/motion.rs`). One run on a shared \
+    machine: trace times within a few per cent of each other are noise.";
 
 impl Experiment for Motion {
     fn name(&self) -> &'static str {
@@ -278,20 +291,7 @@ impl Experiment for Motion {
         if groups.is_empty() {
             return;
         }
-        let _ = writeln!(s, "## Moving scenes: refit against rebuild\n");
-        let _ = writeln!(
-            s,
-            "The frames of a moving scene, followed by two structures of each backend that \
-             refits: one built at frame 0 and refitted every frame (boxes recomputed bottom \
-             up, the tree's topology kept; a two-level form refits its flat part and the \
-             meshes that deform, and rebuilds its top level over the instances: `top`), and \
-             one rebuilt every frame (its flat part, the deformed meshes and the top level). \
-             Per frame: the update's seconds, the median trace time of the camera rays (ray \
-             casting) through each, and each one's SAH cost over the flat primitives (where \
-             the twisting mesh is). Both give the same ids and `t` on every frame (checked \
-             here, and against naive by `tests/tests/motion.rs`). One run on a shared \
-             machine: trace times within a few per cent of each other are noise.\n"
-        );
+        section(s, "Moving scenes: refit against rebuild", INTRO);
         for ((scene, backend), rows) in &groups {
             let size = rows.first().map_or(0, |r| r.size);
             let _ = writeln!(s, "### {scene}, {backend} ({size} x {size})\n");

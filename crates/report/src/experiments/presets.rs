@@ -14,7 +14,7 @@ use super::{Chart, Experiment, Planned, Plot, planned, skip};
 use crate::charts::Series;
 use crate::ctx::{Ctx, Workload, memory_bytes};
 use crate::fmt::file_safe;
-use crate::fmt::{bytes, opt};
+use crate::fmt::{bytes, opt, section};
 use crate::results::{Results, ScalingPoint};
 use anyhow::Result;
 use raybench_core::{Mode, RaySet};
@@ -117,6 +117,19 @@ fn fastest_at(list: &[Measured], k: f64) -> Option<&Measured> {
     list.iter()
         .min_by(|a, b| (a.1 + k * a.2).total_cmp(&(b.1 + k * b.2)))
 }
+
+/// The first paragraph of its section of `REPORT.md`.
+const INTRO: &str = "\
+    Every builder preset of the chosen backends (`BACKEND:PRESET`; `raybench \
+    backends` lists them) on each scene: the build (median of the run's repetitions, \
+    a fresh structure each, all threads), then one frame of camera rays (ray casting, \
+    the report's image size) and as many incoherent rays, timed as in the matrix \
+    (median). Memory: primitives plus structure (Embree's own BVH is not counted). \
+    Time to an image is `build + k x frame` with the camera-ray frame; the \
+    break-even is the frame count after which the backend's fastest-tracing preset \
+    overtakes the one fastest to a first image. One run on a shared machine: a \
+    difference of a few per cent between presets is within its noise (the \
+    matrix's min-max spreads show how much).";
 
 impl Experiment for Presets {
     fn name(&self) -> &'static str {
@@ -279,20 +292,7 @@ impl Experiment for Presets {
         if scenes.is_empty() {
             return;
         }
-        let _ = writeln!(s, "## Build presets: build time against trace time\n");
-        let _ = writeln!(
-            s,
-            "Every builder preset of the chosen backends (`BACKEND:PRESET`; `raybench \
-             backends` lists them) on each scene: the build (median of the run's repetitions, \
-             a fresh structure each, all threads), then one frame of camera rays (ray casting, \
-             the report's image size) and as many incoherent rays, timed as in the matrix \
-             (median). Memory: primitives plus structure (Embree's own BVH is not counted). \
-             Time to an image is `build + k x frame` with the camera-ray frame; the \
-             break-even is the frame count after which the backend's fastest-tracing preset \
-             overtakes the one fastest to a first image. One run on a shared machine: a \
-             difference of a few per cent between presets is within its noise (the \
-             matrix's min-max spreads show how much).\n"
-        );
+        section(s, "Build presets: build time against trace time", INTRO);
         let _ = writeln!(
             s,
             "| scene | preset | build s | primary s | incoherent s | memory | tests/ray |"
