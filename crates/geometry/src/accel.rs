@@ -103,10 +103,7 @@ pub trait Accel: Send + Sync + Sized + 'static {
         hits: &mut [Option<Hit>],
         counters: &mut C,
     ) {
-        assert_eq!(rays.len(), hits.len());
-        for (ray, hit) in rays.iter().zip(hits) {
-            *hit = self.intersect(ray, counters);
-        }
+        ray_by_ray(rays, hits, |ray| self.intersect(ray, counters));
     }
 
     /// Any-hit results of a batch of rays: `occluded[i]` for `rays[i]`.
@@ -114,10 +111,7 @@ pub trait Accel: Send + Sync + Sized + 'static {
     /// # Panics
     /// When the slices differ in length.
     fn occluded_batch<C: Counters>(&self, rays: &[Ray], occluded: &mut [bool], counters: &mut C) {
-        assert_eq!(rays.len(), occluded.len());
-        for (ray, o) in rays.iter().zip(occluded) {
-            *o = self.occluded(ray, counters);
-        }
+        ray_by_ray(rays, occluded, |ray| self.occluded(ray, counters));
     }
 
     /// Size and node or cell counts of the structure.
@@ -129,6 +123,20 @@ pub trait Accel: Send + Sync + Sized + 'static {
     /// build, not per frame.
     fn quality(&self, _params: &QualityParams) -> Option<StructureQuality> {
         None
+    }
+}
+
+/// Fills `out[i]` with `trace(&rays[i])`, ray after ray in order: the batch entry points of
+/// a structure without a batch kernel ([`Accel::intersect_batch`]'s and
+/// [`Accel::occluded_batch`]'s defaults, and backends that only share scratch space, such as
+/// a traversal stack, between the rays of a batch).
+///
+/// # Panics
+/// When the slices differ in length.
+pub fn ray_by_ray<T>(rays: &[Ray], out: &mut [T], mut trace: impl FnMut(&Ray) -> T) {
+    assert_eq!(rays.len(), out.len());
+    for (ray, o) in rays.iter().zip(out) {
+        *o = trace(ray);
     }
 }
 

@@ -50,7 +50,7 @@ mod triangle;
 mod two_level;
 
 pub use aabb::{Aabb, FAR_SCALE, SlabRay};
-pub use accel::{Accel, AccelStats, BatchTracer};
+pub use accel::{Accel, AccelStats, BatchTracer, ray_by_ray};
 pub use bezier::{
     BezierPatch, BezierStats, FALLBACK_DEPTH, MAX_NEWTON_ITERATIONS, REGION_DEPTH, UV_MARGIN,
 };

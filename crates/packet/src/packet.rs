@@ -217,6 +217,14 @@ fn triangle_lanes<L: Lanes, const K: usize>(rays: &[Ray]) -> [RayLanes<L>; K] {
     out
 }
 
+/// The lanes set in `masks`, the packet's rays that enter a node, counted as node visits.
+#[inline]
+fn visit<C: Counters>(masks: &[u32], counters: &mut C) -> u32 {
+    let active: u32 = masks.iter().map(|m| m.count_ones()).sum();
+    counters.add_visits(u64::from(active));
+    active
+}
+
 /// The common octant of `rays` (bit `a` set when the inverse direction along axis `a` is
 /// negative, as `raybench_geometry::SlabRay` decides), or `None` when the rays are not one
 /// coherent packet (mixed signs, or a non-finite origin or direction).
@@ -299,16 +307,12 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
                 masks[k] = pushed[k] & L::bits(L::le(entry_v, L::load(&st.limit[k * L::W..])));
             }
         }
-        let active: u32 = masks.iter().map(|m| m.count_ones()).sum();
+        let active = visit(&masks, counters);
         if active == 0 {
             continue;
         }
-        counters.add_visits(u64::from(active));
         if index & LEAF_BIT != 0 {
-            if tri_lanes.is_none() {
-                tri_lanes = Some(triangle_lanes::<L, K>(rays));
-            }
-            let Some(lanes) = &tri_lanes else { continue };
+            let lanes = tri_lanes.get_or_insert_with(|| triangle_lanes::<L, K>(rays));
             packet_leaf::<L, K, C>(
                 layout,
                 g,
@@ -522,18 +526,12 @@ pub(crate) fn occluded<L: Lanes, const K: usize, C: Counters>(
         sp -= 1;
         let (index, pushed) = stack[sp];
         let masks: [u32; K] = std::array::from_fn(|k| pushed[k] & open[k]);
-        let active: u32 = masks.iter().map(|m| m.count_ones()).sum();
+        let active = visit(&masks, counters);
         if active == 0 {
             continue;
         }
-        counters.add_visits(u64::from(active));
         if index & LEAF_BIT != 0 {
-            if tri_lanes.is_none() {
-                tri_lanes = Some(triangle_lanes::<L, K>(rays));
-            }
-            let Some(tri_lanes) = &tri_lanes else {
-                continue;
-            };
+            let tri_lanes = tri_lanes.get_or_insert_with(|| triangle_lanes::<L, K>(rays));
             let leaf = LeafRef::decode(index);
             for block in &layout.blocks[leaf.first..leaf.first + leaf.blocks] {
                 let occupied = block.occupied();

@@ -6,7 +6,7 @@ use bvh::bvh::{Bvh as CrateBvh, BvhNode};
 use raybench_geometry::traverse::{self, AnyHit, Closest};
 use raybench_geometry::{
     Aabb, Accel, AccelStats, Counters, Geometry, Hit, QualityParams, Ray, StructureQuality,
-    TreeView, Vec3,
+    TreeView, Vec3, ray_by_ray,
 };
 use std::sync::Arc;
 
@@ -36,6 +36,15 @@ impl BHShape<f32, 3> for CrateShape {
 
 /// Traversal stack entries: node index and the ray's entry distance into its box.
 type Stack = Vec<(usize, f32)>;
+
+/// A node of the crate's tree as the walks read it.
+enum Node<'a> {
+    /// A leaf: the raybench id of its one primitive.
+    Leaf(u32),
+    /// An interior node: its left and right children's indices, each with the box the node
+    /// stores for it.
+    Interior([(usize, &'a CrateAabb<f32, 3>); 2]),
+}
 
 /// svenstaro's `bvh` crate (0.13): its binned-SAH tree (one primitive per leaf, built in
 /// parallel with rayon) over the scene's bounded primitives, traced by a stack traversal of
@@ -110,19 +119,30 @@ impl BvhCrateAccel {
                 Vec3::new(b.max[0], b.max[1], b.max[2]),
             )
         };
+        match self.node(index) {
+            Node::Leaf(id) => view.leaf(bounds, &[id]),
+            Node::Interior(children) => {
+                let [l, r] = children.map(|(child, b)| self.view_node(child, to_aabb(b), view));
+                view.interior(bounds, &[l, r])
+            }
+        }
+    }
+
+    /// Node `index` of the crate's tree as the walks read it.
+    #[inline]
+    fn node(&self, index: usize) -> Node<'_> {
         match &self.bvh.nodes[index] {
-            BvhNode::Leaf { shape_index, .. } => view.leaf(bounds, &[self.id(*shape_index)]),
+            BvhNode::Leaf { shape_index, .. } => Node::Leaf(self.id(*shape_index)),
             BvhNode::Node {
                 child_l_index,
                 child_l_aabb,
                 child_r_index,
                 child_r_aabb,
                 ..
-            } => {
-                let l = self.view_node(*child_l_index, to_aabb(child_l_aabb), view);
-                let r = self.view_node(*child_r_index, to_aabb(child_r_aabb), view);
-                view.interior(bounds, &[l, r])
-            }
+            } => Node::Interior([
+                (*child_l_index, child_l_aabb),
+                (*child_r_index, child_r_aabb),
+            ]),
         }
     }
 
@@ -162,35 +182,29 @@ impl BvhCrateAccel {
                 continue;
             }
             q.add_visits(1);
-            match &nodes[index] {
-                BvhNode::Leaf { shape_index, .. } => {
-                    q.test(self.id(*shape_index));
+            match self.node(index) {
+                Node::Leaf(id) => {
+                    q.test(id);
                     best_t = q.best_t();
                 }
-                BvhNode::Node {
-                    child_l_index,
-                    child_l_aabb,
-                    child_r_index,
-                    child_r_aabb,
-                    ..
-                } => {
+                Node::Interior([(l, l_box), (r, r_box)]) => {
                     let entry_of = |b: &CrateAabb<f32, 3>| {
                         cray.intersection_slice_for_aabb(b)
                             .map(|(t0, _)| t0)
                             .filter(|&t0| t0 <= best_t)
                     };
-                    match (entry_of(child_l_aabb), entry_of(child_r_aabb)) {
+                    match (entry_of(l_box), entry_of(r_box)) {
                         (Some(tl), Some(tr)) => {
                             if tl <= tr {
-                                stack.push((*child_r_index, tr));
-                                stack.push((*child_l_index, tl));
+                                stack.push((r, tr));
+                                stack.push((l, tl));
                             } else {
-                                stack.push((*child_l_index, tl));
-                                stack.push((*child_r_index, tr));
+                                stack.push((l, tl));
+                                stack.push((r, tr));
                             }
                         }
-                        (Some(tl), None) => stack.push((*child_l_index, tl)),
-                        (None, Some(tr)) => stack.push((*child_r_index, tr)),
+                        (Some(tl), None) => stack.push((l, tl)),
+                        (None, Some(tr)) => stack.push((r, tr)),
                         (None, None) => {}
                     }
                 }
@@ -210,27 +224,19 @@ impl BvhCrateAccel {
         stack.push((0, ray.t_min));
         while let Some((index, _)) = stack.pop() {
             q.add_visits(1);
-            match &nodes[index] {
-                BvhNode::Leaf { shape_index, .. } => {
-                    if q.test(self.id(*shape_index)) {
+            match self.node(index) {
+                Node::Leaf(id) => {
+                    if q.test(id) {
                         return true;
                     }
                 }
-                BvhNode::Node {
-                    child_l_index,
-                    child_l_aabb,
-                    child_r_index,
-                    child_r_aabb,
-                    ..
-                } => {
-                    for (child, aabb) in
-                        [(child_r_index, child_r_aabb), (child_l_index, child_l_aabb)]
-                    {
+                Node::Interior([left, right]) => {
+                    for (child, aabb) in [right, left] {
                         if cray
                             .intersection_slice_for_aabb(aabb)
                             .is_some_and(|(t0, _)| t0 <= ray.t_max)
                         {
-                            stack.push((*child, 0.0));
+                            stack.push((child, 0.0));
                         }
                     }
                 }
@@ -282,20 +288,18 @@ impl Accel for BvhCrateAccel {
         hits: &mut [Option<Hit>],
         counters: &mut C,
     ) {
-        assert_eq!(rays.len(), hits.len());
         let mut stack = Vec::with_capacity(STACK_CAPACITY);
-        for (ray, hit) in rays.iter().zip(hits) {
-            *hit = self.intersect_with(ray, &mut stack, counters);
-        }
+        ray_by_ray(rays, hits, |ray| {
+            self.intersect_with(ray, &mut stack, counters)
+        });
     }
 
     /// Single rays one after the other, sharing one traversal stack.
     fn occluded_batch<C: Counters>(&self, rays: &[Ray], occluded: &mut [bool], counters: &mut C) {
-        assert_eq!(rays.len(), occluded.len());
         let mut stack = Vec::with_capacity(STACK_CAPACITY);
-        for (ray, o) in rays.iter().zip(occluded) {
-            *o = self.occluded_with(ray, &mut stack, counters);
-        }
+        ray_by_ray(rays, occluded, |ray| {
+            self.occluded_with(ray, &mut stack, counters)
+        });
     }
 
     fn stats(&self) -> AccelStats {

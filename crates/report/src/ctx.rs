@@ -2,7 +2,7 @@
 //! ([`Ctx`]), workloads, loading with skips, the naive budget and measurement with
 //! repetitions. Experiments call down into this module; it knows no experiment.
 
-use crate::results::{Results, Skipped, Timing};
+use crate::results::{Results, ScalingPoint, Skipped, Timing};
 use anyhow::Result;
 use raybench_core::{Mode, RaySet, RenderSettings, Scene};
 use raybench_registry::measure::{Measured, RayBatch, measure};
@@ -52,9 +52,11 @@ pub struct Options {
     pub baseline: Option<PathBuf>,
 }
 
-/// Naive's estimated ray/primitive tests per workload above which it is left out (it is
-/// then not the reference: `bvh` is, itself checked against naive by the tests).
-pub(crate) const NAIVE_BUDGET_QUICK: f64 = 2.0e9;
+/// Naive's estimated ray/primitive tests per workload above which the quick run leaves it
+/// out (it is then not the reference: `bvh` is, itself checked against naive by the
+/// tests): the budget `compare` and `info` keep to by default as well.
+pub(crate) const NAIVE_BUDGET_QUICK: f64 = raybench_registry::BRUTE_FORCE_BUDGET_TESTS;
+/// [`NAIVE_BUDGET_QUICK`] for the full run.
 pub(crate) const NAIVE_BUDGET_FULL: f64 = 2.0e10;
 
 /// The tolerance a backend outside the equivalence contract must meet: at least this
@@ -263,7 +265,45 @@ impl Ctx<'_> {
     }
 }
 
+/// Bytes of `scene`'s primitives plus `r`'s structure: the memory the experiments report.
+pub(crate) fn memory_bytes(scene: &Scene, r: &dyn TimedRenderer) -> u64 {
+    (scene.geometry.memory_bytes() + r.structure().map_or(0, |s| s.memory_bytes)) as u64
+}
+
 impl Measurement {
+    /// This measurement of `r` as a point of a scaling experiment: the median seconds, the
+    /// warm-up's rays and, where `r` counts them, its tests per ray; what only some
+    /// experiments record (load and build seconds, memory, ...) is left for them to fill.
+    pub(crate) fn point(
+        &self,
+        r: &dyn TimedRenderer,
+        experiment: &str,
+        series: String,
+        backend: &str,
+        x: f64,
+    ) -> ScalingPoint {
+        let rays = self.warm.rays.max(1);
+        ScalingPoint {
+            shard: 0,
+            experiment: experiment.into(),
+            series,
+            backend: backend.into(),
+            x,
+            seconds: self.timing.median,
+            rays: self.warm.rays,
+            tests_per_ray: self
+                .warm
+                .counters
+                .filter(|_| r.counts_tests())
+                .map(|c| c.prim_tests as f64 / rays as f64),
+            load_seconds: None,
+            build_seconds: None,
+            memory_bytes: None,
+            difference: None,
+            stored_primitives: None,
+        }
+    }
+
     /// Several cameras' measurements of one workload as one: the warm-ups' ids, `t` and
     /// colours concatenated in camera order, their rays and counters summed; the `i`-th
     /// timed repetition is the sum of every camera's `i`-th (so its median is the time to

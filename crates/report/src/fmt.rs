@@ -2,6 +2,13 @@
 //! it imports nothing of the crate but the results' types.
 
 use crate::results::{Noise, Run, Timing};
+use std::fmt::Write as _;
+
+/// Starts a section of `REPORT.md`: the heading `## title`, then `intro` as its first
+/// paragraph.
+pub(crate) fn section(s: &mut String, title: &str, intro: &str) {
+    let _ = writeln!(s, "## {title}\n\n{intro}\n");
+}
 
 /// A name usable in a file name (generator specs contain `:`).
 pub(crate) fn file_safe(s: &str) -> String {

@@ -5,7 +5,7 @@
 use crate::charts;
 use crate::ctx::{PEER_MAX_FLIP, PEER_MIN_ID_MATCH};
 use crate::experiments;
-use crate::fmt::opt;
+use crate::fmt::{opt, section};
 use crate::results::Results;
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
@@ -72,47 +72,48 @@ pub fn report(results: &Results, charts: &Charts) -> String {
         );
     }
     crate::verdict::write(results, &mut s);
-    let _ = writeln!(s, "## How to read this report\n");
-    let _ = writeln!(
-        s,
-        "Every backend renders the same scenes with the same settings. Times are the median of \
-         the timed repetitions after one counted warm-up (min-max in brackets); build time is \
-         separate. **Mrays/s** counts every ray traced (camera, secondary, shadow) over the \
-         median time; **tests/ray** and **visits/ray** are ray/primitive tests and node or cell \
-         visits per ray, counted in the warm-up. Ray casting runs on several ray sets: \
-         `primary` (camera rays, as frames), `incoherent` (seeded random rays in the scene's \
-         box), and, derived from the primary hits and the same for every backend, `shadow` (any \
-         hit, to every light and one sampled emitter point), `ao` (any hit, cosine rays a tenth \
-         of the scene's diagonal long) and `diffuse` (one cosine bounce, closest hit); any-hit \
-         sets are compared on whether each ray is blocked. **Equality** compares each backend with the \
-         reference backend of its scene (naive where it fits its time budget, else bvh, which \
-         the test suite checks against naive on every built-in scene of up to 2^21 \
-         primitives flattened, and the other exact backends against on the larger ones). \
-         **Pass**: a raybench CPU \
-         backend (bound by the equivalence contract) must be bit-identical (ids, `t`, colours); \
-         other backends must match at least {:.1}% of the ids, counting **ties** (a different \
-         primitive at the same distance, within 1e-4 relative: coincident surfaces, where each \
-         library breaks the tie its own way) as matches, with a mean FLIP error of at most \
-         {PEER_MAX_FLIP}. PSNR is of the 8-bit sRGB images (`inf`: identical); FLIP is NVIDIA's \
-         perceptual difference (0 = indistinguishable). **†** marks a noisy time: the 95% \
-         confidence interval of its median is wider than ±{:.0}%; **?** a single repetition, \
-         whose noise is unknown; compare such figures with care. A scene with several cameras renders every one of them in each \
-         repetition: its time is that of all its cameras, its Mrays/s their rays over it (so \
-         the average over the cameras, weighted by time), and a table per workload gives each \
-         camera's own figure.\n",
-        PEER_MIN_ID_MATCH * 100.0,
-        crate::results::NOISY_HALF_WIDTH * 100.0
+    section(
+        &mut s,
+        "How to read this report",
+        &format!(
+            "Every backend renders the same scenes with the same settings. Times are the median of \
+             the timed repetitions after one counted warm-up; build time is \
+             separate. **Mrays/s** counts every ray traced (camera, secondary, shadow) over the \
+             median time; **tests/ray** and **visits/ray** are ray/primitive tests and node or \
+             cell visits per ray, counted in the warm-up. Ray casting runs on several ray sets: \
+             `primary` (camera rays, as frames), `incoherent` (seeded random rays in the scene's \
+             box), and, derived from the primary hits and the same for every backend, `shadow` \
+             (any hit, to every light and one sampled emitter point), `ao` (any hit, cosine rays a \
+             tenth of the scene's diagonal long) and `diffuse` (one cosine bounce, closest hit); \
+             any-hit sets are compared on whether each ray is blocked. **Equality** compares each \
+             backend with the reference backend of its scene (naive where it fits its time budget, \
+             else bvh, which the test suite checks against naive on every built-in scene of up to \
+             2^21 primitives flattened, and the other exact backends against on the larger ones). \
+             **Pass**: a raybench CPU backend (bound by the equivalence contract) must be \
+             bit-identical (ids, `t`, colours); other backends must match at least {:.1}% of the \
+             ids, counting **ties** (a different primitive at the same distance, within 1e-4 \
+             relative: coincident surfaces, where each library breaks the tie its own way) as \
+             matches, with a mean FLIP error of at most {PEER_MAX_FLIP}. PSNR is of the 8-bit sRGB \
+             images (`inf`: identical); FLIP is NVIDIA's perceptual difference (0 = \
+             indistinguishable). **†** marks a noisy time: its timed repetitions spread by more \
+             than {:.0}% (slowest over fastest); compare such figures with care. A scene with \
+             several cameras renders every one of them in each repetition: its time is that of all \
+             its cameras, its Mrays/s their rays over it (so the average over the cameras, \
+             weighted by time), and a table per workload gives each camera's own figure.",
+            PEER_MIN_ID_MATCH * 100.0,
+            crate::results::NOISY_HALF_WIDTH * 100.0
+        ),
     );
     if let Some(p) = &charts.problem {
         let _ = writeln!(s, "> Charts: {p}\n");
     }
 
     if !results.skipped.is_empty() {
-        let _ = writeln!(s, "## Skipped\n");
-        let _ = writeln!(
-            s,
+        section(
+            &mut s,
+            "Skipped",
             "Parts of the matrix that did not run (or ran in part), so the tables below lack \
-             them.\n"
+             them.",
         );
         let _ = writeln!(s, "| shard | what | status | reason |");
         let _ = writeln!(s, "|---|---|---|---|");

@@ -4,12 +4,16 @@
 //! primitive kinds' numbers and pipeline-override flags come from
 //! [`raybench_core::PrimitiveKind::ALL`], so a new kind is declared here by itself.
 
+use crate::geo::bezier;
+use crate::geo::heightfield::HF_STACK;
+use crate::plan::BLOCK;
 use crate::records::{
     EMITTER_BIT, HAS_INSTANCES, LIGHT_DIRECTIONAL, LIGHT_POINT, MAT_DIFFUSE, MAT_GLASS, MAT_MIRROR,
     NONE, RECORD, STACK_SIZE, WHITTED_STACK, kind_names, kind_number,
 };
 use raybench_core::integrator::{AMBIENT, DIMENSIONS_PER_BOUNCE, ROULETTE_DEPTH, SHADOW_SHORTEN};
-use raybench_core::{NO_HIT, PrimitiveKind};
+use raybench_core::voxels::{EARLY_TERMINATION, SKIP_BLOCK};
+use raybench_core::{FALLBACK_DEPTH, MAX_NEWTON_ITERATIONS, NO_HIT, PrimitiveKind, REGION_DEPTH};
 
 /// The WGSL declarations of every shared constant, one `const` per line, each from the Rust
 /// definition it names, then the pipeline-override constants of `Features` (`records.rs`)
@@ -23,103 +27,42 @@ pub fn wgsl_constants() -> String {
             "raybench_core::PrimitiveKind::index",
         )
     });
+    // One row per shared constant: its WGSL name, its value, and the Rust it comes from.
+    #[rustfmt::skip]
     let u32s: [(&str, u32, &str); 23] = [
         ("NO_HIT", NO_HIT, "raybench_core::NO_HIT"),
         ("MAT_DIFFUSE", MAT_DIFFUSE, "records.rs material kinds"),
         ("MAT_MIRROR", MAT_MIRROR, "records.rs material kinds"),
         ("MAT_GLASS", MAT_GLASS, "records.rs material kinds"),
         ("LIGHT_POINT", LIGHT_POINT, "records.rs light kinds"),
-        (
-            "LIGHT_DIRECTIONAL",
-            LIGHT_DIRECTIONAL,
-            "records.rs light kinds",
-        ),
+        ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL, "records.rs light kinds"),
         ("EMITTER_BIT", EMITTER_BIT, "records.rs prim_info"),
-        (
-            "INSTANCE_RECORD",
-            RECORD,
-            "records::RECORD, geo entries per instance",
-        ),
+        ("INSTANCE_RECORD", RECORD, "records::RECORD, geo entries per instance"),
         ("NO_ENTRY", NONE, "records::NONE"),
-        (
-            "HF_STACK",
-            crate::geo::heightfield::HF_STACK,
-            "geo::heightfield, the height-field walk's stack",
-        ),
+        ("HF_STACK", HF_STACK, "geo::heightfield, the height-field walk's stack"),
         ("STACK_SIZE", STACK_SIZE, "BVH2 traversal stack"),
         ("WHITTED_STACK", WHITTED_STACK, "limits::MAX_DEPTH + 2"),
-        (
-            "ROULETTE_DEPTH",
-            ROULETTE_DEPTH,
-            "raybench_core::integrator",
-        ),
-        (
-            "DIMENSIONS_PER_BOUNCE",
-            DIMENSIONS_PER_BOUNCE,
-            "raybench_core::integrator",
-        ),
-        (
-            "BLOCK",
-            crate::plan::BLOCK,
-            "plan::BLOCK, pixels per block side",
-        ),
-        (
-            "SKIP_BLOCK",
-            raybench_core::voxels::SKIP_BLOCK,
-            "raybench_core::voxels::SKIP_BLOCK",
-        ),
-        (
-            "BEZIER_REGION_DEPTH",
-            raybench_core::REGION_DEPTH,
-            "raybench_geometry::bezier::REGION_DEPTH",
-        ),
-        (
-            "BEZIER_FALLBACK_DEPTH",
-            raybench_core::FALLBACK_DEPTH,
-            "raybench_geometry::bezier::FALLBACK_DEPTH",
-        ),
-        (
-            "BEZIER_NEWTON_ITERATIONS",
-            raybench_core::MAX_NEWTON_ITERATIONS,
-            "raybench_geometry::bezier::MAX_NEWTON_ITERATIONS",
-        ),
-        (
-            "BEZIER_STACK",
-            crate::geo::bezier::STACK,
-            "geo::bezier::STACK, 3 (REGION_DEPTH + FALLBACK_DEPTH) + 1",
-        ),
-        (
-            "BEZIER_DU",
-            crate::geo::bezier::DU,
-            "geo::bezier::DU layout",
-        ),
-        (
-            "BEZIER_DV",
-            crate::geo::bezier::DV,
-            "geo::bezier::DV layout",
-        ),
-        (
-            "BEZIER_BOXES",
-            crate::geo::bezier::BOXES,
-            "geo::bezier::BOXES layout",
-        ),
+        ("ROULETTE_DEPTH", ROULETTE_DEPTH, "raybench_core::integrator"),
+        ("DIMENSIONS_PER_BOUNCE", DIMENSIONS_PER_BOUNCE, "raybench_core::integrator"),
+        ("BLOCK", BLOCK, "plan::BLOCK, pixels per block side"),
+        ("SKIP_BLOCK", SKIP_BLOCK, "raybench_core::voxels::SKIP_BLOCK"),
+        ("BEZIER_REGION_DEPTH", REGION_DEPTH, "raybench_geometry::bezier::REGION_DEPTH"),
+        ("BEZIER_FALLBACK_DEPTH", FALLBACK_DEPTH, "raybench_geometry::bezier::FALLBACK_DEPTH"),
+        ("BEZIER_NEWTON_ITERATIONS", MAX_NEWTON_ITERATIONS, "raybench_geometry::bezier"),
+        ("BEZIER_STACK", bezier::STACK, "geo::bezier, 3 (REGION_DEPTH + FALLBACK_DEPTH) + 1"),
+        ("BEZIER_DU", bezier::DU, "geo::bezier::DU layout"),
+        ("BEZIER_DV", bezier::DV, "geo::bezier::DV layout"),
+        ("BEZIER_BOXES", bezier::BOXES, "geo::bezier::BOXES layout"),
     ];
+    #[rustfmt::skip]
     let f32s: [(&str, f32, &str); 7] = [
         ("AMBIENT", AMBIENT, "raybench_core::integrator"),
-        (
-            "SHADOW_SHORTEN",
-            SHADOW_SHORTEN,
-            "raybench_core::integrator",
-        ),
+        ("SHADOW_SHORTEN", SHADOW_SHORTEN, "raybench_core::integrator"),
         ("MIN_POSITIVE", f32::MIN_POSITIVE, "f32::MIN_POSITIVE"),
         ("INV_PI", std::f32::consts::FRAC_1_PI, "std::f32::consts"),
         ("PI", std::f32::consts::PI, "std::f32::consts"),
         ("TAU", std::f32::consts::TAU, "std::f32::consts"),
-        (
-            "EARLY_TERMINATION",
-            raybench_core::voxels::EARLY_TERMINATION,
-            "raybench_core::voxels::EARLY_TERMINATION",
-        ),
+        ("EARLY_TERMINATION", EARLY_TERMINATION, "raybench_core::voxels::EARLY_TERMINATION"),
     ];
     let ints = kinds
         .into_iter()

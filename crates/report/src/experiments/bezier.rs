@@ -4,11 +4,11 @@
 //! difference from the direct rendering.
 
 use super::{
-    Chart, Ctx, Observed, Plot, Point, Scaling, baseline_only, power_law, scene_for, square,
+    About, Chart, Ctx, Observed, Plot, Point, Scaling, baseline_only, power_law, scene_for, square,
 };
 use crate::charts::Series;
 use crate::ctx::{Loaded, skip_missing_asset};
-use crate::fmt::opt;
+use crate::fmt::{opt, section};
 use crate::images::{self, Rgb8};
 use crate::results::{ImageDifference, Results, ScalingPoint};
 use anyhow::Result;
@@ -30,25 +30,24 @@ pub(super) struct Reference {
 /// The suffix of a spec that tessellates the experiment's scene: `NAME:tessellate=N`.
 const TESSELLATE: &str = ":tessellate=";
 
+/// Its name and axes.
+const ABOUT: About = About {
+    name: "bezier",
+    x_label: "primitives (32 patches, or 2 N² triangles per patch)",
+    axis: None,
+};
+
 impl Scaling for Bezier {
     type State = Reference;
 
-    fn name(&self) -> &'static str {
-        "bezier"
-    }
-
-    fn x_label(&self) -> &'static str {
-        "primitives (32 patches, or 2 N² triangles per patch)"
-    }
-
-    fn axis(&self) -> Option<&'static str> {
-        None
+    fn about(&self) -> &About {
+        &ABOUT
     }
 
     /// The direct patches at x = their primitive count, then the tessellations at x = their
     /// triangle count (spec `NAME:tessellate=N`).
     fn points(&self, ctx: &Ctx) -> Result<Vec<Point>, String> {
-        let scene = scene_for(self.name())?;
+        let scene = scene_for(ABOUT.name)?;
         let w = square(256, 1, Mode::Cast);
         let mut plan = vec![Point {
             series: "direct".into(),
@@ -146,7 +145,7 @@ impl Scaling for Bezier {
             results
                 .scaling
                 .iter()
-                .filter(|p| p.experiment == self.name() && p.series == series)
+                .filter(|p| p.experiment == ABOUT.name && p.series == series)
                 .collect()
         };
         let (direct, tess) = (points("direct"), points("tessellated"));
@@ -163,7 +162,7 @@ impl Scaling for Bezier {
                 points: tess.iter().map(|p| (p.x, p.seconds)).collect(),
                 fit: power_law(
                     results,
-                    self.name(),
+                    ABOUT.name,
                     "tessellated",
                     &tess[0].backend,
                     "seconds",
@@ -200,7 +199,7 @@ impl Scaling for Bezier {
             title: "Render time against primitives (Bezier teapot: direct against tessellated)"
                 .to_string(),
             stem: "scaling-bezier-seconds".into(),
-            x_label: self.x_label().into(),
+            x_label: ABOUT.x_label.into(),
             y_label: "render time (s)".into(),
             plot: Plot::LogLog(times),
         }];
@@ -221,20 +220,22 @@ impl Scaling for Bezier {
         let bz: Vec<_> = results
             .scaling
             .iter()
-            .filter(|p| p.experiment == self.name())
+            .filter(|p| p.experiment == ABOUT.name)
             .collect();
         if !bz.is_empty() {
-            let _ = writeln!(s, "## Bezier patches: direct against tessellated\n");
-            let _ = writeln!(
+            section(
                 s,
-                "The Utah teapot's 32 bicubic patches (`teapot-bezier`) intersected directly \
-                 (subdivision of the control-point boxes, then Newton iteration on (u, v, t)) against \
-                 the same patches tessellated into N x N quads (2 N^2 triangles) each, vertices on \
-                 the exact surface, both in the `{}` backend; 256 x 256 camera rays. Difference \
-                 from the direct image: mean FLIP, the fraction of pixels whose patch differs (or \
-                 one hits and the other misses), and the fraction hit in both whose depth differs \
-                 by more than 1%.\n",
-                raybench_registry::name_with(raybench_registry::Roles::BASELINE)
+                "Bezier patches: direct against tessellated",
+                &format!(
+                    "The Utah teapot's 32 bicubic patches (`teapot-bezier`) intersected directly \
+                     (subdivision of the control-point boxes, then Newton iteration on (u, v, t)) \
+                     against the same patches tessellated into N x N quads (2 N^2 triangles) each, \
+                     vertices on the exact surface, both in the `{}` backend; 256 x 256 camera \
+                     rays. Difference from the direct image: mean FLIP, the fraction of pixels \
+                     whose patch differs (or one hits and the other misses), and the fraction hit \
+                     in both whose depth differs by more than 1%.",
+                    raybench_registry::name_with(raybench_registry::Roles::BASELINE)
+                ),
             );
             let _ = writeln!(
                 s,

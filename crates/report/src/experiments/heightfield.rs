@@ -3,8 +3,8 @@
 //! (`terrain:N`), both in the baseline backend, for growing grids: load, build, memory and
 //! render time.
 
-use super::{Ctx, Observed, Point, Scaling, baseline_only, square};
-use crate::fmt::{bytes, opt};
+use super::{About, Ctx, Observed, Point, Scaling, baseline_only, square};
+use crate::fmt::{bytes, opt, section};
 use crate::results::{Results, ScalingPoint};
 use raybench_core::Mode;
 use raybench_registry::Backend;
@@ -13,19 +13,18 @@ use std::fmt::Write as _;
 /// Experiment `heightfield`.
 pub(super) struct Heightfield;
 
+/// Its name and axes.
+const ABOUT: About = About {
+    name: "heightfield",
+    x_label: "height-field cells (N²)",
+    axis: Some("the height-field cell count N^2 (direct and tessellated, see below)"),
+};
+
 impl Scaling for Heightfield {
     type State = ();
 
-    fn name(&self) -> &'static str {
-        "heightfield"
-    }
-
-    fn x_label(&self) -> &'static str {
-        "height-field cells (N²)"
-    }
-
-    fn axis(&self) -> Option<&'static str> {
-        Some("the height-field cell count N^2 (direct and tessellated, see below)")
+    fn about(&self) -> &About {
+        &ABOUT
     }
 
     fn points(&self, ctx: &Ctx) -> Result<Vec<Point>, String> {
@@ -63,19 +62,22 @@ impl Scaling for Heightfield {
         let hf: Vec<_> = results
             .scaling
             .iter()
-            .filter(|p| p.experiment == self.name())
+            .filter(|p| p.experiment == ABOUT.name)
             .collect();
         if !hf.is_empty() {
-            let _ = writeln!(s, "## Height fields: direct against tessellated\n");
-            let _ = writeln!(
+            section(
                 s,
-                "The `terrain:N` heights as one height-field primitive intersected directly (min-max \
-                 quadtree over the cells, `heightfield:N`) against the same terrain tessellated into \
-                 2 N^2 triangles (`terrain:N`), both in the `{}` backend; 256 x 256 camera rays. Both \
-                 give the same hits and `t` bit for bit. Load: generating the heights and \
-                 tessellating, or building the min-max levels; build: the BVH; memory: primitives \
-                 plus structure; a height field counts as one primitive test per ray.\n",
-                raybench_registry::name_with(raybench_registry::Roles::BASELINE)
+                "Height fields: direct against tessellated",
+                &format!(
+                    "The `terrain:N` heights as one height-field primitive intersected directly \
+                     (min-max quadtree over the cells, `heightfield:N`) against the same terrain \
+                     tessellated into 2 N^2 triangles (`terrain:N`), both in the `{}` backend; 256 \
+                     x 256 camera rays. Both give the same hits and `t` bit for bit. Load: \
+                     generating the heights and tessellating, or building the min-max levels; \
+                     build: the BVH; memory: primitives plus structure; a height field counts as \
+                     one primitive test per ray.",
+                    raybench_registry::name_with(raybench_registry::Roles::BASELINE)
+                ),
             );
             let _ = writeln!(
                 s,

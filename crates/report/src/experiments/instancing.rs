@@ -13,10 +13,10 @@
 //! time, with `build_seconds`, `memory_bytes` and `stored_primitives`; a form that could not
 //! run is a skip record whose reason starts `SCENE flattened: `.
 
-use super::{Chart, Experiment, Planned, Plot, scene_for, skip};
+use super::{Chart, Experiment, Planned, Plot, planned, scene_for, skip};
 use crate::charts::{Bar, Bars};
-use crate::ctx::{Ctx, Workload};
-use crate::fmt::bytes;
+use crate::ctx::{Ctx, Workload, memory_bytes};
+use crate::fmt::{bytes, section};
 use crate::results::{Results, ScalingPoint};
 use anyhow::Result;
 use raybench_core::{Mode, RaySet, Scene};
@@ -99,29 +99,14 @@ impl Instancing {
                     continue;
                 }
             };
-            let memory =
-                (g.memory_bytes() + p.renderer.structure().map_or(0, |s| s.memory_bytes)) as u64;
+            let memory = memory_bytes(scene, p.renderer.as_ref());
             progress.begin(format!("{NAME} {series} {}: trace", b.name));
             let m = ctx.measure(p.renderer.as_ref(), &w, None)?;
-            let rays = m.warm.rays.max(1);
             results.scaling.push(ScalingPoint {
-                shard: 0,
-                experiment: NAME.into(),
-                series: series.into(),
-                backend: b.name.into(),
-                x,
-                seconds: m.timing.median,
-                rays: m.warm.rays,
-                tests_per_ray: m
-                    .warm
-                    .counters
-                    .filter(|_| p.renderer.counts_tests())
-                    .map(|c| c.prim_tests as f64 / rays as f64),
-                load_seconds: None,
                 build_seconds: Some(p.build),
                 memory_bytes: Some(memory),
-                difference: None,
                 stored_primitives: Some(stored),
+                ..m.point(p.renderer.as_ref(), NAME, series.into(), b.name, x)
             });
             progress.step(&format!(
                 "{NAME} {series} {}: build {:.3} s, trace {:.4} s",
@@ -172,44 +157,36 @@ fn mrays(p: &ScalingPoint) -> f64 {
     p.rays as f64 / p.seconds.max(1e-12) / 1e6
 }
 
+/// The first paragraph of its section of `REPORT.md`.
+const INTRO: &str = "\
+    Each scene as loaded, its instances placing meshes stored once under a two-level \
+    structure (a tree over the instances, one structure per distinct mesh), against \
+    the same scene flattened: every instanced primitive carried to world space and \
+    stored flat under one structure. Both have the same primitives under the same \
+    ids (flattening rounds differently, so a few hits may differ in their last \
+    bits). Memory: primitives plus structure (Embree's own BVH is not counted); per \
+    instanced primitive it is divided by the flattened count, per stored primitive \
+    by the primitives actually stored. Build: one build, all threads; trace: camera \
+    rays at the report's image size, ray casting, median of the run's repetitions. \
+    The flattened form runs only where the memory budget allows it.";
+
 impl Experiment for Instancing {
     fn name(&self) -> &'static str {
         NAME
     }
 
     fn plan(&self, ctx: &Ctx, unit: &str, results: &mut Results) -> Result<Option<Planned>> {
-        let scenes = match Self::scenes(ctx) {
-            Ok(s) => s,
-            Err(why) => {
-                skip(results, "experiment", unit, "skipped", why);
-                return Ok(None);
-            }
-        };
-        let backends = Self::backends(ctx);
-        if backends.is_empty() {
-            skip(
-                results,
-                "experiment",
-                unit,
-                "skipped",
+        let steps = Self::scenes(ctx).and_then(|scenes| match Self::backends(ctx).len() {
+            0 => Err(
                 "no chosen backend is the baseline, the SIMD representative or the yardstick"
                     .into(),
-            );
-            return Ok(None);
-        }
-        Ok(Some(Planned {
-            steps: scenes.len() * FORMS.len() * backends.len(),
-            scene: None,
-        }))
+            ),
+            backends => Ok(scenes.len() * FORMS.len() * backends),
+        });
+        Ok(planned(results, unit, steps))
     }
 
-    fn run(
-        &self,
-        ctx: &Ctx,
-        _planned: Planned,
-        progress: &Progress,
-        results: &mut Results,
-    ) -> Result<()> {
+    fn run(&self, ctx: &Ctx, _: Planned, progress: &Progress, results: &mut Results) -> Result<()> {
         let n = Self::backends(ctx).len();
         let mut reasons: Vec<String> = Vec::new();
         let mut ran = false;
@@ -318,20 +295,7 @@ impl Experiment for Instancing {
         if scenes.is_empty() {
             return;
         }
-        let _ = writeln!(s, "## Instancing: instanced against flattened\n");
-        let _ = writeln!(
-            s,
-            "Each scene as loaded, its instances placing meshes stored once under a two-level \
-             structure (a tree over the instances, one structure per distinct mesh), against \
-             the same scene flattened: every instanced primitive carried to world space and \
-             stored flat under one structure. Both have the same primitives under the same \
-             ids (flattening rounds differently, so a few hits may differ in their last \
-             bits). Memory: primitives plus structure (Embree's own BVH is not counted); per \
-             instanced primitive it is divided by the flattened count, per stored primitive \
-             by the primitives actually stored. Build: one build, all threads; trace: camera \
-             rays at the report's image size, ray casting, median of the run's repetitions. \
-             The flattened form runs only where the memory budget allows it.\n"
-        );
+        section(s, "Instancing: instanced against flattened", INTRO);
         let _ = writeln!(
             s,
             "| scene | form | backend | stored | instanced | memory | B/instanced prim | \

@@ -6,7 +6,7 @@ use super::{Chart, Experiment, Planned, Plot};
 use crate::charts::{Bar, Bars};
 use crate::ctx::{Ctx, PEER_MAX_FLIP, PEER_MIN_ID_MATCH, Views, Workload, skip};
 use crate::fmt::file_safe;
-use crate::fmt::{backends_in, bytes, noisy_mark, opt};
+use crate::fmt::{backends_in, bytes, noisy_mark, opt, section};
 use crate::images::{self, Rgb8};
 use crate::results::{CameraRun, Equality, Images, Quality, Results, Run};
 use anyhow::Result;
@@ -107,19 +107,13 @@ impl Experiment for Matrix {
         })
     }
 
-    fn run(
-        &self,
-        ctx: &Ctx,
-        planned: Planned,
-        progress: &Progress,
-        results: &mut Results,
-    ) -> Result<()> {
-        if let Some(scene) = &planned.scene {
+    fn run(&self, ctx: &Ctx, unit: Planned, progress: &Progress, out: &mut Results) -> Result<()> {
+        if let Some(scene) = &unit.scene {
             let (runs, empty) = run_scene(ctx, scene, progress)?;
-            results.runs.extend(runs);
+            out.runs.extend(runs);
             for (workload, why) in empty {
                 skip(
-                    results,
+                    out,
                     "workload",
                     &format!("{} {workload}", scene.name),
                     "skipped",
@@ -286,14 +280,14 @@ impl Experiment for Matrix {
             .filter(|r| !r.phases.is_empty())
             .collect();
         if !phased.is_empty() {
-            let _ = writeln!(s, "## GPU phases\n");
-            let _ = writeln!(
+            section(
                 s,
+                "GPU phases",
                 "Seconds per phase on the GPU backend (median of the timed repetitions): the \
              BVH built on the CPU and the scene uploaded once per scene; then per frame the \
              parameters uploaded, the kernels' execution on the GPU (timestamp queries when \
              the adapter has them, else wall time around submit and wait: this is the time \
-             Mrays/s uses), the image read back, and the whole call.\n"
+             Mrays/s uses), the image read back, and the whole call.",
             );
             let cols = [
                 "prepare.build",

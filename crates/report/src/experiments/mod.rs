@@ -19,7 +19,7 @@ mod spp;
 
 pub(crate) use crate::charts::{Chart, Plot};
 use crate::charts::{PowerLaw, Series};
-use crate::ctx::{Ctx, Loaded, Workload, skip};
+use crate::ctx::{Ctx, Loaded, Workload, memory_bytes, skip};
 use crate::results::{Results, ScalingPoint};
 use anyhow::Result;
 use raybench_core::{Mode, RaySet, Scene};
@@ -47,8 +47,8 @@ pub(crate) const ALL: [&dyn Experiment; 9] = [
 /// The scaling experiments, in the order they run (`--experiments` names them).
 pub(crate) const SCALING: [&dyn Experiment; 8] = [
     &primitives::Primitives,
-    &pixels::Pixels,
-    &spp::Spp,
+    &pixels::PIXELS,
+    &spp::SPP,
     &heightfield::Heightfield,
     &bezier::Bezier,
     &presets::Presets,
@@ -62,6 +62,18 @@ pub(crate) struct Planned {
     pub steps: usize,
     /// Its loaded scene (the matrix's units).
     pub scene: Option<Arc<Scene>>,
+}
+
+/// The plan of an experiment's unit that loads what it needs when it runs: `steps`
+/// progress steps, or (`Err`) why it cannot run, which is recorded in `results` as a skip.
+fn planned(results: &mut Results, unit: &str, steps: Result<usize, String>) -> Option<Planned> {
+    match steps {
+        Ok(steps) => Some(Planned { steps, scene: None }),
+        Err(why) => {
+            skip(results, "experiment", unit, "skipped", why);
+            None
+        }
+    }
 }
 
 /// One part of the report: it splits into units (shards run whole units), plans and runs
@@ -96,7 +108,7 @@ pub(crate) trait Experiment: Sync {
     fn run(
         &self,
         ctx: &Ctx,
-        planned: Planned,
+        unit: Planned,
         progress: &Progress,
         results: &mut Results,
     ) -> Result<()>;
@@ -140,6 +152,19 @@ pub(crate) struct Observed<'a> {
     pub memory_bytes: u64,
 }
 
+/// What names a scaling experiment and its axis: a const of each experiment, which
+/// [`Scaling::about`] returns.
+pub(crate) struct About {
+    /// Its name: `experiment` in `results.json`, `--experiments`, skip records.
+    pub name: &'static str,
+    /// The title of its `x` axis, in plain words (`primitives in the scene`); also the
+    /// charts' titles use it.
+    pub x_label: &'static str,
+    /// What its fits' `x` is, for the sentence before the fits table (`None`: its fits are
+    /// not introduced there).
+    pub axis: Option<&'static str>,
+}
+
 /// A scaling experiment: points of `(series, x)` measured with some backends, fitted on
 /// log-log axes. What it shares with the others (loading each spec once, skipping
 /// brute-force backends over budget, measuring, recording, the fits' charts) is written
@@ -148,15 +173,8 @@ pub(crate) trait Scaling: Sync {
     /// State carried from point to point (the `bezier` experiment's reference image).
     type State: Default;
 
-    /// Its name.
-    fn name(&self) -> &'static str;
-
-    /// The title of its `x` axis, in plain words (`primitives in the scene`); also the
-    /// charts' titles use it.
-    fn x_label(&self) -> &'static str;
-
-    /// What its fits' `x` is, for the sentence before the fits table.
-    fn axis(&self) -> Option<&'static str>;
+    /// Its name and axes.
+    fn about(&self) -> &About;
 
     /// Its points, in the order they run (points of one spec together: each spec is
     /// loaded once); `Err`: why it cannot run at all.
@@ -195,15 +213,10 @@ pub(crate) trait Scaling: Sync {
     /// [`Self::extra_charts`].
     fn charts(&self, results: &Results) -> Vec<Chart> {
         let mut out = Vec::new();
-        let name = Scaling::name(self);
+        let About { name, x_label, .. } = *self.about();
         for (series, backends) in series_of(results, name) {
             out.extend(fit_chart(
-                results,
-                name,
-                &series,
-                &backends,
-                self.x_label(),
-                "seconds",
+                results, name, &series, &backends, x_label, "seconds",
             ));
             out.extend(self.extra_charts(results, &series, &backends));
         }
@@ -216,30 +229,18 @@ pub(crate) trait Scaling: Sync {
 
 impl<T: Scaling> Experiment for T {
     fn name(&self) -> &'static str {
-        Scaling::name(self)
+        self.about().name
     }
 
     fn plan(&self, ctx: &Ctx, unit: &str, results: &mut Results) -> Result<Option<Planned>> {
-        match self.points(ctx) {
-            Ok(points) => Ok(Some(Planned {
-                steps: points.len() * self.backends(ctx.chosen).len(),
-                scene: None,
-            })),
-            Err(reason) => {
-                skip(results, "experiment", unit, "skipped", reason);
-                Ok(None)
-            }
-        }
+        let steps = self
+            .points(ctx)
+            .map(|points| points.len() * self.backends(ctx.chosen).len());
+        Ok(planned(results, unit, steps))
     }
 
-    fn run(
-        &self,
-        ctx: &Ctx,
-        _planned: Planned,
-        progress: &Progress,
-        results: &mut Results,
-    ) -> Result<()> {
-        let name = Scaling::name(self);
+    fn run(&self, ctx: &Ctx, _: Planned, progress: &Progress, results: &mut Results) -> Result<()> {
+        let name = self.about().name;
         let (points, skipped) = run_scaling(self, ctx, progress)?;
         if !skipped.is_empty() {
             let status = if points.is_empty() {
@@ -271,7 +272,7 @@ impl<T: Scaling> Experiment for T {
     }
 
     fn axis(&self) -> Option<&'static str> {
-        Scaling::axis(self)
+        self.about().axis
     }
 }
 
@@ -297,29 +298,47 @@ fn scene_for(name: &str) -> Result<&'static str, String> {
         })
 }
 
-/// The points of the built-in scene that names experiment `name` (its one series), one per
-/// value of `values`, at `(x, workload)` from `at`.
-///
-/// # Errors
-/// When no built-in scene names the experiment.
-fn scene_points(
-    name: &str,
-    values: &[u32],
-    at: impl Fn(u32) -> (f64, Workload),
-) -> Result<Vec<Point>, String> {
-    let scene = scene_for(name)?;
-    Ok(values
-        .iter()
-        .map(|&v| {
-            let (x, workload) = at(v);
-            Point {
-                series: scene.into(),
-                x,
-                spec: scene.into(),
-                workload,
-            }
-        })
-        .collect())
+/// A scaling experiment over the built-in scene whose `[benchmark]` table names it: its one
+/// series, a point per value of the quick or the full run, at the `(x, workload)` that `at`
+/// makes of the value. What `pixels` and `spp` are, each a const of this type.
+pub(crate) struct SceneSweep {
+    /// Its name and axes.
+    pub about: About,
+    /// The values of the quick run.
+    pub quick: &'static [u32],
+    /// The values of the full run.
+    pub full: &'static [u32],
+    /// A value's `x` and workload.
+    pub at: fn(u32) -> (f64, Workload),
+}
+
+impl Scaling for SceneSweep {
+    type State = ();
+
+    fn about(&self) -> &About {
+        &self.about
+    }
+
+    fn points(&self, ctx: &Ctx) -> Result<Vec<Point>, String> {
+        let scene = scene_for(self.about.name)?;
+        let values = if ctx.opts.quick {
+            self.quick
+        } else {
+            self.full
+        };
+        Ok(values
+            .iter()
+            .map(|&v| {
+                let (x, workload) = (self.at)(v);
+                Point {
+                    series: scene.into(),
+                    x,
+                    spec: scene.into(),
+                    workload,
+                }
+            })
+            .collect())
+    }
 }
 
 /// The baseline backend alone: for the experiments that compare two representations of
@@ -339,7 +358,7 @@ fn run_scaling<E: Scaling>(
     ctx: &Ctx,
     progress: &Progress,
 ) -> Result<(Vec<ScalingPoint>, Vec<SkippedScene>)> {
-    let experiment = Scaling::name(e);
+    let experiment = e.about().name;
     let mut points = Vec::new();
     let mut skipped: Vec<SkippedScene> = Vec::new();
     let mut loaded: Option<(String, Arc<Scene>, f64)> = None;
@@ -399,34 +418,13 @@ fn run_scaling<E: Scaling>(
             let x = point.x;
             progress.begin(format!("scaling {experiment} {spec} x={x} {}", b.name));
             let m = ctx.measure(r.as_ref(), &w, None)?;
-            let rays = m.warm.rays.max(1);
-            let mut p = ScalingPoint {
-                shard: 0,
-                experiment: experiment.into(),
-                series: point.series.clone(),
-                backend: b.name.into(),
-                x,
-                seconds: m.timing.median,
-                rays: m.warm.rays,
-                tests_per_ray: m
-                    .warm
-                    .counters
-                    .filter(|_| r.counts_tests())
-                    .map(|c| c.prim_tests as f64 / rays as f64),
-                load_seconds: None,
-                build_seconds: None,
-                memory_bytes: None,
-                difference: None,
-                stored_primitives: None,
-            };
+            let mut p = m.point(r.as_ref(), experiment, point.series.clone(), b.name, x);
             let seen = Observed {
                 point,
                 warm: &m.warm,
                 load_seconds,
                 build_seconds: build,
-                memory_bytes: (scene.geometry.memory_bytes()
-                    + r.structure().map_or(0, |s| s.memory_bytes))
-                    as u64,
+                memory_bytes: memory_bytes(&scene, r.as_ref()),
             };
             e.record(&mut state, &seen, &mut p);
             points.push(p);

@@ -9,10 +9,10 @@
 //! policies are left out, with a line on stderr). The frames are
 //! [`MotionFrame`]s of `results.json`, so `raybench merge` redraws the part.
 
-use super::{Chart, Experiment, Planned, Plot, skip};
+use super::{Chart, Experiment, Planned, Plot, planned, skip};
 use crate::charts::Series;
 use crate::ctx::{Ctx, Workload};
-use crate::fmt::file_safe;
+use crate::fmt::{file_safe, section};
 use crate::results::{MotionFrame, Results};
 use anyhow::Result;
 use raybench_core::{
@@ -100,46 +100,36 @@ impl Motion {
     }
 }
 
+/// The first paragraph of its section of `REPORT.md`.
+const INTRO: &str = "\
+    The frames of a moving scene, followed by two structures of each backend that \
+    refits: one built at frame 0 and refitted every frame (boxes recomputed bottom \
+    up, the tree's topology kept; a two-level form refits its flat part and the \
+    meshes that deform, and rebuilds its top level over the instances: `top`), and \
+    one rebuilt every frame (its flat part, the deformed meshes and the top level). \
+    Per frame: the update's seconds, the median trace time of the camera rays (ray \
+    casting) through each, and each one's SAH cost over the flat primitives (where \
+    the twisting mesh is). Both give the same ids and `t` on every frame (checked \
+    here, and against naive by `tests/tests/motion.rs`). One run on a shared \
+    machine: trace times within a few per cent of each other are noise.";
+
 impl Experiment for Motion {
     fn name(&self) -> &'static str {
         NAME
     }
 
     fn plan(&self, ctx: &Ctx, unit: &str, results: &mut Results) -> Result<Option<Planned>> {
-        let Some((_, frames, _)) = Self::plan_of(ctx) else {
-            skip(
-                results,
-                "experiment",
-                unit,
-                "skipped",
-                "no built-in scene names experiment `motion` in its [benchmark] table".into(),
-            );
-            return Ok(None);
+        let steps = match (Self::plan_of(ctx), Self::backends(ctx).len()) {
+            (None, _) => {
+                Err("no built-in scene names experiment `motion` in its [benchmark] table".into())
+            }
+            (Some(_), 0) => Err("no chosen backend is an exact, accelerated one".into()),
+            (Some((_, frames, _)), backends) => Ok(backends * frames as usize),
         };
-        let backends = Self::backends(ctx);
-        if backends.is_empty() {
-            skip(
-                results,
-                "experiment",
-                unit,
-                "skipped",
-                "no chosen backend is an exact, accelerated one".into(),
-            );
-            return Ok(None);
-        }
-        Ok(Some(Planned {
-            steps: backends.len() * frames as usize,
-            scene: None,
-        }))
+        Ok(planned(results, unit, steps))
     }
 
-    fn run(
-        &self,
-        ctx: &Ctx,
-        _planned: Planned,
-        progress: &Progress,
-        results: &mut Results,
-    ) -> Result<()> {
+    fn run(&self, ctx: &Ctx, _: Planned, progress: &Progress, results: &mut Results) -> Result<()> {
         let Some((spec, frames, size)) = Self::plan_of(ctx) else {
             return Ok(());
         };
@@ -301,20 +291,7 @@ impl Experiment for Motion {
         if groups.is_empty() {
             return;
         }
-        let _ = writeln!(s, "## Moving scenes: refit against rebuild\n");
-        let _ = writeln!(
-            s,
-            "The frames of a moving scene, followed by two structures of each backend that \
-             refits: one built at frame 0 and refitted every frame (boxes recomputed bottom \
-             up, the tree's topology kept; a two-level form refits its flat part and the \
-             meshes that deform, and rebuilds its top level over the instances: `top`), and \
-             one rebuilt every frame (its flat part, the deformed meshes and the top level). \
-             Per frame: the update's seconds, the median trace time of the camera rays (ray \
-             casting) through each, and each one's SAH cost over the flat primitives (where \
-             the twisting mesh is). Both give the same ids and `t` on every frame (checked \
-             here, and against naive by `tests/tests/motion.rs`). One run on a shared \
-             machine: trace times within a few per cent of each other are noise.\n"
-        );
+        section(s, "Moving scenes: refit against rebuild", INTRO);
         for ((scene, backend), rows) in &groups {
             let size = rows.first().map_or(0, |r| r.size);
             let _ = writeln!(s, "### {scene}, {backend} ({size} x {size})\n");

@@ -10,11 +10,11 @@
 //! `bunny incoherent`), backend `BACKEND:PRESET`, `x` the ray count, `seconds` the median
 //! trace time, with `build_seconds` and `memory_bytes`.
 
-use super::{Chart, Experiment, Planned, Plot, skip};
+use super::{Chart, Experiment, Planned, Plot, planned, skip};
 use crate::charts::Series;
-use crate::ctx::{Ctx, Workload};
+use crate::ctx::{Ctx, Workload, memory_bytes};
 use crate::fmt::file_safe;
-use crate::fmt::{bytes, opt};
+use crate::fmt::{bytes, opt, section};
 use crate::results::{Results, ScalingPoint};
 use anyhow::Result;
 use raybench_core::{Mode, RaySet};
@@ -118,6 +118,19 @@ fn fastest_at(list: &[Measured], k: f64) -> Option<&Measured> {
         .min_by(|a, b| (a.1 + k * a.2).total_cmp(&(b.1 + k * b.2)))
 }
 
+/// The first paragraph of its section of `REPORT.md`.
+const INTRO: &str = "\
+    Every builder preset of the chosen backends (`BACKEND:PRESET`; `raybench \
+    backends` lists them) on each scene: the build (median of the run's repetitions, \
+    a fresh structure each, all threads), then one frame of camera rays (ray casting, \
+    the report's image size) and as many incoherent rays, timed as in the matrix \
+    (median). Memory: primitives plus structure (Embree's own BVH is not counted). \
+    Time to an image is `build + k x frame` with the camera-ray frame; the \
+    break-even is the frame count after which the backend's fastest-tracing preset \
+    overtakes the one fastest to a first image. One run on a shared machine: a \
+    difference of a few per cent between presets is within its noise (the \
+    matrix's min-max spreads show how much).";
+
 impl Experiment for Presets {
     fn name(&self) -> &'static str {
         NAME
@@ -125,28 +138,17 @@ impl Experiment for Presets {
 
     fn plan(&self, ctx: &Ctx, unit: &str, results: &mut Results) -> Result<Option<Planned>> {
         let (scenes, presets) = (Self::scenes(ctx), Self::presets(ctx));
-        if scenes.is_empty() || presets.is_empty() {
-            let why = if scenes.is_empty() {
-                "no built-in scene names experiment `presets` in its [benchmark] table"
-            } else {
-                "no chosen backend has build presets"
-            };
-            skip(results, "experiment", unit, "skipped", why.into());
-            return Ok(None);
-        }
-        Ok(Some(Planned {
-            steps: scenes.len() * presets.len(),
-            scene: None,
-        }))
+        let steps = if scenes.is_empty() {
+            Err("no built-in scene names experiment `presets` in its [benchmark] table".into())
+        } else if presets.is_empty() {
+            Err("no chosen backend has build presets".into())
+        } else {
+            Ok(scenes.len() * presets.len())
+        };
+        Ok(planned(results, unit, steps))
     }
 
-    fn run(
-        &self,
-        ctx: &Ctx,
-        _planned: Planned,
-        progress: &Progress,
-        results: &mut Results,
-    ) -> Result<()> {
+    fn run(&self, ctx: &Ctx, _: Planned, progress: &Progress, results: &mut Results) -> Result<()> {
         let presets = Self::presets(ctx);
         let scenes = Self::scenes(ctx);
         let mut skipped: Vec<String> = Vec::new();
@@ -203,31 +205,16 @@ impl Experiment for Presets {
                     continue;
                 };
                 let build = median(builds);
-                let memory = (scene.geometry.memory_bytes()
-                    + r.structure().map_or(0, |s| s.memory_bytes))
-                    as u64;
+                let memory = memory_bytes(&scene, r.as_ref());
                 progress.begin(format!("presets {spec} {name}: trace"));
                 for (w, explicit) in [(primary, None), (incoherent, rays.as_ref())] {
                     let m = ctx.measure(r.as_ref(), &w, explicit)?;
-                    let traced = m.warm.rays.max(1);
+                    let series = format!("{spec} {}", w.rays.name());
+                    let x = f64::from(ctx.size) * f64::from(ctx.size);
                     results.scaling.push(ScalingPoint {
-                        shard: 0,
-                        experiment: self.name().into(),
-                        series: format!("{spec} {}", w.rays.name()),
-                        backend: name.into(),
-                        x: f64::from(ctx.size) * f64::from(ctx.size),
-                        seconds: m.timing.median,
-                        rays: m.warm.rays,
-                        tests_per_ray: m
-                            .warm
-                            .counters
-                            .filter(|_| r.counts_tests())
-                            .map(|c| c.prim_tests as f64 / traced as f64),
-                        load_seconds: None,
                         build_seconds: Some(build),
                         memory_bytes: Some(memory),
-                        difference: None,
-                        stored_primitives: None,
+                        ..m.point(r.as_ref(), NAME, series, name, x)
                     });
                 }
                 ran = true;
@@ -305,20 +292,7 @@ impl Experiment for Presets {
         if scenes.is_empty() {
             return;
         }
-        let _ = writeln!(s, "## Build presets: build time against trace time\n");
-        let _ = writeln!(
-            s,
-            "Every builder preset of the chosen backends (`BACKEND:PRESET`; `raybench \
-             backends` lists them) on each scene: the build (median of the run's repetitions, \
-             a fresh structure each, all threads), then one frame of camera rays (ray casting, \
-             the report's image size) and as many incoherent rays, timed as in the matrix \
-             (median). Memory: primitives plus structure (Embree's own BVH is not counted). \
-             Time to an image is `build + k x frame` with the camera-ray frame; the \
-             break-even is the frame count after which the backend's fastest-tracing preset \
-             overtakes the one fastest to a first image. One run on a shared machine: a \
-             difference of a few per cent between presets is within its noise (the \
-             matrix's min-max spreads show how much).\n"
-        );
+        section(s, "Build presets: build time against trace time", INTRO);
         let _ = writeln!(
             s,
             "| scene | preset | build s | primary s | incoherent s | memory | tests/ray |"

@@ -2,7 +2,7 @@
 //! primitives M of the `soup:M` and `spheres:M` generators, 64 x 64 camera rays; with the
 //! speed-up of every backend over the oracle where it ran.
 
-use super::{Chart, Ctx, Plot, Point, Scaling, fit_chart, points_of, square};
+use super::{About, Chart, Ctx, Plot, Point, Scaling, fit_chart, points_of, square};
 use crate::charts::Series;
 use crate::results::Results;
 use raybench_core::Mode;
@@ -11,22 +11,21 @@ use std::collections::{BTreeMap, BTreeSet};
 /// Experiment `primitives`.
 pub(super) struct Primitives;
 
+/// Its name and axes.
+const ABOUT: About = About {
+    name: "primitives",
+    x_label: "primitives in the scene",
+    axis: Some(
+        "the number of primitives M (`soup:M`, `spheres:M` generators, 64 x 64 camera \
+             rays)",
+    ),
+};
+
 impl Scaling for Primitives {
     type State = ();
 
-    fn name(&self) -> &'static str {
-        "primitives"
-    }
-
-    fn x_label(&self) -> &'static str {
-        "primitives in the scene"
-    }
-
-    fn axis(&self) -> Option<&'static str> {
-        Some(
-            "the number of primitives M (`soup:M`, `spheres:M` generators, 64 x 64 camera \
-             rays)",
-        )
+    fn about(&self) -> &About {
+        &ABOUT
     }
 
     fn points(&self, _ctx: &Ctx) -> Result<Vec<Point>, String> {
@@ -52,13 +51,13 @@ impl Scaling for Primitives {
         series_name: &str,
         backends: &BTreeSet<String>,
     ) -> Vec<Chart> {
-        let name = self.name();
+        let name = ABOUT.name;
         let mut out: Vec<Chart> = fit_chart(
             results,
             name,
             series_name,
             backends,
-            self.x_label(),
+            ABOUT.x_label,
             "tests_per_ray",
         )
         .into_iter()
@@ -92,7 +91,7 @@ impl Scaling for Primitives {
             out.push(Chart {
                 title: format!("Speed-up over {oracle} against primitives: {series_name}"),
                 stem: format!("speedup-{series_name}"),
-                x_label: self.x_label().into(),
+                x_label: ABOUT.x_label.into(),
                 y_label: format!("speed-up ({oracle}'s time / the backend's)"),
                 plot: Plot::LogLog(series),
             });

@@ -4,7 +4,7 @@
 
 use super::{Chart, Plot};
 use crate::charts::Series;
-use crate::fmt::backends_in;
+use crate::fmt::{backends_in, section};
 use crate::results::{GRID_COLUMNS, Quality, Results, Run, TREE_COLUMNS};
 use std::fmt::Write as _;
 
@@ -131,19 +131,21 @@ pub(super) fn write(results: &Results, s: &mut String) {
             _ => None,
         })
         .unwrap_or((1.0, 1.0));
-    let _ = writeln!(s, "## Structure quality\n");
-    let _ = writeln!(
+    section(
         s,
-        "Figures of the structure each backend built, read from the structure itself once per \
-         scene. Trees: the SAH cost with C_t = {c_t} per interior node and C_i = {c_i} per \
-         primitive test (the expected work of a ray that hits the root box: every node's cost \
-         weighted by its box's surface area over the root's); the EPO, end-point overlap (Aila, \
-         Karras and Laine 2013), the cost of the nodes whose box holds a point of a surface \
-         that their subtree does not hold, averaged over the surface area and estimated from \
-         points sampled by area on the triangles and spheres, with its standard error; depth \
-         counts nodes from the root (depth 1) to a leaf; bytes per bounded primitive. Grids: \
-         the cells whose lists rays test, the fraction that is not empty, references per \
-         primitive and the lengths of the non-empty lists.\n"
+        "Structure quality",
+        &format!(
+            "Figures of the structure each backend built, read from the structure itself once per \
+             scene. Trees: the SAH cost with C_t = {c_t} per interior node and C_i = {c_i} per \
+             primitive test (the expected work of a ray that hits the root box: every node's cost \
+             weighted by its box's surface area over the root's); the EPO, end-point overlap \
+             (Aila, Karras and Laine 2013), the cost of the nodes whose box holds a point of a \
+             surface that their subtree does not hold, averaged over the surface area and \
+             estimated from points sampled by area on the triangles and spheres, with its standard \
+             error; depth counts nodes from the root (depth 1) to a leaf; bytes per bounded \
+             primitive. Grids: the cells whose lists rays test, the fraction that is not empty, \
+             references per primitive and the lengths of the non-empty lists."
+        ),
     );
     let table = |s: &mut String, headers: [&str; 7], f: fn(&Quality) -> Option<[String; 7]>| {
         let rows: Vec<(&Run, [String; 7])> = all

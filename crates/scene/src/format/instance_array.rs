@@ -10,13 +10,12 @@
 //! keyed by `(k, dimension, seed)`, so an array is the same on every machine and every
 //! instance is independent of the others' count.
 
-use super::{Context, InstanceMeshes, TransformDesc, V3, table_item};
-use crate::budget::{Holds, Reservation};
+use super::{Placing, TransformDesc, V3, table_item};
+use crate::budget::Holds;
 use crate::error::LoadError;
 use raybench_core::sampling::{pcg3d, to_unit_f32};
-use raybench_core::{Affine3A, SceneBuilder, Vec3, limits};
+use raybench_core::{Affine3A, Vec3, limits};
 use serde::Deserialize;
-use std::collections::HashMap;
 
 /// The table's name in scene files.
 const TABLE: &str = "instance_array";
@@ -156,41 +155,25 @@ impl InstanceArrayDesc {
 /// [`limits::MAX_INSTANCED_PRIMITIVES`] (checked before any instance is added) or the
 /// memory budget, or places an instance whose transform is refused; one message naming the
 /// file, the table's line and index, and the cause.
-pub(super) fn add(
-    tables: Vec<toml::Table>,
-    meshes: &mut InstanceMeshes,
-    text: &str,
-    ctx: &Context,
-    b: &mut SceneBuilder,
-    materials: &HashMap<String, u32>,
-    budget: &mut Reservation,
-) -> Result<(), LoadError> {
+pub(super) fn add(tables: Vec<toml::Table>, p: &mut Placing) -> Result<(), LoadError> {
+    let ctx = p.ctx;
     for (index, table) in tables.into_iter().enumerate() {
-        let (d, what): (InstanceArrayDesc, _) = table_item(text, TABLE, index, table, ctx)?;
+        let (d, what): (InstanceArrayDesc, _) = table_item(p.text, TABLE, index, table, ctx)?;
         let fail = |message: String| LoadError::Parse {
             path: ctx.file.clone(),
             message: format!("{what}: {message}"),
         };
-        let Some(mesh) = meshes.iter_mut().find(|(n, _, _)| *n == d.mesh) else {
+        let Some(mesh) = p.place(&d.mesh) else {
             return Err(fail(format!(
                 "mesh '{}' is not defined (instance meshes are objects with a `name` and \
                  `instance_only = true`)",
                 d.mesh
             )));
         };
-        mesh.2 = true;
-        let mesh = mesh.1;
-        let material = match &d.material {
-            None => None,
-            Some(n) => Some(
-                *materials
-                    .get(n)
-                    .ok_or_else(|| fail(format!("material '{n}' is not defined")))?,
-            ),
-        };
+        let material = p.material(&what, d.material.as_ref())?;
         let (n, spacing, axis) = d.checked().map_err(fail)?;
-        b.check_instances(mesh, n).map_err(ctx.scene_err(&what))?;
-        budget.reserve(
+        p.b.check_instances(mesh, n).map_err(ctx.scene_err(&what))?;
+        p.budget.reserve(
             Holds::Instances(n),
             &format!("{}: {what}", ctx.file.display()),
         )?;
@@ -202,7 +185,7 @@ pub(super) fn add(
                 (k / (nx * ny)) as f32,
             );
             let xf = d.placement(k, cell, spacing, axis);
-            b.add_instance(mesh, xf, material).map_err(|e| {
+            p.b.add_instance(mesh, xf, material).map_err(|e| {
                 let place = format!("{what}: instance {} (cell {cell})", k + 1);
                 ctx.scene_err(&place)(e)
             })?;
@@ -213,7 +196,7 @@ pub(super) fn add(
 
 #[cfg(test)]
 mod tests {
-    use super::super::load_test_scene as load;
+    use super::super::{assert_refused, load_test_scene as load};
 
     /// An icosphere mesh named `m` and a material `red`, for the arrays below.
     const MESH: &str = "[[material]]\nname = \"red\"\ncolor = [1, 0, 0]\n\
@@ -357,14 +340,7 @@ mod tests {
                 "line 9: instance_array 1: instance 2 (cell [1, 0, 0]): instance transform",
             ),
         ];
-        for (text, needle) in cases {
-            let e = load(&text)
-                .err()
-                .unwrap_or_else(|| panic!("accepted: {text}"))
-                .to_string();
-            assert!(e.contains(needle), "{text:?} -> {e}");
-            assert!(e.starts_with("t.toml: "), "{e}");
-        }
+        assert_refused(&cases);
     }
 
     /// The limit on instanced primitives is checked before anything is added: a million

@@ -242,43 +242,83 @@ fn take_instance_keys(
 /// the label of its first object (for errors) and the builder its objects went to.
 type Parts = Vec<(String, String, SceneBuilder)>;
 
-/// The instance meshes by name: each one's index in the scene and whether a table places
-/// it.
-type InstanceMeshes = Vec<(String, u32, bool)>;
+/// What the `[[instance]]` and `[[instance_array]]` tables are added with: the file's text
+/// and context, the scene so far, the materials by name, the memory budget, and the
+/// instance meshes by name (each one's index in the scene and whether a table places it).
+struct Placing<'a> {
+    text: &'a str,
+    ctx: &'a Context<'a>,
+    b: &'a mut SceneBuilder,
+    materials: &'a HashMap<String, u32>,
+    budget: &'a mut Reservation,
+    meshes: Vec<(String, u32, bool)>,
+}
+
+impl Placing<'_> {
+    /// The index in the scene of the instance mesh `name`, which a table now places
+    /// (`None` when no instance mesh has that name).
+    fn place(&mut self, name: &str) -> Option<u32> {
+        let mesh = self.meshes.iter_mut().find(|(n, _, _)| n == name)?;
+        mesh.2 = true;
+        Some(mesh.1)
+    }
+
+    /// The id of the material `name` names for the table labelled `what` (`None` when the
+    /// table names none).
+    fn material(&self, what: &str, name: Option<&String>) -> Result<Option<u32>, LoadError> {
+        material_id(self.materials, self.ctx, what, name)
+    }
+}
+
+/// The id of the material `name` names for the table labelled `what` in messages (`None`
+/// when the table names none).
+fn material_id(
+    materials: &HashMap<String, u32>,
+    ctx: &Context,
+    what: &str,
+    name: Option<&String>,
+) -> Result<Option<u32>, LoadError> {
+    match name {
+        None => Ok(None),
+        Some(n) => materials
+            .get(n)
+            .copied()
+            .map(Some)
+            .ok_or_else(|| LoadError::Parse {
+                path: ctx.file.clone(),
+                message: format!("{what}: material '{n}' is not defined"),
+            }),
+    }
+}
 
 /// Adds every `[[instance]]` table: the meshes of `parts` first (each stored once), then
 /// one instance per table, in file order; then the `[[instance_array]]` tables
 /// (`instance_array.rs`).
-#[allow(clippy::too_many_arguments)]
 fn add_instances(
     tables: Vec<toml::Table>,
     arrays: Vec<toml::Table>,
     parts: Parts,
-    text: &str,
-    ctx: &Context,
-    b: &mut SceneBuilder,
-    materials: &HashMap<String, u32>,
-    budget: &mut Reservation,
+    mut p: Placing,
 ) -> Result<(), LoadError> {
-    let mut meshes: InstanceMeshes = Vec::new();
+    let ctx = p.ctx;
     for (name, what, part) in parts {
-        let i = b
-            .add_instance_mesh(name.clone(), part)
-            .map_err(ctx.scene_err(&what))?;
-        meshes.push((name, i, false));
+        let i =
+            p.b.add_instance_mesh(name.clone(), part)
+                .map_err(ctx.scene_err(&what))?;
+        p.meshes.push((name, i, false));
     }
-    budget.reserve(
+    p.budget.reserve(
         crate::budget::Holds::Instances(tables.len() as u64),
         &format!("{}: [[instance]] tables", ctx.file.display()),
     )?;
     for (index, table) in tables.into_iter().enumerate() {
-        let (d, what): (InstanceDesc, _) = table_item(text, "instance", index, table, ctx)?;
+        let (d, what): (InstanceDesc, _) = table_item(p.text, "instance", index, table, ctx)?;
         let fail = |message: String| LoadError::Parse {
             path: ctx.file.clone(),
             message: format!("{what}: {message}"),
         };
-        let Some(mesh) = meshes.iter_mut().find(|(n, _, _)| *n == d.mesh) else {
-            let known: Vec<String> = meshes.iter().map(|(n, _, _)| format!("'{n}'")).collect();
+        let Some(mesh) = p.place(&d.mesh) else {
+            let known: Vec<String> = p.meshes.iter().map(|(n, _, _)| format!("'{n}'")).collect();
             return Err(fail(format!(
                 "mesh '{}' is not defined (instance meshes are objects with a `name` and \
                  `instance_only = true`; this file has {})",
@@ -290,28 +330,20 @@ fn add_instances(
                 }
             )));
         };
-        mesh.2 = true;
-        let material = match &d.material {
-            None => None,
-            Some(n) => Some(
-                *materials
-                    .get(n)
-                    .ok_or_else(|| fail(format!("material '{n}' is not defined")))?,
-            ),
-        };
+        let material = p.material(&what, d.material.as_ref())?;
         let (affine, moving) =
             motion::placement(&d.transform, d.keys.as_deref(), d.motion.as_ref()).map_err(fail)?;
-        b.add_instance(mesh.1, affine, material)
+        p.b.add_instance(mesh, affine, material)
             .map_err(ctx.scene_err(&what))?;
         if let Some(m) = moving {
-            let index = (b.instance_count() - 1) as u32;
-            b.move_instance(index, m).map_err(ctx.scene_err(&what))?;
+            let index = (p.b.instance_count() - 1) as u32;
+            p.b.move_instance(index, m).map_err(ctx.scene_err(&what))?;
         }
     }
-    instance_array::add(arrays, &mut meshes, text, ctx, b, materials, budget)?;
-    for (name, _, used) in &meshes {
+    instance_array::add(arrays, &mut p)?;
+    for (name, _, used) in &p.meshes {
         if !used {
-            b.warn(format!(
+            p.b.warn(format!(
                 "instance mesh '{name}' is placed by no [[instance]] or [[instance_array]]: \
                  it is not drawn"
             ));
@@ -379,18 +411,7 @@ struct ObjectCx<'a> {
 impl ObjectCx<'_> {
     /// The id of the material `name` names (`None` when the object names none).
     fn material(&self, name: Option<&String>) -> Result<Option<u32>, LoadError> {
-        match name {
-            None => Ok(None),
-            Some(n) => self
-                .materials
-                .get(n)
-                .copied()
-                .map(Some)
-                .ok_or_else(|| LoadError::Parse {
-                    path: self.ctx.file.clone(),
-                    message: format!("{}: material '{n}' is not defined", self.what),
-                }),
-        }
+        material_id(self.materials, self.ctx, self.what, name)
     }
 
     /// The scene builder's errors about this object, as load errors naming it (the
@@ -597,11 +618,14 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
         file.instances,
         file.instance_arrays,
         parts,
-        text,
-        ctx,
-        &mut b,
-        &names,
-        &mut budget,
+        Placing {
+            text,
+            ctx,
+            b: &mut b,
+            materials: &names,
+            budget: &mut budget,
+            meshes: Vec::new(),
+        },
     )?;
     for (index, table) in file.volumes.into_iter().enumerate() {
         let (v, what): (volume::VolumeDesc, _) = table_item(text, "volume", index, table, ctx)?;
@@ -625,9 +649,23 @@ fn load_test_scene(text: &str) -> Result<Scene, LoadError> {
     load_scene_str(text, "t", None, Path::new("/nonexistent"))
 }
 
+/// Checks that [`load_test_scene`] refuses each scene text of `cases` with an error that
+/// names the file and contains the case's needle (for the unit tests of every kind's file).
+#[cfg(test)]
+fn assert_refused(cases: &[(String, &str)]) {
+    for (text, needle) in cases {
+        let e = load_test_scene(text)
+            .err()
+            .unwrap_or_else(|| panic!("accepted: {text}"))
+            .to_string();
+        assert!(e.contains(needle), "{text:?} -> {e}");
+        assert!(e.starts_with("t.toml: "), "{e}");
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use super::load_test_scene as load;
+    use super::{assert_refused, load_test_scene as load};
     use raybench_core::MaterialKind;
 
     #[test]
@@ -945,13 +983,6 @@ mod tests {
                 "`name` must be a string",
             ),
         ];
-        for (text, needle) in cases {
-            let e = load(&text)
-                .err()
-                .unwrap_or_else(|| panic!("accepted: {text}"))
-                .to_string();
-            assert!(e.contains(needle), "{text:?} -> {e}");
-            assert!(e.starts_with("t.toml: "), "{e}");
-        }
+        assert_refused(&cases);
     }
 }

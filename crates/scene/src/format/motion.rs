@@ -179,7 +179,7 @@ pub(super) fn deform(
 
 #[cfg(test)]
 mod tests {
-    use super::super::load_test_scene as load;
+    use super::super::{assert_refused, load_test_scene as load};
     use raybench_core::Vec3;
 
     const MESH: &str = "[[object]]\nname = \"m\"\ninstance_only = true\nkind = \"generator\"\n\
@@ -308,13 +308,6 @@ mod tests {
                 "line 4: object 1 (generator): deform: icosphere:1 emits light",
             ),
         ];
-        for (text, needle) in cases {
-            let e = load(&text)
-                .err()
-                .unwrap_or_else(|| panic!("accepted: {text}"))
-                .to_string();
-            assert!(e.contains(needle), "{text:?} -> {e}");
-            assert!(e.starts_with("t.toml: "), "{e}");
-        }
+        assert_refused(&cases);
     }
 }

@@ -1,4 +1,4 @@
-// SDF models (raybench-geometry's `sdf.rs`, sphere tracing): `geo/sdf.rs` lays out the
+// SDF models (raybench-geometry's `sdf/`, sphere tracing): `geo/sdf.rs` lays out the
 // record (the padded box in a.xyz and b.xyz; c = program start and end as bits, the hit
 // tolerance eps, the Lipschitz bound L) and the program in `geo` (a header with the step
 // limit, then the tree as postfix instructions: opcode bits in x, parameters after).
@@ -125,7 +125,7 @@ fn sdf_distance(first: u32, end: u32, x: vec3<f32>) -> f32 {
 
 // `Sdf::march` (through `Sdf::intersect`): the first surface point of `r` within
 // [r.t_min, t_max] inside the padded box (`Sdf::clip`), under the marching rules of
-// `sdf.rs`: steps of |f| / (L |dir|), a hit where |f| < eps, fixed steps of eps while the
+// `sdf/mod.rs`: steps of |f| / (L |dir|), a hit where |f| < eps, fixed steps of eps while the
 // ray starts within eps of the surface, then the side fixed by the sign of f.
 fn sdf_hit(r: Ray, p: Prim, t_max: f32) -> Cand {
     // `Ray::is_valid` (by the bits: the compiler may assume finite arithmetic).
