@@ -164,7 +164,7 @@ impl Experiment for Matrix {
                                     r.status,
                                     r.reason.as_deref().unwrap_or("no reason given")
                                 )),
-                                Some(r) => r.mrays_per_s.map_or(Bar::Absent, Bar::Value),
+                                Some(r) => throughput_bar(r),
                                 None if brute => Bar::Unsupported(
                                     "left out: a brute-force backend over its time budget \
                                      on this scene"
@@ -286,8 +286,9 @@ impl Experiment for Matrix {
                 "Seconds per phase on the GPU backend (median of the timed repetitions): the \
              BVH built on the CPU and the scene uploaded once per scene; then per frame the \
              parameters uploaded, the kernels' execution on the GPU (timestamp queries when \
-             the adapter has them, else wall time around submit and wait: this is the time \
-             Mrays/s uses), the image read back, and the whole call.",
+             the adapter has them, else wall time around submit and wait), the image read \
+             back, and the whole call (the wall-clock time Mrays/s uses, as for every \
+             backend). On a software adapter the whole call is far longer than the kernels.",
             );
             let cols = [
                 "prepare.build",
@@ -457,6 +458,22 @@ impl Experiment for Matrix {
 /// everywhere; Whitted
 /// and path tracing where its built-in `[benchmark]` table asks for them (lights to shadow
 /// and mirrors to follow; scenes built for path tracing); the volume modes where there are
+/// A run's throughput bar: Mrays/s over the median time, with the interval the median's
+/// interval gives where it has one.
+fn throughput_bar(r: &Run) -> Bar {
+    let Some(v) = r.mrays_per_s else {
+        return Bar::Absent;
+    };
+    match (r.seconds.as_ref().and_then(|t| t.interval), r.rays) {
+        (Some([lo, hi]), Some(rays)) if lo > 0.0 => Bar::Interval {
+            value: v,
+            lo: rays as f64 / hi / 1e6,
+            hi: rays as f64 / lo / 1e6,
+        },
+        _ => Bar::Value(v),
+    }
+}
+
 /// volumes.
 fn workloads(ctx: &Ctx, scene: &Scene) -> Vec<Workload> {
     let s = ctx.size;
