@@ -45,14 +45,6 @@ pub struct Comparison {
     pub geomean_ratio: Option<f64>,
 }
 
-/// Seconds per ray of each timed repetition of `r`.
-fn per_ray(r: &Run) -> Vec<f64> {
-    match (&r.seconds, r.rays) {
-        (Some(t), Some(rays)) if rays > 0 => t.samples.iter().map(|s| s / rays as f64).collect(),
-        _ => Vec::new(),
-    }
-}
-
 /// Compares the timed runs of `after` with those of `before`.
 #[must_use]
 pub fn compare(before: &Results, after: &Results) -> Comparison {
@@ -70,7 +62,7 @@ pub fn compare(before: &Results, after: &Results) -> Comparison {
         if vb <= 0.0 {
             continue;
         }
-        let (before_t, after_t) = (per_ray(b), per_ray(a));
+        let (before_t, after_t) = (b.seconds_per_ray(), a.seconds_per_ray());
         // Speed is the inverse of time: before's time over after's is after's speed-up.
         let (_, interval) = stats::ratio_interval(&before_t, &after_t);
         let verdict = match stats::change(&after_t, &before_t) {

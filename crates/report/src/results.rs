@@ -565,6 +565,19 @@ impl From<&raybench_core::StructureQuality> for Quality {
 }
 
 impl Run {
+    /// Seconds per ray of each timed repetition (empty without timings or rays): what
+    /// backends that trace the same rays are compared on (Mrays/s is the inverse of their
+    /// median).
+    #[must_use]
+    pub fn seconds_per_ray(&self) -> Vec<f64> {
+        match (&self.seconds, self.rays) {
+            (Some(t), Some(rays)) if rays > 0 => {
+                t.samples.iter().map(|s| s / rays as f64).collect()
+            }
+            _ => Vec::new(),
+        }
+    }
+
     /// What the run measured: scene, workload and backend (`spheres cast-primary 256x256
     /// 1 spp, backend bvh`); unique within a report.
     #[must_use]

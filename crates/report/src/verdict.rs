@@ -48,15 +48,6 @@ fn valid(r: &Run) -> bool {
     r.status == "ok" && r.mrays_per_s.is_some() && r.equality.as_ref().is_none_or(|e| e.pass)
 }
 
-/// Seconds per ray of each timed repetition of `r` (the repetitions of backends that trace
-/// the same rays compare directly; Mrays/s is their inverse).
-fn per_ray(r: &Run) -> Vec<f64> {
-    match (&r.seconds, r.rays) {
-        (Some(t), Some(rays)) if rays > 0 => t.samples.iter().map(|s| s / rays as f64).collect(),
-        _ => Vec::new(),
-    }
-}
-
 /// `x` as a speed-up factor: two decimals below 10, none above.
 fn factor(x: f64) -> String {
     if x >= 10.0 {
@@ -69,7 +60,8 @@ fn factor(x: f64) -> String {
 /// How much faster `best` is than `other`, with the ratio's interval where both have
 /// repetitions enough: `1.95x [1.90-2.01] bvh`.
 fn speed_up(best: &Run, other: &Run) -> String {
-    let (ratio, interval) = stats::ratio_interval(&per_ray(other), &per_ray(best));
+    let (ratio, interval) =
+        stats::ratio_interval(&other.seconds_per_ray(), &best.seconds_per_ray());
     match interval {
         Some(i) => format!(
             "{}x [{}-{}] {}",
@@ -86,7 +78,7 @@ fn speed_up(best: &Run, other: &Run) -> String {
 /// interval separates it from every other, else the backends that tie with it.
 fn fastest_cell(runs: &[&Run], baseline: &str, oracle: &str) -> String {
     let valid: Vec<&Run> = runs.iter().copied().filter(|r| valid(r)).collect();
-    let times: Vec<Vec<f64>> = valid.iter().map(|r| per_ray(r)).collect();
+    let times: Vec<Vec<f64>> = valid.iter().map(|r| r.seconds_per_ray()).collect();
     let refs: Vec<&[f64]> = times.iter().map(Vec::as_slice).collect();
     let Some(verdict) = stats::fastest(&refs) else {
         return if runs.is_empty() {
