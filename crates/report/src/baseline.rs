@@ -28,7 +28,8 @@ pub struct Change {
     pub interval: Option<[f64; 2]>,
     /// The change exceeds the noise of both runs and the minimum effect.
     pub significant: bool,
-    /// `faster`, `slower`, `within noise` or `noise unknown`.
+    /// `faster`, `slower`, `within noise`, `noise unknown` (a single repetition on either
+    /// side) or `machine interfered` (either side's median rests on contended repetitions).
     pub verdict: &'static str,
 }
 
@@ -43,6 +44,15 @@ pub struct Comparison {
     pub only_after: Vec<String>,
     /// Geometric mean of the ratios (`null` without common workloads).
     pub geomean_ratio: Option<f64>,
+}
+
+/// Whether `r`'s median rests on repetitions another process interfered with (at least half
+/// of those kept were contended: the redo budget was spent): its time measures the machine's
+/// load as much as the backend, so no change is claimed from it.
+fn interfered(r: &Run) -> bool {
+    r.seconds
+        .as_ref()
+        .is_some_and(|t| 2 * t.contended as usize >= t.samples.len().max(1))
 }
 
 /// Compares the timed runs of `after` with those of `before`.
@@ -65,11 +75,15 @@ pub fn compare(before: &Results, after: &Results) -> Comparison {
         let (before_t, after_t) = (b.seconds_per_ray(), a.seconds_per_ray());
         // Speed is the inverse of time: before's time over after's is after's speed-up.
         let (_, interval) = stats::ratio_interval(&before_t, &after_t);
-        let verdict = match stats::change(&after_t, &before_t) {
-            stats::Change::Faster => "faster",
-            stats::Change::Slower => "slower",
-            stats::Change::Same => "within noise",
-            stats::Change::Unknown => "noise unknown",
+        let verdict = if interfered(a) || interfered(b) {
+            "machine interfered"
+        } else {
+            match stats::change(&after_t, &before_t) {
+                stats::Change::Faster => "faster",
+                stats::Change::Slower => "slower",
+                stats::Change::Same => "within noise",
+                stats::Change::Unknown => "noise unknown",
+            }
         };
         out.changes.push(Change {
             workload: key,
@@ -105,12 +119,14 @@ pub fn markdown(c: &Comparison, before: &str, after: &str) -> String {
     let _ = writeln!(s, "## Before and after\n");
     let count = |v: &str| c.changes.iter().filter(|x| x.verdict == v).count();
     let (faster, slower, unknown) = (count("faster"), count("slower"), count("noise unknown"));
+    let interfered = count("machine interfered");
     let _ = writeln!(
         s,
         "`{after}` against `{before}`: {} workloads in both, {faster} faster and {slower} slower \
          (the {:.0}% interval of the speed ratio excludes 1 and the change is at least {:.0}%), \
          {unknown} with a single repetition on either side (noise unknown, no change claimed), \
-         the rest within noise; geometric mean of the speed ratios {}. Workloads only before: \
+         {interfered} where another process took the CPU through most repetitions of either \
+         side (machine interfered, no change claimed), the rest within noise; geometric mean of the speed ratios {}. Workloads only before: \
          {}; only after: {}.\n",
         c.changes.len(),
         stats::CONFIDENCE * 100.0,
@@ -185,6 +201,12 @@ mod tests {
         .unwrap()
     }
 
+    /// `r` with `n` of its repetitions kept contended.
+    fn contended(mut r: Run, n: u32) -> Run {
+        r.seconds.as_mut().unwrap().contended = n;
+        r
+    }
+
     fn results(runs: Vec<Run>) -> Results {
         Results {
             runs,
@@ -202,6 +224,7 @@ mod tests {
             run("b", vec![1.0, 1.02, 0.99, 1.01, 1.0, 0.98]),
             run("c", vec![1.0, 1.01, 0.99, 1.0, 1.02, 0.98]),
             run("one", vec![1.0]),
+            run("busy", vec![1.0, 1.01, 0.99, 1.0, 1.02, 0.98]),
             run("gone", vec![1.0]),
         ]);
         let after = results(vec![
@@ -209,6 +232,7 @@ mod tests {
             run("b", vec![1.01, 0.97, 1.03, 1.0, 0.99, 1.02]),
             run("c", vec![1.5, 1.4, 1.45, 1.48, 1.42, 1.46]),
             run("one", vec![0.5]),
+            contended(run("busy", vec![2.0, 2.02, 1.98, 2.0, 2.04, 1.96]), 4),
             run("new", vec![1.0]),
         ]);
         let c = compare(&before, &after);
@@ -223,7 +247,8 @@ mod tests {
                 ("a", "faster"),
                 ("b", "within noise"),
                 ("c", "slower"),
-                ("one", "noise unknown")
+                ("one", "noise unknown"),
+                ("busy", "machine interfered")
             ]
         );
         assert!((c.changes[0].ratio - 1.005 / 0.505).abs() < 1e-9);
@@ -233,11 +258,12 @@ mod tests {
         assert_eq!(c.only_before.len(), 1);
         assert_eq!(c.only_after.len(), 1);
         let g = c.geomean_ratio.unwrap();
-        let expected = (c.changes.iter().map(|x| x.ratio.ln()).sum::<f64>() / 4.0).exp();
+        let expected = (c.changes.iter().map(|x| x.ratio.ln()).sum::<f64>() / 5.0).exp();
         assert!((g - expected).abs() < 1e-12);
         let md = markdown(&c, "old", "new");
         assert!(md.contains("1 faster and 1 slower"), "{md}");
         assert!(md.contains("1 with a single repetition"), "{md}");
+        assert!(md.contains("1 where another process took the CPU"), "{md}");
         assert!(md.contains("| **faster** |"), "{md}");
     }
 }
