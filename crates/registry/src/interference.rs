@@ -13,6 +13,12 @@ use std::collections::HashMap;
 /// repetition counts as contended: 10 %.
 pub const CONTENDED_WAIT_SHARE: f64 = 0.10;
 
+/// The run-queue delay a repetition must also exceed to count as contended: 2 ms, about
+/// what one time slice of another busy process costs. Below it the delay is the threads'
+/// own wake-up latency (tens of microseconds per wake-up), which is most of a
+/// millisecond-long repetition's wait on a quiet machine.
+pub const CONTENDED_WAIT_SECONDS: f64 = 0.002;
+
 /// What the scheduler says of one timed call.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Interference {
@@ -34,10 +40,11 @@ impl Interference {
         }
     }
 
-    /// Whether the waiting passed [`CONTENDED_WAIT_SHARE`].
+    /// Whether the waiting passed both [`CONTENDED_WAIT_SHARE`] and
+    /// [`CONTENDED_WAIT_SECONDS`].
     #[must_use]
     pub fn contended(&self) -> bool {
-        self.wait_share() > CONTENDED_WAIT_SHARE
+        self.wait_share() > CONTENDED_WAIT_SHARE && self.wait_seconds > CONTENDED_WAIT_SECONDS
     }
 }
 
@@ -105,7 +112,13 @@ mod tests {
             cpu_seconds: 1.0,
             wait_seconds: 0.5,
         };
-        assert!(!quiet.contended() && hogged.contended());
+        // A millisecond's repetition whose threads waited 0.3 ms to wake: a large share,
+        // but no other process's time slice.
+        let woken = Interference {
+            cpu_seconds: 0.001,
+            wait_seconds: 0.0003,
+        };
+        assert!(!quiet.contended() && hogged.contended() && !woken.contended());
         assert!((hogged.wait_share() - 1.0 / 3.0).abs() < 1e-12);
         assert_eq!(Interference::default().wait_share(), 0.0);
     }

@@ -324,9 +324,10 @@ fn noisy(results: &Results, s: &mut String) {
     }
     parts.push(format!(
         "{redone} repetitions redone because the machine interfered (their threads waited \
-         for a CPU more than {:.0}% of the time), {contended} kept contended when the redo \
-         budget was spent",
-        raybench_registry::interference::CONTENDED_WAIT_SHARE * 100.0
+         for a CPU more than {:.0}% of the time and more than {:.0} ms), {contended} kept \
+         contended when the redo budget was spent",
+        raybench_registry::interference::CONTENDED_WAIT_SHARE * 100.0,
+        raybench_registry::interference::CONTENDED_WAIT_SECONDS * 1e3
     ));
     let points = results.scaling.len();
     if points > 0 {
