@@ -196,17 +196,40 @@ pub(crate) fn with_threads<T: Send>(
     threads: Option<usize>,
     f: impl FnOnce() -> Result<T> + Send,
 ) -> Result<T> {
-    match threads {
-        None => f(),
-        Some(n) if !(1..=MAX_THREADS).contains(&n) => {
-            bail!("--threads {n}: between 1 and {MAX_THREADS} worker threads are accepted")
-        }
-        Some(n) => rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .context("cannot start the thread pool")?
-            .install(f),
+    with_pool(threads, false, f)
+}
+
+/// Runs `f` on a pool of `threads` workers (default: rayon's global pool, one per core);
+/// with `pin`, worker `i` is bound to the `i`-th core this process may run on (modulo their
+/// count), so that the scheduler does not move it between cores.
+pub(crate) fn with_pool<T: Send>(
+    threads: Option<usize>,
+    pin: bool,
+    f: impl FnOnce() -> Result<T> + Send,
+) -> Result<T> {
+    if let Some(n) = threads
+        && !(1..=MAX_THREADS).contains(&n)
+    {
+        bail!("--threads {n}: between 1 and {MAX_THREADS} worker threads are accepted");
     }
+    if threads.is_none() && !pin {
+        return f();
+    }
+    let mut builder = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or_else(rayon::current_num_threads));
+    if pin {
+        let cores = core_affinity::get_core_ids()
+            .filter(|c| !c.is_empty())
+            .context("--pin: this system does not say which cores the process may use")?;
+        builder = builder.start_handler(move |i| {
+            // A refusal leaves the worker unpinned; the report records what was asked.
+            let _ = core_affinity::set_for_current(cores[i % cores.len()]);
+        });
+    }
+    builder
+        .build()
+        .context("cannot start the thread pool")?
+        .install(f)
 }
 
 pub(crate) fn load_scene(

@@ -23,7 +23,7 @@ mod args;
 mod cmd;
 
 use anyhow::Result;
-use args::with_threads;
+use args::{with_pool, with_threads};
 use clap::{Parser, Subcommand};
 use cmd::{backends, compare, diff, info, rays, render, report, scenes};
 use raybench_scene::assets_dir;
@@ -160,7 +160,12 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Scenes => scenes::scenes(&assets),
         Command::Backends { json } => backends::backends(json),
         Command::Info(cmd) => with_threads(cmd.threads, || info::info(&cmd, &assets)),
-        Command::Report(cmd) => with_threads(cmd.threads, || report::report(&cmd, &assets)),
+        Command::Report(cmd) => {
+            // On a pool of its own, so that the thread that times is one of the workers: on
+            // the global pool, the calling thread and every worker compete for the cores.
+            let threads = cmd.threads.unwrap_or_else(rayon::current_num_threads);
+            with_pool(Some(threads), cmd.pin, || report::report(&cmd, &assets))
+        }
         Command::Merge(cmd) => report::merge(&cmd),
         Command::CompareResults(cmd) => report::compare_results(&cmd),
         Command::Diff(cmd) => diff::diff_images(&cmd),

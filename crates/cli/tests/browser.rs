@@ -72,6 +72,8 @@ fn render_report() -> PathBuf {
             "64",
             "--repeat",
             "1",
+            "--min-sample",
+            "0",
             "--no-scaling",
             "--out",
         ])

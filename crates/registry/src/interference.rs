@@ -98,6 +98,78 @@ pub fn load_average() -> Option<[f64; 3]> {
     Some([it.next()?.ok()?, it.next()?.ok()?, it.next()?.ok()?])
 }
 
+/// What the whole machine's CPUs did up to a moment, for the share other processes took
+/// between two moments ([`MachineUse::others_since`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MachineUse {
+    /// Clock ticks of every CPU busy (user, nice, system, interrupts) or taken by the
+    /// hypervisor (steal), since boot.
+    busy: u64,
+    /// Of those, stolen by the hypervisor.
+    steal: u64,
+    /// Every CPU's ticks, idle included.
+    total: u64,
+    /// This process's user and system ticks, its threads included.
+    own: u64,
+}
+
+/// The share of the machine's CPU time, between two [`MachineUse`] readings, that other
+/// processes (and the hypervisor) took.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OthersUse {
+    /// Busy time not this process's, hypervisor steal included, over all CPUs' time.
+    pub share: f64,
+    /// Of the machine's CPU time, the share the hypervisor stole.
+    pub steal: f64,
+}
+
+impl MachineUse {
+    /// The counters now (`/proc/stat`, `/proc/self/stat`); `None` where the system does not
+    /// tell.
+    #[must_use]
+    pub fn now() -> Option<Self> {
+        let stat = std::fs::read_to_string("/proc/stat").ok()?;
+        let cpu: Vec<u64> = stat
+            .lines()
+            .next()?
+            .strip_prefix("cpu ")?
+            .split_whitespace()
+            .map(str::parse)
+            .collect::<Result<_, _>>()
+            .ok()?;
+        // user nice system idle iowait irq softirq steal [guest guest_nice]: guest time is
+        // already counted in user and nice.
+        let field = |i: usize| cpu.get(i).copied().unwrap_or(0);
+        let busy = field(0) + field(1) + field(2) + field(5) + field(6) + field(7);
+        let total = busy + field(3) + field(4);
+        let own_stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+        // The fields after the command name (in parentheses, which may hold spaces):
+        // utime and stime are the 12th and 13th of them.
+        let after = own_stat.rsplit_once(')')?.1;
+        let mut it = after.split_whitespace().skip(11).map(str::parse::<u64>);
+        let own = it.next()?.ok()? + it.next()?.ok()?;
+        Some(Self {
+            busy,
+            steal: field(7),
+            total,
+            own,
+        })
+    }
+
+    /// What other processes took of the machine between `earlier` and `self`; `None` when
+    /// no tick passed.
+    #[must_use]
+    pub fn others_since(&self, earlier: &Self) -> Option<OthersUse> {
+        let total = self.total.checked_sub(earlier.total).filter(|&t| t > 0)? as f64;
+        let busy = self.busy.saturating_sub(earlier.busy);
+        let own = self.own.saturating_sub(earlier.own);
+        Some(OthersUse {
+            share: busy.saturating_sub(own) as f64 / total,
+            steal: self.steal.saturating_sub(earlier.steal) as f64 / total,
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -140,5 +212,19 @@ mod tests {
         }
         let load = load_average();
         assert!(load.is_none_or(|l| l.iter().all(|x| *x >= 0.0)));
+        if let Some(before) = MachineUse::now() {
+            let mut a = 0u64;
+            for i in 0..50_000_000u64 {
+                a = std::hint::black_box(a.wrapping_add(i));
+            }
+            let after = MachineUse::now().expect("readable twice");
+            assert!(after.own >= before.own && after.total >= before.total);
+            if let Some(o) = after.others_since(&before) {
+                assert!(
+                    (0.0..=1.0).contains(&o.share) && o.steal <= o.share + 1e-12,
+                    "{o:?}"
+                );
+            }
+        }
     }
 }

@@ -3,8 +3,10 @@
 //! repetitions. Experiments call down into this module; it knows no experiment.
 
 use crate::results::{Results, ScalingPoint, Skipped, Timing};
+use crate::rounds;
 use anyhow::Result;
 use raybench_core::{Mode, RaySet, RenderSettings, Scene};
+use raybench_registry::interference::Interference;
 use raybench_registry::measure::{Measured, RayBatch, measure};
 use raybench_registry::{Backend, TimedRenderer};
 use std::path::PathBuf;
@@ -29,8 +31,11 @@ pub struct Options {
     pub shard: (u32, u32),
     /// Image side for the main matrix (default 256 quick, 512 full).
     pub size: Option<u32>,
-    /// Timed repetitions after the warm-up (default 3 quick, 5 full).
-    pub repeat: Option<u32>,
+    /// Timed repetitions after the warm-up (default [`rounds::Repeat::Auto`]).
+    pub repeat: Option<rounds::Repeat>,
+    /// Seconds a timed sample lasts at least (default [`crate::MIN_SAMPLE_QUICK`] or
+    /// [`crate::MIN_SAMPLE_FULL`]).
+    pub min_sample: Option<f64>,
     /// Run the scaling experiments.
     pub scaling: bool,
     /// Which scaling experiments (default: all of [`experiments()`]).
@@ -50,6 +55,10 @@ pub struct Options {
     pub command: String,
     /// An earlier report (folder or `results.json`) to compare with ([`baseline`]).
     pub baseline: Option<PathBuf>,
+    /// Rank backends on another device by their device time rather than wall time.
+    pub device_time: bool,
+    /// Whether the worker threads are pinned to cores (recorded; the caller pins them).
+    pub pin: bool,
 }
 
 /// Naive's estimated ray/primitive tests per workload above which the quick run leaves it
@@ -158,7 +167,11 @@ pub(crate) struct Ctx<'a> {
     pub(crate) chosen: &'a [&'static Backend],
     pub(crate) modes: &'a [Mode],
     pub(crate) size: u32,
+    /// The repetitions every workload gets at least (what the naive budget and the build
+    /// repetitions count): [`rounds::Repeat::minimum`].
     pub(crate) repeat: u32,
+    /// How the timed repetitions are taken.
+    pub(crate) policy: rounds::Policy,
     pub(crate) budget: f64,
 }
 
@@ -166,6 +179,8 @@ pub(crate) struct Ctx<'a> {
 pub(crate) struct Measurement {
     pub(crate) warm: Measured,
     pub(crate) timing: Timing,
+    /// For a backend on another device: the timed repetitions' device time (phase `gpu`).
+    pub(crate) device: Option<Timing>,
     /// Medians of the timed repetitions' phases.
     pub(crate) phases: raybench_core::Timings,
 }
@@ -191,77 +206,163 @@ impl Ctx<'_> {
         tests <= self.budget
     }
 
-    /// Warm-up (counted, kept for the comparison) and timed repetitions.
+    /// Warm-up (counted, kept for the comparison) and timed repetitions of one renderer.
     pub(crate) fn measure(
         &self,
         r: &dyn TimedRenderer,
         w: &Workload,
         rays: Option<&RayBatch>,
     ) -> Result<Measurement> {
-        self.measure_settings(r, &w.settings(), rays)
+        let views = [(None, rays.cloned())];
+        let mut all = self.measure_all(&[r], &w.settings(), &views)?;
+        Ok(all.remove(0).0)
     }
 
-    /// [`Ctx::measure`] with explicit settings (a camera chosen).
-    pub(crate) fn measure_settings(
+    /// Every renderer of `renderers` on the workload `settings` from each of `views`
+    /// (indices into the scene's cameras, `None`: the scene's camera; with the rays of
+    /// each): per renderer, the measurement over every view ([`Measurement::sum`]) and each
+    /// view's.
+    ///
+    /// Every renderer is warmed up first: a counted run per view (its ids, `t` and counters
+    /// are what the comparison uses), then, for a backend on another device or a workload
+    /// shorter than the minimum sample, an uncounted one that compiles what the timed runs
+    /// will use and says how many runs fill a sample. Then the timed rounds
+    /// ([`rounds::run`]): each renderer once per round in a rotated order, a sample being
+    /// every view once (each run as often as fills its share of the minimum sample), a
+    /// sample the machine interfered with taken again within the redo budget.
+    pub(crate) fn measure_all(
         &self,
-        r: &dyn TimedRenderer,
+        renderers: &[&dyn TimedRenderer],
         settings: &RenderSettings,
-        rays: Option<&RayBatch>,
-    ) -> Result<Measurement> {
-        let warm = measure(r, settings, rays, true)?;
-        // The warm-up counts; the timed runs do not. A backend on another device compiles a
-        // kernel per variant: its uncounted one is made ready here, so that no timed run
-        // includes a compilation.
-        if r.device().is_some() {
-            measure(r, settings, rays, false)?;
-        }
-        let mut samples = Vec::new();
-        let mut phases = Vec::new();
-        // A repetition another process interfered with is run again, up to as many times
-        // as there are repetitions; past that budget it is kept and counted.
-        let (mut redone, mut contended) = (0, 0);
-        while samples.len() < self.repeat as usize {
-            let m = measure(r, settings, rays, false)?;
-            let busy = m.interference.is_some_and(|i| i.contended());
-            if busy && redone < self.repeat {
-                redone += 1;
-                continue;
+        views: &Views,
+    ) -> Result<Vec<(Measurement, Vec<Measurement>)>> {
+        let per_view = |camera: Option<u32>| RenderSettings {
+            camera,
+            ..*settings
+        };
+        let share = self.policy.min_sample / views.len().max(1) as f64;
+        // Warm-ups: per renderer and view, the counted run and the runs per sample.
+        let mut warm = Vec::with_capacity(renderers.len());
+        for r in renderers {
+            let mut each = Vec::with_capacity(views.len());
+            for (camera, rays) in views {
+                let settings = per_view(*camera);
+                let counted = measure(*r, &settings, rays.as_ref(), true)?;
+                let device = r.device().is_some();
+                let (once, first) = if device || counted.seconds < share {
+                    let m = measure(*r, &settings, rays.as_ref(), false)?;
+                    (m.seconds, device.then_some(m.seconds))
+                } else {
+                    (counted.seconds, None)
+                };
+                let runs = rounds::repetitions_per_sample(once, share);
+                each.push((counted, runs, first));
             }
-            contended += u32::from(busy);
-            samples.push(m.seconds);
-            phases.push(m.phases);
+            warm.push(each);
         }
-        Ok(Measurement {
-            warm,
-            timing: Timing {
-                redone,
-                contended,
-                ..Timing::of(samples)
-            },
-            phases: raybench_registry::measure::median_phases(&phases),
-        })
+        let tallies = rounds::run(renderers.len(), &self.policy, |i| {
+            self.sample(renderers[i], &per_view, views, &warm[i])
+        })?;
+        Ok(renderers
+            .iter()
+            .zip(warm)
+            .zip(tallies)
+            .map(|((_, warm), tally)| {
+                let each: Vec<Measurement> = warm
+                    .into_iter()
+                    .enumerate()
+                    .map(|(v, (counted, runs, first))| {
+                        let samples = tally.extra.iter().map(|x| x[v].0).collect();
+                        let mut phases = raybench_registry::measure::median_phases(
+                            &tally
+                                .extra
+                                .iter()
+                                .map(|x| x[v].1.clone())
+                                .collect::<Vec<_>>(),
+                        );
+                        if let Some(first) = first {
+                            phases.push("warm-up", first);
+                        }
+                        Measurement {
+                            warm: counted,
+                            timing: Timing {
+                                redone: tally.redone,
+                                contended: tally.contended,
+                                per_sample: runs,
+                                ..Timing::of(samples)
+                            },
+                            phases,
+                            device: None,
+                        }
+                    })
+                    .collect();
+                let mut all = Measurement::sum(&each);
+                let counts = |t: Timing| Timing {
+                    redone: tally.redone,
+                    contended: tally.contended,
+                    per_sample: each.iter().map(|m| m.timing.per_sample).min().unwrap_or(1),
+                    ..t
+                };
+                // The device's time of a sample: its `gpu` phase over every view.
+                let device: Option<Vec<f64>> = tally
+                    .extra
+                    .iter()
+                    .map(|x| x.iter().map(|(_, p)| p.get("gpu")).sum())
+                    .collect();
+                all.device = device
+                    .filter(|d| !d.is_empty())
+                    .map(|d| counts(Timing::of(d)));
+                all.timing = counts(Timing::of(tally.seconds));
+                (all, each)
+            })
+            .collect())
     }
 
-    /// [`Ctx::measure`] from each of `views` (indices into the scene's cameras; `None`: the
-    /// scene's camera), with the rays of each view: the measurement of every view, and
-    /// their sum ([`Measurement::sum`]).
-    pub(crate) fn measure_views(
+    /// One timed sample of `r`: every view run its `runs` times, uncounted. Its seconds
+    /// are the sum over views of the seconds per run; the extra is each view's seconds per
+    /// run and mean phases.
+    fn sample(
         &self,
         r: &dyn TimedRenderer,
-        w: &Workload,
+        per_view: &dyn Fn(Option<u32>) -> RenderSettings,
         views: &Views,
-    ) -> Result<(Measurement, Vec<Measurement>)> {
-        let each: Vec<Measurement> = views
-            .iter()
-            .map(|(camera, rays)| {
-                let settings = RenderSettings {
-                    camera: *camera,
-                    ..w.settings()
-                };
-                self.measure_settings(r, &settings, rays.as_ref())
-            })
-            .collect::<Result<_>>()?;
-        Ok((Measurement::sum(&each), each))
+        warm: &[(Measured, u32, Option<f64>)],
+    ) -> Result<rounds::Sample<Vec<(f64, raybench_core::Timings)>>> {
+        let (mut seconds, mut elapsed) = (0.0, 0.0);
+        let mut waited = Some(Interference::default());
+        let mut extra = Vec::with_capacity(views.len());
+        for ((camera, rays), (_, runs, _)) in views.iter().zip(warm) {
+            let settings = per_view(*camera);
+            let mut total = 0.0;
+            let mut phases = raybench_core::Timings::default();
+            for _ in 0..*runs {
+                let m = measure(r, &settings, rays.as_ref(), false)?;
+                total += m.seconds;
+                waited = waited.zip(m.interference).map(|(a, b)| Interference {
+                    cpu_seconds: a.cpu_seconds + b.cpu_seconds,
+                    wait_seconds: a.wait_seconds + b.wait_seconds,
+                });
+                for (name, secs) in m.phases.0 {
+                    match phases.0.iter_mut().find(|(n, _)| *n == name) {
+                        Some((_, sum)) => *sum += secs,
+                        None => phases.push(name, secs),
+                    }
+                }
+            }
+            let n = f64::from(*runs);
+            for (_, s) in &mut phases.0 {
+                *s /= n;
+            }
+            seconds += total / n;
+            elapsed += total;
+            extra.push((total / n, phases));
+        }
+        Ok(rounds::Sample {
+            seconds,
+            elapsed,
+            contended: waited.is_some_and(|i| i.contended()),
+            extra,
+        })
     }
 }
 
@@ -313,6 +414,7 @@ impl Measurement {
             return Measurement {
                 warm: one.warm.clone(),
                 timing: one.timing.clone(),
+                device: one.device.clone(),
                 phases: one.phases.clone(),
             };
         }
@@ -359,6 +461,7 @@ impl Measurement {
         }
         Measurement {
             warm,
+            device: None,
             timing: Timing {
                 redone: each.iter().map(|m| m.timing.redone).sum(),
                 contended: each.iter().map(|m| m.timing.contended).sum(),

@@ -45,6 +45,24 @@ pub(crate) fn backends_in(runs: &[&Run]) -> Vec<String> {
     seen
 }
 
+/// `backend` as the report shows it among `runs`: with `(software adapter)` where one of
+/// its runs ran on one ([`Run::label`]).
+pub(crate) fn label_in(runs: &[&Run], backend: &str) -> String {
+    runs.iter()
+        .find(|r| r.backend == backend && r.software_device)
+        .map_or_else(|| backend.to_string(), |r| r.label())
+}
+
+/// Seconds with three significant digits, in plain decimals (`0.0123`, `0.0000234`,
+/// `1.23`), so that a short workload's time does not print as `0.0000`.
+pub(crate) fn secs(v: f64) -> String {
+    if !(v.is_finite() && v > 0.0) {
+        return format!("{v}");
+    }
+    let decimals = (2 - v.log10().floor() as i32).clamp(0, 12) as usize;
+    format!("{v:.decimals$}")
+}
+
 /// A value formatted by `f`, or `-`.
 pub(crate) fn opt(v: Option<f64>, f: impl Fn(f64) -> String) -> String {
     v.map_or_else(|| "-".into(), f)
@@ -58,5 +76,17 @@ pub(crate) fn bytes(b: u64) -> String {
         format!("{:.1} KiB", b as f64 / 1024.0)
     } else {
         format!("{b} B")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn seconds_keep_three_significant_digits() {
+        assert_eq!(super::secs(0.012_345), "0.0123");
+        assert_eq!(super::secs(0.000_023_4), "0.0000234");
+        assert_eq!(super::secs(1.234_5), "1.23");
+        assert_eq!(super::secs(123.4), "123");
+        assert_eq!(super::secs(0.0), "0");
     }
 }

@@ -620,6 +620,21 @@ fn stats(p: &Pick, reference: &Run) -> String {
                 crate::fmt::noisy_mark(t)
             ),
         ));
+        rows.push(("repetitions", crate::experiments::matrix::repetitions(t)));
+    }
+    if let Some(t) = &r.device_seconds {
+        rows.push((
+            "device time",
+            format!(
+                "{}{}",
+                seconds(t.median),
+                if r.software_device {
+                    " (software adapter)"
+                } else {
+                    ""
+                }
+            ),
+        ));
     }
     if let Some(m) = r.mrays_per_s {
         rows.push(("Mrays/s", format!("{m:.2}")));

@@ -15,6 +15,7 @@ pub mod images;
 pub mod machine;
 mod markdown;
 pub mod results;
+pub mod rounds;
 pub mod stats;
 mod verdict;
 
@@ -28,8 +29,20 @@ use raybench_registry::interference;
 use raybench_registry::progress::Progress;
 use raybench_registry::{BACKENDS, Backend, Roles, backend};
 use results::{Results, Shard};
+use rounds::Repeat;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+
+/// The shortest timed sample of `--quick` (seconds): a workload shorter than this is run
+/// several times within one sample.
+pub const MIN_SAMPLE_QUICK: f64 = 0.015;
+/// The shortest timed sample of the full run (seconds).
+pub const MIN_SAMPLE_FULL: f64 = 0.1;
+/// Seconds of samples a backend may spend on one workload of `--quick` beyond the minimum
+/// repetitions, looking for a narrow interval ([`Repeat::Auto`]).
+pub const BUDGET_QUICK: f64 = 0.1;
+/// [`BUDGET_QUICK`] for the full run.
+pub const BUDGET_FULL: f64 = 1.0;
 
 /// The names of the scaling experiments, in the order they run (`--experiments`).
 #[must_use]
@@ -51,10 +64,28 @@ pub fn run(opts: &Options) -> Result<Results> {
     if !(16..=4096).contains(&size) {
         bail!("--size must be in 16..=4096");
     }
-    let repeat = opts.repeat.unwrap_or(if opts.quick { 3 } else { 5 });
-    if !(1..=100).contains(&repeat) {
-        bail!("--repeat must be in 1..=100");
+    let policy = rounds::Policy {
+        repeat: opts.repeat.unwrap_or(Repeat::Auto),
+        min_sample: opts.min_sample.unwrap_or(if opts.quick {
+            MIN_SAMPLE_QUICK
+        } else {
+            MIN_SAMPLE_FULL
+        }),
+        budget: if opts.quick {
+            BUDGET_QUICK
+        } else {
+            BUDGET_FULL
+        },
+    };
+    if let Repeat::Fixed(n) = policy.repeat
+        && !(1..=100).contains(&n)
+    {
+        bail!("--repeat must be auto or in 1..=100");
     }
+    if !(0.0..=10.0).contains(&policy.min_sample) {
+        bail!("--min-sample must be in 0..=10000 milliseconds");
+    }
+    let repeat = policy.repeat.minimum();
     let mut chosen: Vec<&'static Backend> = match &opts.backends {
         Some(names) => names
             .iter()
@@ -121,6 +152,7 @@ pub fn run(opts: &Options) -> Result<Results> {
         modes: &modes,
         size,
         repeat,
+        policy,
         budget: if opts.quick {
             NAIVE_BUDGET_QUICK
         } else {
@@ -155,6 +187,7 @@ pub fn run(opts: &Options) -> Result<Results> {
     let started = machine::now_utc();
     let wall = Instant::now();
     let load_before = interference::load_average();
+    let use_before = interference::MachineUse::now();
     let mut results = Results {
         schema: results::SCHEMA.into(),
         raybench_version: env!("CARGO_PKG_VERSION").into(),
@@ -167,6 +200,11 @@ pub fn run(opts: &Options) -> Result<Results> {
             command: opts.command.clone(),
             quick: opts.quick,
             load: None,
+            ranked_by_device: opts.device_time,
+            others: None,
+            pinned: opts.pin,
+            repeat: ctx.policy.repeat.name(),
+            min_sample: ctx.policy.min_sample,
         }],
         ..Results::default()
     };
@@ -200,6 +238,10 @@ pub fn run(opts: &Options) -> Result<Results> {
     results.shards[0].load = load_before
         .zip(interference::load_average())
         .map(|(before, after)| [before, after]);
+    results.shards[0].others = use_before
+        .zip(interference::MachineUse::now())
+        .and_then(|(before, after)| after.others_since(&before))
+        .map(|o| [o.share, o.steal]);
     results.fit();
     let appendix = before.as_ref().map(|(before, name)| {
         baseline::markdown(

@@ -51,13 +51,14 @@ pub fn report(results: &Results, charts: &Charts) -> String {
         let m = &sh.machine;
         let _ = writeln!(
             s,
-            "**Shard {}/{}**{}: {}, {} logical cores ({} worker threads); {}; GPU: {}; {}; {}. Started {} UTC, took {:.0} s{}.\n\n`{}`\n",
+            "**Shard {}/{}**{}: {}, {} logical cores ({} worker threads{}); {}; GPU: {}; {}; {}. Started {} UTC, took {:.0} s{}{}{}.\n\n`{}`\n",
             sh.index,
             sh.count,
             if sh.quick { " (quick)" } else { "" },
             m.cpu,
             m.cores,
             m.threads,
+            if sh.pinned { ", pinned to cores" } else { "" },
             m.isa,
             m.gpu,
             m.os,
@@ -68,6 +69,20 @@ pub fn report(results: &Results, charts: &Charts) -> String {
                 "; load average {:.2} before, {:.2} after (1 minute)",
                 before[0], after[0]
             )),
+            sh.others.map_or_else(String::new, |[share, steal]| format!(
+                "; other processes took {:.1}% of the CPUs' time meanwhile ({:.1}% stolen by the hypervisor)",
+                share * 100.0,
+                steal * 100.0
+            )),
+            if sh.repeat.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    "; repetitions {}, each at least {:.0} ms",
+                    sh.repeat,
+                    sh.min_sample * 1e3
+                )
+            },
             sh.command
         );
     }
@@ -77,8 +92,11 @@ pub fn report(results: &Results, charts: &Charts) -> String {
         "How to read this report",
         &format!(
             "Every backend renders the same scenes with the same settings. Times are the median of \
-             the timed repetitions after one counted warm-up; build time is \
-             separate. **Mrays/s** counts every ray traced (camera, secondary, shadow) over the \
+             the timed repetitions after a counted warm-up; the repetitions of a workload run in \
+             rounds, every backend once per round in a rotated order, each repetition lasting \
+             at least the minimum sample (a shorter workload runs several times within it, \
+             and the time per run is reported); one the machine interfered with is redone. \
+             `[lo-hi]` is the median's {:.0}% interval. Build time is separate. **Mrays/s** counts every ray traced (camera, secondary, shadow) over the \
              median time; **tests/ray** and **visits/ray** are ray/primitive tests and node or \
              cell visits per ray, counted in the warm-up. Ray casting runs on several ray sets: \
              `primary` (camera rays, as frames), `incoherent` (seeded random rays in the scene's \
@@ -95,11 +113,13 @@ pub fn report(results: &Results, charts: &Charts) -> String {
              relative: coincident surfaces, where each library breaks the tie its own way) as \
              matches, with a mean FLIP error of at most {PEER_MAX_FLIP}. PSNR is of the 8-bit sRGB \
              images (`inf`: identical); FLIP is NVIDIA's perceptual difference (0 = \
-             indistinguishable). **†** marks a noisy time: its timed repetitions spread by more \
-             than {:.0}% (slowest over fastest); compare such figures with care. A scene with \
+             indistinguishable). **†** marks a noisy time: its median's interval is wider than \
+             ±{:.0}%; **?** a single repetition (noise unknown); compare such figures with \
+             care. A scene with \
              several cameras renders every one of them in each repetition: its time is that of all \
              its cameras, its Mrays/s their rays over it (so the average over the cameras, \
              weighted by time), and a table per workload gives each camera's own figure.",
+            crate::stats::CONFIDENCE * 100.0,
             PEER_MIN_ID_MATCH * 100.0,
             crate::results::NOISY_HALF_WIDTH * 100.0
         ),

@@ -102,6 +102,26 @@ pub struct Shard {
     /// recorded.
     #[serde(default)]
     pub load: Option<[[f64; 3]; 2]>,
+    /// Whether the verdict ranks backends on another device by their device time
+    /// (`--device-time`) rather than by wall time, as every other backend is.
+    #[serde(default)]
+    pub ranked_by_device: bool,
+    /// The share of the machine's CPU time other processes took while the shard ran (busy
+    /// time not its own over all CPUs' time; hypervisor steal included), and of it the
+    /// hypervisor's steal; `null` where `/proc` does not tell and in older files.
+    #[serde(default)]
+    pub others: Option<[f64; 2]>,
+    /// Whether the worker threads were pinned to cores (`--pin`).
+    #[serde(default)]
+    pub pinned: bool,
+    /// How the timed repetitions were chosen: `auto` or the fixed count (`--repeat`);
+    /// empty in files written before it was recorded.
+    #[serde(default)]
+    pub repeat: String,
+    /// Seconds a timed repetition lasted at least (`--min-sample`); 0 in files written
+    /// before it was recorded.
+    #[serde(default)]
+    pub min_sample: f64,
 }
 
 impl Shard {
@@ -171,6 +191,15 @@ pub struct Timing {
     /// Repetitions discarded because the machine interfered, and run again.
     #[serde(default)]
     pub redone: u32,
+    /// Runs of the workload within one repetition (a repetition lasts at least the run's
+    /// minimum sample; its seconds are per run): 1 in files written before samples had a
+    /// minimum length.
+    #[serde(default = "one")]
+    pub per_sample: u32,
+}
+
+fn one() -> u32 {
+    1
 }
 
 /// The half-width of a median's interval, relative to the median, above which a timing is
@@ -189,16 +218,6 @@ pub enum Noise {
 }
 
 impl Timing {
-    /// `(max - min) / min` of the repetitions (0 for one repetition).
-    #[must_use]
-    pub fn spread(&self) -> f64 {
-        if self.min > 0.0 && self.max.is_finite() {
-            (self.max - self.min) / self.min
-        } else {
-            0.0
-        }
-    }
-
     /// The noise the median's interval shows; for files without intervals, the interval
     /// computed from the samples.
     #[must_use]
@@ -244,6 +263,7 @@ impl Timing {
             samples,
             contended: 0,
             redone: 0,
+            per_sample: 1,
         }
     }
 }
@@ -322,8 +342,20 @@ pub struct Run {
     pub memory_bytes: Option<u64>,
     /// Named sizes of the structure (nodes, leaves, cells, ...).
     pub structure: BTreeMap<String, u64>,
-    /// Render (or trace) time of the timed repetitions.
+    /// Render (or trace) time of the timed repetitions: the wall-clock time of the whole
+    /// call, for every backend.
     pub seconds: Option<Timing>,
+    /// For a backend on another device: the device's execution time of the same
+    /// repetitions (phase `gpu`: timestamp queries where the adapter has them).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub device_seconds: Option<Timing>,
+    /// For a backend on another device: the adapter it ran on (name, type, driver).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub device: Option<String>,
+    /// Whether that adapter is a software one (a CPU emulating a GPU, such as lavapipe):
+    /// its figures are then no GPU's, and the report says so wherever they appear.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub software_device: bool,
     /// Rays traced per repetition (all rays: camera, secondary, shadow).
     pub rays: Option<u64>,
     /// Rays per second over the median time, in millions.
@@ -337,9 +369,10 @@ pub struct Run {
     /// Files.
     pub images: Images,
     /// Seconds per phase, for backends on another device (the GPU): `prepare.build`,
-    /// `prepare.upload`, and the medians of the timed repetitions' `upload`, `gpu`
-    /// (execution, the time `seconds` and `mrays_per_s` use), `readback` and `render`
-    /// (the whole call). Empty for CPU backends.
+    /// `prepare.upload`, `warm-up` (the first call, which compiles the kernels it uses),
+    /// and the medians of the timed repetitions' `upload`, `gpu` (execution),
+    /// `readback` and `render` (the whole call, the time `seconds` and `mrays_per_s`
+    /// use). Empty for CPU backends.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub phases: BTreeMap<String, f64>,
     /// Each camera, for a scene with several (empty otherwise): the run's own figures are
@@ -570,11 +603,33 @@ impl Run {
     /// median).
     #[must_use]
     pub fn seconds_per_ray(&self) -> Vec<f64> {
-        match (&self.seconds, self.rays) {
+        self.seconds_per_ray_by(false)
+    }
+
+    /// [`Run::seconds_per_ray`], over the device time where `device` is set and the run
+    /// has one.
+    #[must_use]
+    pub fn seconds_per_ray_by(&self, device: bool) -> Vec<f64> {
+        let timing = match &self.device_seconds {
+            Some(t) if device => Some(t),
+            _ => self.seconds.as_ref(),
+        };
+        match (timing, self.rays) {
             (Some(t), Some(rays)) if rays > 0 => {
                 t.samples.iter().map(|s| s / rays as f64).collect()
             }
             _ => Vec::new(),
+        }
+    }
+
+    /// The backend's name as the report shows it: `wgpu (software adapter)` for one on a
+    /// software adapter.
+    #[must_use]
+    pub fn label(&self) -> String {
+        if self.software_device {
+            format!("{} (software adapter)", self.backend)
+        } else {
+            self.backend.clone()
         }
     }
 

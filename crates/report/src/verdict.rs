@@ -6,7 +6,7 @@
 
 use crate::fmt::noisy_mark;
 use crate::results::{Fit, NOISY_HALF_WIDTH, Noise, Results, Run, Timing};
-use crate::stats::{self, Fastest};
+use crate::stats::{self, Fastest, Pairing};
 use raybench_registry::Roles;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -59,28 +59,35 @@ fn factor(x: f64) -> String {
 
 /// How much faster `best` is than `other`, with the ratio's interval where both have
 /// repetitions enough: `1.95x [1.90-2.01] bvh`.
-fn speed_up(best: &Run, other: &Run) -> String {
-    let (ratio, interval) =
-        stats::ratio_interval(&other.seconds_per_ray(), &best.seconds_per_ray());
+fn speed_up(best: &Run, other: &Run, by_device: bool) -> String {
+    // The runs of one workload were timed in the same rounds: compared round by round.
+    let (ratio, interval) = Pairing::Rounds.ratio(
+        &other.seconds_per_ray_by(by_device),
+        &best.seconds_per_ray_by(by_device),
+    );
     match interval {
         Some(i) => format!(
             "{}x [{}-{}] {}",
             factor(ratio),
             factor(i.lo),
             factor(i.hi),
-            other.backend
+            other.label()
         ),
-        None => format!("{}x {}", factor(ratio), other.backend),
+        None => format!("{}x {}", factor(ratio), other.label()),
     }
 }
 
 /// The verdict's cell for one scene and workload kind: the fastest valid backend where its
 /// interval separates it from every other, else the backends that tie with it.
-fn fastest_cell(runs: &[&Run], baseline: &str, oracle: &str) -> String {
+/// With `by_device`, a backend on another device is timed by its device time.
+fn fastest_cell(runs: &[&Run], baseline: &str, oracle: &str, by_device: bool) -> String {
     let valid: Vec<&Run> = runs.iter().copied().filter(|r| valid(r)).collect();
-    let times: Vec<Vec<f64>> = valid.iter().map(|r| r.seconds_per_ray()).collect();
+    let times: Vec<Vec<f64>> = valid
+        .iter()
+        .map(|r| r.seconds_per_ray_by(by_device))
+        .collect();
     let refs: Vec<&[f64]> = times.iter().map(Vec::as_slice).collect();
-    let Some(verdict) = stats::fastest(&refs) else {
+    let Some(verdict) = stats::fastest(&refs, Pairing::Rounds) else {
         return if runs.is_empty() {
             String::new()
         } else {
@@ -95,23 +102,23 @@ fn fastest_cell(runs: &[&Run], baseline: &str, oracle: &str) -> String {
             format!(
                 "tie: {} within noise; ",
                 tied.iter()
-                    .map(|&i| format!("`{}`", valid[i].backend))
+                    .map(|&i| format!("`{}`", valid[i].label()))
                     .collect::<Vec<_>>()
                     .join(", ")
             ),
         ),
     };
-    let v = best.mrays_per_s.unwrap_or(0.0);
+    let v = stats::median(&best.seconds_per_ray_by(by_device)).map_or(0.0, |t| 1e-6 / t);
     let ups: Vec<String> = [baseline, oracle]
         .iter()
         .filter(|name| **name != best.backend)
         .filter_map(|name| valid.iter().find(|r| r.backend == *name))
         .filter(|r| r.mrays_per_s.is_some_and(|m| m > 0.0))
-        .map(|r| speed_up(best, r))
+        .map(|r| speed_up(best, r, by_device))
         .collect();
     format!(
         "{prefix}`{}` {v:.2}{}{}",
-        best.backend,
+        best.label(),
         match verdict {
             Fastest::Unknown(_) => " ? (noise unknown)",
             _ => best.seconds.as_ref().map_or("", noisy_mark),
@@ -132,15 +139,22 @@ fn fastest(results: &Results, s: &mut String) {
     }
     let baseline = raybench_registry::name_with(Roles::BASELINE);
     let oracle = raybench_registry::name_with(Roles::ORACLE);
+    let by_device = results.shards.iter().any(|s| s.ranked_by_device);
     let _ = writeln!(
         s,
-        "**Fastest backend** per scene and workload (Mrays/s over every ray traced; only \
+        "**Fastest backend** per scene and workload (Mrays/s over every ray traced, by the \
+         wall-clock time of the whole call{}; only \
          backends whose result passed the equality check count), with its speed-up over \
          `{baseline}` (the baseline structure) and `{oracle}` (the oracle, where it fitted \
          its time budget) and the {:.0}% interval of each speed-up. A backend is named \
          fastest only where the interval of its lead over every other excludes parity and the \
          lead is at least {:.0}%; otherwise the cell names the backends that **tie** within the noise. † marks a \
          noisy time, ? a single repetition (noise unknown).\n",
+        if by_device {
+            ", a backend on another device by its device time (`--device-time`)"
+        } else {
+            ", a GPU's too"
+        },
         stats::CONFIDENCE * 100.0,
         stats::MIN_EFFECT * 100.0
     );
@@ -163,7 +177,7 @@ fn fastest(results: &Results, s: &mut String) {
                     .iter()
                     .filter(|r| &r.scene == scene && &r.mode == mode && &r.ray_set == set)
                     .collect();
-                fastest_cell(&runs, baseline, oracle)
+                fastest_cell(&runs, baseline, oracle, by_device)
             })
             .collect();
         let _ = writeln!(s, "| {scene} | {} |", cells.join(" | "));

@@ -34,9 +34,15 @@ pub(crate) struct ReportCmd {
     /// Image side of the main matrix (default 256 with --quick, else 512).
     #[arg(long)]
     pub(crate) size: Option<u32>,
-    /// Timed repetitions after the warm-up (default 3 with --quick, else 5).
-    #[arg(long)]
-    pub(crate) repeat: Option<u32>,
+    /// Timed repetitions per backend and workload, taken in rounds that rotate the
+    /// backends: `auto` (the default) repeats from 6 to 30 times until the median's 95 %
+    /// interval is within 3 % or the workload's time budget is spent; N takes exactly N.
+    #[arg(long, value_parser = parse_repeat, value_name = "auto|N")]
+    pub(crate) repeat: Option<raybench_report::rounds::Repeat>,
+    /// Milliseconds a timed repetition lasts at least: a shorter workload is run several
+    /// times within it, and its time per run reported (default 15 with --quick, else 100).
+    #[arg(long, value_name = "MS")]
+    pub(crate) min_sample: Option<f64>,
     /// Leave out the scaling experiments.
     #[arg(long)]
     pub(crate) no_scaling: bool,
@@ -47,6 +53,15 @@ pub(crate) struct ReportCmd {
     /// Worker threads (default: all cores; at most 1024).
     #[arg(long)]
     pub(crate) threads: Option<usize>,
+    /// Pin each worker thread to a core (recorded in the report): steadier timings where
+    /// the scheduler would move threads between cores; no help against other processes on
+    /// the same cores (docs/report.md).
+    #[arg(long)]
+    pub(crate) pin: bool,
+    /// Rank a backend on another device (the GPU) by its device time (the kernels'
+    /// execution) rather than by the wall-clock time of the whole call.
+    #[arg(long)]
+    pub(crate) device_time: bool,
     /// An earlier report (its folder or its results.json) to set this run beside: REPORT.md
     /// gains a "Before and after" section (as `compare-results` prints).
     #[arg(long, value_name = "DIR")]
@@ -62,6 +77,17 @@ pub(crate) struct ReportCmd {
     /// the workload `cast-file` (the only ray-casting workload unless --rays names sets).
     #[arg(long, value_name = "FILE")]
     pub(crate) rays_file: Option<PathBuf>,
+}
+
+pub(crate) fn parse_repeat(s: &str) -> Result<raybench_report::rounds::Repeat, String> {
+    use raybench_report::rounds::Repeat;
+    match s.trim() {
+        "auto" => Ok(Repeat::Auto),
+        n => match n.parse::<u32>() {
+            Ok(n @ 1..=100) => Ok(Repeat::Fixed(n)),
+            _ => Err(format!("'{s}' is neither auto nor a count in 1..=100")),
+        },
+    }
 }
 
 pub(crate) fn parse_shard(s: &str) -> Result<(u32, u32), String> {
@@ -108,6 +134,7 @@ pub(crate) fn report(cmd: &ReportCmd, assets: &Path) -> Result<ExitCode> {
         shard: cmd.shard,
         size: cmd.size,
         repeat: cmd.repeat,
+        min_sample: cmd.min_sample.map(|ms| ms / 1000.0),
         scaling: !cmd.no_scaling,
         experiments: cmd.experiments.clone(),
         ray_sets: cmd.rays.clone(),
@@ -117,6 +144,8 @@ pub(crate) fn report(cmd: &ReportCmd, assets: &Path) -> Result<ExitCode> {
         threads: rayon::current_num_threads(),
         command: std::env::args().collect::<Vec<_>>().join(" "),
         baseline: cmd.baseline.clone(),
+        device_time: cmd.device_time,
+        pin: cmd.pin,
     };
     let results = raybench_report::run(&opts)?;
     let failed: Vec<String> = results

@@ -30,7 +30,7 @@ fn quick_experiment(dir: &Path, backends: &str, experiment: &str) -> Value {
     #[rustfmt::skip]
     let args = [
         "report", "--quick", "--scenes", "spheres", "--modes", "cast", "--backends", backends,
-        "--size", "16", "--repeat", "1", "--experiments", experiment,
+        "--size", "16", "--repeat", "1", "--min-sample", "0", "--experiments", experiment,
         "--out", dir.to_str().unwrap(),
     ];
     raybench_ok(&args);

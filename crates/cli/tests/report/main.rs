@@ -12,6 +12,7 @@ mod html;
 mod matrix;
 mod merge;
 mod skips;
+mod timing;
 
 use common::{raybench, raybench_ok};
 use std::path::{Path, PathBuf};
@@ -45,7 +46,7 @@ fn small_report(dir: &Path, extra: &[&str]) -> Output {
     #[rustfmt::skip]
     let mut args = vec![
         "report", "--scenes", "spheres,cornell-box", "--backends", "naive,bvh,packet",
-        "--size", "32", "--repeat", "1", "--no-scaling", "--out", dir.to_str().unwrap(),
+        "--size", "32", "--repeat", "1", "--min-sample", "0", "--no-scaling", "--out", dir.to_str().unwrap(),
     ];
     args.extend_from_slice(extra);
     raybench_ok(&args)

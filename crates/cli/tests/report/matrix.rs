@@ -149,7 +149,7 @@ object = [
         #[rustfmt::skip]
         let mut args = vec![
             "--scenes", &scene, "--backends", "naive,bvh", "--modes", "cast",
-            "--size", "24", "--repeat", "2", "--no-scaling",
+            "--size", "24", "--repeat", "2", "--min-sample", "0", "--no-scaling",
         ];
         args.extend_from_slice(extra);
         report(out, &args)
@@ -246,7 +246,7 @@ fn report_replays_a_ray_file() {
         #[rustfmt::skip]
         let mut args = vec![
             "--scenes", "spheres", "--backends", "naive,bvh", "--modes", "cast", "--size", "16",
-            "--repeat", "1", "--no-scaling", "--rays-file", file.to_str().unwrap(),
+            "--repeat", "1", "--min-sample", "0", "--no-scaling", "--rays-file", file.to_str().unwrap(),
         ];
         args.extend_from_slice(&extra);
         assert_success(&report(&run_dir, &args));

@@ -24,6 +24,8 @@ fn skipped_scenes_and_experiments_are_listed_once() {
             "16",
             "--repeat",
             "1",
+            "--min-sample",
+            "0",
             "--experiments",
             "pixels",
             "--out",
@@ -116,7 +118,7 @@ fn a_backend_that_did_not_run_is_marked_in_the_charts() {
         #[rustfmt::skip]
         let args = [
             "report", "--scenes", &scenes, "--backends", "naive,wgpu,wgpu-cwbvh",
-            "--modes", "cast", "--size", "16", "--repeat", "1", "--no-scaling",
+            "--modes", "cast", "--size", "16", "--repeat", "1", "--min-sample", "0", "--no-scaling",
             "--out", out.to_str().unwrap(),
         ];
         let out = cmd.args(args).output().expect("raybench runs");
@@ -138,8 +140,33 @@ fn a_backend_that_did_not_run_is_marked_in_the_charts() {
         };
         if status("spheres") == "ok" {
             assert_eq!(status("bilinear"), "ok", "{gpu} on bilinear");
+            // Wall time and device time both; a software adapter named as such wherever
+            // the backend's figures appear.
+            let run = runs
+                .iter()
+                .find(|r| r["backend"] == gpu && r["scene"] == "spheres")
+                .unwrap();
+            assert!(
+                run["device_seconds"]["median"].as_f64() > Some(0.0),
+                "{run}"
+            );
+            assert!(
+                run["device"].as_str().is_some_and(|d| !d.is_empty()),
+                "{run}"
+            );
+            let software = run["software_device"] == true;
+            let machine_gpu = r["shards"][0]["machine"]["gpu"].as_str().unwrap();
+            assert_eq!(software, machine_gpu.contains("(software"), "{machine_gpu}");
+            let label = if software {
+                format!("{gpu} (software adapter)")
+            } else {
+                gpu.to_string()
+            };
             let phases = &md[md.find("## GPU phases").expect("a GPU phases table")..];
-            assert!(phases.contains(&format!("| {gpu} |")), "{phases}");
+            assert!(phases.contains(&format!("| {label} |")), "{phases}");
+            assert!(phases.contains("| warm-up |"), "{phases}");
+            let table = &md[md.find("## Scenes").unwrap()..];
+            assert!(table.contains(&format!("| {label} |")), "{table}");
         } else {
             assert_eq!(status("spheres"), "unavailable", "{gpu} on spheres");
         }
@@ -178,7 +205,7 @@ fn a_quick_run_leaves_software_gpus_out() {
     #[rustfmt::skip]
     let out = report(&dir, &[
         "--quick", "--scenes", "spheres", "--modes", "cast", "--rays", "primary",
-        "--size", "16", "--repeat", "1", "--no-scaling",
+        "--size", "16", "--repeat", "1", "--min-sample", "0", "--no-scaling",
     ]);
     assert_success(&out);
     let r = results(&dir);
@@ -222,7 +249,7 @@ fn a_workload_without_rays_is_skipped_with_its_reason() {
     #[rustfmt::skip]
     let out = report(&out_dir, &[
         "--scenes", &scene, "--backends", "naive,bvh", "--modes", "cast",
-        "--rays", "primary,shadow", "--size", "16", "--repeat", "1", "--no-scaling",
+        "--rays", "primary,shadow", "--size", "16", "--repeat", "1", "--min-sample", "0", "--no-scaling",
     ]);
     assert_success(&out);
     let r = results(&out_dir);
@@ -261,6 +288,8 @@ fn a_scene_over_the_memory_budget_is_skipped() {
             "16",
             "--repeat",
             "1",
+            "--min-sample",
+            "0",
             "--no-scaling",
             "--out",
             dir.to_str().unwrap(),

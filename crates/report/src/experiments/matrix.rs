@@ -6,15 +6,15 @@ use super::{Chart, Experiment, Planned, Plot};
 use crate::charts::{Bar, Bars};
 use crate::ctx::{Ctx, PEER_MAX_FLIP, PEER_MIN_ID_MATCH, Views, Workload, skip};
 use crate::fmt::file_safe;
-use crate::fmt::{backends_in, bytes, noisy_mark, opt, section};
+use crate::fmt::{backends_in, bytes, label_in, noisy_mark, opt, secs, section};
 use crate::images::{self, Rgb8};
-use crate::results::{CameraRun, Equality, Images, Quality, Results, Run};
+use crate::results::{CameraRun, Equality, Images, Quality, Results, Run, Timing};
 use anyhow::Result;
 use raybench_core::ray_sets::DerivedParams;
 use raybench_core::{Mode, QualityParams, RaySet, Scene};
-use raybench_registry::measure::{Measured, explicit_rays, prepare};
+use raybench_registry::measure::{Measured, Prepared, explicit_rays, prepare};
 use raybench_registry::progress::Progress;
-use raybench_registry::{Backend, Roles, compare_hits};
+use raybench_registry::{Backend, Roles, TimedRenderer, compare_hits};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::sync::Arc;
@@ -174,7 +174,10 @@ impl Experiment for Matrix {
                             },
                         )
                         .collect();
-                    Bars { label: b, values }
+                    Bars {
+                        label: label_in(&runs, &b),
+                        values,
+                    }
                 })
                 .collect();
             out.push(Chart {
@@ -207,7 +210,8 @@ impl Experiment for Matrix {
                 }
             }
             let _ = writeln!(s, "## Summary: ray casting, camera rays, Mrays/s\n");
-            let _ = writeln!(s, "| scene | primitives | {} |", backends.join(" | "));
+            let labels: Vec<String> = backends.iter().map(|b| label_in(&summary, b)).collect();
+            let _ = writeln!(s, "| scene | primitives | {} |", labels.join(" | "));
             let _ = writeln!(s, "|---|---:|{}", "---:|".repeat(backends.len()));
             for sc in &scenes {
                 let prims = summary
@@ -248,7 +252,7 @@ impl Experiment for Matrix {
                     "Throughput relative to the yardstick peer `{base_name}` on the same rays, same \
                  run:\n"
                 );
-                let _ = writeln!(s, "| scene | {} |", backends.join(" | "));
+                let _ = writeln!(s, "| scene | {} |", labels.join(" | "));
                 let _ = writeln!(s, "|---|{}", "---:|".repeat(backends.len()));
                 for sc in &scenes {
                     let base = summary
@@ -284,15 +288,19 @@ impl Experiment for Matrix {
                 s,
                 "GPU phases",
                 "Seconds per phase on the GPU backend (median of the timed repetitions): the \
-             BVH built on the CPU and the scene uploaded once per scene; then per frame the \
+             BVH built on the CPU and the scene uploaded once per scene; the warm-up call \
+             (untimed: it compiles the kernels the timed calls use); then per frame the \
              parameters uploaded, the kernels' execution on the GPU (timestamp queries when \
              the adapter has them, else wall time around submit and wait), the image read \
-             back, and the whole call (the wall-clock time Mrays/s uses, as for every \
-             backend). On a software adapter the whole call is far longer than the kernels.",
+             back, and the whole call. Mrays/s (wall) is over the whole call, as for every \
+             backend, and ranks it in the verdict; Mrays/s (device) over the kernels' \
+             execution ranks it with `--device-time`. A backend on a software adapter (a CPU \
+             emulating a GPU) is marked so wherever its figures appear: they are no GPU's.",
             );
             let cols = [
                 "prepare.build",
                 "prepare.upload",
+                "warm-up",
                 "upload",
                 "gpu",
                 "readback",
@@ -300,27 +308,33 @@ impl Experiment for Matrix {
             ];
             let _ = writeln!(
                 s,
-                "| scene | workload | backend | {} | Mrays/s |",
+                "| scene | workload | backend | {} | Mrays/s (wall) | Mrays/s (device) |",
                 cols.join(" | ")
             );
-            let _ = writeln!(s, "|---|---|---|{}---:|", "---:|".repeat(cols.len()));
+            let _ = writeln!(s, "|---|---|---|{}---:|---:|", "---:|".repeat(cols.len()));
             for r in phased {
                 let cells: Vec<String> = cols
                     .iter()
                     .map(|c| opt(r.phases.get(*c).copied(), |v| format!("{v:.4}")))
                     .collect();
+                let device = r
+                    .device_seconds
+                    .as_ref()
+                    .zip(r.rays)
+                    .map(|(t, rays)| rays as f64 / t.median.max(1e-12) / 1e6);
                 let _ = writeln!(
                     s,
-                    "| {} | {} {} {}x{} spp {} | {} | {} | {} |",
+                    "| {} | {} {} {}x{} spp {} | {} | {} | {} | {} |",
                     r.scene,
                     r.mode,
                     r.ray_set,
                     r.width,
                     r.height,
                     r.spp,
-                    r.backend,
+                    r.label(),
                     cells.join(" | "),
-                    opt(r.mrays_per_s, |v| format!("{v:.2}"))
+                    opt(r.mrays_per_s, |v| format!("{v:.2}")),
+                    opt(device, |v| format!("{v:.2}"))
                 );
             }
             let _ = writeln!(s);
@@ -368,18 +382,18 @@ impl Experiment for Matrix {
             );
             let _ = writeln!(
                 s,
-                "| backend | build s | memory | render s [min-max] | Mrays/s | tests/ray | visits/ray | id match | hit diff | ties | max abs dt | PSNR dB | FLIP | pass |"
+                "| backend | build s | memory | render s [interval] | min s | repetitions | Mrays/s | tests/ray | visits/ray | id match | hit diff | ties | max abs dt | PSNR dB | FLIP | pass |"
             );
             let _ = writeln!(
                 s,
-                "|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"
+                "|---|---:|---:|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"
             );
             for r in &runs {
                 if r.status != "ok" {
                     let _ = writeln!(
                         s,
-                        "| {} | {}: {} ||||||||||||",
-                        r.backend,
+                        "| {} | {}: {} ||||||||||||||",
+                        r.label(),
                         r.status,
                         r.reason.as_deref().unwrap_or("")
                     );
@@ -388,17 +402,22 @@ impl Experiment for Matrix {
                 let e = r.equality.as_ref();
                 let _ = writeln!(
                     s,
-                    "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-                    r.backend,
+                    "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                    r.label(),
                     opt(r.build_seconds, |v| format!("{v:.3}")),
                     r.memory_bytes.map_or("-".into(), bytes),
                     r.seconds.as_ref().map_or("-".into(), |t| format!(
-                        "{:.4} [{:.4}-{:.4}]{}",
-                        t.median,
-                        t.min,
-                        t.max,
+                        "{} {}{}",
+                        secs(t.median),
+                        t.interval.map_or("[?]".into(), |[lo, hi]| format!(
+                            "[{}-{}]",
+                            secs(lo),
+                            secs(hi)
+                        )),
                         noisy_mark(t)
                     )),
+                    r.seconds.as_ref().map_or("-".into(), |t| secs(t.min)),
+                    r.seconds.as_ref().map_or("-".into(), repetitions),
                     opt(r.mrays_per_s, |v| format!("{v:.3}")),
                     opt(r.tests_per_ray, |v| format!("{v:.1}")),
                     opt(r.visits_per_ray, |v| format!("{v:.1}")),
@@ -650,19 +669,28 @@ fn run_scene(
         })
         .collect();
     let (workloads, explicit): (Vec<Workload>, Vec<Box<Views>>) = kept.into_iter().unzip();
-    let mut reference: Vec<Option<Reference>> = workloads.iter().map(|_| None).collect();
+    // Every backend prepared first, so that each workload's repetitions can be taken in
+    // rounds over all of them.
+    let prepared: Vec<(&Backend, Result<Prepared, String>, Option<Quality>)> = order
+        .iter()
+        .map(|b| {
+            progress.begin(format!("{} {}: build", scene.name, b.name));
+            let p = prepare(b, scene);
+            // Once per backend and scene: the EPO's samples are bounded (4096 points).
+            let quality = p.as_ref().ok().and_then(|p| {
+                p.renderer
+                    .quality(&QualityParams::default())
+                    .as_ref()
+                    .map(Quality::from)
+            });
+            (*b, p, quality)
+        })
+        .collect();
     let mut runs = Vec::new();
-    for b in order {
-        progress.begin(format!("{} {}: build", scene.name, b.name));
-        let prepared = prepare(b, scene);
-        // Once per backend and scene: the EPO's samples are bounded (4096 points).
-        let quality = prepared.as_ref().ok().and_then(|p| {
-            p.renderer
-                .quality(&QualityParams::default())
-                .as_ref()
-                .map(Quality::from)
-        });
-        for (wi, w) in workloads.iter().enumerate() {
+    for (wi, w) in workloads.iter().enumerate() {
+        let mut of_workload = Vec::with_capacity(prepared.len());
+        let mut timed: Vec<(usize, &Prepared)> = Vec::new();
+        for (b, p, _) in &prepared {
             let mut run = Run {
                 shard: 0,
                 scene: scene.name.clone(),
@@ -681,6 +709,9 @@ fn run_scene(
                 memory_bytes: None,
                 structure: BTreeMap::new(),
                 seconds: None,
+                device_seconds: None,
+                device: None,
+                software_device: false,
                 rays: None,
                 mrays_per_s: None,
                 tests_per_ray: None,
@@ -691,33 +722,38 @@ fn run_scene(
                 cameras: Vec::new(),
                 quality: None,
             };
-            let checked = match &prepared {
-                Ok(p) => p.renderer.supports_mode(w.mode).map(|()| p),
-                Err(reason) => Err(reason.clone()),
-            };
-            let (r, build, prepare_phases) = match checked {
-                Ok(p) => (&p.renderer, p.build, &p.phases),
-                Err(reason) => {
-                    let available = (b.make)().availability().is_ok();
-                    run.status = if available {
-                        "unsupported"
-                    } else {
-                        "unavailable"
-                    }
-                    .into();
-                    progress.step(&format!("{} {} {}: {reason}", scene.name, w.key(), b.name));
-                    run.reason = Some(reason);
-                    runs.push(run);
-                    continue;
-                }
-            };
-            progress.begin(format!("{} {} {}", scene.name, w.key(), b.name));
-            let (m, each) = ctx.measure_views(r.as_ref(), w, &explicit[wi])?;
-            run.build_seconds = Some(build);
-            run.quality.clone_from(&quality);
+            match p {
+                Ok(p) => match p.renderer.supports_mode(w.mode) {
+                    Ok(()) => timed.push((of_workload.len(), p)),
+                    Err(reason) => not_run(&mut run, b, reason),
+                },
+                Err(reason) => not_run(&mut run, b, reason.clone()),
+            }
+            if let Some(reason) = &run.reason {
+                progress.step(&format!("{} {} {}: {reason}", scene.name, w.key(), b.name));
+            }
+            of_workload.push(run);
+        }
+        progress.begin(format!(
+            "{} {}: {} backends in rounds",
+            scene.name,
+            w.key(),
+            timed.len()
+        ));
+        let renderers: Vec<&dyn TimedRenderer> =
+            timed.iter().map(|(_, p)| p.renderer.as_ref()).collect();
+        let measured = ctx.measure_all(&renderers, &w.settings(), &explicit[wi])?;
+        let mut reference: Option<Reference> = None;
+        for ((i, p), (m, each)) in timed.into_iter().zip(measured) {
+            let (b, _, quality) = &prepared[i];
+            let run = &mut of_workload[i];
+            let r = &p.renderer;
+            run.build_seconds = Some(p.build);
+            run.quality.clone_from(quality);
             // Phases only for backends that have more than build and render (a GPU).
-            if prepare_phases.0.len() > 1 || m.phases.0.len() > 1 {
-                run.phases = prepare_phases
+            if p.phases.0.len() > 1 || m.phases.0.len() > 1 {
+                run.phases = p
+                    .phases
                     .0
                     .iter()
                     .map(|(n, s)| (format!("prepare.{n}"), *s))
@@ -741,6 +777,10 @@ fn run_scene(
                     (c.node_visits > 0).then(|| c.node_visits as f64 / rays as f64);
             }
             run.seconds = Some(m.timing);
+            run.device_seconds = m.device;
+            run.device = r.device();
+            run.software_device = run.device.is_some()
+                && raybench_registry::software_device().as_deref() == run.device.as_deref();
             // The images are the first camera's.
             let image = each[0]
                 .warm
@@ -753,7 +793,7 @@ fn run_scene(
                 w.key(),
                 file_safe(b.name)
             );
-            match &reference[wi] {
+            match &reference {
                 None => {
                     if let Some(img) = &image {
                         let name = format!("images/{stem}.png");
@@ -772,7 +812,7 @@ fn run_scene(
                         pass: true,
                     });
                     run.cameras = camera_runs(scene, &explicit[wi], &each, None);
-                    reference[wi] = Some(Reference {
+                    reference = Some(Reference {
                         all: m.warm,
                         each: each.into_iter().map(|m| m.warm).collect(),
                         image,
@@ -798,8 +838,8 @@ fn run_scene(
                 b.name,
                 run.mrays_per_s.unwrap_or(0.0)
             ));
-            runs.push(run);
         }
+        runs.extend(of_workload);
     }
     Ok((runs, empty))
 }
@@ -860,6 +900,40 @@ fn equality(
         flip_mean: flip,
         pass,
     })
+}
+
+/// A timing's repetitions as the per-scene tables show them: `6`, with the runs per
+/// repetition, the redone and the contended ones where there are any
+/// (`9 (20 runs each, 2 redone, 1 contended)`).
+pub(crate) fn repetitions(t: &Timing) -> String {
+    let mut notes = Vec::new();
+    if t.per_sample > 1 {
+        notes.push(format!("{} runs each", t.per_sample));
+    }
+    if t.redone > 0 {
+        notes.push(format!("{} redone", t.redone));
+    }
+    if t.contended > 0 {
+        notes.push(format!("{} contended", t.contended));
+    }
+    if notes.is_empty() {
+        t.samples.len().to_string()
+    } else {
+        format!("{} ({})", t.samples.len(), notes.join(", "))
+    }
+}
+
+/// Marks `run` as not run: `unsupported` where `b` is available but cannot run it,
+/// `unavailable` where `b` cannot run on this machine.
+fn not_run(run: &mut Run, b: &Backend, reason: String) {
+    let available = (b.make)().availability().is_ok();
+    run.status = if available {
+        "unsupported"
+    } else {
+        "unavailable"
+    }
+    .into();
+    run.reason = Some(reason);
 }
 
 /// A workload left out because it has no rays: its key (`cast-shadow`) and why.

@@ -552,6 +552,7 @@ mod tests {
             shard: (1, 1),
             size: None,
             repeat: None,
+            min_sample: None,
             scaling: true,
             experiments: None,
             ray_sets: None,
@@ -561,6 +562,8 @@ mod tests {
             command: String::new(),
             baseline: None,
             rays_file: None,
+            device_time: false,
+            pin: false,
         };
         let chosen: Vec<&'static Backend> = raybench_registry::BACKENDS.iter().collect();
         let ctx = Ctx {
@@ -570,6 +573,11 @@ mod tests {
             modes: &Mode::ALL,
             size: 64,
             repeat: 1,
+            policy: crate::rounds::Policy {
+                repeat: crate::rounds::Repeat::Fixed(1),
+                min_sample: 0.0,
+                budget: 0.0,
+            },
             budget: 0.0,
         };
         f(&ctx)

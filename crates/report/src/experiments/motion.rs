@@ -205,8 +205,14 @@ impl Experiment for Motion {
                     )
                 };
                 progress.begin(format!("motion {name}: frame {f}: trace"));
-                let m_refit = ctx.measure(refitted.renderer.as_ref(), &w, None)?;
-                let m_rebuilt = ctx.measure(rebuilt.renderer.as_ref(), &w, None)?;
+                // In the same rounds, so that load drift reaches both alike.
+                let mut both = ctx.measure_all(
+                    &[refitted.renderer.as_ref(), rebuilt.renderer.as_ref()],
+                    &w.settings(),
+                    &[(None, None)],
+                )?;
+                let m_rebuilt = both.pop().expect("two measured").0;
+                let m_refit = both.pop().expect("two measured").0;
                 anyhow::ensure!(
                     m_refit.warm.ids == m_rebuilt.warm.ids
                         && m_refit
