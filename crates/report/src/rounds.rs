@@ -18,6 +18,11 @@ pub const MAX_AUTO: u32 = 30;
 /// [`Repeat::Auto`] aims for: 3 %.
 pub const TARGET_HALF_WIDTH: f64 = 0.03;
 
+/// Contended samples in a row after which a workload stops redoing them: the machine is
+/// busy throughout, not in a burst, and another try would only find it busy again. They
+/// are then kept and counted; a clean sample resumes the redoing.
+pub const PERSISTENT: u32 = 3;
+
 /// How many timed repetitions each backend gets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Repeat {
@@ -133,7 +138,8 @@ pub fn order(round: usize, n: usize) -> impl Iterator<Item = usize> {
 
 /// Times `n` contestants in rounds under `policy`: `sample(i)` takes one sample of
 /// contestant `i`. A contended sample is taken again, up to [`Repeat::minimum`] times per
-/// contestant; past that it is kept and counted.
+/// contestant and while fewer than [`PERSISTENT`] samples in a row were contended; past
+/// that it is kept and counted.
 ///
 /// # Errors
 /// The first error of `sample`.
@@ -144,6 +150,7 @@ pub fn run<X, E>(
 ) -> Result<Vec<Tally<X>>, E> {
     let mut tallies: Vec<Tally<X>> = (0..n).map(|_| Tally::default()).collect();
     let redo_budget = policy.repeat.minimum();
+    let mut streak = 0;
     for round in 0.. {
         let due: Vec<usize> = order(round, n)
             .filter(|&i| tallies[i].wants_more(policy))
@@ -156,7 +163,8 @@ pub fn run<X, E>(
             loop {
                 let s = sample(i)?;
                 t.elapsed += s.elapsed;
-                if s.contended && t.redone < redo_budget {
+                streak = if s.contended { streak + 1 } else { 0 };
+                if s.contended && t.redone < redo_budget && streak <= PERSISTENT {
                     t.redone += 1;
                     continue;
                 }
@@ -237,6 +245,17 @@ mod tests {
         })
         .unwrap();
         assert_eq!((t[0].seconds.len(), t[0].redone, t[0].contended), (2, 1, 0));
+        // A machine busy throughout: three tries, then every sample kept and counted.
+        let t = run::<(), ()>(2, &policy(Repeat::Fixed(3)), |_| {
+            Ok(Sample {
+                contended: true,
+                ..plain(0.01)
+            })
+        })
+        .unwrap();
+        let redone: u32 = t.iter().map(|t| t.redone).sum();
+        let contended: u32 = t.iter().map(|t| t.contended).sum();
+        assert_eq!((redone, contended), (PERSISTENT, 6));
     }
 
     #[test]
