@@ -23,7 +23,15 @@ pub struct Change {
     pub after: f64,
     /// `after / before`: above 1 is faster.
     pub ratio: f64,
-    /// The confidence interval of [`Change::ratio`] (`null` when either run has a single
+    /// The workload's common mode: the median of [`Change::ratio`] over its backends (where
+    /// three or more have repetitions enough on both sides and no interference), the
+    /// machine's drift between the runs together with any change common to every backend;
+    /// `null` where the workload has fewer backends.
+    pub common: Option<f64>,
+    /// [`Change::ratio`] over [`Change::common`] (the ratio itself without a common mode):
+    /// what the verdict judges.
+    pub relative: f64,
+    /// The confidence interval of [`Change::relative`] (`null` when either run has a single
     /// repetition).
     pub interval: Option<[f64; 2]>,
     /// The change exceeds the noise of both runs and the minimum effect.
@@ -44,10 +52,38 @@ pub struct Comparison {
     pub only_after: Vec<String>,
     /// Geometric mean of the ratios (`null` without common workloads).
     pub geomean_ratio: Option<f64>,
+    /// Geometric mean of the workloads' common modes ([`Change::common`]; `null` where no
+    /// workload has one).
+    pub geomean_common: Option<f64>,
+    /// The smallest change claimed, as a fraction: [`stats::MIN_EFFECT`], or the run-to-run
+    /// floor ([`FLOOR_SIGMAS`] robust standard deviations of the relative ratios) where it
+    /// is larger.
+    pub min_effect: f64,
+}
+
+/// Robust standard deviations of the relative ratios' logarithms (over the comparison's
+/// judged workloads) that a change must also exceed: the run-to-run floor. Two runs of one
+/// binary minutes apart differ by more than their own intervals say (memory layout, the
+/// host's other guests): on a 2-vCPU guest the relative ratios of two quiet runs had a
+/// median absolute log of 0.9 % and a tail to 17 %.
+pub const FLOOR_SIGMAS: f64 = 5.0;
+
+/// Judged workloads a comparison needs to estimate its run-to-run floor; with fewer the
+/// floor is [`stats::MIN_EFFECT`].
+pub const FLOOR_WORKLOADS: usize = 20;
+
+/// Backends a workload needs in both runs for its common mode: with two, one backend's
+/// change would move the median halfway and show in both.
+pub const COMMON_MODE_BACKENDS: usize = 3;
+
+/// The geometric mean of `values` (`None` for none).
+fn geomean(values: impl Iterator<Item = f64>) -> Option<f64> {
+    let logs: Vec<f64> = values.filter(|v| *v > 0.0).map(f64::ln).collect();
+    (!logs.is_empty()).then(|| (logs.iter().sum::<f64>() / logs.len() as f64).exp())
 }
 
 /// Whether `r`'s median rests on repetitions another process interfered with (at least half
-/// of those kept were contended: the redo budget was spent): its time measures the machine's
+/// of those kept were contended: the machine was busy throughout): its time measures the machine's
 /// load as much as the backend, so no change is claimed from it.
 fn interfered(r: &Run) -> bool {
     r.seconds
@@ -56,10 +92,19 @@ fn interfered(r: &Run) -> bool {
 }
 
 /// Compares the timed runs of `after` with those of `before`.
+///
+/// Two runs are minutes apart, and a shared machine's speed drifts over minutes (on a
+/// 2-vCPU guest, 5-25 % between two quiet runs of the same binary, by workload, with no
+/// other process in sight): each workload's ratios are therefore judged relative to its
+/// common mode, the median ratio over its backends, which were timed in the same rounds.
+/// A change common to every backend cannot be told from the machine's drift: it shows in
+/// the common mode, reported beside.
 #[must_use]
 pub fn compare(before: &Results, after: &Results) -> Comparison {
     let timed = |r: &&Run| r.status == "ok" && r.mrays_per_s.is_some();
     let mut out = Comparison::default();
+    // (workload without the backend, change, before's and after's seconds per ray)
+    let mut found: Vec<(String, Change, Vec<f64>, Vec<f64>)> = Vec::new();
     for a in after.runs.iter().filter(timed) {
         let key = a.key();
         let Some(b) = before.runs.iter().filter(timed).find(|b| b.key() == key) else {
@@ -73,27 +118,74 @@ pub fn compare(before: &Results, after: &Results) -> Comparison {
             continue;
         }
         let (before_t, after_t) = (b.seconds_per_ray(), a.seconds_per_ray());
-        // Speed is the inverse of time: before's time over after's is after's speed-up.
-        let (_, interval) = stats::ratio_interval(&before_t, &after_t);
+        let unknown = before_t.len() < 2 || after_t.len() < 2;
         let verdict = if interfered(a) || interfered(b) {
             "machine interfered"
+        } else if unknown {
+            "noise unknown"
         } else {
-            match stats::change(&after_t, &before_t) {
-                stats::Change::Faster => "faster",
-                stats::Change::Slower => "slower",
-                stats::Change::Same => "within noise",
-                stats::Change::Unknown => "noise unknown",
-            }
+            ""
         };
-        out.changes.push(Change {
-            workload: key,
-            before: vb,
-            after: va,
-            ratio: va / vb,
-            interval: interval.map(|i| [i.lo, i.hi]),
-            significant: matches!(verdict, "faster" | "slower"),
-            verdict,
+        let group = format!(
+            "{} {}-{} {}x{} {}",
+            a.scene, a.mode, a.ray_set, a.width, a.height, a.spp
+        );
+        found.push((
+            group,
+            Change {
+                workload: key,
+                before: vb,
+                after: va,
+                ratio: va / vb,
+                common: None,
+                relative: va / vb,
+                interval: None,
+                significant: false,
+                verdict,
+            },
+            before_t,
+            after_t,
+        ));
+    }
+    for (group, change, before_t, after_t) in &found {
+        let peers: Vec<f64> = found
+            .iter()
+            .filter(|(g, c, ..)| g == group && c.verdict.is_empty())
+            .map(|(_, c, ..)| c.ratio)
+            .collect();
+        let common = (peers.len() >= COMMON_MODE_BACKENDS)
+            .then(|| stats::median(&peers))
+            .flatten();
+        let drift = common.unwrap_or(1.0);
+        // Speed is the inverse of time: before's time over after's is after's speed-up.
+        let (_, interval) = stats::ratio_interval(before_t, after_t);
+        let interval = interval.map(|i| stats::Interval {
+            lo: i.lo / drift,
+            hi: i.hi / drift,
+            ..i
         });
+        out.changes.push(Change {
+            common,
+            relative: change.ratio / drift,
+            interval: interval.map(|i| [i.lo, i.hi]),
+            ..change.clone()
+        });
+    }
+    out.min_effect = run_to_run_floor(&out.changes).max(stats::MIN_EFFECT);
+    for c in &mut out.changes {
+        if !c.verdict.is_empty() {
+            continue;
+        }
+        let [lo, hi] = c.interval.expect("judged changes have intervals");
+        let e = out.min_effect;
+        c.verdict = if lo > 1.0 && c.relative >= 1.0 + e {
+            "faster"
+        } else if hi < 1.0 && c.relative <= 1.0 / (1.0 + e) {
+            "slower"
+        } else {
+            "within noise"
+        };
+        c.significant = matches!(c.verdict, "faster" | "slower");
     }
     for b in before.runs.iter().filter(timed) {
         let key = b.key();
@@ -101,15 +193,34 @@ pub fn compare(before: &Results, after: &Results) -> Comparison {
             out.only_before.push(key);
         }
     }
-    let logs: Vec<f64> = out
-        .changes
-        .iter()
-        .filter(|c| c.ratio > 0.0)
-        .map(|c| c.ratio.ln())
-        .collect();
-    out.geomean_ratio =
-        (!logs.is_empty()).then(|| (logs.iter().sum::<f64>() / logs.len() as f64).exp());
+    out.geomean_ratio = geomean(out.changes.iter().map(|c| c.ratio));
+    // One common mode per workload, not per backend.
+    let mut commons: Vec<(&str, f64)> = Vec::new();
+    for ((group, ..), c) in found.iter().zip(&out.changes) {
+        if let Some(m) = c.common
+            && !commons.iter().any(|(g, _)| *g == group)
+        {
+            commons.push((group, m));
+        }
+    }
+    out.geomean_common = geomean(commons.iter().map(|(_, m)| *m));
     out
+}
+
+/// [`FLOOR_SIGMAS`] robust standard deviations (1.4826 times the median absolute value) of
+/// the logarithms of the judged changes' relative ratios, as a fraction; 0 with fewer than
+/// [`FLOOR_WORKLOADS`] of them.
+fn run_to_run_floor(changes: &[Change]) -> f64 {
+    let logs: Vec<f64> = changes
+        .iter()
+        .filter(|c| c.verdict.is_empty() && c.relative > 0.0)
+        .map(|c| c.relative.ln().abs())
+        .collect();
+    if logs.len() < FLOOR_WORKLOADS {
+        return 0.0;
+    }
+    let mad = stats::median(&logs).unwrap_or(0.0);
+    (FLOOR_SIGMAS * 1.4826 * mad).exp() - 1.0
 }
 
 /// The comparison as a markdown section (a heading, a summary line, a table).
@@ -123,27 +234,39 @@ pub fn markdown(c: &Comparison, before: &str, after: &str) -> String {
     let _ = writeln!(
         s,
         "`{after}` against `{before}`: {} workloads in both, {faster} faster and {slower} slower \
-         (the {:.0}% interval of the speed ratio excludes 1 and the change is at least {:.0}%), \
+         (the {:.0}% interval of the speed ratio excludes 1 and the change is at least {:.1}%: \
+         the larger of {:.0}% and the run-to-run floor, {FLOOR_SIGMAS} robust standard \
+         deviations of the relative ratios over this comparison's workloads, what two runs \
+         of one binary differ by beyond their own intervals), \
          {unknown} with a single repetition on either side (noise unknown, no change claimed), \
          {interfered} where another process took the CPU through most repetitions of either \
          side (machine interfered, no change claimed), the rest within noise; geometric mean of the speed ratios {}. Workloads only before: \
-         {}; only after: {}.\n",
+         {}; only after: {}.\n\n\
+         Each ratio is judged relative to its workload's common mode (**all**: the median \
+         ratio over the workload's backends, where {COMMON_MODE_BACKENDS} or more have one), \
+         which takes out the machine's drift between the two runs (a shared machine's speed \
+         moves by several percent over minutes) and with it any change common to every \
+         backend, which cannot be told from that drift; geometric mean of the common modes \
+         {}.\n",
         c.changes.len(),
         stats::CONFIDENCE * 100.0,
+        c.min_effect * 100.0,
         stats::MIN_EFFECT * 100.0,
         c.geomean_ratio
             .map_or_else(|| "-".into(), |g| format!("{g:.3}")),
         c.only_before.len(),
-        c.only_after.len()
+        c.only_after.len(),
+        c.geomean_common
+            .map_or_else(|| "-".into(), |g| format!("{g:.3}")),
     );
     if c.changes.is_empty() {
         return s;
     }
     let _ = writeln!(
         s,
-        "| workload | before Mrays/s | after Mrays/s | after / before | interval | verdict |"
+        "| workload | before Mrays/s | after Mrays/s | after / before | all | relative | interval | verdict |"
     );
-    let _ = writeln!(s, "|---|---:|---:|---:|---|---|");
+    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---|---|");
     for x in &c.changes {
         let verdict = if x.significant {
             format!("**{}**", x.verdict)
@@ -155,8 +278,13 @@ pub fn markdown(c: &Comparison, before: &str, after: &str) -> String {
             .map_or_else(|| "-".into(), |[lo, hi]| format!("{lo:.3}-{hi:.3}"));
         let _ = writeln!(
             s,
-            "| {} | {:.3} | {:.3} | {:.3} | {interval} | {verdict} |",
-            x.workload, x.before, x.after, x.ratio
+            "| {} | {:.3} | {:.3} | {:.3} | {} | {:.3} | {interval} | {verdict} |",
+            x.workload,
+            x.before,
+            x.after,
+            x.ratio,
+            x.common.map_or_else(|| "-".into(), |m| format!("{m:.3}")),
+            x.relative
         );
     }
     let _ = writeln!(s);
@@ -253,7 +381,14 @@ mod tests {
         );
         assert!((c.changes[0].ratio - 1.005 / 0.505).abs() < 1e-9);
         let [lo, hi] = c.changes[0].interval.unwrap();
-        assert!(lo > 1.0 && lo <= c.changes[0].ratio && c.changes[0].ratio <= hi);
+        let relative = c.changes[0].relative;
+        assert!(lo > 1.0 && lo <= relative && relative <= hi);
+        // Three backends judged: their common mode is b's (unchanged).
+        let common = c.changes[0].common.unwrap();
+        assert!(
+            (common - 1.0 / 1.005).abs() < 1e-9
+                && (relative - c.changes[0].ratio / common).abs() < 1e-12
+        );
         assert_eq!(c.changes[3].interval, None);
         assert_eq!(c.only_before.len(), 1);
         assert_eq!(c.only_after.len(), 1);
@@ -265,5 +400,70 @@ mod tests {
         assert!(md.contains("1 with a single repetition"), "{md}");
         assert!(md.contains("1 where another process took the CPU"), "{md}");
         assert!(md.contains("| **faster** |"), "{md}");
+    }
+
+    /// The machine 10 % slower in the second run for every backend alike: no change is
+    /// claimed, the drift shows as the common mode; one backend 30 % slower on top of it is
+    /// slower. With two backends there is no common mode, and the drift counts.
+    #[test]
+    fn the_machine_s_drift_is_the_common_mode() {
+        let steady = |scale: f64| {
+            [1.0, 1.01, 0.99, 1.0, 1.02, 0.98]
+                .iter()
+                .map(|x| x * scale)
+                .collect::<Vec<_>>()
+        };
+        let before = results(["a", "b", "c", "d"].map(|n| run(n, steady(1.0))).to_vec());
+        let after = results(vec![
+            run("a", steady(1.1)),
+            run("b", steady(1.1)),
+            run("c", steady(1.1)),
+            run("d", steady(1.1 * 1.3)),
+        ]);
+        let c = compare(&before, &after);
+        let verdicts: Vec<&str> = c.changes.iter().map(|x| x.verdict).collect();
+        assert_eq!(
+            verdicts,
+            ["within noise", "within noise", "within noise", "slower"]
+        );
+        assert!((c.geomean_common.unwrap() - 1.0 / 1.1).abs() < 1e-9);
+        let md = markdown(&c, "old", "new");
+        assert!(
+            md.contains("geometric mean of the common modes 0.909"),
+            "{md}"
+        );
+        // Over twenty workloads the floor is measured: scattered by about 1 %, it stays at
+        // the minimum effect, and a 30 % change stands out of it.
+        let jitter = |i: usize| 1.0 + 0.01 * ((i * 7 % 5) as f64 - 2.0) / 2.0;
+        let names: Vec<String> = (0..24).map(|i| format!("b{i}")).collect();
+        let before24 = results(names.iter().map(|n| run(n, steady(1.0))).collect());
+        let after24 = results(
+            names
+                .iter()
+                .enumerate()
+                .map(|(i, n)| run(n, steady(jitter(i) * if i == 5 { 1.3 } else { 1.0 })))
+                .collect(),
+        );
+        let c = compare(&before24, &after24);
+        assert!(
+            c.min_effect >= stats::MIN_EFFECT && c.min_effect < 0.1,
+            "{}",
+            c.min_effect
+        );
+        let claimed: Vec<&str> = c
+            .changes
+            .iter()
+            .filter(|x| x.significant)
+            .map(|x| x.verdict)
+            .collect();
+        assert_eq!(claimed, ["slower"]);
+        // Two backends: judged as they are.
+        let two = |r: &Results| results(r.runs[..2].to_vec());
+        let c = compare(&two(&before), &two(&after));
+        assert!(
+            c.changes
+                .iter()
+                .all(|x| x.common.is_none() && x.verdict == "slower")
+        );
     }
 }

@@ -88,7 +88,8 @@ pub struct Tally<X> {
     pub extra: Vec<X>,
     /// Samples discarded because the machine interfered, and taken again.
     pub redone: u32,
-    /// Samples kept although the machine interfered (the redo budget was spent).
+    /// Samples kept although the machine interfered (the redo budget was spent, or the
+    /// machine was busy throughout: [`PERSISTENT`]).
     pub contended: u32,
     /// Seconds of samples taken, kept or not.
     pub elapsed: f64,

@@ -228,6 +228,14 @@ pub fn change(a: &[f64], b: &[f64]) -> Change {
 #[must_use]
 pub fn change_by(pairing: Pairing, a: &[f64], b: &[f64]) -> Change {
     let (ratio, interval) = pairing.ratio(a, b);
+    judge(ratio, interval)
+}
+
+/// What a ratio of times `a / b` and its interval say: [`Change::Faster`] where the
+/// interval lies below 1 and the ratio is at most `1 -` [`MIN_EFFECT`], [`Change::Slower`]
+/// likewise above, [`Change::Unknown`] without an interval.
+#[must_use]
+pub fn judge(ratio: f64, interval: Option<Interval>) -> Change {
     let Some(i) = interval else {
         return Change::Unknown;
     };

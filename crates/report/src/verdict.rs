@@ -339,9 +339,11 @@ fn noisy(results: &Results, s: &mut String) {
     parts.push(format!(
         "{redone} repetitions redone because the machine interfered (their threads waited \
          for a CPU more than {:.0}% of the time and more than {:.0} ms), {contended} kept \
-         contended when the redo budget was spent",
+         contended (the redo budget spent, or the machine busy throughout: {} contended in a \
+         row stop the redoing)",
         raybench_registry::interference::CONTENDED_WAIT_SHARE * 100.0,
-        raybench_registry::interference::CONTENDED_WAIT_SECONDS * 1e3
+        raybench_registry::interference::CONTENDED_WAIT_SECONDS * 1e3,
+        crate::rounds::PERSISTENT
     ));
     let points = results.scaling.len();
     if points > 0 {
