@@ -34,6 +34,19 @@ pub struct DiffStats {
     pub psnr: Option<f64>,
     /// Mean FLIP of the displayed images (0 identical, 1 most different).
     pub flip: f64,
+    /// Pixels of the reference with a channel that is not finite (NaN or infinite): they
+    /// are left out of every other figure, and fail any `--fail-above` gate.
+    pub non_finite_a: u64,
+    /// Pixels of the test image with a channel that is not finite.
+    pub non_finite_b: u64,
+}
+
+impl DiffStats {
+    /// Whether either image has a pixel that is not finite.
+    #[must_use]
+    pub fn has_non_finite(&self) -> bool {
+        self.non_finite_a + self.non_finite_b > 0
+    }
 }
 
 /// A metric `--fail-above` can test.
@@ -97,11 +110,19 @@ pub fn diff(
             a.width, a.height, b.width, b.height
         ));
     }
-    let n = (a.color.len() * 3).max(1) as f64;
     let (mut sum_a, mut sum_b, mut abs, mut max, mut sq, mut rel) =
         (0.0, 0.0, 0.0, 0.0f64, 0.0, 0.0);
+    let (mut non_finite_a, mut non_finite_b, mut counted) = (0u64, 0u64, 0usize);
     let mut per_pixel = Vec::with_capacity(a.color.len());
     for (ca, cb) in a.color.iter().zip(&b.color) {
+        let (fa, fb) = (ca.is_finite(), cb.is_finite());
+        non_finite_a += u64::from(!fa);
+        non_finite_b += u64::from(!fb);
+        if !(fa && fb) {
+            per_pixel.push(0.0);
+            continue;
+        }
+        counted += 1;
         let mut pixel = 0.0;
         for (x, y) in ca.to_array().into_iter().zip(cb.to_array()) {
             let (x, y) = (f64::from(x), f64::from(y));
@@ -116,6 +137,7 @@ pub fn diff(
         }
         per_pixel.push(pixel);
     }
+    let n = (counted * 3).max(1) as f64;
     let scale = exposure.exp2();
     let shown = |img: &LinearImage| {
         let scaled: Vec<_> = img.color.iter().map(|&c| c * scale).collect();
@@ -146,6 +168,8 @@ pub fn diff(
         rel_mse: rel / n,
         psnr: psnr(&ra, &rb),
         flip: mean_flip,
+        non_finite_a,
+        non_finite_b,
     };
     Ok((stats, error_map, flip_map))
 }
@@ -223,5 +247,24 @@ mod tests {
             color: vec![Vec3::ZERO; 4],
         };
         assert!(diff(&a, &c, 0.0).unwrap_err().contains("differ in size"));
+    }
+
+    #[test]
+    fn non_finite_pixels_are_counted_and_left_out() {
+        let a = image(vec![Vec3::ONE; 4]);
+        let b = image(vec![
+            Vec3::new(f32::NAN, 1.0, 1.0),
+            Vec3::ONE,
+            Vec3::splat(f32::INFINITY),
+            Vec3::splat(2.0),
+        ]);
+        let (s, _, _) = diff(&a, &b, 0.0).unwrap();
+        assert_eq!((s.non_finite_a, s.non_finite_b), (0, 2));
+        assert!(s.has_non_finite());
+        // Over the two finite pairs: one equal, one off by 1 in every channel.
+        assert_eq!((s.max_abs_error, s.mean_abs_error), (1.0, 0.5));
+        assert!(s.mean_b.is_finite() && s.mse.is_finite() && s.rel_mse.is_finite());
+        let (s, _, _) = diff(&b, &b, 0.0).unwrap();
+        assert_eq!((s.non_finite_a, s.non_finite_b), (2, 2));
     }
 }

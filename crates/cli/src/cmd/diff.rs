@@ -84,6 +84,13 @@ pub(crate) fn diff_images(cmd: &DiffCmd) -> Result<ExitCode> {
                 ))
         )?;
         outln!("mean FLIP       {:.6}", stats.flip)?;
+        if stats.has_non_finite() {
+            outln!(
+                "non-finite      {} (A)  {} (B) pixels, left out of the figures above",
+                stats.non_finite_a,
+                stats.non_finite_b
+            )?;
+        }
     }
     if let Some((e, f)) = &maps {
         error_map.save(e)?;
@@ -91,6 +98,15 @@ pub(crate) fn diff_images(cmd: &DiffCmd) -> Result<ExitCode> {
         eprintln!("wrote {} and {}", e.display(), f.display());
     }
     if let Some(limit) = cmd.fail_above {
+        // A pixel that is not a number passes no gate, whatever the metric says of the
+        // others.
+        if stats.has_non_finite() {
+            eprintln!(
+                "{} pixels of A and {} of B are not finite (NaN or infinite): above any limit",
+                stats.non_finite_a, stats.non_finite_b
+            );
+            return Ok(ExitCode::from(2));
+        }
         let value = cmd.metric.of(&stats);
         if value > limit {
             let name = Metric::ALL

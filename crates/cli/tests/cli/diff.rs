@@ -68,6 +68,38 @@ fn linear_output_and_diff() {
     }
     let o = diff(&[&path("a.exr"), &path("a.pfm"), "--fail-above", "0"]);
     assert!(o.status.success());
+    // A pixel that is not a number passes no gate, whatever the metric; it is counted.
+    let pfm = |name: &str, values: [f32; 6]| {
+        let mut bytes = b"PF\n2 1\n-1.0\n".to_vec();
+        bytes.extend(values.iter().flat_map(|v| v.to_le_bytes()));
+        write(&dir, name, &bytes)
+    };
+    let finite = pfm("finite.pfm", [0.5; 6]);
+    let nan = pfm("nan.pfm", [0.5, 0.5, 0.5, f32::NAN, 0.5, 0.5]);
+    for metric in ["flip", "mae", "max", "mse", "relmse"] {
+        let o = diff(&[&finite, &nan, "--fail-above", "1", "--metric", metric]);
+        assert_eq!(o.status.code(), Some(2), "{metric}");
+        let (stdout, stderr) = (
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr),
+        );
+        assert!(
+            stdout.contains("non-finite      0 (A)  1 (B) pixels"),
+            "{stdout}"
+        );
+        assert!(
+            stderr.contains("0 pixels of A and 1 of B are not finite"),
+            "{stderr}"
+        );
+    }
+    let counted = json(&diff(&[&nan, &finite, "--json"]));
+    assert_eq!(
+        (
+            counted["non_finite_a"].as_u64(),
+            counted["non_finite_b"].as_u64()
+        ),
+        (Some(1), Some(0))
+    );
     // Bad input: one error line each.
     let small = path("small.pfm");
     std::fs::write(&small, b"PF\n1 1\n-1.0\n\0\0\0\0\0\0\0\0\0\0\0\0").unwrap();
