@@ -10,7 +10,7 @@
 
 use raybench_core::{Ray, Vec3, limits};
 use std::fmt;
-use std::io::{Read, Write};
+use std::io::Read;
 use std::path::{Path, PathBuf};
 
 /// The first 8 bytes of every ray file.
@@ -225,19 +225,20 @@ fn read_up_to(file: &mut std::fs::File, buf: &mut [u8]) -> std::io::Result<usize
     Ok(got)
 }
 
-/// Writes `rays` to `path` (replacing it).
+/// Writes `rays` to `path` (replacing it) through [`raybench_render::write_file`]: whole or
+/// not at all.
 ///
 /// # Errors
 /// When the file cannot be written.
 pub fn write(path: &Path, rays: &[Ray], any_hit: bool) -> Result<(), RaysFileError> {
-    let io = |e: std::io::Error| RaysFileError {
+    raybench_render::write_file(path, &to_bytes(rays, any_hit)).map_err(|e| RaysFileError {
         path: path.to_owned(),
         offset: None,
-        cause: e.to_string(),
-    };
-    let mut file = std::io::BufWriter::new(std::fs::File::create(path).map_err(io)?);
-    file.write_all(&to_bytes(rays, any_hit)).map_err(io)?;
-    file.flush().map_err(io)
+        cause: match e {
+            raybench_render::OutputError::Io { cause, .. } => cause.to_string(),
+            other => other.to_string(),
+        },
+    })
 }
 
 #[cfg(test)]

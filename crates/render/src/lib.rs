@@ -17,7 +17,7 @@ mod read;
 
 pub use output::{
     ImageFormat, OutputError, check_image_path, check_png_path, id_color, partial_path, pfm_bytes,
-    srgb8, write_atomically, write_color, write_color_png, write_ids_png, write_rgb,
+    srgb8, write_atomically, write_color, write_color_png, write_file, write_ids_png, write_rgb,
 };
 pub use read::{LinearImage, ReadError, parse_pfm, read_linear};
 

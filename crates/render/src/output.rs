@@ -112,6 +112,28 @@ pub fn write_atomically<E: From<OutputError>>(
     })
 }
 
+/// Writes `bytes` to `path` through [`write_atomically`]: the temporary file is written
+/// whole and synced to the disk before the rename, so every error of the write (a full
+/// disk, a quota, a file-size limit) is reported, and nothing partial is left under
+/// either name. Every file raybench writes goes through here: encoders write to memory
+/// first (a buffered writer that flushes on drop would lose the last error).
+///
+/// # Errors
+/// [`OutputError::Io`] when the file cannot be created, written or synced;
+/// [`OutputError::Rename`].
+pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    use std::io::Write as _;
+    write_atomically(path, |tmp| {
+        let io = |cause| OutputError::Io {
+            path: path.to_owned(),
+            cause,
+        };
+        let mut file = std::fs::File::create(tmp).map_err(io)?;
+        file.write_all(bytes).map_err(io)?;
+        file.sync_all().map_err(io)
+    })
+}
+
 /// The file formats a frame's colour can be written in, chosen by the file's extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ImageFormat {
@@ -230,20 +252,15 @@ pub fn check_png_path(path: &Path) -> Result<(), OutputError> {
 /// # Errors
 /// When the file cannot be written or renamed.
 pub fn write_rgb(path: &Path, width: u32, height: u32, rgb: Vec<u8>) -> Result<(), OutputError> {
-    write_atomically(path, |tmp| {
-        image::save_buffer_with_format(
-            tmp,
-            &rgb,
-            width,
-            height,
-            image::ExtendedColorType::Rgb8,
-            image::ImageFormat::Png,
-        )
+    use image::ImageEncoder as _;
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png)
+        .write_image(&rgb, width, height, image::ExtendedColorType::Rgb8)
         .map_err(|cause| OutputError::Write {
             path: path.to_owned(),
             cause,
-        })
-    })
+        })?;
+    write_file(path, &png)
 }
 
 /// Writes the frame's colour (linear, clamped, sRGB-encoded) as a PNG.
@@ -273,23 +290,18 @@ pub fn write_color(frame: &Frame, path: &Path, exposure: f32) -> Result<(), Outp
             let data: Vec<f32> = scaled().flat_map(|c| c.to_array()).collect();
             let img = image::Rgb32FImage::from_raw(frame.width, frame.height, data)
                 .expect("a frame holds width x height colours");
-            write_atomically(path, |tmp| {
-                image::DynamicImage::ImageRgb32F(img)
-                    .save_with_format(tmp, image::ImageFormat::OpenExr)
-                    .map_err(|cause| OutputError::Write {
-                        path: path.to_owned(),
-                        cause,
-                    })
-            })
+            let mut exr = std::io::Cursor::new(Vec::new());
+            image::DynamicImage::ImageRgb32F(img)
+                .write_to(&mut exr, image::ImageFormat::OpenExr)
+                .map_err(|cause| OutputError::Write {
+                    path: path.to_owned(),
+                    cause,
+                })?;
+            write_file(path, exr.get_ref())
         }
         Some(ImageFormat::Pfm) => {
             let bytes = pfm_bytes(frame.width, frame.height, &scaled().collect::<Vec<_>>());
-            write_atomically(path, |tmp| {
-                std::fs::write(tmp, &bytes).map_err(|cause| OutputError::Io {
-                    path: path.to_owned(),
-                    cause,
-                })
-            })
+            write_file(path, &bytes)
         }
         None => check_image_path(path, &ImageFormat::ALL).map(|_| ()),
     }

@@ -306,10 +306,7 @@ pub fn draw(dir: &Path, chart: &Chart) -> Result<String, String> {
     let name = format!("{}.svg", chart.stem);
     let path = dir.join(&name);
     let text = svg(chart)?;
-    raybench_render::write_atomically::<anyhow::Error>(&path, |tmp| {
-        std::fs::write(tmp, text.as_bytes()).map_err(anyhow::Error::from)
-    })
-    .map_err(|e| format!("cannot write {}: {e:#}", path.display()))?;
+    raybench_render::write_file(&path, text.as_bytes()).map_err(|e| e.to_string())?;
     Ok(name)
 }
 

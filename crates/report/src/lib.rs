@@ -286,11 +286,9 @@ pub fn write(results: &Results, out: &Path, appendix: Option<&str>) -> Result<()
     Ok(())
 }
 
-/// Writes `text` to `path` through [`raybench_render::write_atomically`].
+/// Writes `text` to `path` through [`raybench_render::write_file`].
 fn write_text(path: &Path, text: &str) -> Result<()> {
-    raybench_render::write_atomically(path, |tmp| {
-        std::fs::write(tmp, text).with_context(|| format!("cannot write {}", path.display()))
-    })
+    Ok(raybench_render::write_file(path, text.as_bytes())?)
 }
 
 /// Joins the `results.json` of several report folders into one report in `out` (images are
@@ -334,8 +332,9 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Results> {
             {
                 let (from, to) = (dir.join(name), out.join(name));
                 if from != to {
-                    std::fs::copy(&from, &to)
+                    let bytes = std::fs::read(&from)
                         .with_context(|| format!("cannot copy {}", from.display()))?;
+                    raybench_render::write_file(&to, &bytes)?;
                 }
             }
         }

@@ -100,6 +100,25 @@ fn validate(path: &Path, root: &gltf::json::Root) -> Result<(), LoadError> {
             }
         }
     }
+    // What the gltf crate unwraps without checking (`Image::source`): an image is either
+    // in a buffer view, with its MIME type, or at a URI.
+    for (i, image) in root.images.iter().enumerate() {
+        match (&image.uri, &image.buffer_view, &image.mime_type) {
+            (None, None, _) => {
+                return Err(parse_err(
+                    path,
+                    format!("image {i} has neither a uri nor a bufferView"),
+                ));
+            }
+            (_, Some(_), None) => {
+                return Err(parse_err(
+                    path,
+                    format!("image {i} is in a bufferView but has no mimeType"),
+                ));
+            }
+            _ => {}
+        }
+    }
     let mut errors = Vec::new();
     root.validate(root, gltf::json::Path::new, &mut |at, e| {
         errors.push(format!("{}: {e}", at()));

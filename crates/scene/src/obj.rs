@@ -213,12 +213,22 @@ pub fn load_obj_file(path: &Path) -> Result<MeshData, LoadError> {
     let dir = path.parent().unwrap_or(Path::new("."));
     // The folder of each material's MTL file, in material order (map_Kd is relative to it).
     let mtl_dirs = RefCell::new(Vec::new());
-    parse_obj(
+    // A malformed material library is an error naming its line (tobj would panic on some
+    // faults and turn the others into "no materials"); tobj's loader callback can only
+    // say that it failed, so the error waits here.
+    let mtl_fault = RefCell::new(None);
+    let data = parse_obj(
         &bytes,
         path,
         |mtl| {
             let mtl = dir.join(mtl);
-            let result = load_mtl(&mtl);
+            let result = match load_mtl(&mtl) {
+                Ok(result) => result,
+                Err(fault) => {
+                    mtl_fault.borrow_mut().get_or_insert(fault);
+                    return Err(tobj::LoadError::MaterialParseError);
+                }
+            };
             if let Ok((ms, _)) = &result {
                 let mtl_dir = mtl.parent().map_or_else(|| dir.to_owned(), Path::to_owned);
                 mtl_dirs
@@ -228,18 +238,69 @@ pub fn load_obj_file(path: &Path) -> Result<MeshData, LoadError> {
             result
         },
         |i| mtl_dirs.borrow().get(i).cloned(),
-    )
+    );
+    match mtl_fault.into_inner() {
+        Some(fault) => Err(fault),
+        None => data,
+    }
 }
 
 /// Largest MTL file read (material libraries are small text files).
 const MAX_MTL_BYTES: u64 = 16 << 20;
 
 /// Reads an MTL file as `tobj` would, but through [`crate::io::read_text`]: a regular
-/// file of bounded size, with a byte-order mark accepted.
-fn load_mtl(path: &Path) -> tobj::MTLLoadResult {
-    let text = crate::io::read_text(path, MAX_MTL_BYTES, "material library")
-        .map_err(|_| tobj::LoadError::OpenFileFailed)?;
-    tobj::load_mtl_buf(&mut text.as_bytes())
+/// file of bounded size, with a byte-order mark accepted. An unreadable file gives tobj's
+/// "no materials"; a malformed one, checked before tobj parses it ([`check_mtl`]), the
+/// error naming its line.
+fn load_mtl(path: &Path) -> Result<tobj::MTLLoadResult, LoadError> {
+    let Ok(text) = crate::io::read_text(path, MAX_MTL_BYTES, "material library") else {
+        return Ok(Err(tobj::LoadError::OpenFileFailed));
+    };
+    check_mtl(&text).map_err(|message| LoadError::Parse {
+        path: path.to_owned(),
+        message: format!("malformed material library: {message}"),
+    })?;
+    Ok(tobj::load_mtl_buf(&mut text.as_bytes()))
+}
+
+/// The statements of an MTL file that tobj parses, checked as it would parse them: each
+/// colour (`Ka`, `Kd`, `Ks`, `Ke`) exactly three finite numbers, `Ns`, `Ni` and `d` one,
+/// `illum` one whole number, `newmtl` and every map a name. The first fault, with its line.
+fn check_mtl(text: &str) -> Result<(), String> {
+    let numbers = |key: &str, args: &[&str], n: usize| {
+        let ok = args.len() == n
+            && args
+                .iter()
+                .all(|a| a.parse::<f32>().is_ok_and(f32::is_finite));
+        (!ok).then(|| {
+            format!(
+                "`{key}` needs {n} finite number{}, found `{}`",
+                if n == 1 { "" } else { "s" },
+                args.join(" ")
+            )
+        })
+    };
+    for (i, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        let Some(key) = words.next() else { continue };
+        let args: Vec<&str> = words.collect();
+        let fault = match key {
+            "Ka" | "Kd" | "Ks" | "Ke" => numbers(key, &args, 3),
+            "Ns" | "Ni" | "d" => numbers(key, &args, 1),
+            "illum" => (args.len() != 1 || args[0].parse::<u32>().is_err())
+                .then(|| format!("`illum` needs one whole number, found `{}`", args.join(" "))),
+            "newmtl" => args.is_empty().then(|| "`newmtl` needs a name".to_string()),
+            "bump" | "map_Ka" | "map_Kd" | "map_Ks" | "map_Bump" | "map_bump" | "map_Ns"
+            | "map_ns" | "map_NS" | "map_d" => args
+                .is_empty()
+                .then(|| format!("`{key}` needs a file name")),
+            _ => None,
+        };
+        if let Some(fault) = fault {
+            return Err(format!("line {}: {fault}", i + 1));
+        }
+    }
+    Ok(())
 }
 
 /// Parses OBJ text from memory (`path` names it in errors); `mtllib` statements load no

@@ -446,3 +446,128 @@ fn silent_garbage_is_refused_or_warned() {
     assert!(out.exists());
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// Faults a dependency would panic on, or silently swallow, are errors naming the file and
+/// the place: a material library's short colour line (tobj unwraps it), its other malformed
+/// statements (tobj turned them into "no materials"), and a glTF image without a source or
+/// a buffer-view image without a MIME type (the gltf crate unwraps both).
+#[test]
+fn dependency_faults_are_errors_not_panics() {
+    let dir = tmp_dir("dependency-faults");
+    let obj = b"mtllib m.mtl\nusemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    let out = dir.join("o.png");
+    for (mtl, needle) in [
+        (
+            "newmtl m\nKd 0.5 0.5\n",
+            "line 2: `Kd` needs 3 finite numbers, found `0.5 0.5`",
+        ),
+        (
+            "newmtl m\nKd\n",
+            "line 2: `Kd` needs 3 finite numbers, found ``",
+        ),
+        ("newmtl m\n\nKs 1\n", "line 3: `Ks` needs 3 finite numbers"),
+        ("newmtl m\nKa 1 1\n", "line 2: `Ka` needs 3"),
+        ("newmtl m\nKe 1 2\n", "line 2: `Ke` needs 3"),
+        (
+            "newmtl m\nKd 1 1 1 1\n",
+            "line 2: `Kd` needs 3 finite numbers, found `1 1 1 1`",
+        ),
+        ("newmtl m\nKd a b c\n", "line 2: `Kd` needs 3"),
+        (
+            "newmtl m\nillum banana\n",
+            "line 2: `illum` needs one whole number",
+        ),
+        ("newmtl m\nNs nan\n", "line 2: `Ns` needs 1 finite number"),
+        ("newmtl m\nmap_Kd\n", "line 2: `map_Kd` needs a file name"),
+    ] {
+        write(&dir, "m.mtl", mtl.as_bytes());
+        let scene = write(&dir, "p.obj", obj);
+        #[rustfmt::skip]
+        let o = raybench(&["render", &scene, "--width", "8", "--height", "8", "--out", out.to_str().unwrap()]);
+        assert_clean_error(&o, &format!("m.mtl: malformed material library: {needle}"));
+    }
+    // A well-formed library still loads, and a missing one still means no materials.
+    write(&dir, "m.mtl", b"newmtl m\nKd 0.5 0.5 0.5\nNs 10\nillum 2\n");
+    let scene = write(&dir, "p.obj", obj);
+    render(&scene, (8, 8), &out, &[]);
+    std::fs::remove_file(dir.join("m.mtl")).unwrap();
+    render(&scene, (8, 8), &out, &[]);
+
+    let gltf = |images: &str| {
+        format!(
+            r#"{{"asset": {{"version": "2.0"}}, "images": {images}, "textures": [{{"source": 0}}],
+            "materials": [{{"pbrMetallicRoughness": {{"baseColorTexture": {{"index": 0}}}}}}]}}"#
+        )
+    };
+    for (images, needle) in [
+        ("[{}]", "image 0 has neither a uri nor a bufferView"),
+        (
+            r#"[{"bufferView": 0}]"#,
+            "image 0 is in a bufferView but has no mimeType",
+        ),
+    ] {
+        let scene = write(&dir, "i.gltf", gltf(images).as_bytes());
+        #[rustfmt::skip]
+        let o = raybench(&["render", &scene, "--width", "8", "--height", "8", "--out", out.to_str().unwrap()]);
+        assert_clean_error(&o, &format!("i.gltf: {needle}"));
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// A write that fails part-way (here a file-size limit of 1 KiB, as a full disk or a quota
+/// would) is one error line naming the file and a non-zero exit, and leaves neither the file
+/// nor its temporary one: PNG, OpenEXR and PFM colour, the id image, and a diff's maps.
+#[cfg(unix)]
+#[test]
+fn a_failed_write_is_an_error_and_leaves_no_file() {
+    let dir = tmp_dir("file-size-limit");
+    let limited = |args: &[&str]| {
+        // The limit's signal ignored (as a shell does for a background job), so that the
+        // write fails with "File too large" instead of killing the process.
+        Command::new("sh")
+            .arg("-c")
+            .arg("trap '' XFSZ; ulimit -f 1; exec \"$0\" \"$@\"")
+            .arg(env!("CARGO_BIN_EXE_raybench"))
+            .args(args)
+            .output()
+            .expect("sh runs")
+    };
+    let at = |name: &str| dir.join(name).to_str().unwrap().to_owned();
+    #[rustfmt::skip]
+    let size = ["--width", "128", "--height", "128"];
+    for name in ["x.png", "x.exr", "x.pfm"] {
+        let out = at(name);
+        let mut args = vec!["render", "spheres", "--out", &out];
+        args.extend(size);
+        assert_clean_error(&limited(&args), &format!("cannot write {out}"));
+    }
+    let (ids, small) = (at("ids.png"), at("small.pfm"));
+    let mut args = vec!["render", "spheres", "--ids", &ids, "--out", &small];
+    args.extend(size);
+    // The colour (written first) or the id image: whichever passes the limit first.
+    assert_clean_error(&limited(&args), "cannot write ");
+    // diff's maps, over the limit: the same frame at two exposures.
+    render("spheres", (128, 128), &dir.join("c.pfm"), &[]);
+    render(
+        "spheres",
+        (128, 128),
+        &dir.join("d.pfm"),
+        &["--exposure", "-1"],
+    );
+    let maps = at("maps");
+    let o = limited(&["diff", &at("c.pfm"), &at("d.pfm"), "--out", &maps]);
+    assert_clean_error(&o, &format!("cannot write {maps}/"));
+    let left: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .chain(std::fs::read_dir(&maps).unwrap())
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| {
+            n.starts_with('x')
+                || n.starts_with("ids")
+                || n.starts_with("small")
+                || n.contains("partial")
+        })
+        .collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
