@@ -281,7 +281,10 @@ fn check_mtl(text: &str) -> Result<(), String> {
         })
     };
     for (i, line) in text.lines().enumerate() {
-        let mut words = line.split_whitespace();
+        // A comment may follow a statement (`Ka 0.63 0.065 0.05 # Red`, in the Cornell
+        // box's library).
+        let statement = line.split_once('#').map_or(line, |(s, _)| s);
+        let mut words = statement.split_whitespace();
         let Some(key) = words.next() else { continue };
         let args: Vec<&str> = words.collect();
         let fault = match key {

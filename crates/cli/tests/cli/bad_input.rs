@@ -487,7 +487,11 @@ fn dependency_faults_are_errors_not_panics() {
         assert_clean_error(&o, &format!("m.mtl: malformed material library: {needle}"));
     }
     // A well-formed library still loads, and a missing one still means no materials.
-    write(&dir, "m.mtl", b"newmtl m\nKd 0.5 0.5 0.5\nNs 10\nillum 2\n");
+    write(
+        &dir,
+        "m.mtl",
+        b"# a library\nnewmtl m\nKd 0.5 0.5 0.5 # grey\nNs 10\nillum 2\n",
+    );
     let scene = write(&dir, "p.obj", obj);
     render(&scene, (8, 8), &out, &[]);
     std::fs::remove_file(dir.join("m.mtl")).unwrap();
