@@ -391,6 +391,7 @@ impl Measurement {
             backend: backend.into(),
             x,
             seconds: self.timing.median,
+            timing: Some(self.timing.clone()),
             rays: self.warm.rays,
             tests_per_ray: self
                 .warm

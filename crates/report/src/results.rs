@@ -662,6 +662,10 @@ pub struct ScalingPoint {
     pub x: f64,
     /// Median render seconds.
     pub seconds: f64,
+    /// The timed repetitions behind [`ScalingPoint::seconds`]: median, interval, minimum
+    /// and counts, as a run's `seconds`; absent in older files.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub timing: Option<Timing>,
     /// Rays traced.
     pub rays: u64,
     /// Ray/primitive tests per ray.
@@ -939,6 +943,7 @@ mod tests {
                 backend: "tree".into(),
                 x,
                 seconds: s,
+                timing: None,
                 rays: 1,
                 tests_per_ray: None,
                 load_seconds: None,

@@ -345,10 +345,23 @@ fn noisy(results: &Results, s: &mut String) {
         raybench_registry::interference::CONTENDED_WAIT_SECONDS * 1e3,
         crate::rounds::PERSISTENT
     ));
-    let points = results.scaling.len();
-    if points > 0 {
+    let points = &results.scaling;
+    if !points.is_empty() {
+        let wide = points
+            .iter()
+            .filter(|p| matches!(p.timing.as_ref().map(Timing::noise), Some(Noise::Wide(_))))
+            .count();
+        let without = points.iter().filter(|p| p.timing.is_none()).count();
         parts.push(format!(
-            "the scaling experiments' {points} points are single medians, not judged"
+            "of the scaling experiments' {} points, {wide} have a median's interval wider \
+             than ±{:.0}%{}",
+            points.len(),
+            NOISY_HALF_WIDTH * 100.0,
+            if without > 0 {
+                format!(" ({without} without repetitions recorded: older files)")
+            } else {
+                String::new()
+            }
         ));
     }
     let _ = writeln!(s, "**Noise**: {}.\n", parts.join("; "));

@@ -53,7 +53,20 @@ fn a_scaling_experiment_runs_and_is_written() {
         assert_eq!(p["experiment"], "spp");
         assert_eq!(p["series"], "cornell-box");
         assert_eq!(p["backend"], "bvh");
+        // The repetitions behind the median: one here (noise unknown), counted.
+        let t = &p["timing"];
+        assert_eq!(t["median"], p["seconds"], "{p}");
+        assert_eq!(t["samples"].as_array().map(Vec::len), Some(1), "{p}");
+        assert!(
+            t["interval"].is_null() && t["contended"].as_u64().is_some(),
+            "{p}"
+        );
     }
+    let noise = markdown(&dir);
+    assert!(
+        noise.contains("of the scaling experiments' 5 points, 0 have a median's interval"),
+        "{noise}"
+    );
     assert_eq!(r["fits"][0]["experiment"], "spp");
     let md = markdown(&dir);
     assert!(md.contains("## Scaling"), "{md}");

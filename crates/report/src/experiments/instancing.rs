@@ -403,6 +403,7 @@ mod tests {
                 backend: backend.into(),
                 x: 1000.0,
                 seconds,
+                timing: None,
                 rays: 4096,
                 tests_per_ray: None,
                 load_seconds: None,
