@@ -118,7 +118,6 @@ pub fn run(opts: &Options) -> Result<Results> {
         .iter()
         .flatten()
         .find(|c| !experiments().contains(&c.as_str()))
-        .filter(|_| opts.scaling)
     {
         bail!(
             "unknown experiment '{unknown}' (known: {})",

@@ -76,6 +76,10 @@ pub(crate) fn compare(cmd: &CompareCmd, assets: &Path) -> Result<ExitCode> {
     if cmd.repeat == 0 || cmd.repeat > 10_000 {
         bail!("--repeat must be in 1..=10000");
     }
+    // Named backends are checked before the scene loads: a typo need not wait for it.
+    if cmd.backends.is_some() {
+        chosen_backends(cmd.backends.as_deref(), 0.0).map_err(anyhow::Error::msg)?;
+    }
     let scene = load_scene(&cmd.scene, assets, &cmd.camera, cmd.flatten)?;
     check_mode_fits(&scene, settings.mode)?;
     let (ray_set, rays) = cmd.rays.batch(&scene, &settings)?;

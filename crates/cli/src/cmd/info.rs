@@ -51,6 +51,10 @@ pub(crate) struct InfoCmd {
 }
 
 pub(crate) fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
+    // Named backends are checked before the scene loads, as in `compare`.
+    if cmd.backends.is_some() {
+        chosen_backends(cmd.backends.as_deref(), 0.0).map_err(anyhow::Error::msg)?;
+    }
     let scene = load_scene(&cmd.scene, assets, &cmd.camera, cmd.flatten)?;
     check_mode_fits(&scene, cmd.mode)?;
     let g = &scene.geometry;

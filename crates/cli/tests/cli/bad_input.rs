@@ -575,3 +575,15 @@ fn a_failed_write_is_an_error_and_leaves_no_file() {
     assert!(left.is_empty(), "left behind: {left:?}");
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// A backend name that does not exist is refused before the scene loads (`loaded ...` is
+/// what loading prints).
+#[test]
+fn unknown_backends_are_refused_before_the_scene_loads() {
+    for command in ["compare", "info"] {
+        let o = raybench(&[command, "spheres", "--backends", "bvh,nope"]);
+        assert_clean_error(&o, "nope");
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(!stderr.contains("loaded"), "{command}: {stderr}");
+    }
+}

@@ -76,6 +76,17 @@ fn bad_report_options_are_refused_cleanly() {
         vec!["report", "--modes", "raster", "--out", d],
         vec!["report", "--rays", "sideways", "--out", d],
         vec!["report", "--ao-rays", "0", "--out", d],
+        // Checked whether the experiments run or not.
+        vec![
+            "report",
+            "--no-scaling",
+            "--experiments",
+            "bogus",
+            "--scenes",
+            "spheres",
+            "--out",
+            d,
+        ],
         vec!["merge", "/nonexistent-raybench-dir", "--out", d],
     ] {
         let out = raybench(&args);
