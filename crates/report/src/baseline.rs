@@ -1,8 +1,9 @@
 //! Before and after: a report's runs set beside an earlier `results.json`
 //! (`raybench compare-results OLD NEW`, `raybench report --baseline DIR`), the way a change
 //! is judged. Per workload (scene, mode, ray set, size, samples, backend) the speed ratio
-//! with its confidence interval, and a change only where that interval excludes parity and
-//! the change is at least [`crate::stats::MIN_EFFECT`] ([`crate::stats::change`]); where
+//! relative to the workload's common mode, with its confidence interval, and a change only
+//! where that interval excludes parity and the change exceeds the larger of
+//! [`crate::stats::MIN_EFFECT`] and the comparison's run-to-run floor ([`compare`]); where
 //! either run has a single repetition, the noise is unknown and no change is claimed.
 
 use crate::results::{Results, Run};
@@ -176,14 +177,17 @@ pub fn compare(before: &Results, after: &Results) -> Comparison {
         if !c.verdict.is_empty() {
             continue;
         }
-        let [lo, hi] = c.interval.expect("judged changes have intervals");
-        let e = out.min_effect;
-        c.verdict = if lo > 1.0 && c.relative >= 1.0 + e {
-            "faster"
-        } else if hi < 1.0 && c.relative <= 1.0 / (1.0 + e) {
-            "slower"
-        } else {
-            "within noise"
+        // Judged as a ratio of times, after over before: the inverse of the speed ratio.
+        let times = c.interval.map(|[lo, hi]| stats::Interval {
+            lo: 1.0 / hi,
+            hi: 1.0 / lo,
+            confidence: stats::CONFIDENCE,
+        });
+        c.verdict = match stats::judge(1.0 / c.relative, times, out.min_effect) {
+            stats::Change::Faster => "faster",
+            stats::Change::Slower => "slower",
+            stats::Change::Same => "within noise",
+            stats::Change::Unknown => "noise unknown",
         };
         c.significant = matches!(c.verdict, "faster" | "slower");
     }

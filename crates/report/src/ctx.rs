@@ -220,7 +220,7 @@ impl Ctx<'_> {
 
     /// Every renderer of `renderers` on the workload `settings` from each of `views`
     /// (indices into the scene's cameras, `None`: the scene's camera; with the rays of
-    /// each): per renderer, the measurement over every view ([`Measurement::sum`]) and each
+    /// each): per renderer, the measurement over every view ([`Measurement::of_views`]) and each
     /// view's.
     ///
     /// Every renderer is warmed up first: a counted run per view (its ids, `t` and counters
@@ -296,7 +296,6 @@ impl Ctx<'_> {
                         }
                     })
                     .collect();
-                let mut all = Measurement::sum(&each);
                 let counts = |t: Timing| Timing {
                     redone: tally.redone,
                     contended: tally.contended,
@@ -309,10 +308,13 @@ impl Ctx<'_> {
                     .iter()
                     .map(|x| x.iter().map(|(_, p)| p.get("gpu")).sum())
                     .collect();
-                all.device = device
-                    .filter(|d| !d.is_empty())
-                    .map(|d| counts(Timing::of(d)));
-                all.timing = counts(Timing::of(tally.seconds));
+                let all = Measurement::of_views(
+                    &each,
+                    counts(Timing::of(tally.seconds)),
+                    device
+                        .filter(|d| !d.is_empty())
+                        .map(|d| counts(Timing::of(d))),
+                );
                 (all, each)
             })
             .collect())
@@ -342,12 +344,7 @@ impl Ctx<'_> {
                     cpu_seconds: a.cpu_seconds + b.cpu_seconds,
                     wait_seconds: a.wait_seconds + b.wait_seconds,
                 });
-                for (name, secs) in m.phases.0 {
-                    match phases.0.iter_mut().find(|(n, _)| *n == name) {
-                        Some((_, sum)) => *sum += secs,
-                        None => phases.push(name, secs),
-                    }
-                }
+                add_phases(&mut phases, &m.phases);
             }
             let n = f64::from(*runs);
             for (_, s) in &mut phases.0 {
@@ -406,69 +403,65 @@ impl Measurement {
         }
     }
 
-    /// Several cameras' measurements of one workload as one: the warm-ups' ids, `t` and
-    /// colours concatenated in camera order, their rays and counters summed; the `i`-th
-    /// timed repetition is the sum of every camera's `i`-th (so its median is the time to
-    /// render every camera once), and each phase's median is summed likewise.
-    pub(crate) fn sum(each: &[Measurement]) -> Measurement {
-        if let [one] = each {
-            return Measurement {
-                warm: one.warm.clone(),
-                timing: one.timing.clone(),
-                device: one.device.clone(),
-                phases: one.phases.clone(),
-            };
-        }
-        let mut warm = Measured {
-            ids: Vec::new(),
-            t: Vec::new(),
-            rays: 0,
-            counters: None,
-            seconds: 0.0,
-            phases: raybench_core::Timings::default(),
-            color: None,
-            interference: None,
-        };
+    /// Several cameras' measurements of one workload as one, with the `timing` and
+    /// `device` time of the rounds that took them all: the warm-ups' ids, `t` and colours
+    /// concatenated in camera order, their rays and counters summed, and each phase's
+    /// median summed.
+    pub(crate) fn of_views(
+        each: &[Measurement],
+        timing: Timing,
+        device: Option<Timing>,
+    ) -> Measurement {
         let mut phases = raybench_core::Timings::default();
-        let reps = each
-            .iter()
-            .map(|m| m.timing.samples.len())
-            .min()
-            .unwrap_or(0);
-        let mut samples = vec![0.0; reps];
         for m in each {
-            warm.ids.extend_from_slice(&m.warm.ids);
-            warm.t.extend_from_slice(&m.warm.t);
-            warm.rays += m.warm.rays;
-            warm.seconds += m.warm.seconds;
-            if let Some(c) = &m.warm.counters {
-                use raybench_core::Counters as _;
-                warm.counters
-                    .get_or_insert_with(raybench_core::RayCounters::default)
-                    .merge(c);
-            }
-            if let Some(c) = &m.warm.color {
-                warm.color.get_or_insert_with(Vec::new).extend_from_slice(c);
-            }
-            for (i, s) in samples.iter_mut().enumerate() {
-                *s += m.timing.samples[i];
-            }
-            for (name, secs) in &m.phases.0 {
-                match phases.0.iter_mut().find(|(n, _)| n == name) {
-                    Some((_, total)) => *total += secs,
-                    None => phases.push(name.clone(), *secs),
+            add_phases(&mut phases, &m.phases);
+        }
+        let warm = if let [one] = each {
+            one.warm.clone()
+        } else {
+            let mut warm = Measured {
+                ids: Vec::new(),
+                t: Vec::new(),
+                rays: 0,
+                counters: None,
+                seconds: 0.0,
+                phases: raybench_core::Timings::default(),
+                color: None,
+                interference: None,
+            };
+            for m in each {
+                warm.ids.extend_from_slice(&m.warm.ids);
+                warm.t.extend_from_slice(&m.warm.t);
+                warm.rays += m.warm.rays;
+                warm.seconds += m.warm.seconds;
+                if let Some(c) = &m.warm.counters {
+                    use raybench_core::Counters as _;
+                    warm.counters
+                        .get_or_insert_with(raybench_core::RayCounters::default)
+                        .merge(c);
+                }
+                if let Some(c) = &m.warm.color {
+                    warm.color.get_or_insert_with(Vec::new).extend_from_slice(c);
                 }
             }
-        }
+            warm
+        };
         Measurement {
             warm,
-            device: None,
-            timing: Timing {
-                redone: each.iter().map(|m| m.timing.redone).sum(),
-                contended: each.iter().map(|m| m.timing.contended).sum(),
-                ..Timing::of(samples)
-            },
+            timing,
+            device,
             phases,
+        }
+    }
+}
+
+/// Adds each phase of `from` to the same-named phase of `into` (appended where `into` has
+/// none).
+fn add_phases(into: &mut raybench_core::Timings, from: &raybench_core::Timings) {
+    for (name, secs) in &from.0 {
+        match into.0.iter_mut().find(|(n, _)| n == name) {
+            Some((_, total)) => *total += secs,
+            None => into.push(name.clone(), *secs),
         }
     }
 }

@@ -63,6 +63,27 @@ pub(crate) fn secs(v: f64) -> String {
     format!("{v:.decimals$}")
 }
 
+/// A timing's repetitions as the per-scene tables show them: `6`, with the runs per
+/// repetition, the redone and the contended ones where there are any
+/// (`9 (20 runs each, 2 redone, 1 contended)`).
+pub(crate) fn repetitions(t: &crate::results::Timing) -> String {
+    let mut notes = Vec::new();
+    if t.per_sample > 1 {
+        notes.push(format!("{} runs each", t.per_sample));
+    }
+    if t.redone > 0 {
+        notes.push(format!("{} redone", t.redone));
+    }
+    if t.contended > 0 {
+        notes.push(format!("{} contended", t.contended));
+    }
+    if notes.is_empty() {
+        t.samples.len().to_string()
+    } else {
+        format!("{} ({})", t.samples.len(), notes.join(", "))
+    }
+}
+
 /// A value formatted by `f`, or `-`.
 pub(crate) fn opt(v: Option<f64>, f: impl Fn(f64) -> String) -> String {
     v.map_or_else(|| "-".into(), f)

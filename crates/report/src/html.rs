@@ -620,7 +620,7 @@ fn stats(p: &Pick, reference: &Run) -> String {
                 crate::fmt::noisy_mark(t)
             ),
         ));
-        rows.push(("repetitions", crate::experiments::matrix::repetitions(t)));
+        rows.push(("repetitions", crate::fmt::repetitions(t)));
     }
     if let Some(t) = &r.device_seconds {
         rows.push((

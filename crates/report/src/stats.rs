@@ -197,55 +197,30 @@ pub fn paired_ratio(a: &[f64], b: &[f64]) -> (f64, Option<Interval>) {
     (ratio, (n >= 2).then(|| median_interval(&ratios)).flatten())
 }
 
-/// How times are matched when two sets are compared.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Pairing {
-    /// Taken in the same rounds: compared round by round ([`paired_ratio`]).
-    Rounds,
-    /// Taken apart (two runs): their medians compared ([`ratio_interval`]).
-    Apart,
-}
-
-impl Pairing {
-    /// The ratio of `a` to `b` and its interval under this pairing.
-    #[must_use]
-    pub fn ratio(self, a: &[f64], b: &[f64]) -> (f64, Option<Interval>) {
-        match self {
-            Self::Rounds => paired_ratio(a, b),
-            Self::Apart => ratio_interval(a, b),
-        }
-    }
-}
-
-/// Whether times `a` differ from times `b` (taken apart) beyond both the noise (the
-/// ratio's interval excludes 1) and [`MIN_EFFECT`].
-#[must_use]
-pub fn change(a: &[f64], b: &[f64]) -> Change {
-    change_by(Pairing::Apart, a, b)
-}
-
-/// [`change`] under `pairing`.
-#[must_use]
-pub fn change_by(pairing: Pairing, a: &[f64], b: &[f64]) -> Change {
-    let (ratio, interval) = pairing.ratio(a, b);
-    judge(ratio, interval)
-}
-
 /// What a ratio of times `a / b` and its interval say: [`Change::Faster`] where the
-/// interval lies below 1 and the ratio is at most `1 -` [`MIN_EFFECT`], [`Change::Slower`]
-/// likewise above, [`Change::Unknown`] without an interval.
+/// interval lies below 1 and the ratio is at most `1 / (1 + min_effect)`,
+/// [`Change::Slower`] where it lies above 1 and the ratio is at least `1 + min_effect`,
+/// [`Change::Unknown`] without an interval.
 #[must_use]
-pub fn judge(ratio: f64, interval: Option<Interval>) -> Change {
+pub fn judge(ratio: f64, interval: Option<Interval>, min_effect: f64) -> Change {
     let Some(i) = interval else {
         return Change::Unknown;
     };
-    if i.hi < 1.0 && ratio <= 1.0 - MIN_EFFECT {
+    if i.hi < 1.0 && ratio <= 1.0 / (1.0 + min_effect) {
         Change::Faster
-    } else if i.lo > 1.0 && ratio >= 1.0 + MIN_EFFECT {
+    } else if i.lo > 1.0 && ratio >= 1.0 + min_effect {
         Change::Slower
     } else {
         Change::Same
     }
+}
+
+/// Whether times `a` differ from times `b` taken in the same rounds, round by round
+/// ([`paired_ratio`]), beyond the noise and [`MIN_EFFECT`].
+#[must_use]
+pub fn paired_change(a: &[f64], b: &[f64]) -> Change {
+    let (ratio, interval) = paired_ratio(a, b);
+    judge(ratio, interval, MIN_EFFECT)
 }
 
 /// Who is fastest on one workload.
@@ -262,11 +237,11 @@ pub enum Fastest {
     Unknown(usize),
 }
 
-/// The fastest of `times` (one set of repetitions per backend, compared under `pairing`;
-/// empty sets are ignored), or the backends that tie with it; `None` when no backend has
-/// times.
+/// The fastest of `times` (one set of repetitions per backend, taken in the same rounds
+/// and compared round by round; empty sets are ignored), or the backends that tie with it;
+/// `None` when no backend has times.
 #[must_use]
-pub fn fastest(times: &[&[f64]], pairing: Pairing) -> Option<Fastest> {
+pub fn fastest(times: &[&[f64]]) -> Option<Fastest> {
     let mut order: Vec<(usize, f64)> = times
         .iter()
         .enumerate()
@@ -280,7 +255,7 @@ pub fn fastest(times: &[&[f64]], pairing: Pairing) -> Option<Fastest> {
     let tied: Vec<usize> = order
         .iter()
         .map(|&(i, _)| i)
-        .filter(|&i| i == best || change_by(pairing, times[i], times[best]) != Change::Slower)
+        .filter(|&i| i == best || paired_change(times[i], times[best]) != Change::Slower)
         .collect();
     Some(if tied.len() == 1 {
         Fastest::Clear(best)
@@ -376,6 +351,12 @@ mod tests {
         assert_ne!(ratio_interval(&a, &b).1, ratio_interval(&b, &a).1);
     }
 
+    /// Two runs' times compared apart, as `compare-results` does before its common mode.
+    fn change(a: &[f64], b: &[f64]) -> Change {
+        let (ratio, interval) = ratio_interval(a, b);
+        judge(ratio, interval, MIN_EFFECT)
+    }
+
     #[test]
     fn changes_need_the_interval_and_the_minimum_effect() {
         let a: Vec<f64> = (0..10).map(|i| 1.0 + 0.001 * f64::from(i)).collect();
@@ -386,6 +367,9 @@ mod tests {
         // Separated by the intervals, but 1 % is below the minimum effect.
         assert_eq!(change(&slight, &a), Change::Same);
         assert_eq!(change(&[0.5], &a), Change::Unknown);
+        // A larger minimum effect claims less.
+        let (r, i) = ratio_interval(&a, &half);
+        assert_eq!(judge(r, i, 1.5), Change::Same);
         // The same distribution twice claims no change nearly always (an A/A test).
         let mut g = SplitMix(3);
         let trials = 300;
@@ -405,16 +389,14 @@ mod tests {
         let fast = [1.0, 1.01, 0.99, 1.02, 0.98, 1.0];
         let close = [1.01, 1.0, 1.02, 0.99, 1.03, 1.0];
         let slow = [2.0, 2.02, 1.98, 2.01, 1.99, 2.0];
-        for p in [Pairing::Apart, Pairing::Rounds] {
-            assert_eq!(fastest(&[&slow, &fast], p), Some(Fastest::Clear(1)));
-            assert_eq!(
-                fastest(&[&slow, &close, &fast], p),
-                Some(Fastest::Tie(vec![2, 1]))
-            );
-            assert_eq!(fastest(&[&slow, &[1.0]], p), Some(Fastest::Unknown(1)));
-            assert_eq!(fastest(&[&[], &slow], p), Some(Fastest::Clear(1)));
-            assert_eq!(fastest(&[], p), None);
-        }
+        assert_eq!(fastest(&[&slow, &fast]), Some(Fastest::Clear(1)));
+        assert_eq!(
+            fastest(&[&slow, &close, &fast]),
+            Some(Fastest::Tie(vec![2, 1]))
+        );
+        assert_eq!(fastest(&[&slow, &[1.0]]), Some(Fastest::Unknown(1)));
+        assert_eq!(fastest(&[&[], &slow]), Some(Fastest::Clear(1)));
+        assert_eq!(fastest(&[]), None);
     }
 
     #[test]
@@ -424,8 +406,8 @@ mod tests {
         let phase = [1.0, 1.0, 1.3, 1.3, 1.3, 1.0, 1.0, 1.3, 1.0, 1.0];
         let a: Vec<f64> = phase.iter().map(|p| p * 1.00).collect();
         let b: Vec<f64> = phase.iter().map(|p| p * 1.05).collect();
-        assert_eq!(change_by(Pairing::Apart, &b, &a), Change::Same);
-        assert_eq!(change_by(Pairing::Rounds, &b, &a), Change::Slower);
+        assert_eq!(change(&b, &a), Change::Same);
+        assert_eq!(paired_change(&b, &a), Change::Slower);
         let (ratio, interval) = paired_ratio(&b, &a);
         let interval = interval.unwrap();
         assert!((ratio - 1.05).abs() < 1e-12 && interval.lo > 1.04 && interval.hi < 1.06);

@@ -6,7 +6,7 @@
 
 use crate::fmt::noisy_mark;
 use crate::results::{Fit, NOISY_HALF_WIDTH, Noise, Results, Run, Timing};
-use crate::stats::{self, Fastest, Pairing};
+use crate::stats::{self, Fastest};
 use raybench_registry::Roles;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -61,7 +61,7 @@ fn factor(x: f64) -> String {
 /// repetitions enough: `1.95x [1.90-2.01] bvh`.
 fn speed_up(best: &Run, other: &Run, by_device: bool) -> String {
     // The runs of one workload were timed in the same rounds: compared round by round.
-    let (ratio, interval) = Pairing::Rounds.ratio(
+    let (ratio, interval) = stats::paired_ratio(
         &other.seconds_per_ray_by(by_device),
         &best.seconds_per_ray_by(by_device),
     );
@@ -87,7 +87,7 @@ fn fastest_cell(runs: &[&Run], baseline: &str, oracle: &str, by_device: bool) ->
         .map(|r| r.seconds_per_ray_by(by_device))
         .collect();
     let refs: Vec<&[f64]> = times.iter().map(Vec::as_slice).collect();
-    let Some(verdict) = stats::fastest(&refs, Pairing::Rounds) else {
+    let Some(verdict) = stats::fastest(&refs) else {
         return if runs.is_empty() {
             String::new()
         } else {

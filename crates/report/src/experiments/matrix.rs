@@ -6,9 +6,9 @@ use super::{Chart, Experiment, Planned, Plot};
 use crate::charts::{Bar, Bars};
 use crate::ctx::{Ctx, PEER_MAX_FLIP, PEER_MIN_ID_MATCH, Views, Workload, skip};
 use crate::fmt::file_safe;
-use crate::fmt::{backends_in, bytes, label_in, noisy_mark, opt, secs, section};
+use crate::fmt::{backends_in, bytes, label_in, noisy_mark, opt, repetitions, secs, section};
 use crate::images::{self, Rgb8};
-use crate::results::{CameraRun, Equality, Images, Quality, Results, Run, Timing};
+use crate::results::{CameraRun, Equality, Images, Quality, Results, Run};
 use anyhow::Result;
 use raybench_core::ray_sets::DerivedParams;
 use raybench_core::{Mode, QualityParams, RaySet, Scene};
@@ -900,27 +900,6 @@ fn equality(
         flip_mean: flip,
         pass,
     })
-}
-
-/// A timing's repetitions as the per-scene tables show them: `6`, with the runs per
-/// repetition, the redone and the contended ones where there are any
-/// (`9 (20 runs each, 2 redone, 1 contended)`).
-pub(crate) fn repetitions(t: &Timing) -> String {
-    let mut notes = Vec::new();
-    if t.per_sample > 1 {
-        notes.push(format!("{} runs each", t.per_sample));
-    }
-    if t.redone > 0 {
-        notes.push(format!("{} redone", t.redone));
-    }
-    if t.contended > 0 {
-        notes.push(format!("{} contended", t.contended));
-    }
-    if notes.is_empty() {
-        t.samples.len().to_string()
-    } else {
-        format!("{} ({})", t.samples.len(), notes.join(", "))
-    }
 }
 
 /// Marks `run` as not run: `unsupported` where `b` is available but cannot run it,
