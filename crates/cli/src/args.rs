@@ -84,7 +84,8 @@ impl RaysArgs {
 
 #[derive(Args, Clone)]
 pub(crate) struct FrameArgs {
-    /// Integrator.
+    /// Integrator: cast (ray casting), whitted (Whitted ray tracing), path (Monte Carlo
+    /// path tracing), mip or composite (voxel volumes: maximum intensity, compositing).
     #[arg(long, default_value = "cast", value_parser = parse_mode)]
     pub(crate) mode: Mode,
     /// Image width in pixels.
@@ -292,9 +293,10 @@ pub(crate) fn fmt_opt<T>(v: Option<T>, f: impl Fn(T) -> String) -> String {
 /// `--exposure EV` of `render` and `diff`.
 #[derive(Args)]
 pub(crate) struct Exposure {
-    /// Exposure in stops: colour is scaled by 2^EV (render: what is written, in every
-    /// format, 0 writing the radiance itself; diff: both images before PSNR and FLIP,
-    /// which compare them as displayed).
+    // `diff` replaces this help with its own (`main.rs`: both images are scaled before PSNR
+    // and FLIP).
+    /// Exposure in stops: the colour written, in every format, is scaled by 2^EV (0 writes
+    /// the radiance itself).
     #[arg(
         long = "exposure",
         default_value_t = 0.0,
