@@ -106,7 +106,7 @@ fn main() -> ExitCode {
     let cli = {
         use clap::{CommandFactory as _, FromArgMatches as _};
         let cmd = negative_numbers(Cli::command()).mut_subcommand("diff", |c| {
-            c.mut_arg("exposure", |a| {
+            c.mut_arg("ev", |a| {
                 a.help(
                     "Exposure in stops: both images are scaled by 2^EV before PSNR and FLIP, \
                      which compare them as displayed",

@@ -121,9 +121,10 @@ impl Camera {
         }
         // Points as every coordinate of a scene: within the f32 range the geometry resolves.
         for (name, v) in [("position", self.position), ("look_at", self.look_at)] {
-            if v.abs().max_element() > crate::limits::MAX_COORDINATE {
+            let largest = v.abs().max_element();
+            if largest > crate::limits::MAX_COORDINATE {
                 return Err(format!(
-                    "{name} {v} has a coordinate beyond {:e} in magnitude (the limit)",
+                    "{name} has a coordinate of magnitude {largest:e}, over the limit of {:e}",
                     crate::limits::MAX_COORDINATE
                 ));
             }
