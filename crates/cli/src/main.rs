@@ -189,7 +189,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
             (cli.memory_limit.is_some(), "--memory-limit"),
         ] {
             if given {
-                anyhow::bail!("{option} applies to the commands that load scenes; `{name}` loads none");
+                anyhow::bail!(
+                    "{option} applies to the commands that load scenes; `{name}` loads none"
+                );
             }
         }
     }

@@ -280,7 +280,10 @@ mod tests {
             "[######..................] 1/4  0m30s elapsed, ~1m30s left  x"
         );
         assert_eq!(clock(125.4), "2m05s");
-        assert_eq!(record_line(3, 12, 41.0, "bvh: spheres"), "3/12  0m41s  bvh: spheres");
+        assert_eq!(
+            record_line(3, 12, 41.0, "bvh: spheres"),
+            "3/12  0m41s  bvh: spheres"
+        );
         // An empty plan draws an empty bar, never a division by zero.
         assert!(status_line(0, 0, 0.0, "").starts_with("[........................] 0/0"));
     }

@@ -312,7 +312,9 @@ fn settings_line(
         policy.repeat.name(),
         policy.min_sample,
         opts.scaling,
-        opts.experiments.as_ref().map_or("all".into(), |e| e.join(",")),
+        opts.experiments
+            .as_ref()
+            .map_or("all".into(), |e| e.join(",")),
         opts.ray_sets.as_ref().map_or("all".into(), |r| {
             names(r.iter().map(|s| s.name()).collect())
         }),
@@ -434,7 +436,10 @@ pub fn merge(dirs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Result
 /// Checks that the shards of `inputs` form one plan: the same shard count, settings, binary
 /// and units, each shard once, every shard present. Returns the missing shards as skip
 /// records when `allow_partial`, else refuses them.
-fn check_plan(inputs: &[(&PathBuf, Results)], allow_partial: bool) -> Result<Vec<results::Skipped>> {
+fn check_plan(
+    inputs: &[(&PathBuf, Results)],
+    allow_partial: bool,
+) -> Result<Vec<results::Skipped>> {
     let shards: Vec<(&PathBuf, &Shard)> = inputs
         .iter()
         .flat_map(|(dir, r)| r.shards.iter().map(move |s| (*dir, s)))
@@ -518,7 +523,10 @@ fn check_plan(inputs: &[(&PathBuf, Results)], allow_partial: bool) -> Result<Vec
             kind: "shard".into(),
             name: format!("{i}/{}", first.count),
             status: "missing".into(),
-            reason: format!("not in the merge (--allow-partial): {} did not run", holds(i)),
+            reason: format!(
+                "not in the merge (--allow-partial): {} did not run",
+                holds(i)
+            ),
         })
         .collect())
 }

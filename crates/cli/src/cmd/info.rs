@@ -75,8 +75,11 @@ pub(crate) fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
             g.len()
         )?;
     }
-    for (kind, n) in g.count_by_kind() {
-        outln!("  {:<9} {n}", kind.name())?;
+    // Counts aligned after the longest kind's name ("analytic solid / CSG tree").
+    let kinds = g.count_by_kind();
+    let width = kinds.iter().map(|(k, _)| k.name().len()).max().unwrap_or(0);
+    for (kind, n) in kinds {
+        outln!("  {:<width$} {n}", kind.name())?;
     }
     outln!("volumes     {}", scene.volumes.len())?;
     outln!("objects     {}", scene.objects.len())?;

@@ -36,6 +36,17 @@ pub(crate) fn scenes(assets: &Path) -> Result<ExitCode> {
             ", which does not exist: set --assets or RAYBENCH_ASSETS"
         }
     )?;
+    // One name column for both lists, as wide as the longest name.
+    let generator_names: Vec<String> = GENERATORS
+        .iter()
+        .map(|g| format!("{}:ARG", g.name))
+        .collect();
+    let width = BUILTIN_SCENES
+        .iter()
+        .map(|b| b.name.len())
+        .chain(generator_names.iter().map(String::len))
+        .max()
+        .unwrap_or(0);
     for b in BUILTIN_SCENES {
         let missing: Vec<_> = b
             .assets
@@ -47,13 +58,12 @@ pub(crate) fn scenes(assets: &Path) -> Result<ExitCode> {
         } else {
             "missing-assets"
         };
-        outln!("{:<14} {:<15} {}", b.name, state, b.description)?;
+        outln!("{:<width$} {state:<14} {}", b.name, b.description)?;
     }
     outln!("# generators (NAME:ARG)")?;
-    for g in GENERATORS {
+    for (g, name) in GENERATORS.iter().zip(&generator_names) {
         outln!(
-            "{:<14} {:<15} {} (ARG = {}, at most {})",
-            format!("{}:ARG", g.name),
+            "{name:<width$} {:<14} {} (ARG = {}, at most {})",
             "ok",
             g.description,
             g.argument,

@@ -138,7 +138,9 @@ fn long_work_shows_progress_on_a_terminal_only() {
     assert!(!stderr.lines().any(|l| l.starts_with("1/1")), "{stderr}");
     let stderr = run(&report, Some("sometimes"));
     assert_eq!(
-        stderr.matches("warning: RAYBENCH_PROGRESS='sometimes' is ignored").count(),
+        stderr
+            .matches("warning: RAYBENCH_PROGRESS='sometimes' is ignored")
+            .count(),
         1,
         "{stderr}"
     );

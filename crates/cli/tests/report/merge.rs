@@ -69,11 +69,20 @@ fn merge_checks_the_shards_form_one_plan() {
         .collect();
     let [one, two_of_three, other, merged, partial] = [0, 1, 2, 3, 4].map(|i| &dirs[i]);
     small_report(one, &["--shard", "1/2"]);
-    assert_clean_error(&merge(&[one], merged), "shards missing from the merge: 2/2 (matrix cornell-box)");
+    assert_clean_error(
+        &merge(&[one], merged),
+        "shards missing from the merge: 2/2 (matrix cornell-box)",
+    );
     small_report(two_of_three, &["--shard", "2/3"]);
-    assert_clean_error(&merge(&[one, two_of_three], merged), "the shard counts differ (1/2 against 2/3)");
+    assert_clean_error(
+        &merge(&[one, two_of_three], merged),
+        "the shard counts differ (1/2 against 2/3)",
+    );
     small_report(other, &["--shard", "2/2", "--ao-rays", "3"]);
-    assert_clean_error(&merge(&[one, other], merged), "the settings differ (ao-rays=4 against ao-rays=3)");
+    assert_clean_error(
+        &merge(&[one, other], merged),
+        "the settings differ (ao-rays=4 against ao-rays=3)",
+    );
     assert!(!merged.join("results.json").exists());
     // Asked for, a partial merge lists the missing shard and what it holds.
     let d = |p: &Path| p.to_str().unwrap().to_string();
@@ -91,8 +100,14 @@ fn merge_checks_the_shards_form_one_plan() {
     assert!(markdown(partial).contains("shard `2/2` (missing)"));
     // Two scenes make two units: a third shard would hold none.
     let out = raybench(&[
-        "report", "--scenes", "spheres,cornell-box", "--no-scaling", "--shard", "3/3",
-        "--out", &d(merged),
+        "report",
+        "--scenes",
+        "spheres,cornell-box",
+        "--no-scaling",
+        "--shard",
+        "3/3",
+        "--out",
+        &d(merged),
     ]);
     assert_clean_error(&out, "shard 3 holds none; split it into at most 2 shards");
     for d in &dirs {

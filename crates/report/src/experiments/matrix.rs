@@ -10,8 +10,8 @@ use crate::fmt::{backends_in, bytes, label_in, noisy_mark, opt, repetitions, sec
 use crate::images::{self, Rgb8};
 use crate::results::{CameraRun, Equality, Images, Quality, Results, Run};
 use anyhow::Result;
-use raybench_core::ray_sets::DerivedParams;
 use raybench_core::integrator::HEADLIGHT_NOTE;
+use raybench_core::ray_sets::DerivedParams;
 use raybench_core::{Mode, QualityParams, RaySet, Scene};
 use raybench_registry::measure::{Measured, Prepared, explicit_rays, prepare};
 use raybench_registry::progress::Progress;
@@ -695,7 +695,10 @@ fn run_scene(
             if no_rays(views) {
                 progress.remove(order.len());
                 let file = w.replay.then_some(ctx.opts.rays_file.as_deref()).flatten();
-                empty.push((w.key(), raybench_registry::measure::no_rays(w.rays, scene, file)));
+                empty.push((
+                    w.key(),
+                    raybench_registry::measure::no_rays(w.rays, scene, file),
+                ));
                 false
             } else {
                 true
