@@ -31,6 +31,38 @@ pub(crate) fn not_a_file_message(meta: &std::fs::Metadata) -> String {
     format!("is {what}, not a regular file")
 }
 
+/// What is at `path`, when it is not a regular file that can be opened: `missing`, `a
+/// dangling symbolic link`, `a folder`, `a FIFO (named pipe)`, a symbolic link loop or
+/// another error in the system's words. `Ok` for a regular file.
+pub(crate) fn probe(path: &Path) -> Result<(), String> {
+    match std::fs::metadata(path) {
+        Ok(meta) if meta.is_file() => Ok(()),
+        Ok(meta) => Err(not_a_file_message(&meta)
+            .trim_start_matches("is ")
+            .to_owned()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            if std::fs::symlink_metadata(path).is_ok() {
+                Err("a symbolic link to nothing".into())
+            } else {
+                Err("missing".into())
+            }
+        }
+        Err(e) => Err(os_error(&e)),
+    }
+}
+
+/// An error of the system in words, naming a symbolic link loop as one (its text,
+/// "too many levels of symbolic links", does not say so on every system).
+pub(crate) fn os_error(e: &std::io::Error) -> String {
+    // ELOOP: 40 on Linux, 62 on macOS and the BSDs.
+    let eloop = if cfg!(target_os = "linux") { 40 } else { 62 };
+    if cfg!(unix) && e.raw_os_error() == Some(eloop) {
+        format!("a symbolic link loop ({e})")
+    } else {
+        e.to_string()
+    }
+}
+
 /// The error for a path that exists but is no regular file ([`not_a_file_message`]).
 pub(crate) fn not_a_file(path: &Path, meta: &std::fs::Metadata) -> LoadError {
     LoadError::Parse {

@@ -20,6 +20,16 @@ pub enum SampleFormat {
 }
 
 impl SampleFormat {
+    /// The name scene files give the type (`u16`).
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::U8 => "u8",
+            Self::U16 => "u16",
+            Self::F32 => "f32",
+        }
+    }
+
     /// Bytes per sample.
     #[must_use]
     pub fn bytes(self) -> u64 {
@@ -169,11 +179,18 @@ fn check_raw_count(
     Ok(count * format.bytes())
 }
 
+/// The error for a raw file of `len` bytes where `count` samples of `format` need another
+/// size: too short (truncated) or too long.
 fn size_mismatch(path: &Path, len: u64, count: u64, format: SampleFormat) -> LoadError {
     let expected = count * format.bytes();
+    let what = if len < expected { "short" } else { "long" };
     raw_err(
         path,
-        format!("raw file holds {len} bytes; {count} {format:?} samples need {expected}"),
+        format!(
+            "raw file holds {len} bytes, too {what} for {count} {} samples ({expected} bytes): \
+             check the declared dimensions and format",
+            format.name()
+        ),
     )
 }
 

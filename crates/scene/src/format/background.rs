@@ -67,9 +67,10 @@ pub(super) fn add(
                     "rotate must be finite and scale finite and at least 0".into(),
                 ));
             }
-            let path = ctx.resolve(&desc.map)?;
+            let path = ctx.resolve("map", &desc.map, &what)?;
             let context = format!("{}: {what}", ctx.file.display());
-            let (w, h, texels, negative) = read_map(&path, budget, &context)?;
+            let (w, h, texels, negative) =
+                read_map(&path, budget, &context).map_err(ctx.within(&what))?;
             if negative {
                 b.warn(format!(
                     "{context}: {} has negative texels, read as 0",
@@ -81,6 +82,7 @@ pub(super) fn add(
                     path: path.clone(),
                     message: "the map's radiance times the scale overflows f32".into(),
                 }
+                .within(&context)
             })?;
             b.environment(Arc::new(env));
             Ok(())
