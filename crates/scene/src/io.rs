@@ -100,6 +100,24 @@ pub(crate) fn strip_bom(bytes: &[u8]) -> &[u8] {
     bytes.strip_prefix(UTF8_BOM).unwrap_or(bytes)
 }
 
+/// `bytes` with every line end that is a lone carriage return (the classic Mac OS
+/// convention) made a line feed: the line-oriented text formats read here (OBJ, MTL,
+/// `.bpt`) accept CR, LF and CR LF line ends. (TOML defines its own line ends, and PLY's
+/// header is read by `ply-rs-bw`: they are not changed.)
+pub(crate) fn lone_cr_to_lf(bytes: &[u8]) -> std::borrow::Cow<'_, [u8]> {
+    let lone = |i: usize| bytes[i] == b'\r' && bytes.get(i + 1) != Some(&b'\n');
+    if !(0..bytes.len()).any(lone) {
+        return std::borrow::Cow::Borrowed(bytes);
+    }
+    let mut out = bytes.to_vec();
+    for (i, b) in out.iter_mut().enumerate() {
+        if lone(i) {
+            *b = b'\n';
+        }
+    }
+    std::borrow::Cow::Owned(out)
+}
+
 /// A path's extension in lower case (empty when it has none).
 pub(crate) fn extension(path: &Path) -> String {
     path.extension()
