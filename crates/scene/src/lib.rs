@@ -151,6 +151,28 @@ mod tests {
     use super::*;
     use raybench_core::Vec3;
 
+    /// A scene path that is a symbolic link loop says so (it was "file not found"); a
+    /// missing one is not found.
+    #[cfg(unix)]
+    #[test]
+    fn a_symbolic_link_loop_is_named() {
+        let dir = std::env::temp_dir().join(format!("raybench-loop-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let link = dir.join("loop.obj");
+        std::fs::remove_file(&link).ok();
+        std::os::unix::fs::symlink("loop.obj", &link).unwrap();
+        let e = load(link.to_str().unwrap(), &dir).unwrap_err().to_string();
+        assert!(e.contains("loop.obj: a symbolic link loop ("), "{e}");
+        let e = load_file(&link, &dir).unwrap_err().to_string();
+        assert!(e.contains("loop.obj: a symbolic link loop ("), "{e}");
+        let absent = dir.join("absent.obj");
+        let e = load(absent.to_str().unwrap(), &dir)
+            .unwrap_err()
+            .to_string();
+        assert!(e.ends_with("absent.obj: file not found"), "{e}");
+        std::fs::remove_dir_all(dir).ok();
+    }
+
     /// The default assets folder appears in messages: no `..` in it.
     #[test]
     fn the_default_assets_folder_is_normalised() {

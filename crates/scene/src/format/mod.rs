@@ -536,9 +536,17 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
             let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
             format!("line {line}, column {column}: ")
         });
+        let mut message = e.message().trim_end().to_owned();
+        // The parser's "duplicate key" names no key: its span is the key.
+        if message == "duplicate key"
+            && let Some(key) = e.span().and_then(|span| text.get(span))
+        {
+            let key = key.trim().trim_matches(['"', '\'']);
+            message = format!("`{key}` is given twice (a key or a table may appear once)");
+        }
         LoadError::Parse {
             path: ctx.file.clone(),
-            message: format!("{position}{}", e.message()),
+            message: format!("{position}{message}"),
         }
     })?;
     let mut budget = Reservation::new()?;
@@ -846,6 +854,29 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.contains("line 2: camera: unknown field `fovy`"), "{e}");
+    }
+
+    /// A key or table given twice is named, at its second line.
+    #[test]
+    fn duplicate_keys_are_named() {
+        for (text, expected) in [
+            (
+                "name = \"a\"\nname = \"b\"\n",
+                "t.toml: line 2, column 1: `name` is given twice (a key or a table may \
+                 appear once)",
+            ),
+            (
+                "[[object]]\nkind = \"sphere\"\nradius = 1\nradius = 2\n",
+                "t.toml: line 4, column 1: `radius` is given twice",
+            ),
+            (
+                "[camera]\nfov = 1\n[camera]\nfov = 2\n",
+                "t.toml: line 3, column 2: `camera` is given twice",
+            ),
+        ] {
+            let e = load(text).unwrap_err().to_string();
+            assert!(e.starts_with(expected), "{e}");
+        }
     }
 
     #[test]
