@@ -912,6 +912,43 @@ mod tests {
         json.replace(r#"{"mesh": 0, "translation": [0, 0, 5]}"#, node)
     }
 
+    /// An emitting mesh placed twice is copied, with one warning of plain words (no run
+    /// of spaces from a broken line continuation).
+    #[test]
+    fn an_instanced_emitter_is_copied_with_a_plain_warning() {
+        let json = with_node(r#"{"mesh": 0, "translation": [0, 0, 5]}, {"mesh": 0}"#)
+            .replacen(r#""nodes": [0]}"#, r#""nodes": [0, 1]}"#, 1)
+            .replacen(
+                r#""name": "m","#,
+                r#""name": "m", "emissiveFactor": [1, 1, 1],"#,
+                1,
+            );
+        let p = tmp("emitter.gltf");
+        std::fs::write(&p, &json).unwrap();
+        let scene = tmp("emitter.toml");
+        std::fs::write(
+            &scene,
+            "[[object]]\nkind = \"mesh\"\npath = \"emitter.gltf\"\n",
+        )
+        .unwrap();
+        let s = crate::format::load_toml_file(&scene, Path::new("/nonexistent")).unwrap();
+        assert_eq!(s.geometry.len(), 2);
+        let w: Vec<&String> = s
+            .warnings
+            .iter()
+            .filter(|w| w.contains("emits light"))
+            .collect();
+        assert_eq!(w.len(), 1, "{:?}", s.warnings);
+        assert!(
+            w[0].ends_with(
+                "glTF mesh 0 is placed 2 times but emits light: copied per placement \
+                 (instanced primitives are not sampled as lights in this version)"
+            ) && !w[0].contains("  "),
+            "{}",
+            w[0]
+        );
+    }
+
     /// Node transforms that the `gltf` crate would read as another transform are refused,
     /// naming the node and the cause.
     #[test]
