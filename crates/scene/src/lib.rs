@@ -12,6 +12,18 @@
 //!
 //! Nothing here panics on bad input: every malformed, truncated or out-of-range file gives a
 //! [`LoadError`] that names the file and the problem.
+//!
+//! Every format draws the same line between errors and warnings. Refused: what the file's
+//! own layout does not describe (an OBJ face or a PLY face of fewer than three vertices,
+//! numbers beyond a PLY record's properties, a list running past the end of the file),
+//! values a scene file would refuse (an MTL `Ni` of 0 as `ior = 0`, `Ns` below 0 as
+//! `shininess`), and transforms a library would silently read as another (a glTF node with
+//! both a matrix and TRS properties, a projective matrix, a rotation that is no unit
+//! quaternion). Warned of, and loaded: what is legal, or common in files found in the
+//! wild, but surely not what was meant (self-intersecting polygons, bytes after a PLY
+//! file's last record, instances stacked by a zero spacing, a texture that cannot be used,
+//! which keeps its material's flat colour). A file a scene names that cannot be used is an
+//! error naming the scene file, the line and the table.
 
 mod bpt;
 mod budget;

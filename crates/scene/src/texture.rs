@@ -221,7 +221,7 @@ mod tests {
         };
         let mut b = SceneBuilder::new("t");
         let mut budget = Reservation::with_limit(1 << 30);
-        let ids = add_textures(&mut b, &[bomb.clone()], &mut budget, "s").unwrap();
+        let ids = add_textures(&mut b, std::slice::from_ref(&bomb), &mut budget, "s").unwrap();
         assert_eq!(ids, [None]);
         let s = b.build();
         assert_eq!(s.warnings.len(), 1);

@@ -81,7 +81,7 @@ fn a_missing_file_names_the_scene_line_and_every_place() {
     // A folder in the assets.
     let e = error(
         &d,
-        &format!("[[object]]\nkind = \"mesh\"\npath = \"a-folder.obj\"\n"),
+        "[[object]]\nkind = \"mesh\"\npath = \"a-folder.obj\"\n",
         &assets,
     );
     assert!(
