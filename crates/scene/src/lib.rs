@@ -84,7 +84,8 @@ fn default_assets_dir() -> PathBuf {
 
 /// `path` with its `.` components dropped and each `..` taking away the component before
 /// it (without looking at the file system: a `..` after a symbolic link may differ).
-fn normalize_lexically(path: &Path) -> PathBuf {
+#[must_use]
+pub fn normalize_lexically(path: &Path) -> PathBuf {
     use std::path::Component;
     let mut out = PathBuf::new();
     for c in path.components() {

@@ -12,17 +12,7 @@ pub(crate) fn resolved_dir(assets: &Path) -> (PathBuf, bool) {
         return (p, true);
     }
     let absolute = std::path::absolute(assets).unwrap_or_else(|_| assets.to_owned());
-    let mut clean = PathBuf::new();
-    for c in absolute.components() {
-        match c {
-            std::path::Component::CurDir => {}
-            std::path::Component::ParentDir => {
-                clean.pop();
-            }
-            c => clean.push(c),
-        }
-    }
-    (clean, false)
+    (raybench_scene::normalize_lexically(&absolute), false)
 }
 
 pub(crate) fn scenes(assets: &Path) -> Result<ExitCode> {
