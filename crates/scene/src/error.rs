@@ -7,7 +7,7 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum LoadError {
     /// The file could not be read.
-    #[error("{}: {}", path.display(), crate::io::os_error(cause))]
+    #[error("{}: {}", path.display(), os_error(cause))]
     Io {
         /// The file.
         path: PathBuf,
@@ -136,5 +136,17 @@ impl LoadError {
                 error: Box::new(error),
             },
         }
+    }
+}
+
+/// An error of the system in words, naming a symbolic link loop as one (its text,
+/// "too many levels of symbolic links", does not say so on every system).
+pub(crate) fn os_error(e: &std::io::Error) -> String {
+    // ELOOP: 40 on Linux, 62 on macOS and the BSDs.
+    let eloop = if cfg!(target_os = "linux") { 40 } else { 62 };
+    if cfg!(unix) && e.raw_os_error() == Some(eloop) {
+        format!("a symbolic link loop ({e})")
+    } else {
+        e.to_string()
     }
 }

@@ -47,19 +47,7 @@ pub(crate) fn probe(path: &Path) -> Result<(), String> {
                 Err("missing".into())
             }
         }
-        Err(e) => Err(os_error(&e)),
-    }
-}
-
-/// An error of the system in words, naming a symbolic link loop as one (its text,
-/// "too many levels of symbolic links", does not say so on every system).
-pub(crate) fn os_error(e: &std::io::Error) -> String {
-    // ELOOP: 40 on Linux, 62 on macOS and the BSDs.
-    let eloop = if cfg!(target_os = "linux") { 40 } else { 62 };
-    if cfg!(unix) && e.raw_os_error() == Some(eloop) {
-        format!("a symbolic link loop ({e})")
-    } else {
-        e.to_string()
+        Err(e) => Err(crate::error::os_error(&e)),
     }
 }
 

@@ -96,7 +96,7 @@ fn decode(
     let open = || {
         let r = image::ImageReader::new(Cursor::new(&bytes[..]))
             .with_guessed_format()
-            .map_err(|e| DecodeError::Unreadable(crate::io::os_error(&e)))?;
+            .map_err(|e| DecodeError::Unreadable(crate::error::os_error(&e)))?;
         if r.format().is_none() {
             return Err(DecodeError::Unreadable("not a PNG or JPEG image".into()));
         }
