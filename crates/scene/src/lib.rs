@@ -18,6 +18,8 @@ mod budget;
 mod builtin;
 mod error;
 mod format;
+#[doc(hidden)]
+pub mod fuzzing;
 pub mod generators;
 mod gltf_loader;
 mod io;

@@ -217,34 +217,21 @@ pub(crate) fn decode_checked<R: std::io::BufRead + std::io::Seek>(
 /// it from its header when it has more than `max_pixels` pixels, and calling `reserve`
 /// with its pixel count before decoding (the memory budget). Decoding may allocate
 /// `bytes_per_pixel` per pixel twice over (the widest decoded form and a conversion).
+/// `contents` are the file's bytes when they are already in memory (the fuzz targets);
+/// `None` reads the file.
 ///
 /// # Errors
 /// [`LoadError::Io`] when unreadable, [`LoadError::Parse`] when not decodable as `format`
 /// or too large, and what `reserve` returns.
 pub(crate) fn decode_image(
     path: &Path,
+    contents: Option<&[u8]>,
     format: image::ImageFormat,
     what: &str,
     max_pixels: u64,
     bytes_per_pixel: u64,
     reserve: impl FnOnce(u64) -> Result<(), LoadError>,
 ) -> Result<image::DynamicImage, LoadError> {
-    let parse = |message: String| LoadError::Parse {
-        path: path.to_owned(),
-        message,
-    };
-    // A FIFO would block the reader.
-    crate::io::check_regular_file(path)?;
-    let open = || {
-        let mut r = image::ImageReader::open(path).map_err(|cause| {
-            DecodeError::Fatal(LoadError::Io {
-                path: path.to_owned(),
-                cause,
-            })
-        })?;
-        r.set_format(format);
-        Ok(r)
-    };
     let check = |w: u32, h: u32| {
         let pixels = u64::from(w) * u64::from(h);
         if pixels > max_pixels {
@@ -254,7 +241,33 @@ pub(crate) fn decode_image(
         }
         Ok(())
     };
-    decode_checked(open, check, reserve, 2 * bytes_per_pixel).map_err(|e| match e {
+    let decoded = if let Some(bytes) = contents {
+        let open = || {
+            let mut r = image::ImageReader::new(std::io::Cursor::new(bytes));
+            r.set_format(format);
+            Ok(r)
+        };
+        decode_checked(open, check, reserve, 2 * bytes_per_pixel)
+    } else {
+        // A FIFO would block the reader.
+        crate::io::check_regular_file(path)?;
+        let open = || {
+            let mut r = image::ImageReader::open(path).map_err(|cause| {
+                DecodeError::Fatal(LoadError::Io {
+                    path: path.to_owned(),
+                    cause,
+                })
+            })?;
+            r.set_format(format);
+            Ok(r)
+        };
+        decode_checked(open, check, reserve, 2 * bytes_per_pixel)
+    };
+    let parse = |message: String| LoadError::Parse {
+        path: path.to_owned(),
+        message,
+    };
+    decoded.map_err(|e| match e {
         DecodeError::Unreadable(m) => parse(format!("not a readable {what}: {m}")),
         DecodeError::Refused(m) => parse(m),
         DecodeError::Fatal(e) => e,
@@ -270,9 +283,15 @@ pub(crate) fn decode_image(
 /// large.
 pub fn read_png_gray(path: &Path, max_pixels: u64) -> Result<(u32, u32, Vec<f32>), LoadError> {
     // Room for the decoded image in its widest form (16-bit RGBA).
-    let img = decode_image(path, image::ImageFormat::Png, "PNG", max_pixels, 8, |_| {
-        Ok(())
-    })?;
+    let img = decode_image(
+        path,
+        None,
+        image::ImageFormat::Png,
+        "PNG",
+        max_pixels,
+        8,
+        |_| Ok(()),
+    )?;
     let (w, h) = (img.width(), img.height());
     let luma = img.into_luma16();
     Ok((
