@@ -221,3 +221,36 @@ fn whitted_point_light_falls_off_with_distance_squared() {
         frame.color[0]
     );
 }
+
+/// Whitted in a scene without point or directional lights: the headlight, radiance 1 along
+/// the view direction, lights a diffuse plane seen head on with `albedo * 1 + ambient`
+/// (without it the plane would show its ambient term alone).
+#[test]
+fn whitted_lights_a_scene_without_lights_by_a_headlight() {
+    let mut b = SceneBuilder::new("dark");
+    let m = b.add_material(material(0.5, 0.0)).unwrap();
+    b.add_plane(Vec3::ZERO, Vec3::Y, m).unwrap();
+    b.camera(Camera {
+        position: Vec3::new(0.0, 1.0, 0.001),
+        look_at: Vec3::ZERO,
+        up: Vec3::Z,
+        vfov_degrees: 1.0,
+    })
+    .unwrap();
+    let scene = Arc::new(b.build());
+    assert!(scene.lights.is_empty());
+    let settings = RenderSettings {
+        width: 1,
+        height: 1,
+        mode: Mode::Whitted,
+        ..Default::default()
+    };
+    let frame = render_with(raybench_tests::ORACLE, &scene, &settings, 1);
+    // Nearly head on (the eye is 0.001 off the axis): cos within 1e-6 of 1.
+    let expect = 0.5 + 0.05 * 0.5;
+    assert!(
+        (frame.color[0].x - expect).abs() < 1e-3,
+        "{}",
+        frame.color[0]
+    );
+}

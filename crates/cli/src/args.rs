@@ -9,7 +9,7 @@ use raybench_core::{
     CameraOverrides, LightSampling, Mode, RaySet, RenderSettings, Scene, Timings, Vec3,
 };
 use raybench_registry::brute_force_tests;
-use raybench_registry::measure::{RayBatch, explicit_rays};
+use raybench_registry::measure::{RayBatch, explicit_rays, no_rays};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -34,7 +34,8 @@ pub(crate) struct RaysArgs {
 
 impl RaysArgs {
     /// The workload's name (`shadow`, or `file:NAME`) and its explicit rays (`None`:
-    /// frames).
+    /// frames); an empty batch (a ray file of no rays, shadow rays without lights) is an
+    /// error saying why.
     pub(crate) fn batch(
         &self,
         scene: &Arc<Scene>,
@@ -46,7 +47,11 @@ impl RaysArgs {
                 || path.display().to_string(),
                 |n| n.to_string_lossy().into_owned(),
             );
-            return Ok((format!("file:{name}"), Some(RayBatch::from_file(file))));
+            let batch = RayBatch::from_file(file);
+            if batch.rays.is_empty() {
+                bail!("{}", no_rays(self.rays, scene, Some(path)));
+            }
+            return Ok((format!("file:{name}"), Some(batch)));
         }
         let params = DerivedParams {
             ao_rays: self.ao_rays,
@@ -54,6 +59,10 @@ impl RaysArgs {
             ..DerivedParams::default()
         };
         let batch = explicit_rays(self.rays, scene, settings, &params)?;
+        // Nothing to time or compare: a table of zero rays would rank backends by noise.
+        if batch.as_ref().is_some_and(|b| b.rays.is_empty()) {
+            bail!("{}: {}", scene.name, no_rays(self.rays, scene, None));
+        }
         Ok((self.rays.name().to_owned(), batch))
     }
 
@@ -75,7 +84,8 @@ impl RaysArgs {
 
 #[derive(Args, Clone)]
 pub(crate) struct FrameArgs {
-    /// Integrator.
+    /// Integrator: cast (ray casting), whitted (Whitted ray tracing), path (Monte Carlo
+    /// path tracing), mip or composite (voxel volumes: maximum intensity, compositing).
     #[arg(long, default_value = "cast", value_parser = parse_mode)]
     pub(crate) mode: Mode,
     /// Image width in pixels.
@@ -266,6 +276,13 @@ pub(crate) fn check_mode_fits(scene: &Scene, mode: Mode) -> Result<()> {
             scene.name
         );
     }
+    if mode == Mode::Whitted && scene.lights.is_empty() {
+        eprintln!(
+            "note: scene '{}' {}",
+            scene.name,
+            raybench_core::integrator::HEADLIGHT_NOTE
+        );
+    }
     Ok(())
 }
 
@@ -276,9 +293,10 @@ pub(crate) fn fmt_opt<T>(v: Option<T>, f: impl Fn(T) -> String) -> String {
 /// `--exposure EV` of `render` and `diff`.
 #[derive(Args)]
 pub(crate) struct Exposure {
-    /// Exposure in stops: colour is scaled by 2^EV (render: what is written, in every
-    /// format, 0 writing the radiance itself; diff: both images before PSNR and FLIP,
-    /// which compare them as displayed).
+    // `diff` replaces this help with its own (`main.rs`: both images are scaled before PSNR
+    // and FLIP).
+    /// Exposure in stops: the colour written, in every format, is scaled by 2^EV (0 writes
+    /// the radiance itself).
     #[arg(
         long = "exposure",
         default_value_t = 0.0,

@@ -87,9 +87,35 @@ enum Command {
     Rays(rays::RaysCmd),
 }
 
+/// Lets every option that takes a value take a negative number (`--fov -5`), so that its
+/// own check refuses it, rather than clap's tip to write `-- -5` (which would make it the
+/// scene).
+fn negative_numbers(cmd: clap::Command) -> clap::Command {
+    cmd.mut_args(|a| {
+        if a.get_action().takes_values() {
+            a.allow_negative_numbers(true)
+        } else {
+            a
+        }
+    })
+    .mut_subcommands(negative_numbers)
+}
+
 fn main() -> ExitCode {
     quiet_wayland_probe();
-    let cli = Cli::parse();
+    let cli = {
+        use clap::{CommandFactory as _, FromArgMatches as _};
+        let cmd = negative_numbers(Cli::command()).mut_subcommand("diff", |c| {
+            c.mut_arg("ev", |a| {
+                a.help(
+                    "Exposure in stops: both images are scaled by 2^EV before PSNR and FLIP, \
+                     which compare them as displayed",
+                )
+            })
+        });
+        let matches = cmd.get_matches();
+        Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
+    };
     match run(cli) {
         Ok(code) => code,
         // The reader of standard output went away (`| head`): what it wanted was written.
@@ -148,6 +174,27 @@ fn quiet_wayland_probe() {
 fn quiet_wayland_probe() {}
 
 fn run(cli: Cli) -> Result<ExitCode> {
+    // The global scene options mean nothing to the commands that load no scene: refused
+    // rather than silently ignored.
+    let loads_no_scene = match &cli.command {
+        Command::Backends { .. } => Some("backends"),
+        Command::Merge(_) => Some("merge"),
+        Command::CompareResults(_) => Some("compare-results"),
+        Command::Diff(_) => Some("diff"),
+        _ => None,
+    };
+    if let Some(name) = loads_no_scene {
+        for (given, option) in [
+            (cli.assets.is_some(), "--assets"),
+            (cli.memory_limit.is_some(), "--memory-limit"),
+        ] {
+            if given {
+                anyhow::bail!(
+                    "{option} applies to the commands that load scenes; `{name}` loads none"
+                );
+            }
+        }
+    }
     let assets = assets_dir(cli.assets.as_deref());
     if let Some(MemoryLimit(limit)) = cli.memory_limit {
         raybench_scene::set_memory_limit(limit);

@@ -97,8 +97,9 @@ impl Camera {
         }
     }
 
-    /// True when the camera can produce rays: finite vectors, distinct eye and target, an up
-    /// vector not parallel to the view direction, and a field of view in `(0, 180)`.
+    /// True when the camera can produce rays: finite vectors, eye and target within
+    /// [`crate::limits::MAX_COORDINATE`], distinct eye and target, an up vector not parallel
+    /// to the view direction, and a field of view in `(0, 180)`.
     #[must_use]
     pub fn is_valid(&self) -> bool {
         self.check().is_ok()
@@ -116,6 +117,16 @@ impl Camera {
         ] {
             if !v.is_finite() {
                 return Err(format!("{name} {v} is not finite"));
+            }
+        }
+        // Points as every coordinate of a scene: within the f32 range the geometry resolves.
+        for (name, v) in [("position", self.position), ("look_at", self.look_at)] {
+            let largest = v.abs().max_element();
+            if largest > crate::limits::MAX_COORDINATE {
+                return Err(format!(
+                    "{name} has a coordinate of magnitude {largest:e}, over the limit of {:e}",
+                    crate::limits::MAX_COORDINATE
+                ));
             }
         }
         let forward = self.look_at - self.position;

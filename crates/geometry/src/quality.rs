@@ -31,6 +31,10 @@ use crate::sampling::{pcg3d, to_unit_f32};
 /// cent of the estimate on the built-in scenes, in milliseconds.
 pub const DEFAULT_EPO_SAMPLES: u32 = 4096;
 
+/// The most EPO samples a run may ask for: 256 times the default, seconds on a large scene
+/// (the standard error falls only as the square root of the count).
+pub const MAX_EPO_SAMPLES: u32 = 1 << 20;
+
 /// The cost constants of the SAH cost and the EPO.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CostConstants {

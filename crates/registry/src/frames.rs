@@ -28,6 +28,19 @@ pub fn numbered(path: &Path, frame: u32, frames: u32) -> PathBuf {
     path.with_file_name(name)
 }
 
+/// Checks `--frames` alone, before a scene is loaded: between 1 and [`MAX_FRAMES`].
+///
+/// # Errors
+/// The message saying so.
+pub fn check_frame_count(frames: u32) -> Result<(), String> {
+    if frames == 0 || frames > MAX_FRAMES {
+        return Err(format!(
+            "--frames {frames}: between 1 and {MAX_FRAMES} frames are rendered"
+        ));
+    }
+    Ok(())
+}
+
 /// Whether `frames` frames of `scene` can be rendered: 1 to [`MAX_FRAMES`], and more than
 /// one only for a scene that moves (a still scene's frames would be identical images: the
 /// command refuses rather than render the same picture N times).
@@ -35,11 +48,7 @@ pub fn numbered(path: &Path, frame: u32, frames: u32) -> PathBuf {
 /// # Errors
 /// Why not, in one sentence.
 pub fn check_frames(scene: &Scene, frames: u32) -> Result<(), String> {
-    if frames == 0 || frames > MAX_FRAMES {
-        return Err(format!(
-            "--frames {frames}: between 1 and {MAX_FRAMES} frames are rendered"
-        ));
-    }
+    check_frame_count(frames)?;
     if frames > 1 && !scene.is_moving() {
         return Err(format!(
             "--frames {frames}: scene '{}' does not move (no instance `keys` or `motion`, no \

@@ -76,6 +76,20 @@ pub fn explicit_rays(
     }))
 }
 
+/// Why a batch of rays of `set` on `scene` came out empty, for messages: the ray file
+/// (`file`) holds none, the scene has no light to aim shadow rays at, or no primary ray
+/// hits the scene (every derived set starts at the primary hits).
+#[must_use]
+pub fn no_rays(set: RaySet, scene: &Scene, file: Option<&std::path::Path>) -> String {
+    match file {
+        Some(file) => format!("no rays: the ray file {} holds none", file.display()),
+        None if set == RaySet::Shadow && scene.lights.is_empty() && scene.emitters.is_empty() => {
+            "no shadow rays: the scene has no light or emitter to aim them at".into()
+        }
+        None => format!("no {} rays: no primary ray hits the scene", set.name()),
+    }
+}
+
 /// The rays of the derived set `set` (`shadow`, `ao`, `diffuse`): the [`primary_rays`]
 /// traced with `tracer` (any exact backend gives the same hits, so the same set), then
 /// [`ray_sets::derived`] with seed `params.seed`.

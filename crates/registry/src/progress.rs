@@ -16,11 +16,14 @@ pub const DELAY: Duration = Duration::from_secs(2);
 /// How often the live line is redrawn.
 const TICK: Duration = Duration::from_millis(250);
 
-/// When the live line is shown.
+/// When the live line is shown, and whether the report's step records are printed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Display {
-    /// Never (stderr is not a terminal, or `RAYBENCH_PROGRESS=never`).
+    /// Nothing: no live line and no step records (`RAYBENCH_PROGRESS=never`).
     Never,
+    /// No live line (stderr is not a terminal); [`Progress::step`]'s records are printed as
+    /// plain lines without the bar, for the log.
+    Log,
     /// On a terminal, redrawn in place once a step has run for [`DELAY`].
     Terminal,
     /// At the start of every step and at every tick, one line each, on any stderr
@@ -29,16 +32,35 @@ pub enum Display {
 }
 
 impl Display {
-    /// The choice for this process: `RAYBENCH_PROGRESS` (`never`, `always`), else
-    /// [`Display::Terminal`] when stderr is a terminal, else [`Display::Never`].
+    /// The choice for this process: `RAYBENCH_PROGRESS` (`never`, `always`; any other value
+    /// is ignored with one warning), else [`Display::Terminal`] when stderr is a terminal,
+    /// else [`Display::Log`].
     #[must_use]
     pub fn from_env() -> Self {
-        match std::env::var("RAYBENCH_PROGRESS").as_deref() {
-            Ok("never") => Self::Never,
-            Ok("always") => Self::Always,
-            _ if std::io::stderr().is_terminal() => Self::Terminal,
-            _ => Self::Never,
+        let var = std::env::var("RAYBENCH_PROGRESS");
+        match var.as_deref() {
+            Ok("never") => return Self::Never,
+            Ok("always") => return Self::Always,
+            Ok(other) => {
+                static WARNED: std::sync::Once = std::sync::Once::new();
+                WARNED.call_once(|| {
+                    eprintln!(
+                        "warning: RAYBENCH_PROGRESS='{other}' is ignored (it takes never or always)"
+                    );
+                });
+            }
+            Err(_) => {}
         }
+        if std::io::stderr().is_terminal() {
+            Self::Terminal
+        } else {
+            Self::Log
+        }
+    }
+
+    /// Whether it draws a live line (and so needs the ticker).
+    fn live(self) -> bool {
+        matches!(self, Self::Terminal | Self::Always)
     }
 }
 
@@ -89,6 +111,13 @@ pub fn status_line(done: usize, total: usize, elapsed: f64, what: &str) -> Strin
     )
 }
 
+/// A step's record in a log: `3/12  0m41s  what` (the status line without its bar and
+/// estimate).
+#[must_use]
+pub fn record_line(done: usize, total: usize, elapsed: f64, what: &str) -> String {
+    format!("{done}/{total}  {}  {what}", clock(elapsed))
+}
+
 /// `2m05s`.
 #[must_use]
 pub fn clock(seconds: f64) -> String {
@@ -122,7 +151,7 @@ impl Progress {
             drawn: false,
         }));
         let stop = Arc::new(AtomicBool::new(false));
-        let ticker = (display != Display::Never).then(|| {
+        let ticker = display.live().then(|| {
             let (state, stop) = (Arc::clone(&state), Arc::clone(&stop));
             std::thread::spawn(move || {
                 while !stop.load(Ordering::Relaxed) {
@@ -161,15 +190,22 @@ impl Progress {
         clear(&mut s);
     }
 
-    /// One step done, with a line for the log: the bar, the times and `what` (the report's
-    /// record of every measurement, printed whatever the display).
+    /// One step done, with a record line: the bar, the times and `what` where a live line
+    /// is shown, the same without the bar in a log ([`Display::Log`]), nothing under
+    /// [`Display::Never`].
     pub fn step(&self, what: &str) {
         let mut s = self.state();
         s.done += 1;
         s.current = None;
         clear(&mut s);
         let elapsed = s.start.elapsed().as_secs_f64();
-        eprintln!("{}", status_line(s.done, s.total, elapsed, what));
+        match self.display {
+            Display::Never => {}
+            Display::Log => eprintln!("{}", record_line(s.done, s.total, elapsed, what)),
+            Display::Terminal | Display::Always => {
+                eprintln!("{}", status_line(s.done, s.total, elapsed, what));
+            }
+        }
     }
 
     /// Takes `n` steps out of the total (work found unnecessary after all).
@@ -244,6 +280,10 @@ mod tests {
             "[######..................] 1/4  0m30s elapsed, ~1m30s left  x"
         );
         assert_eq!(clock(125.4), "2m05s");
+        assert_eq!(
+            record_line(3, 12, 41.0, "bvh: spheres"),
+            "3/12  0m41s  bvh: spheres"
+        );
         // An empty plan draws an empty bar, never a division by zero.
         assert!(status_line(0, 0, 0.0, "").starts_with("[........................] 0/0"));
     }

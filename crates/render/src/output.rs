@@ -184,8 +184,8 @@ impl ImageFormat {
 
 /// Checks, before any work, that an image can be written at `path`: its extension is one of
 /// `formats` (a file under another name would mislead), it is not a folder, its folder
-/// exists, and a file can be created there (the temporary file [`partial_path`] is created
-/// and removed again), so that a long render is never wasted on a path that cannot take
+/// exists, and a file can be created there (a probe file is created and removed again), so
+/// that a long render is never wasted on a path that cannot take
 /// its result. Returns the format.
 ///
 /// # Errors
@@ -228,13 +228,16 @@ pub fn check_image_path(path: &Path, formats: &[ImageFormat]) -> Result<ImageFor
     if !dir.is_dir() {
         return Err(err(format!("the folder {} does not exist", dir.display())));
     }
-    let tmp = partial_path(path);
+    // A probe of a name no one else uses (not `partial_path`, which a killed earlier run may
+    // have left behind: the write replaces such a leftover).
+    let probe = dir.join(format!(".raybench-probe-{}", std::process::id()));
     std::fs::OpenOptions::new()
         .write(true)
-        .create_new(true)
-        .open(&tmp)
+        .create(true)
+        .truncate(true)
+        .open(&probe)
         .map_err(|e| err(format!("cannot create a file in {}: {e}", dir.display())))?;
-    let _ = std::fs::remove_file(&tmp);
+    let _ = std::fs::remove_file(&probe);
     Ok(format)
 }
 
@@ -386,6 +389,13 @@ mod tests {
         assert!(check_png_path(&dir.join("ok.png")).is_ok());
         assert!(check_png_path(&dir.join("OK.PNG")).is_ok());
         assert!(!dir.join("ok.partial.png").exists());
+        // A temporary file a killed earlier write left behind blocks neither the check nor
+        // the write, which replaces it.
+        std::fs::write(dir.join("stale.partial.png"), "left over").unwrap();
+        assert!(check_png_path(&dir.join("stale.png")).is_ok());
+        write_color_png(&frame, &dir.join("stale.png")).unwrap();
+        assert!(!dir.join("stale.partial.png").exists());
+        assert!(image::open(dir.join("stale.png")).is_ok());
         for (p, needle) in [
             (dir.join("x.exr"), "'.exr'"),
             (dir.join("x.jpg"), "'.jpg'"),

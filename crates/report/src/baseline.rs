@@ -237,7 +237,7 @@ pub fn markdown(c: &Comparison, before: &str, after: &str) -> String {
     let interfered = count("machine interfered");
     let _ = writeln!(
         s,
-        "`{after}` against `{before}`: {} workloads in both, {faster} faster and {slower} slower \
+        "`{after}` against `{before}`: {} in both, {faster} faster and {slower} slower \
          (the {:.0}% interval of the speed ratio excludes 1 and the change is at least {:.1}%: \
          the larger of {:.0}% and the run-to-run floor, {FLOOR_SIGMAS} robust standard \
          deviations of the relative ratios over this comparison's workloads, what two runs \
@@ -252,7 +252,7 @@ pub fn markdown(c: &Comparison, before: &str, after: &str) -> String {
          moves by several percent over minutes) and with it any change common to every \
          backend, which cannot be told from that drift; geometric mean of the common modes \
          {}.\n",
-        c.changes.len(),
+        crate::fmt::count(c.changes.len(), "workload"),
         stats::CONFIDENCE * 100.0,
         c.min_effect * 100.0,
         stats::MIN_EFFECT * 100.0,

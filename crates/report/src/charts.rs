@@ -200,13 +200,6 @@ fn registry() -> impl Iterator<Item = &'static str> {
         .chain(raybench_registry::NOT_BUILT.iter().map(|n| n.name))
 }
 
-/// A stable small hash (FNV-1a) of a name, for presets this build does not know.
-fn fnv(s: &str) -> usize {
-    s.bytes().fold(0xcbf2_9ce4_8422_2325_u64, |h, b| {
-        (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3)
-    }) as usize
-}
-
 /// The style of a backend (`bvh`) or of a preset of one (`bvh:fast`: its backend's colour,
 /// a marker by the preset's place among the backend's presets); `None` for other names.
 #[must_use]
@@ -222,7 +215,7 @@ pub fn backend_style(label: &str) -> Option<Style> {
         Some(p) => {
             let place = raybench_registry::presets::presets_of(base)
                 .position(|q| q.preset == p)
-                .unwrap_or_else(|| fnv(p));
+                .unwrap_or_else(|| crate::fnv1a(p.as_bytes()) as usize);
             MARKERS[(i + 1 + place) % MARKERS.len()]
         }
     };

@@ -84,6 +84,15 @@ pub(crate) fn repetitions(t: &crate::results::Timing) -> String {
     }
 }
 
+/// `n` and the noun, plural unless `n` is 1: `1 workload`, `3 workloads`.
+pub(crate) fn count(n: usize, noun: &str) -> String {
+    if n == 1 {
+        format!("1 {noun}")
+    } else {
+        format!("{n} {noun}s")
+    }
+}
+
 /// A value formatted by `f`, or `-`.
 pub(crate) fn opt(v: Option<f64>, f: impl Fn(f64) -> String) -> String {
     v.map_or_else(|| "-".into(), f)

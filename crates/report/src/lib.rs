@@ -44,6 +44,24 @@ pub const BUDGET_QUICK: f64 = 0.1;
 /// [`BUDGET_QUICK`] for the full run.
 pub const BUDGET_FULL: f64 = 1.0;
 
+/// A stable hash (FNV-1a, 64 bits) of `bytes`: a preset's colour for presets this build
+/// does not know, and the executable's fingerprint in a shard's [`results::Plan`].
+pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325_u64, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3)
+    })
+}
+
+/// What identifies the running binary in a shard's plan: its version and a hash of its
+/// executable file (two builds of one version are told apart).
+fn binary_id() -> String {
+    let version = env!("CARGO_PKG_VERSION");
+    match std::env::current_exe().and_then(std::fs::read) {
+        Ok(bytes) => format!("raybench {version}, executable {:016x}", fnv1a(&bytes)),
+        Err(_) => format!("raybench {version}, executable unreadable"),
+    }
+}
+
 /// The names of the scaling experiments, in the order they run (`--experiments`).
 #[must_use]
 pub fn experiments() -> Vec<&'static str> {
@@ -173,12 +191,29 @@ pub fn run(opts: &Options) -> Result<Results> {
         })
         .flat_map(|e| e.units(&ctx).into_iter().map(move |u| (*e, u)))
         .collect();
+    let plan = results::Plan {
+        settings: settings_line(opts, &chosen, &modes, size, &policy),
+        binary: binary_id(),
+        units: units
+            .iter()
+            .map(|(e, u)| format!("{} {u}", e.name()))
+            .collect(),
+    };
     let mine: Vec<(&dyn Experiment, String)> = units
         .into_iter()
         .enumerate()
-        .filter(|(i, _)| (*i as u32 % shards) + 1 == shard)
+        .filter(|(i, _)| results::Plan::holds(*i, shard, shards))
         .map(|(_, u)| u)
         .collect();
+    if mine.is_empty() {
+        bail!(
+            "--shard {shard}/{shards}: the plan has {} units (the matrix's scenes and the \
+             scaling experiments, split whole), so shard {shard} holds none; split it into \
+             at most {} shards",
+            plan.units.len(),
+            plan.units.len().max(1)
+        );
+    }
 
     std::fs::create_dir_all(opts.out.join("images"))
         .with_context(|| format!("cannot create {}", opts.out.display()))?;
@@ -204,6 +239,7 @@ pub fn run(opts: &Options) -> Result<Results> {
             pinned: opts.pin,
             repeat: ctx.policy.repeat.name(),
             min_sample: ctx.policy.min_sample,
+            plan: Some(plan),
         }],
         ..Results::default()
     };
@@ -257,6 +293,41 @@ pub fn run(opts: &Options) -> Result<Results> {
     Ok(results)
 }
 
+/// The settings that decide a report's work and timings, as one line: every option but
+/// the shard, the output folder and the baseline (the shards of one plan share it).
+fn settings_line(
+    opts: &Options,
+    chosen: &[&'static Backend],
+    modes: &[Mode],
+    size: u32,
+    policy: &rounds::Policy,
+) -> String {
+    let names = |v: Vec<&str>| v.join(",");
+    format!(
+        "quick={} backends={} modes={} size={size} repeat={} min-sample={} scaling={} \
+         experiments={} rays={} ao-rays={} rays-file={} threads={} pin={} device-time={}",
+        opts.quick,
+        names(chosen.iter().map(|b| b.name).collect()),
+        names(modes.iter().map(|m| m.name()).collect()),
+        policy.repeat.name(),
+        policy.min_sample,
+        opts.scaling,
+        opts.experiments
+            .as_ref()
+            .map_or("all".into(), |e| e.join(",")),
+        opts.ray_sets.as_ref().map_or("all".into(), |r| {
+            names(r.iter().map(|s| s.name()).collect())
+        }),
+        opts.ao_rays,
+        opts.rays_file
+            .as_ref()
+            .map_or("none".into(), |p| p.display().to_string()),
+        opts.threads,
+        opts.pin,
+        opts.device_time,
+    )
+}
+
 /// Writes `results.json`, the charts, `REPORT.md` and `REPORT.html` into `out`;
 /// `appendix` (Markdown: the comparison with a baseline) ends both reports.
 ///
@@ -293,12 +364,29 @@ fn write_text(path: &Path, text: &str) -> Result<()> {
 /// Joins the `results.json` of several report folders into one report in `out` (images are
 /// copied; charts and `REPORT.md` are drawn anew).
 ///
+/// The folders must hold the shards of one plan ([`results::Plan`]): the same shard count,
+/// settings, binary and units, each shard once and every shard present; with
+/// `allow_partial` a missing shard is listed under Skipped with the units it would have run.
+///
 /// # Errors
-/// A folder without a readable `results.json`, two folders holding the same shard or the
-/// same measurement, or an unwritable `out`.
-pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Results> {
+/// A folder without a readable `results.json`, shards of different plans, a shard given
+/// twice, a missing shard (without `allow_partial`), `out` being one of the folders, or an
+/// unwritable `out`.
+pub fn merge(dirs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Results> {
     if dirs.is_empty() {
         bail!("merge needs at least one report folder");
+    }
+    // Writing into a folder being merged would replace its results while they are read.
+    if let Ok(o) = std::fs::canonicalize(out)
+        && let Some(dir) = dirs
+            .iter()
+            .find(|d| std::fs::canonicalize(d).is_ok_and(|d| d == o))
+    {
+        bail!(
+            "--out {} is the merged folder {}: its report would be replaced; name another folder",
+            out.display(),
+            dir.display()
+        );
     }
     let mut merged = Results {
         schema: results::SCHEMA.into(),
@@ -321,6 +409,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Results> {
         }
         inputs.push((dir, r));
     }
+    let missing = check_plan(&inputs, allow_partial)?;
     std::fs::create_dir_all(out.join("images"))
         .with_context(|| format!("cannot create {}", out.display()))?;
     for (dir, r) in inputs {
@@ -339,6 +428,114 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Results> {
         }
         merged.absorb(r);
     }
+    merged.skipped.extend(missing);
     write(&merged, out, None)?;
     Ok(merged)
+}
+
+/// Checks that the shards of `inputs` form one plan: the same shard count, settings, binary
+/// and units, each shard once, every shard present. Returns the missing shards as skip
+/// records when `allow_partial`, else refuses them.
+fn check_plan(
+    inputs: &[(&PathBuf, Results)],
+    allow_partial: bool,
+) -> Result<Vec<results::Skipped>> {
+    let shards: Vec<(&PathBuf, &Shard)> = inputs
+        .iter()
+        .flat_map(|(dir, r)| r.shards.iter().map(move |s| (*dir, s)))
+        .collect();
+    let Some(&(first_dir, first)) = shards.first() else {
+        bail!("{}: the results hold no shard", inputs[0].0.display());
+    };
+    let plan_of = |dir: &PathBuf, s: &Shard| -> Result<results::Plan> {
+        s.plan.clone().ok_or_else(|| {
+            anyhow::anyhow!(
+                "{}: shard {}/{} records no plan (written by an older raybench), so its set \
+                 cannot be checked; run it again",
+                dir.display(),
+                s.index,
+                s.count
+            )
+        })
+    };
+    let plan = plan_of(first_dir, first)?;
+    let mut seen: Vec<(u32, &PathBuf)> = Vec::new();
+    for &(dir, s) in &shards {
+        let other = plan_of(dir, s)?;
+        let differs = |what: &str, a: &str, b: &str| {
+            anyhow::anyhow!(
+                "{} and {} are not shards of one plan: {what} differ ({a} against {b})",
+                first_dir.display(),
+                dir.display()
+            )
+        };
+        if s.count != first.count {
+            return Err(differs(
+                "the shard counts",
+                &format!("{}/{}", first.index, first.count),
+                &format!("{}/{}", s.index, s.count),
+            ));
+        }
+        if other.settings != plan.settings {
+            let (a, b) = first_difference(&plan.settings, &other.settings);
+            return Err(differs("the settings", a, b));
+        }
+        if other.binary != plan.binary {
+            return Err(differs("the binaries", &plan.binary, &other.binary));
+        }
+        if other.units != plan.units {
+            return Err(differs(
+                "the scenes and experiments",
+                &plan.units.join(", "),
+                &other.units.join(", "),
+            ));
+        }
+        if let Some((_, earlier)) = seen.iter().find(|(i, _)| *i == s.index) {
+            bail!(
+                "{} and {} hold the same shard {}/{}; give each shard once",
+                earlier.display(),
+                dir.display(),
+                s.index,
+                s.count
+            );
+        }
+        seen.push((s.index, dir));
+    }
+    let missing: Vec<u32> = (1..=first.count)
+        .filter(|i| !seen.iter().any(|(s, _)| s == i))
+        .collect();
+    let holds = |i: u32| plan.units_of(i, first.count).join(", ");
+    if !missing.is_empty() && !allow_partial {
+        let list: Vec<String> = missing
+            .iter()
+            .map(|i| format!("{i}/{} ({})", first.count, holds(*i)))
+            .collect();
+        bail!(
+            "shards missing from the merge: {}; merge every shard of the plan, or pass \
+             --allow-partial to list the missing ones under Skipped",
+            list.join("; ")
+        );
+    }
+    Ok(missing
+        .into_iter()
+        .map(|i| results::Skipped {
+            shard: 0,
+            kind: "shard".into(),
+            name: format!("{i}/{}", first.count),
+            status: "missing".into(),
+            reason: format!(
+                "not in the merge (--allow-partial): {} did not run",
+                holds(i)
+            ),
+        })
+        .collect())
+}
+
+/// The first whitespace-separated settings that differ between `a` and `b` (the whole lines
+/// where they differ only in length).
+fn first_difference<'a>(a: &'a str, b: &'a str) -> (&'a str, &'a str) {
+    a.split_whitespace()
+        .zip(b.split_whitespace())
+        .find(|(x, y)| x != y)
+        .unwrap_or((a, b))
 }

@@ -122,6 +122,44 @@ pub struct Shard {
     /// before it was recorded.
     #[serde(default)]
     pub min_sample: f64,
+    /// The plan this shard is part of (`merge` checks that its shards share it); `null` in
+    /// files written before it was recorded.
+    #[serde(default)]
+    pub plan: Option<Plan>,
+}
+
+/// The whole report a shard is part of: what `merge` checks its shards share, and which
+/// units a missing shard would have run.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Plan {
+    /// The options that decide the work and its timings, as one line: every option of
+    /// `report` but `--shard`, `--out` and `--baseline`.
+    pub settings: String,
+    /// The binary that ran it: its version and a hash of its executable.
+    pub binary: String,
+    /// Every unit of the whole plan in order (`matrix spheres`, `primitives primitives`):
+    /// shard `I/N` runs those at 0-based positions `p` with `p mod N = I - 1`
+    /// ([`Plan::holds`]).
+    pub units: Vec<String>,
+}
+
+impl Plan {
+    /// Whether shard `index` of `count` runs the unit at 0-based position `position`.
+    #[must_use]
+    pub fn holds(position: usize, index: u32, count: u32) -> bool {
+        (position as u64 % u64::from(count)) + 1 == u64::from(index)
+    }
+
+    /// The units shard `index` of `count` runs.
+    #[must_use]
+    pub fn units_of(&self, index: u32, count: u32) -> Vec<&str> {
+        self.units
+            .iter()
+            .enumerate()
+            .filter(|(p, _)| Self::holds(*p, index, count))
+            .map(|(_, u)| u.as_str())
+            .collect()
+    }
 }
 
 impl Shard {
@@ -356,6 +394,10 @@ pub struct Run {
     /// its figures are then no GPU's, and the report says so wherever they appear.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub software_device: bool,
+    /// Whether a Whitted run's scene was lit by the headlight Whitted ray tracing uses where
+    /// a scene has no point or directional light ([`raybench_core::integrator::headlight`]).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub headlight: bool,
     /// Rays traced per repetition (all rays: camera, secondary, shadow).
     pub rays: Option<u64>,
     /// Rays per second over the median time, in millions.

@@ -18,7 +18,8 @@ const NOISY_NAMED: usize = 12;
 pub(super) fn write(results: &Results, s: &mut String) {
     let _ = writeln!(s, "## Verdict\n");
     if results.runs.is_empty() && results.scaling.is_empty() {
-        let _ = writeln!(s, "Nothing ran: see Skipped below.\n");
+        let _ = writeln!(s, "Nothing ran.\n");
+        skipped(results, s);
         return;
     }
     fastest(results, s);
@@ -262,7 +263,9 @@ fn skipped(results: &Results, s: &mut String) {
             what.join(", ")
         ));
     }
-    if lines.is_empty() {
+    if lines.is_empty() && results.runs.is_empty() && results.scaling.is_empty() {
+        let _ = writeln!(s, "**Skipped**: nothing was planned.\n");
+    } else if lines.is_empty() {
         let _ = writeln!(
             s,
             "**Skipped**: nothing; every scene, workload and backend ran.\n"

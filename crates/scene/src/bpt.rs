@@ -40,6 +40,9 @@ pub fn load_bpt_file(path: &Path) -> Result<Vec<BptPatch>, LoadError> {
 /// patches than declared or data after the declared patches.
 pub fn parse_bpt(text: &str, path: &Path) -> Result<Vec<BptPatch>, LoadError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    // Lines may end in CR alone (`crate::io::lone_cr_to_lf`).
+    let text = String::from_utf8_lossy(&crate::io::lone_cr_to_lf(text.as_bytes())).into_owned();
+    let text = text.as_str();
     let err = |line: usize, message: String| LoadError::Parse {
         path: path.to_owned(),
         message: format!("line {line}: {message}"),

@@ -103,6 +103,15 @@ pub fn human_bytes(bytes: u64) -> String {
 }
 
 impl MemoryBudget {
+    /// Whether the user set this budget (`--memory-limit` or [`MEMORY_LIMIT_ENV`]) rather
+    /// than it being the default share of the available memory: a user's limit also lifts
+    /// the check on images that decode to far more than their files hold
+    /// ([`crate::samples::check_expansion`]).
+    #[must_use]
+    pub fn is_set_by_user(&self) -> bool {
+        self.origin == "--memory-limit" || self.origin == MEMORY_LIMIT_ENV
+    }
+
     /// The budget in force ([`set_memory_limit`], else [`MEMORY_LIMIT_ENV`], else
     /// [`DEFAULT_SHARE`] of the available memory, else none).
     ///
@@ -240,6 +249,24 @@ impl Reservation {
             budget: MemoryBudget {
                 bytes: Some(bytes),
                 origin: "test".into(),
+            },
+            used: 0,
+        }
+    }
+
+    /// Whether the user set the budget ([`MemoryBudget::is_set_by_user`]).
+    pub(crate) fn is_set_by_user(&self) -> bool {
+        self.budget.is_set_by_user()
+    }
+
+    /// A reservation against a budget of `bytes` that the user set (for tests of what a
+    /// user's limit allows).
+    #[cfg(test)]
+    pub(crate) fn with_user_limit(bytes: u64) -> Self {
+        Self {
+            budget: MemoryBudget {
+                bytes: Some(bytes),
+                origin: MEMORY_LIMIT_ENV.into(),
             },
             used: 0,
         }

@@ -61,6 +61,11 @@ fn load_buffers(
                     base64::engine::general_purpose::STANDARD
                         .decode(payload)
                         .map_err(|e| parse_err(path, format!("bad base64 buffer: {e}")))?
+                } else if let Some(scheme) = uri_scheme(uri) {
+                    return Err(parse_err(
+                        path,
+                        format!("buffer {}: {}", buffer.index(), not_fetched(uri, scheme)),
+                    ));
                 } else {
                     read_external(path, buffer.index(), &base.join(uri), buffer.length())?
                 }
@@ -119,6 +124,9 @@ fn validate(path: &Path, root: &gltf::json::Root) -> Result<(), LoadError> {
             _ => {}
         }
     }
+    for (i, node) in root.nodes.iter().enumerate() {
+        check_node_transform(node).map_err(|why| parse_err(path, format!("node {i}: {why}")))?;
+    }
     let mut errors = Vec::new();
     root.validate(root, gltf::json::Path::new, &mut |at, e| {
         errors.push(format!("{}: {e}", at()));
@@ -127,6 +135,53 @@ fn validate(path: &Path, root: &gltf::json::Root) -> Result<(), LoadError> {
         None => Ok(()),
         Some(first) => Err(parse_err(path, format!("invalid glTF: {first}"))),
     }
+}
+
+/// How far a node's rotation may be from a unit quaternion (glTF requires one; writers
+/// round).
+const UNIT_QUATERNION_TOLERANCE: f32 = 1e-3;
+
+/// Refuses what the `gltf` crate would read silently as another transform: a `matrix`
+/// beside `translation`, `rotation` or `scale` (the crate uses the matrix and drops the
+/// others; glTF allows one form or the other), a projective `matrix` (last row not
+/// `0 0 0 1`: its projection would be dropped), and a `rotation` that is no unit
+/// quaternion (a zero one would be read as no rotation, a longer one as a scale too).
+fn check_node_transform(node: &gltf::json::Node) -> Result<(), String> {
+    if let Some(m) = node.matrix {
+        let trs: Vec<&str> = [
+            ("translation", node.translation.is_some()),
+            ("rotation", node.rotation.is_some()),
+            ("scale", node.scale.is_some()),
+        ]
+        .iter()
+        .filter_map(|&(name, set)| set.then_some(name))
+        .collect();
+        if !trs.is_empty() {
+            return Err(format!(
+                "has both a matrix and {} (glTF allows one form or the other)",
+                trs.join(" and ")
+            ));
+        }
+        // Column-major: the last row is elements 3, 7, 11 and 15.
+        let last = [m[3], m[7], m[11], m[15]];
+        if last != [0.0, 0.0, 0.0, 1.0] {
+            return Err(format!(
+                "its matrix is projective: the last row is [{}, {}, {}, {}], not [0, 0, 0, 1]",
+                last[0], last[1], last[2], last[3]
+            ));
+        }
+    }
+    if let Some(q) = node.rotation {
+        let q = glam::Vec4::from(q.0);
+        let length = q.length();
+        if !q.is_finite() || (length - 1.0).abs() > UNIT_QUATERNION_TOLERANCE {
+            return Err(format!(
+                "rotation [{}, {}, {}, {}] is not a unit quaternion (its length is {length})",
+                q.x, q.y, q.z, q.w
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn material_of(m: &gltf::Material) -> Material {
@@ -579,6 +634,27 @@ fn add_shading_attributes(
     Ok(())
 }
 
+/// The scheme of an absolute URI (`http` of `http://example.com/a.png`), when `uri` has
+/// one: glTF names files by relative references, and only `data:` URIs are read in place.
+/// (A one-letter "scheme" is a Windows drive, `C:`.)
+fn uri_scheme(uri: &str) -> Option<&str> {
+    let (scheme, _) = uri.split_once(':')?;
+    let mut chars = scheme.chars();
+    (scheme.len() > 1
+        && chars.next().is_some_and(|c| c.is_ascii_alphabetic())
+        && chars.all(|c| c.is_ascii_alphanumeric() || matches!(c, '+' | '-' | '.')))
+    .then_some(scheme)
+}
+
+/// Why a URI with a scheme other than `data:` is not read.
+fn not_fetched(uri: &str, scheme: &str) -> String {
+    let shown: String = uri.chars().take(80).collect();
+    format!(
+        "its URI '{shown}' is a {scheme}: URI, which raybench does not fetch (it reads files \
+         beside the glTF file and data: URIs)"
+    )
+}
+
 /// `%XX` escapes of a URI decoded (image file names with spaces).
 fn percent_decode(uri: &str) -> String {
     let b = uri.as_bytes();
@@ -651,6 +727,9 @@ fn texture_ref(
                     .decode(payload)
                     .map_err(|e| format!("bad base64 image: {e}"))?;
                 bytes(data)
+            }
+            None if uri_scheme(uri).is_some() => {
+                return Err(not_fetched(uri, uri_scheme(uri).unwrap_or_default()));
             }
             None => {
                 let file = path
@@ -820,6 +899,131 @@ mod tests {
         std::fs::write(&p, &json).unwrap();
         let e = load_gltf_file(&p).unwrap_err().to_string();
         assert!(e.contains("absent.bin"), "{e}");
+    }
+
+    /// A triangle glTF with its buffer embedded, whose node is `node` (JSON).
+    fn with_node(node: &str) -> String {
+        let (bin, _) = triangle_gltf(None);
+        let data_uri = format!(
+            "data:application/octet-stream;base64,{}",
+            base64::engine::general_purpose::STANDARD.encode(&bin)
+        );
+        let (_, json) = triangle_gltf(Some(&data_uri));
+        json.replace(r#"{"mesh": 0, "translation": [0, 0, 5]}"#, node)
+    }
+
+    /// An emitting mesh placed twice is copied, with one warning of plain words (no run
+    /// of spaces from a broken line continuation).
+    #[test]
+    fn an_instanced_emitter_is_copied_with_a_plain_warning() {
+        let json = with_node(r#"{"mesh": 0, "translation": [0, 0, 5]}, {"mesh": 0}"#)
+            .replacen(r#""nodes": [0]}"#, r#""nodes": [0, 1]}"#, 1)
+            .replacen(
+                r#""name": "m","#,
+                r#""name": "m", "emissiveFactor": [1, 1, 1],"#,
+                1,
+            );
+        let p = tmp("emitter.gltf");
+        std::fs::write(&p, &json).unwrap();
+        let scene = tmp("emitter.toml");
+        std::fs::write(
+            &scene,
+            "[[object]]\nkind = \"mesh\"\npath = \"emitter.gltf\"\n",
+        )
+        .unwrap();
+        let s = crate::format::load_toml_file(&scene, Path::new("/nonexistent")).unwrap();
+        assert_eq!(s.geometry.len(), 2);
+        let w: Vec<&String> = s
+            .warnings
+            .iter()
+            .filter(|w| w.contains("emits light"))
+            .collect();
+        assert_eq!(w.len(), 1, "{:?}", s.warnings);
+        assert!(
+            w[0].ends_with(
+                "glTF mesh 0 is placed 2 times but emits light: copied per placement \
+                 (instanced primitives are not sampled as lights in this version)"
+            ) && !w[0].contains("  "),
+            "{}",
+            w[0]
+        );
+    }
+
+    /// Node transforms that the `gltf` crate would read as another transform are refused,
+    /// naming the node and the cause.
+    #[test]
+    fn node_transforms_that_would_be_misread_are_refused() {
+        let cases = [
+            (
+                r#"{"mesh": 0, "matrix": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,5,1],
+                   "translation": [1, 0, 0]}"#,
+                "t.gltf: node 0: has both a matrix and translation (glTF allows one form or \
+                 the other)",
+            ),
+            (
+                r#"{"mesh": 0, "matrix": [1,0,0,0, 0,1,0,0, 0,0,1,0.5, 0,0,5,1]}"#,
+                "t.gltf: node 0: its matrix is projective: the last row is [0, 0, 0.5, 1], \
+                 not [0, 0, 0, 1]",
+            ),
+            (
+                r#"{"mesh": 0, "rotation": [0, 0, 0, 0]}"#,
+                "t.gltf: node 0: rotation [0, 0, 0, 0] is not a unit quaternion (its length \
+                 is 0)",
+            ),
+            (
+                r#"{"mesh": 0, "rotation": [0, 0, 0, 2]}"#,
+                "is not a unit quaternion (its length is 2)",
+            ),
+        ];
+        for (node, expected) in cases {
+            let e = load_gltf_bytes(with_node(node).as_bytes(), Path::new("t.gltf"))
+                .err()
+                .unwrap_or_else(|| panic!("accepted: {node}"))
+                .to_string();
+            assert!(e.contains(expected), "{node}: {e}");
+        }
+        // A matrix alone, and a rotation within rounding of unit length, load.
+        for node in [
+            r#"{"mesh": 0, "matrix": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,5,1]}"#,
+            r#"{"mesh": 0, "rotation": [0, 0, 0, 0.9999999], "translation": [0, 0, 5]}"#,
+        ] {
+            check(&load_gltf_bytes(with_node(node).as_bytes(), Path::new("t.gltf")).unwrap());
+        }
+    }
+
+    /// Remote URIs are not fetched, and said so: a buffer's is an error, a texture's a
+    /// warning that keeps the flat colour.
+    #[test]
+    fn remote_uris_are_not_fetched() {
+        let (_, json) = triangle_gltf(Some("http://example.com/tri.bin"));
+        let e = load_gltf_bytes(json.as_bytes(), Path::new("t.gltf"))
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            "t.gltf: buffer 0: its URI 'http://example.com/tri.bin' is a http: URI, which \
+             raybench does not fetch (it reads files beside the glTF file and data: URIs)"
+        );
+        let json = with_node(r#"{"mesh": 0, "translation": [0, 0, 5]}"#).replace(
+            r#""pbrMetallicRoughness": {"baseColorFactor": [1, 0, 0, 1]}"#,
+            r#""pbrMetallicRoughness": {"baseColorFactor": [1, 0, 0, 1],
+               "baseColorTexture": {"index": 0}}}], "textures": [{"source": 0}],
+               "images": [{"uri": "https://example.com/wood.png""#,
+        );
+        let data = load_gltf_bytes(json.as_bytes(), Path::new("t.gltf")).unwrap();
+        assert!(data.textures.is_empty());
+        assert_eq!(data.warnings.len(), 1, "{:?}", data.warnings);
+        assert!(
+            data.warnings[0].contains(
+                "texture 0 (baseColorTexture) cannot be used (its URI \
+                 'https://example.com/wood.png' is a https: URI, which raybench does not fetch"
+            ),
+            "{:?}",
+            data.warnings
+        );
+        assert_eq!(uri_scheme("C:/textures/a.png"), None);
+        assert_eq!(uri_scheme("wood%20grain.png"), None);
+        assert_eq!(uri_scheme("file:///a.png"), Some("file"));
     }
 
     #[test]

@@ -31,6 +31,38 @@ pub(crate) fn not_a_file_message(meta: &std::fs::Metadata) -> String {
     format!("is {what}, not a regular file")
 }
 
+/// What is at `path`, when it is not a regular file that can be opened: `missing`, `a
+/// dangling symbolic link`, `a folder`, `a FIFO (named pipe)`, a symbolic link loop or
+/// another error in the system's words. `Ok` for a regular file.
+pub(crate) fn probe(path: &Path) -> Result<(), String> {
+    match std::fs::metadata(path) {
+        Ok(meta) if meta.is_file() => Ok(()),
+        Ok(meta) => Err(not_a_file_message(&meta)
+            .trim_start_matches("is ")
+            .to_owned()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            if std::fs::symlink_metadata(path).is_ok() {
+                Err("a symbolic link to nothing".into())
+            } else {
+                Err("missing".into())
+            }
+        }
+        Err(e) => Err(os_error(&e)),
+    }
+}
+
+/// An error of the system in words, naming a symbolic link loop as one (its text,
+/// "too many levels of symbolic links", does not say so on every system).
+pub(crate) fn os_error(e: &std::io::Error) -> String {
+    // ELOOP: 40 on Linux, 62 on macOS and the BSDs.
+    let eloop = if cfg!(target_os = "linux") { 40 } else { 62 };
+    if cfg!(unix) && e.raw_os_error() == Some(eloop) {
+        format!("a symbolic link loop ({e})")
+    } else {
+        e.to_string()
+    }
+}
+
 /// The error for a path that exists but is no regular file ([`not_a_file_message`]).
 pub(crate) fn not_a_file(path: &Path, meta: &std::fs::Metadata) -> LoadError {
     LoadError::Parse {
@@ -66,6 +98,24 @@ pub(crate) const UTF8_BOM: &[u8] = b"\xef\xbb\xbf";
 /// `.bpt`, glTF JSON) accepts one.
 pub(crate) fn strip_bom(bytes: &[u8]) -> &[u8] {
     bytes.strip_prefix(UTF8_BOM).unwrap_or(bytes)
+}
+
+/// `bytes` with every line end that is a lone carriage return (the classic Mac OS
+/// convention) made a line feed: the line-oriented text formats read here (OBJ, MTL,
+/// `.bpt`) accept CR, LF and CR LF line ends. (TOML defines its own line ends, and PLY's
+/// header is read by `ply-rs-bw`: they are not changed.)
+pub(crate) fn lone_cr_to_lf(bytes: &[u8]) -> std::borrow::Cow<'_, [u8]> {
+    let lone = |i: usize| bytes[i] == b'\r' && bytes.get(i + 1) != Some(&b'\n');
+    if !(0..bytes.len()).any(lone) {
+        return std::borrow::Cow::Borrowed(bytes);
+    }
+    let mut out = bytes.to_vec();
+    for (i, b) in out.iter_mut().enumerate() {
+        if lone(i) {
+            *b = b'\n';
+        }
+    }
+    std::borrow::Cow::Owned(out)
 }
 
 /// A path's extension in lower case (empty when it has none).

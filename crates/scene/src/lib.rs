@@ -12,6 +12,18 @@
 //!
 //! Nothing here panics on bad input: every malformed, truncated or out-of-range file gives a
 //! [`LoadError`] that names the file and the problem.
+//!
+//! Every format draws the same line between errors and warnings. Refused: what the file's
+//! own layout does not describe (an OBJ face or a PLY face of fewer than three vertices,
+//! numbers beyond a PLY record's properties, a list running past the end of the file),
+//! values a scene file would refuse (an MTL `Ni` of 0 as `ior = 0`, `Ns` below 0 as
+//! `shininess`), and transforms a library would silently read as another (a glTF node with
+//! both a matrix and TRS properties, a projective matrix, a rotation that is no unit
+//! quaternion). Warned of, and loaded: what is legal, or common in files found in the
+//! wild, but surely not what was meant (self-intersecting polygons, bytes after a PLY
+//! file's last record, instances stacked by a zero spacing, a texture that cannot be used,
+//! which keeps its material's flat colour). A file a scene names that cannot be used is an
+//! error naming the scene file, the line and the table.
 
 mod bpt;
 mod budget;
@@ -62,7 +74,39 @@ pub fn assets_dir(explicit: Option<&Path>) -> PathBuf {
     if let Some(p) = std::env::var_os(ASSETS_ENV).filter(|p| !p.is_empty()) {
         return PathBuf::from(p);
     }
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets")
+    default_assets_dir()
+}
+
+/// `assets/` at the workspace root, with no `..` in it (it appears in messages): the
+/// canonical path when it exists, else the path normalised lexically.
+fn default_assets_dir() -> PathBuf {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
+    std::fs::canonicalize(&path).unwrap_or_else(|_| normalize_lexically(&path))
+}
+
+/// `path` with its `.` components dropped and each `..` taking away the component before
+/// it (without looking at the file system: a `..` after a symbolic link may differ).
+#[must_use]
+pub fn normalize_lexically(path: &Path) -> PathBuf {
+    use std::path::Component;
+    let mut out = PathBuf::new();
+    for c in path.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir => {
+                if matches!(out.components().next_back(), Some(Component::Normal(_))) {
+                    out.pop();
+                } else if !matches!(
+                    out.components().next_back(),
+                    Some(Component::RootDir | Component::Prefix(_))
+                ) {
+                    out.push("..");
+                }
+            }
+            c => out.push(c),
+        }
+    }
+    out
 }
 
 /// Loads the scene named by `spec`: an existing file path, a built-in scene name or a
@@ -82,8 +126,16 @@ pub fn load(spec: &str, assets: &Path) -> Result<Scene, LoadError> {
     if generators::is_generator_spec(spec) {
         return generators::generate_scene(spec);
     }
-    if let Ok(meta) = std::fs::metadata(path) {
-        return Err(io::not_a_file(path, &meta));
+    match std::fs::metadata(path) {
+        Ok(meta) => return Err(io::not_a_file(path, &meta)),
+        // A symbolic link loop, a folder that cannot be read: the system's words.
+        Err(cause) if cause.kind() != std::io::ErrorKind::NotFound => {
+            return Err(LoadError::Io {
+                path: path.to_owned(),
+                cause,
+            });
+        }
+        Err(_) => {}
     }
     if path.extension().is_some() || spec.contains('/') {
         return Err(LoadError::NotFound {
@@ -113,6 +165,48 @@ pub fn load_file(path: &Path, assets: &Path) -> Result<Scene, LoadError> {
 mod tests {
     use super::*;
     use raybench_core::Vec3;
+
+    /// A scene path that is a symbolic link loop says so (it was "file not found"); a
+    /// missing one is not found.
+    #[cfg(unix)]
+    #[test]
+    fn a_symbolic_link_loop_is_named() {
+        let dir = std::env::temp_dir().join(format!("raybench-loop-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let link = dir.join("loop.obj");
+        std::fs::remove_file(&link).ok();
+        std::os::unix::fs::symlink("loop.obj", &link).unwrap();
+        let e = load(link.to_str().unwrap(), &dir).unwrap_err().to_string();
+        assert!(e.contains("loop.obj: a symbolic link loop ("), "{e}");
+        let e = load_file(&link, &dir).unwrap_err().to_string();
+        assert!(e.contains("loop.obj: a symbolic link loop ("), "{e}");
+        let absent = dir.join("absent.obj");
+        let e = load(absent.to_str().unwrap(), &dir)
+            .unwrap_err()
+            .to_string();
+        assert!(e.ends_with("absent.obj: file not found"), "{e}");
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    /// The default assets folder appears in messages: no `..` in it.
+    #[test]
+    fn the_default_assets_folder_is_normalised() {
+        let dir = default_assets_dir();
+        assert!(dir.is_absolute(), "{}", dir.display());
+        assert!(
+            !dir.components()
+                .any(|c| matches!(c, std::path::Component::ParentDir)),
+            "{}",
+            dir.display()
+        );
+        assert!(dir.ends_with("assets"), "{}", dir.display());
+        assert_eq!(
+            normalize_lexically(Path::new("/a/b/crates/cli/../../../assets/./x")),
+            Path::new("/a/assets/x")
+        );
+        assert_eq!(normalize_lexically(Path::new("/../a")), Path::new("/a"));
+        assert_eq!(normalize_lexically(Path::new("../a/..")), Path::new(".."));
+    }
 
     /// Every text format accepts a leading UTF-8 byte-order mark: the first
     /// line is not swallowed into a garbage keyword.

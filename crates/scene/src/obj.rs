@@ -145,7 +145,9 @@ pub fn material_from_mtl(m: &tobj::Material) -> Material {
         }),
         shininess: m.shininess.unwrap_or(d.shininess),
         emission,
-        ior: m.optical_density.filter(|&n| n > 0.0).unwrap_or(d.ior),
+        // As in scene files, an index of refraction that is not above 0 is refused (by
+        // the scene builder), not replaced.
+        ior: m.optical_density.unwrap_or(d.ior),
         checker: None,
         base_color_texture: None,
         emission_texture: None,
@@ -269,6 +271,8 @@ fn load_mtl(path: &Path, text: Option<String>) -> Result<tobj::MTLLoadResult, Lo
     let Some(text) = text else {
         return Ok(Err(tobj::LoadError::OpenFileFailed));
     };
+    let text = crate::io::lone_cr_to_lf(text.as_bytes());
+    let text = String::from_utf8_lossy(&text);
     check_mtl(&text).map_err(|message| LoadError::Parse {
         path: path.to_owned(),
         message: format!("malformed material library: {message}"),
@@ -278,7 +282,9 @@ fn load_mtl(path: &Path, text: Option<String>) -> Result<tobj::MTLLoadResult, Lo
 
 /// The statements of an MTL file that tobj parses, checked as it would parse them: each
 /// colour (`Ka`, `Kd`, `Ks`, `Ke`) exactly three finite numbers, `Ns`, `Ni` and `d` one,
-/// `illum` one whole number, `newmtl` and every map a name. The first fault, with its line.
+/// `illum` one whole number, `newmtl` and every map a name; and the values as scene files
+/// check them: `Ns` (shininess) at least 0 and `Ni` (index of refraction) above 0. The
+/// first fault, with its line.
 fn check_mtl(text: &str) -> Result<(), String> {
     let numbers = |key: &str, args: &[&str], n: usize| {
         let ok = args.len() == n
@@ -293,6 +299,13 @@ fn check_mtl(text: &str) -> Result<(), String> {
             )
         })
     };
+    // One finite number within a range, for the field `name`.
+    let bounded = |key: &str, args: &[&str], name: &str, ok: fn(f32) -> bool, range: &str| {
+        numbers(key, args, 1).or_else(|| {
+            let v: f32 = args[0].parse().unwrap_or(f32::NAN);
+            (!ok(v)).then(|| format!("`{key}` ({name}) must be {range}, found `{}`", args[0]))
+        })
+    };
     for (i, line) in text.lines().enumerate() {
         // A comment may follow a statement (`Ka 0.63 0.065 0.05 # Red`, in the Cornell
         // box's library).
@@ -302,7 +315,9 @@ fn check_mtl(text: &str) -> Result<(), String> {
         let args: Vec<&str> = words.collect();
         let fault = match key {
             "Ka" | "Kd" | "Ks" | "Ke" => numbers(key, &args, 3),
-            "Ns" | "Ni" | "d" => numbers(key, &args, 1),
+            "Ns" => bounded(key, &args, "shininess", |v| v >= 0.0, "at least 0"),
+            "Ni" => bounded(key, &args, "index of refraction", |v| v > 0.0, "above 0"),
+            "d" => numbers(key, &args, 1),
             "illum" => (args.len() != 1 || args[0].parse::<u32>().is_err())
                 .then(|| format!("`illum` needs one whole number, found `{}`", args.join(" "))),
             "newmtl" => args.is_empty().then(|| "`newmtl` needs a name".to_string()),
@@ -337,8 +352,9 @@ pub fn load_obj_bytes(bytes: &[u8], path: &Path) -> Result<MeshData, LoadError> 
 /// Refuses face, line and point elements with an index beyond `u32` in magnitude or a
 /// relative (negative) index reaching before the first element: `tobj` turns the latter
 /// into huge indices and multiplies texture and normal indices unchecked (an overflow, a
-/// panic in debug builds). No mesh has more than `u32::MAX` vertices.
-fn check_index_magnitudes(bytes: &[u8], path: &Path) -> Result<(), LoadError> {
+/// panic in debug builds). No mesh has more than `u32::MAX` vertices. Refuses faces of
+/// fewer than three vertices too, as PLY and scene files do (`tobj` drops them unsaid).
+fn check_elements(bytes: &[u8], path: &Path) -> Result<(), LoadError> {
     // Positions, texture coordinates and normals seen so far.
     let mut counts = [0u64; 3];
     for (n, line) in bytes.split(|&b| b == b'\n').enumerate() {
@@ -351,7 +367,17 @@ fn check_index_magnitudes(bytes: &[u8], path: &Path) -> Result<(), LoadError> {
             Some("v") => counts[0] += 1,
             Some("vt") => counts[1] += 1,
             Some("vn") => counts[2] += 1,
-            Some("f" | "l" | "p") => {
+            Some(key @ ("f" | "l" | "p")) => {
+                let corners = words.clone().count();
+                if key == "f" && corners < 3 {
+                    return Err(LoadError::Parse {
+                        path: path.to_owned(),
+                        message: format!(
+                            "line {}: a face needs at least 3 vertices, found {corners}",
+                            n + 1
+                        ),
+                    });
+                }
                 let bad = words.any(|w| {
                     w.split('/').zip(counts).any(|(i, count)| {
                         i.parse::<i64>().is_ok_and(|i| {
@@ -478,8 +504,9 @@ fn parse_obj(
     mtl: impl Fn(&Path) -> tobj::MTLLoadResult,
     texture_dir: impl Fn(usize) -> Option<PathBuf>,
 ) -> Result<MeshData, LoadError> {
-    let bytes = crate::io::strip_bom(bytes);
-    check_index_magnitudes(bytes, path)?;
+    let bytes = crate::io::lone_cr_to_lf(crate::io::strip_bom(bytes));
+    let bytes = &bytes[..];
+    check_elements(bytes, path)?;
     let (models, materials) =
         tobj::load_obj_buf(&mut { bytes }, &OBJ_OPTIONS, mtl).map_err(|e| LoadError::Parse {
             path: path.to_owned(),
@@ -586,4 +613,143 @@ fn parse_obj(
         message: e.to_string(),
     })?;
     Ok(data)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A fresh scratch folder `name` for this module's tests.
+    fn dir(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("raybench-obj-{}-{name}", std::process::id()));
+        std::fs::remove_dir_all(&d).ok();
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    /// A triangle whose material library is `mtl`, written in `dir`; the loader's result.
+    fn with_mtl(dir: &Path, mtl: &str) -> Result<MeshData, LoadError> {
+        std::fs::write(dir.join("m.mtl"), mtl).unwrap();
+        let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n";
+        std::fs::write(dir.join("t.obj"), obj).unwrap();
+        load_obj_file(&dir.join("t.obj"))
+    }
+
+    /// MTL values are refused where scene files refuse them, and the message names the
+    /// statement and the field it sets (not another one): no value is silently replaced.
+    #[test]
+    fn mtl_values_are_refused_as_scene_files_refuse_them() {
+        let d = dir("mtl-values");
+        let cases = [
+            ("Ns nan", "line 2: `Ns` needs 1 finite number, found `nan`"),
+            (
+                "Ns -50",
+                "line 2: `Ns` (shininess) must be at least 0, found `-50`",
+            ),
+            (
+                "Ni 0",
+                "line 2: `Ni` (index of refraction) must be above 0, found `0`",
+            ),
+            (
+                "Ni -1.5",
+                "`Ni` (index of refraction) must be above 0, found `-1.5`",
+            ),
+            ("Ni nan", "line 2: `Ni` needs 1 finite number, found `nan`"),
+            (
+                "Kd a b c",
+                "line 2: `Kd` needs 3 finite numbers, found `a b c`",
+            ),
+            (
+                "Kd 1 1 1 1",
+                "line 2: `Kd` needs 3 finite numbers, found `1 1 1 1`",
+            ),
+            (
+                "illum banana",
+                "line 2: `illum` needs one whole number, found `banana`",
+            ),
+        ];
+        for (statement, needle) in cases {
+            let e = with_mtl(&d, &format!("newmtl a\n{statement}\n"))
+                .err()
+                .unwrap_or_else(|| panic!("accepted: {statement}"))
+                .to_string();
+            assert!(e.contains("m.mtl: malformed material library: "), "{e}");
+            assert!(e.contains(needle), "{statement}: {e}");
+        }
+        // In range: accepted and kept.
+        let data = with_mtl(&d, "newmtl a\nNs 0\nNi 1.33\nillum 4\n").unwrap();
+        assert_eq!(data.materials[0].ior, 1.33);
+        assert_eq!(data.materials[0].shininess, 0.0);
+        // `material_from_mtl` passes the index on: the scene builder refuses it, as it
+        // refuses `ior = 0` in a scene file.
+        let m = tobj::Material {
+            optical_density: Some(0.0),
+            ..Default::default()
+        };
+        assert_eq!(material_from_mtl(&m).ior, 0.0);
+        let e = raybench_core::SceneBuilder::new("t")
+            .add_material(material_from_mtl(&m))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("ior 0 must be positive"), "{e}");
+        // Scene files: the shininess is named as such.
+        for (value, needle) in [
+            ("nan", "shininess NaN must be finite"),
+            ("-50", "shininess -50 must be finite and at least 0"),
+        ] {
+            let text = format!(
+                "[[material]]\nname = \"a\"\nshininess = {value}\n[[object]]\n\
+                 kind = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n"
+            );
+            let e = crate::format::load_scene_str(&text, "t", None, Path::new("/nonexistent"))
+                .err()
+                .unwrap_or_else(|| panic!("accepted: {value}"))
+                .to_string();
+            assert!(e.contains(needle) && !e.contains("ior"), "{e}");
+        }
+    }
+
+    /// A face of fewer than three vertices is refused with its line, as PLY and scene
+    /// files refuse one (it was dropped unsaid).
+    #[test]
+    fn two_vertex_faces_are_refused() {
+        let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2\n";
+        let e = load_obj_bytes(obj.as_bytes(), Path::new("t.obj"))
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            "t.obj: line 5: a face needs at least 3 vertices, found 2"
+        );
+        // Lines (`l 1 2`) and points stay ignored.
+        let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nl 1 2\np 1\n";
+        let data = load_obj_bytes(obj.as_bytes(), Path::new("t.obj")).unwrap();
+        assert_eq!(data.mesh.indices.len(), 1);
+    }
+
+    /// Lines ending in CR alone (classic Mac OS) read as lines, in the OBJ file and in its
+    /// material library.
+    #[test]
+    fn cr_line_ends_are_line_ends() {
+        let d = dir("cr");
+        std::fs::write(d.join("m.mtl"), "newmtl a\rKd 0.5 0.25 1\r").unwrap();
+        let obj = "mtllib m.mtl\rv 0 0 0\rv 1 0 0\rv 0 1 0\rv 1 1 0\rusemtl a\rf 1 2 3\rf 2 4 3\r";
+        std::fs::write(d.join("t.obj"), obj).unwrap();
+        let data = load_obj_file(&d.join("t.obj")).unwrap();
+        assert_eq!(data.mesh.indices, [[0, 1, 2], [1, 3, 2]]);
+        assert_eq!(data.materials[0].base_color, Vec3::new(0.5, 0.25, 1.0));
+        // Mixed with CR LF.
+        let data = load_obj_bytes(
+            b"v 0 0 0\r\nv 1 0 0\rv 0 1 0\r\nf 1 2 3",
+            Path::new("t.obj"),
+        )
+        .unwrap();
+        assert_eq!(data.mesh.indices.len(), 1);
+        // A patch file too.
+        let mut bpt = String::from("1\r3 3\r");
+        for k in 0..16 {
+            bpt += &format!("{} {} 0\r", k % 4, k / 4);
+        }
+        assert_eq!(crate::parse_bpt(&bpt, Path::new("p.bpt")).unwrap().len(), 1);
+    }
 }

@@ -34,8 +34,10 @@ pub(crate) type Reserve<'a> = &'a mut dyn FnMut(u64) -> Result<(), LoadError>;
 /// more records than the file could hold or more than the limits allow, or lacks the
 /// `vertex` element or its `x`, `y`, `z`; when a record is truncated or malformed, a
 /// coordinate, normal or texture coordinate is not finite, a face has fewer than three
-/// vertices or a vertex index out of range. The error names the element, the record and
-/// its line (ASCII) or byte offset (binary).
+/// vertices or a vertex index out of range; when an ASCII record has more numbers than
+/// the header's properties take, or a binary list's length runs past the file. The error
+/// names the element, the record and its line (ASCII) or byte offset (binary). Bytes
+/// after the last record (padding, or a header declaring too few records) are a warning.
 pub fn load_ply_file(path: &Path) -> Result<MeshData, LoadError> {
     load_ply_file_reserving(path, &mut |_| Ok(()))
 }
@@ -436,16 +438,66 @@ impl Body<'_> {
                 let line = self.next_line()?;
                 let text =
                     std::str::from_utf8(line).map_err(|_| "the line is not text".to_owned())?;
-                parser
+                let record = parser
                     .read_ascii_element(text, def)
-                    .map_err(|e| ascii_cause(&e))
+                    .map_err(|e| ascii_cause(&e))?;
+                // `ply-rs-bw` ignores numbers beyond the properties.
+                let (found, needed) = ascii_words(text, def);
+                if found > needed {
+                    return Err(format!(
+                        "{found} numbers where the header's properties take {needed} (the \
+                         header does not describe this line)"
+                    ));
+                }
+                Ok(record)
             }
-            Encoding::BinaryLittleEndian => parser
-                .read_little_endian_element(&mut self.rest, def)
-                .map_err(|e| binary_cause(&e)),
-            Encoding::BinaryBigEndian => parser
-                .read_big_endian_element(&mut self.rest, def)
-                .map_err(|e| binary_cause(&e)),
+            Encoding::BinaryLittleEndian | Encoding::BinaryBigEndian => {
+                let start = self.rest;
+                let big = self.encoding == Encoding::BinaryBigEndian;
+                let read = if big {
+                    parser.read_big_endian_element(&mut self.rest, def)
+                } else {
+                    parser.read_little_endian_element(&mut self.rest, def)
+                };
+                read.map_err(|e| {
+                    if e.kind() == std::io::ErrorKind::UnexpectedEof {
+                        list_too_long(start, def, big).unwrap_or_else(truncated)
+                    } else {
+                        first_line(&e)
+                    }
+                })
+            }
+        }
+    }
+
+    /// What is left after the last record, when it is more than blank space, as a
+    /// warning's words: the records hold less than the file (a header declaring too few
+    /// records, or another file appended). Warned of, not refused: some writers pad files.
+    fn leftover(&self) -> Option<String> {
+        let rest = self.rest;
+        match self.encoding {
+            Encoding::Ascii => {
+                let lines = rest
+                    .split(|&b| b == b'\n')
+                    .filter(|l| !l.trim_ascii().is_empty())
+                    .count();
+                (lines > 0).then(|| {
+                    format!(
+                        "{lines} non-blank line{} after the last record (from line {}) are \
+                         ignored: the header declares fewer records than the file holds",
+                        if lines == 1 { "" } else { "s" },
+                        self.line
+                    )
+                })
+            }
+            _ => (!rest.is_empty()).then(|| {
+                format!(
+                    "{} bytes after the last record (from byte {}) are ignored: the header \
+                     declares fewer records than the file holds",
+                    rest.len(),
+                    self.len - rest.len()
+                )
+            }),
         }
     }
 
@@ -505,16 +557,68 @@ impl Body<'_> {
     }
 }
 
-fn truncated() -> String {
-    "the file ends inside this record (truncated)".into()
+/// The numbers on an ASCII record's line, and how many the properties of `def` take (a
+/// list takes its length and its entries), counted once the record has parsed.
+fn ascii_words(line: &str, def: &ElementDef) -> (usize, usize) {
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let mut needed = 0usize;
+    for p in def.properties.values() {
+        needed += match &p.data_type {
+            PropertyType::Scalar(_) => 1,
+            PropertyType::List(..) => {
+                let n = words
+                    .get(needed)
+                    .and_then(|w| w.parse::<f64>().ok())
+                    .unwrap_or(0.0);
+                1 + n as usize
+            }
+        };
+    }
+    (words.len(), needed)
 }
 
-/// The cause of a failed binary record, in one line.
-fn binary_cause(e: &ParseError) -> String {
-    if e.kind() == std::io::ErrorKind::UnexpectedEof {
-        return truncated();
+/// Why a binary record of `def` starting at `bytes` ran past the file, when a list's
+/// length is the cause: the length and what it needs, against what the file has left.
+/// `None` when every list fits (the file ends inside the record: truncated).
+fn list_too_long(bytes: &[u8], def: &ElementDef, big: bool) -> Option<String> {
+    let mut at = 0u64;
+    for (name, p) in &def.properties {
+        match &p.data_type {
+            PropertyType::Scalar(t) => at += scalar_bytes(t),
+            PropertyType::List(count, t) => {
+                let size = scalar_bytes(count);
+                let raw = bytes.get(at as usize..(at + size) as usize)?;
+                let mut word = [0u8; 8];
+                if big {
+                    word[8 - raw.len()..].copy_from_slice(raw);
+                } else {
+                    word[..raw.len()].copy_from_slice(raw);
+                }
+                let n = if big {
+                    u64::from_be_bytes(word)
+                } else {
+                    u64::from_le_bytes(word)
+                };
+                // Signed count types: a negative length is read as huge, and is wrong too.
+                at += size;
+                let need = n.saturating_mul(scalar_bytes(t));
+                let left = (bytes.len() as u64).saturating_sub(at);
+                if need > left {
+                    return Some(format!(
+                        "the file ends inside this record: its list '{name}' of {n} entries \
+                         needs {need} bytes, {left} are left (a corrupt list length, or a \
+                         truncated file)"
+                    ));
+                }
+                at += need;
+            }
+        }
     }
-    first_line(e)
+    None
+}
+
+fn truncated() -> String {
+    "the file ends inside this record (truncated)".into()
 }
 
 /// The cause of a failed ASCII record, in one line.
@@ -727,6 +831,9 @@ fn parse_ply(bytes: &[u8], path: &Path, reserve: Reserve<'_>) -> Result<MeshData
         }
     }
 
+    if let Some(why) = body.leftover() {
+        data.warnings.push(format!("{}: {why}", path.display()));
+    }
     // The triangles beyond one per face, reserved before they are made.
     reserve(triangles - plan.faces as u64)?;
     let polygons = PolygonMesh {

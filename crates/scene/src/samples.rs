@@ -20,6 +20,16 @@ pub enum SampleFormat {
 }
 
 impl SampleFormat {
+    /// The name scene files give the type (`u16`).
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::U8 => "u8",
+            Self::U16 => "u16",
+            Self::F32 => "f32",
+        }
+    }
+
     /// Bytes per sample.
     #[must_use]
     pub fn bytes(self) -> u64 {
@@ -169,12 +179,83 @@ fn check_raw_count(
     Ok(count * format.bytes())
 }
 
+/// The error for a raw file of `len` bytes where `count` samples of `format` need another
+/// size: too short (truncated) or too long.
 fn size_mismatch(path: &Path, len: u64, count: u64, format: SampleFormat) -> LoadError {
     let expected = count * format.bytes();
+    let what = if len < expected { "short" } else { "long" };
     raw_err(
         path,
-        format!("raw file holds {len} bytes; {count} {format:?} samples need {expected}"),
+        format!(
+            "raw file holds {len} bytes, too {what} for {count} {} samples ({expected} bytes): \
+             check the declared dimensions and format",
+            format.name()
+        ),
     )
+}
+
+/// Images of at most this many pixels are never refused for their compression ratio
+/// ([`check_expansion`]): 2048 x 2048, some 80 MB decoded.
+pub(crate) const EXPANSION_FREE_PIXELS: u64 = 1 << 22;
+
+/// The most pixels a larger image may have per byte of its file unless the user set the
+/// memory budget ([`check_expansion`]). Photographs and painted textures have well under
+/// 10 (a PNG or JPEG byte holds a few pixels at best); a 783 KB PNG of 16384 x 16384
+/// zeros has 343 and would take gigabytes once decoded.
+pub(crate) const MAX_PIXELS_PER_FILE_BYTE: u64 = 64;
+
+/// Refuses a `w x h` image whose file of `file_bytes` bytes decodes to far more than it
+/// holds (a decompression bomb, or a flat image better given as a colour): above
+/// [`EXPANSION_FREE_PIXELS`] pixels, more than [`MAX_PIXELS_PER_FILE_BYTE`] per byte. A
+/// memory budget the user set (`user_limit`) lifts the check: the budget alone then
+/// decides.
+///
+/// # Errors
+/// A sentence with the sizes and how to lift the check.
+pub(crate) fn check_expansion(
+    w: u32,
+    h: u32,
+    file_bytes: u64,
+    user_limit: bool,
+) -> Result<(), String> {
+    let pixels = u64::from(w) * u64::from(h);
+    if user_limit
+        || pixels <= EXPANSION_FREE_PIXELS
+        || pixels <= MAX_PIXELS_PER_FILE_BYTE.saturating_mul(file_bytes)
+    {
+        return Ok(());
+    }
+    Err(format!(
+        "{w} x {h} pixels from a file of {}: {} pixels per byte, over the {} that the default \
+         memory budget allows an image of more than {} pixels (a decompression bomb?); set \
+         --memory-limit or RAYBENCH_MEMORY_LIMIT to decode it",
+        crate::budget::human_bytes(file_bytes),
+        pixels / file_bytes.max(1),
+        MAX_PIXELS_PER_FILE_BYTE,
+        EXPANSION_FREE_PIXELS
+    ))
+}
+
+/// An image decoder's error in one line of words: its first line, with the Debug form of
+/// a PNG chunk type (`ChunkType { type: IHDR, critical: true, .. }`) given as its name.
+pub(crate) fn image_error_words(e: &image::ImageError) -> String {
+    let text = e.to_string();
+    let mut line = text.lines().next().unwrap_or_default().trim().to_owned();
+    while let Some(at) = line.find(" { type: ") {
+        let name_start = line[..at]
+            .rfind(|c: char| !c.is_alphanumeric() && c != '_')
+            .map_or(0, |i| i + 1);
+        let value_start = at + " { type: ".len();
+        let Some(end) = line[at..].find('}').map(|i| at + i + 1) else {
+            break;
+        };
+        let value: String = line[value_start..end]
+            .chars()
+            .take_while(|c| c.is_alphanumeric())
+            .collect();
+        line.replace_range(name_start..end, &value);
+    }
+    line.trim_end_matches(['.', ' ']).to_owned()
 }
 
 /// Why [`decode_checked`] gave no image.
@@ -200,7 +281,7 @@ pub(crate) fn decode_checked<R: std::io::BufRead + std::io::Seek>(
 ) -> Result<image::DynamicImage, DecodeError> {
     let (w, h) = open()?
         .into_dimensions()
-        .map_err(|e| DecodeError::Unreadable(e.to_string()))?;
+        .map_err(|e| DecodeError::Unreadable(image_error_words(&e)))?;
     check(w, h).map_err(DecodeError::Refused)?;
     let pixels = u64::from(w) * u64::from(h);
     reserve(pixels).map_err(DecodeError::Fatal)?;
@@ -210,7 +291,7 @@ pub(crate) fn decode_checked<R: std::io::BufRead + std::io::Seek>(
     reader.limits(limits);
     reader
         .decode()
-        .map_err(|e| DecodeError::Unreadable(e.to_string()))
+        .map_err(|e| DecodeError::Unreadable(image_error_words(&e)))
 }
 
 /// Decodes the image at `path` as `format` (`what` names it in errors: `PNG`), refusing
@@ -232,6 +313,16 @@ pub(crate) fn decode_image(
     bytes_per_pixel: u64,
     reserve: impl FnOnce(u64) -> Result<(), LoadError>,
 ) -> Result<image::DynamicImage, LoadError> {
+    // The file's length, which the decoded size is checked against.
+    let file_bytes = match contents {
+        Some(bytes) => bytes.len() as u64,
+        None => {
+            // A FIFO would block the reader.
+            crate::io::check_regular_file(path)?;
+            std::fs::metadata(path).map_or(u64::MAX, |m| m.len())
+        }
+    };
+    let user_limit = crate::budget::MemoryBudget::current().is_ok_and(|b| b.is_set_by_user());
     let check = |w: u32, h: u32| {
         let pixels = u64::from(w) * u64::from(h);
         if pixels > max_pixels {
@@ -239,7 +330,7 @@ pub(crate) fn decode_image(
                 "{w} x {h} image has {pixels} pixels (limit {max_pixels})"
             ));
         }
-        Ok(())
+        check_expansion(w, h, file_bytes, user_limit)
     };
     let decoded = if let Some(bytes) = contents {
         let open = || {
@@ -249,8 +340,6 @@ pub(crate) fn decode_image(
         };
         decode_checked(open, check, reserve, 2 * bytes_per_pixel)
     } else {
-        // A FIFO would block the reader.
-        crate::io::check_regular_file(path)?;
         let open = || {
             let mut r = image::ImageReader::open(path).map_err(|cause| {
                 DecodeError::Fatal(LoadError::Io {

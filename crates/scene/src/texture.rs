@@ -1,8 +1,10 @@
 //! The image textures mesh files name (OBJ `map_Kd`, glTF `baseColorTexture` and
 //! `emissiveTexture`): where each image is, and its decoding (PNG or JPEG through `image`,
 //! sRGB to linear) once per scene. A texture that is missing, undecodable or too large is a
-//! warning, and its material keeps its flat colour; the memory budget refuses textures the
-//! scene cannot hold.
+//! warning, and its material keeps its flat colour, as is one whose file is far smaller than
+//! its decoded texels unless the user set the memory budget
+//! ([`crate::samples::check_expansion`]); the memory budget refuses textures the scene
+//! cannot hold.
 
 use crate::budget::{Holds, Reservation};
 use crate::error::LoadError;
@@ -94,19 +96,20 @@ pub(crate) fn decode(
     let open = || {
         let r = image::ImageReader::new(Cursor::new(&bytes[..]))
             .with_guessed_format()
-            .map_err(|e| DecodeError::Unreadable(e.to_string()))?;
+            .map_err(|e| DecodeError::Unreadable(crate::io::os_error(&e)))?;
         if r.format().is_none() {
             return Err(DecodeError::Unreadable("not a PNG or JPEG image".into()));
         }
         Ok(r)
     };
+    let user_limit = budget.is_set_by_user();
     let check = |w: u32, h: u32| {
         if w == 0 || h == 0 || w > MAX_TEXTURE_SIZE || h > MAX_TEXTURE_SIZE {
             return Err(format!(
                 "{w} x {h} texels (each side must be 1 to {MAX_TEXTURE_SIZE})"
             ));
         }
-        Ok(())
+        crate::samples::check_expansion(w, h, bytes.len() as u64, user_limit)
     };
     let reserve = |texels| {
         budget.reserve(
@@ -166,6 +169,7 @@ pub(crate) fn add_textures(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use image::ImageEncoder as _;
 
     /// A `w x h` black PNG as a texture of encoded bytes.
     fn png(w: u32, h: u32) -> TextureRef {
@@ -185,6 +189,97 @@ mod tests {
                 bytes: out.into_inner().into(),
             },
             wrap: [Wrap::Repeat; 2],
+        }
+    }
+
+    /// A texture whose file is far smaller than its texels (a decompression bomb) is a
+    /// warning under the default budget, and decoded under a budget the user set.
+    #[test]
+    fn a_texture_that_expands_too_much_needs_a_user_limit() {
+        // Black, compressed as well as PNG can: some 300 pixels a byte.
+        let mut file = Vec::new();
+        image::codecs::png::PngEncoder::new_with_quality(
+            &mut file,
+            image::codecs::png::CompressionType::Best,
+            image::codecs::png::FilterType::NoFilter,
+        )
+        .write_image(
+            &vec![0; 2048 * 2049 * 3],
+            2048,
+            2049,
+            image::ExtendedColorType::Rgb8,
+        )
+        .unwrap();
+        assert!(file.len() < 20_000, "{}", file.len());
+        let bomb = TextureRef {
+            name: "2048x2049".into(),
+            source: ImageSource::Bytes {
+                key: "bomb".into(),
+                bytes: file.into(),
+            },
+            wrap: [Wrap::Repeat; 2],
+        };
+        let mut b = SceneBuilder::new("t");
+        let mut budget = Reservation::with_limit(1 << 30);
+        let ids = add_textures(&mut b, std::slice::from_ref(&bomb), &mut budget, "s").unwrap();
+        assert_eq!(ids, [None]);
+        let s = b.build();
+        assert_eq!(s.warnings.len(), 1);
+        let w = &s.warnings[0];
+        assert!(
+            w.starts_with(
+                "s: texture 2048x2049 cannot be used (2048 x 2049 pixels from a file of "
+            ) && w.contains("over the 64 that the default memory budget allows")
+                && w.contains("set --memory-limit or RAYBENCH_MEMORY_LIMIT to decode it")
+                && w.ends_with("its material keeps its flat colour"),
+            "{w}"
+        );
+        // 2048 x 2048 is decoded whatever its file's size.
+        let mut b = SceneBuilder::new("t");
+        assert_eq!(
+            add_textures(&mut b, &[png(2048, 2048)], &mut budget, "s").unwrap(),
+            [Some(0)]
+        );
+        let mut b = SceneBuilder::new("t");
+        let mut user = Reservation::with_user_limit(1 << 30);
+        assert_eq!(
+            add_textures(&mut b, &[bomb], &mut user, "s").unwrap(),
+            [Some(0)]
+        );
+    }
+
+    /// A decoder's error is one line of words: no Debug form of the decoder's types, no
+    /// line break.
+    #[test]
+    fn decoder_errors_are_one_line_of_words() {
+        let TextureRef {
+            source: ImageSource::Bytes { bytes, .. },
+            ..
+        } = png(4, 4)
+        else {
+            unreachable!()
+        };
+        let mut crc = bytes.to_vec();
+        crc[25] = 9; // inside IHDR: its CRC no longer matches
+        let mut jpeg = b"\xff\xd8\xff\xe0junk".to_vec();
+        jpeg.truncate(8);
+        for (data, needle) in [(crc, "while decoding IHDR chunk"), (jpeg, "Jpeg")] {
+            let tex = TextureRef {
+                name: "x".into(),
+                source: ImageSource::Bytes {
+                    key: needle.into(),
+                    bytes: data.into(),
+                },
+                wrap: [Wrap::Repeat; 2],
+            };
+            let mut b = SceneBuilder::new("t");
+            add_textures(&mut b, &[tex], &mut Reservation::with_limit(1 << 30), "s").unwrap();
+            let w = &b.build().warnings[0];
+            assert!(w.contains(needle), "{w}");
+            assert!(
+                !w.contains('\n') && !w.contains(" { ") && !w.contains(".)"),
+                "{w}"
+            );
         }
     }
 

@@ -490,7 +490,8 @@ fn malformed_records_name_their_place() {
         assert_error(
             &b,
             &format!(
-                "face 1 (byte {}): the file ends inside this record (truncated)",
+                "face 1 (byte {}): the file ends inside this record: its list \
+                 'vertex_indices' of 5 entries needs 20 bytes, 16 are left",
                 body + 48
             ),
         );
@@ -563,7 +564,8 @@ fn malformed_records_name_their_place() {
     assert_error(
         &b,
         &format!(
-            "edge 2 (byte {}): the file ends inside this record (truncated)",
+            "edge 2 (byte {}): the file ends inside this record: its list 'b' of 2 entries \
+             needs 8 bytes, 6 are left",
             header_len(&b) + 48 + 13
         ),
     );
@@ -702,4 +704,79 @@ fn ply_files_are_meshes_and_scenes() {
         "{e}"
     );
     std::fs::remove_dir_all(dir).ok();
+}
+
+/// A record the header does not describe is refused: an ASCII line with more numbers
+/// than the properties take, a binary list whose length runs past the file (said so,
+/// not "truncated"). Bytes after the last record are a warning (some writers pad files).
+#[test]
+fn records_the_header_does_not_describe() {
+    let (positions, polys) = quad();
+    let good = |enc| ply(enc, "", &[vertices(&positions), faces(&polys)]);
+    let ascii = String::from_utf8(good(Enc::Ascii)).unwrap();
+    let ascii_with = |from: &str, to: &str| ascii.replacen(from, to, 1).into_bytes();
+    assert_error(
+        &ascii_with("1 0 0\n", "1 0 0 7\n"),
+        "vertex 2 (line 11): 4 numbers where the header's properties take 3",
+    );
+    assert_error(
+        &ascii_with("4 0 1 2 3", "4 0 1 2 3 0"),
+        "face 1 (line 14): 6 numbers where the header's properties take 5",
+    );
+    for enc in [Enc::Le, Enc::Be] {
+        let mut bytes = good(enc);
+        // The face's list length is its record's first byte, 17 bytes before the end.
+        let at = bytes.len() - 17;
+        assert_eq!(bytes[at], 4);
+        bytes[at] = 255;
+        let e = error(&bytes);
+        assert!(
+            e.contains("face 1 (byte ")
+                && e.contains(
+                    "the file ends inside this record: its list 'vertex_indices' of 255 \
+                     entries needs 1020 bytes, 16 are left (a corrupt list length, or a \
+                     truncated file)"
+                ),
+            "{enc:?}: {e}"
+        );
+        // A record cut short outside a list says "truncated" alone.
+        let tail = Element {
+            name: "edge",
+            decls: vec![Decl::List("uchar", "int", "b"), Decl::Scalar("int", "a")],
+            rows: vec![vec![Val::L(vec![1.0, 2.0]), Val::N(1.0)]],
+        };
+        let mut short = ply(enc, "", &[vertices(&positions), tail]);
+        short.truncate(short.len() - 2);
+        let e = error(&short);
+        assert!(
+            e.contains("edge 1 (byte ") && e.ends_with("ends inside this record (truncated)"),
+            "{e}"
+        );
+        // Trailing bytes: loaded, with a warning.
+        let mut padded = good(enc);
+        padded.extend_from_slice(b"\0\0\0junk");
+        let m = load(&padded).unwrap();
+        assert_eq!(m.mesh.indices.len(), 2);
+        assert!(
+            m.warnings
+                .iter()
+                .any(|w| w.starts_with("t.ply: 7 bytes after the last record")),
+            "{:?}",
+            m.warnings
+        );
+        assert!(load(&good(enc)).unwrap().warnings.is_empty());
+    }
+    let mut trailing = ascii.clone();
+    trailing += "\n  \n1 2 3\n";
+    let m = load(trailing.as_bytes()).unwrap();
+    assert!(
+        m.warnings
+            .iter()
+            .any(|w| w.contains("1 non-blank line after the last record")),
+        "{:?}",
+        m.warnings
+    );
+    // Blank lines at the end are no warning.
+    let m = load(format!("{ascii}\n\n").as_bytes()).unwrap();
+    assert!(m.warnings.is_empty(), "{:?}", m.warnings);
 }

@@ -42,9 +42,9 @@ pub(crate) fn parse_metric(s: &str) -> Result<Metric, String> {
 pub(crate) fn diff_images(cmd: &DiffCmd) -> Result<ExitCode> {
     let exposure = cmd.exposure.checked()?;
     if let Some(x) = cmd.fail_above
-        && !x.is_finite()
+        && !(x.is_finite() && x >= 0.0)
     {
-        bail!("--fail-above {x} is not a finite number");
+        bail!("--fail-above {x} is not a finite number of at least 0 (every metric is)");
     }
     let maps = cmd
         .out

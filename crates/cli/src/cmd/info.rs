@@ -26,7 +26,7 @@ pub(crate) struct InfoCmd {
     /// Height of the probe image.
     #[arg(long, default_value_t = 128)]
     pub(crate) height: u32,
-    /// Integrator of the probe (primary rays only).
+    /// Integrator of the probe: cast, whitted, path, mip or composite.
     #[arg(long, default_value = "cast", value_parser = parse_mode)]
     pub(crate) mode: Mode,
     /// Samples per pixel of the probe.
@@ -38,8 +38,13 @@ pub(crate) struct InfoCmd {
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub(crate) threads: Option<usize>,
-    /// Points sampled for each structure's EPO (end-point overlap).
-    #[arg(long, default_value_t = raybench_core::quality::DEFAULT_EPO_SAMPLES)]
+    /// Points sampled for each structure's EPO (end-point overlap), at most 1048576.
+    #[arg(
+        long,
+        default_value_t = raybench_core::quality::DEFAULT_EPO_SAMPLES,
+        value_parser = clap::value_parser!(u32)
+            .range(1..=i64::from(raybench_core::quality::MAX_EPO_SAMPLES))
+    )]
     pub(crate) epo_samples: u32,
     /// Flatten the scene's instances first: every instanced primitive carried to world
     /// space and stored flat, ids unchanged (to compare a two-level structure with one over
@@ -70,8 +75,11 @@ pub(crate) fn info(cmd: &InfoCmd, assets: &Path) -> Result<ExitCode> {
             g.len()
         )?;
     }
-    for (kind, n) in g.count_by_kind() {
-        outln!("  {:<9} {n}", kind.name())?;
+    // Counts aligned after the longest kind's name ("analytic solid / CSG tree").
+    let kinds = g.count_by_kind();
+    let width = kinds.iter().map(|(k, _)| k.name().len()).max().unwrap_or(0);
+    for (kind, n) in kinds {
+        outln!("  {:<width$} {n}", kind.name())?;
     }
     outln!("volumes     {}", scene.volumes.len())?;
     outln!("objects     {}", scene.objects.len())?;

@@ -1,7 +1,7 @@
 //! `raybench render`: one scene to an image, or a sequence of frames.
 
 use crate::args::{CameraArgs, Exposure, FrameArgs, check_mode_fits, load_scene, phase_line};
-use anyhow::Result;
+use anyhow::{Result, bail};
 use clap::Args;
 use raybench_core::{Mode, RenderSettings, Scene, UpdatePolicy};
 use raybench_registry::measure::{device_seconds, prepare, timed_seconds};
@@ -75,7 +75,16 @@ pub(crate) fn render(cmd: &RenderCmd, assets: &Path) -> Result<ExitCode> {
     let exposure = cmd.exposure.checked()?;
     if let Some(ids) = &cmd.ids {
         raybench_render::check_png_path(ids)?;
+        // One file for both would keep only the image written last.
+        if std::path::absolute(ids)? == std::path::absolute(&out)? {
+            bail!(
+                "--ids {} and --out {} name the same file: give the id image a name of its own",
+                ids.display(),
+                out.display()
+            );
+        }
     }
+    raybench_registry::frames::check_frame_count(cmd.frames).map_err(anyhow::Error::msg)?;
     let scene = load_scene(&cmd.scene, assets, &cmd.camera, cmd.flatten)?;
     check_mode_fits(&scene, settings.mode)?;
     raybench_registry::frames::check_frames(&scene, cmd.frames).map_err(anyhow::Error::msg)?;
@@ -154,13 +163,13 @@ pub(crate) fn render_frames(
         let frame = p.renderer.render(settings)?;
         let secs = timed_seconds(&frame.timings);
         trace += secs;
-        progress.step(&format!("frame {f}"));
-        eprintln!(
+        progress.done();
+        progress.note(&format!(
             "frame {f}: {}; render {:.3} ms, {:.2} Mrays/s",
             describe(&phases),
             secs * 1e3,
             frame.stats.rays as f64 / secs.max(1e-12) / 1e6
-        );
+        ));
         let path = numbered(out, f, cmd.frames);
         raybench_render::write_color(&frame, &path, exposure)?;
         if let Some(ids) = &cmd.ids {

@@ -108,9 +108,13 @@ pub(crate) struct MergeCmd {
     /// Report folders (each with a results.json).
     #[arg(required = true)]
     pub(crate) dirs: Vec<PathBuf>,
-    /// Output folder of the merged report.
+    /// Output folder of the merged report (not one of the merged folders).
     #[arg(long, value_name = "DIR")]
     pub(crate) out: PathBuf,
+    /// Merge a set that lacks some shards of its plan, listing the missing ones (and the
+    /// scenes and experiments they hold) under Skipped.
+    #[arg(long)]
+    pub(crate) allow_partial: bool,
 }
 
 #[derive(Args)]
@@ -148,6 +152,18 @@ pub(crate) fn report(cmd: &ReportCmd, assets: &Path) -> Result<ExitCode> {
         pin: cmd.pin,
     };
     let results = raybench_report::run(&opts)?;
+    if results.runs.is_empty() && results.scaling.is_empty() {
+        let why: Vec<String> = results
+            .skipped
+            .iter()
+            .map(|k| format!("{} {}: {}", k.kind, k.name, k.reason))
+            .collect();
+        eprintln!(
+            "error: nothing ran ({}); REPORT.md lists what was skipped",
+            why.join("; ")
+        );
+        return Ok(ExitCode::FAILURE);
+    }
     let failed: Vec<String> = results
         .runs
         .iter()
@@ -166,7 +182,7 @@ pub(crate) fn report(cmd: &ReportCmd, assets: &Path) -> Result<ExitCode> {
 
 /// `raybench merge`: the shards' results joined into one report.
 pub(crate) fn merge(cmd: &MergeCmd) -> Result<ExitCode> {
-    raybench_report::merge(&cmd.dirs, &cmd.out)?;
+    raybench_report::merge(&cmd.dirs, &cmd.out, cmd.allow_partial)?;
     Ok(ExitCode::SUCCESS)
 }
 

@@ -12,17 +12,7 @@ pub(crate) fn resolved_dir(assets: &Path) -> (PathBuf, bool) {
         return (p, true);
     }
     let absolute = std::path::absolute(assets).unwrap_or_else(|_| assets.to_owned());
-    let mut clean = PathBuf::new();
-    for c in absolute.components() {
-        match c {
-            std::path::Component::CurDir => {}
-            std::path::Component::ParentDir => {
-                clean.pop();
-            }
-            c => clean.push(c),
-        }
-    }
-    (clean, false)
+    (raybench_scene::normalize_lexically(&absolute), false)
 }
 
 pub(crate) fn scenes(assets: &Path) -> Result<ExitCode> {
@@ -36,6 +26,17 @@ pub(crate) fn scenes(assets: &Path) -> Result<ExitCode> {
             ", which does not exist: set --assets or RAYBENCH_ASSETS"
         }
     )?;
+    // One name column for both lists, as wide as the longest name.
+    let generator_names: Vec<String> = GENERATORS
+        .iter()
+        .map(|g| format!("{}:ARG", g.name))
+        .collect();
+    let width = BUILTIN_SCENES
+        .iter()
+        .map(|b| b.name.len())
+        .chain(generator_names.iter().map(String::len))
+        .max()
+        .unwrap_or(0);
     for b in BUILTIN_SCENES {
         let missing: Vec<_> = b
             .assets
@@ -47,13 +48,12 @@ pub(crate) fn scenes(assets: &Path) -> Result<ExitCode> {
         } else {
             "missing-assets"
         };
-        outln!("{:<14} {:<15} {}", b.name, state, b.description)?;
+        outln!("{:<width$} {state:<14} {}", b.name, b.description)?;
     }
     outln!("# generators (NAME:ARG)")?;
-    for g in GENERATORS {
+    for (g, name) in GENERATORS.iter().zip(&generator_names) {
         outln!(
-            "{:<14} {:<15} {} (ARG = {}, at most {})",
-            format!("{}:ARG", g.name),
+            "{name:<width$} {:<14} {} (ARG = {}, at most {})",
             "ok",
             g.description,
             g.argument,

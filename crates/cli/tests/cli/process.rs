@@ -120,6 +120,30 @@ fn long_work_shows_progress_on_a_terminal_only() {
             "{what}: {stderr}"
         );
     }
+    // The report's step records: plain lines in a log, nothing under `never`; an unknown
+    // value is ignored with one warning.
+    let report_dir = dir.join("report");
+    #[rustfmt::skip]
+    let report = [
+        "report", "--scenes", "spheres", "--backends", "bvh", "--modes", "cast", "--rays",
+        "primary", "--size", "16", "--repeat", "1", "--min-sample", "0", "--no-scaling",
+        "--out", report_dir.to_str().unwrap(),
+    ];
+    let stderr = run(&report, None);
+    assert!(
+        stderr.lines().any(|l| l.starts_with("1/1  0m")) && !stderr.contains("[#"),
+        "{stderr}"
+    );
+    let stderr = run(&report, Some("never"));
+    assert!(!stderr.lines().any(|l| l.starts_with("1/1")), "{stderr}");
+    let stderr = run(&report, Some("sometimes"));
+    assert_eq!(
+        stderr
+            .matches("warning: RAYBENCH_PROGRESS='sometimes' is ignored")
+            .count(),
+        1,
+        "{stderr}"
+    );
     std::fs::remove_dir_all(dir).unwrap();
 }
 

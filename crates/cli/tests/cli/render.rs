@@ -117,7 +117,8 @@ fn ply_meshes_render_and_bad_ones_give_one_line_errors() {
         ),
         (
             write(&dir, "truncated.ply", truncated),
-            "truncated.ply: face 2 (byte 230): the file ends inside this record (truncated)",
+            "truncated.ply: face 2 (byte 230): the file ends inside this record: its list \
+             'vertex_indices' of 3 entries needs 12 bytes, 9 are left",
         ),
         (
             write(

@@ -50,7 +50,67 @@ fn shards_split_by_scene_and_merge_back() {
     let rerun = tmp_dir("shard1-rerun");
     small_report(&rerun, &["--shard", "1/2"]);
     assert_clean_error(&merge(&[&a, &rerun], &again), "both measure spheres");
+    // The merged report is not written over one of its inputs.
+    assert_clean_error(&merge(&[&a, &b], &a), "is the merged folder");
+    assert!(a.join("results.json").is_file());
     for d in [a, b, m, again, rerun] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}
+
+/// A set of shards that is not one whole plan is refused with the reason (a shard missing,
+/// another shard count, other settings), and a missing shard is listed under Skipped when
+/// a partial merge is asked for; a shard that would hold nothing is refused up front.
+#[test]
+fn merge_checks_the_shards_form_one_plan() {
+    let dirs: Vec<_> = ["one", "two-of-three", "other-settings", "merged", "partial"]
+        .into_iter()
+        .map(|n| tmp_dir(&format!("plan-{n}")))
+        .collect();
+    let [one, two_of_three, other, merged, partial] = [0, 1, 2, 3, 4].map(|i| &dirs[i]);
+    small_report(one, &["--shard", "1/2"]);
+    assert_clean_error(
+        &merge(&[one], merged),
+        "shards missing from the merge: 2/2 (matrix cornell-box)",
+    );
+    small_report(two_of_three, &["--shard", "2/3"]);
+    assert_clean_error(
+        &merge(&[one, two_of_three], merged),
+        "the shard counts differ (1/2 against 2/3)",
+    );
+    small_report(other, &["--shard", "2/2", "--ao-rays", "3"]);
+    assert_clean_error(
+        &merge(&[one, other], merged),
+        "the settings differ (ao-rays=4 against ao-rays=3)",
+    );
+    assert!(!merged.join("results.json").exists());
+    // Asked for, a partial merge lists the missing shard and what it holds.
+    let d = |p: &Path| p.to_str().unwrap().to_string();
+    let o = raybench(&["merge", &d(one), "--out", &d(partial), "--allow-partial"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = results(partial);
+    let skipped = r["skipped"].as_array().unwrap();
+    assert!(
+        skipped.iter().any(|k| k["kind"] == "shard"
+            && k["name"] == "2/2"
+            && k["status"] == "missing"
+            && k["reason"].as_str().unwrap().contains("matrix cornell-box")),
+        "{skipped:?}"
+    );
+    assert!(markdown(partial).contains("shard `2/2` (missing)"));
+    // Two scenes make two units: a third shard would hold none.
+    let out = raybench(&[
+        "report",
+        "--scenes",
+        "spheres,cornell-box",
+        "--no-scaling",
+        "--shard",
+        "3/3",
+        "--out",
+        &d(merged),
+    ]);
+    assert_clean_error(&out, "shard 3 holds none; split it into at most 2 shards");
+    for d in &dirs {
         let _ = std::fs::remove_dir_all(d);
     }
 }

@@ -313,3 +313,106 @@ fn a_scene_over_the_memory_budget_is_skipped() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Modes named by `--modes` run on a scene file too (Whitted lit by the headlight where the
+/// scene has no point or directional light, and saying so); the modes asked for that cannot
+/// run are listed under Skipped with the reason, never claimed as run; a run where nothing
+/// ran is an error; an empty ray file is skipped for what it is.
+#[test]
+fn modes_asked_for_run_on_scene_files_or_are_listed() {
+    let (dir, scene) = scene_dir(
+        "modes",
+        "dark.toml",
+        "name = \"dark\"\n[[object]]\nkind = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n",
+    );
+    let d = |name: &str| dir.join(name);
+    #[rustfmt::skip]
+    let common = [
+        "--scenes", scene.as_str(), "--backends", "naive,bvh", "--rays", "primary", "--size", "16",
+        "--repeat", "1", "--min-sample", "0", "--no-scaling",
+    ];
+    fn with<'a>(common: &[&'a str], extra: &[&'a str]) -> Vec<&'a str> {
+        [common, extra].concat()
+    }
+    // Named: whitted and path run; mip cannot, and says why.
+    let out = report(
+        &d("named"),
+        &with(&common, &["--modes", "whitted,path,mip"]),
+    );
+    assert_success(&out);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(
+        stderr
+            .matches("note: scene 'dark' has no point or directional light")
+            .count(),
+        1,
+        "{stderr}"
+    );
+    let r = results(&d("named"));
+    let runs = r["runs"].as_array().unwrap();
+    let modes: Vec<&str> = runs.iter().map(|r| r["mode"].as_str().unwrap()).collect();
+    assert_eq!(modes, ["whitted", "whitted", "path", "path"]);
+    assert!(
+        runs.iter()
+            .all(|r| r["headlight"].as_bool().unwrap_or(false) == (r["mode"] == "whitted")),
+        "{runs:?}"
+    );
+    let skipped = r["skipped"].as_array().unwrap();
+    assert_eq!(skipped.len(), 1, "{skipped:?}");
+    assert_eq!(skipped[0]["name"], "dark mip");
+    assert!(
+        skipped[0]["reason"]
+            .as_str()
+            .unwrap()
+            .contains("the scene has none")
+    );
+    let md = markdown(&d("named"));
+    assert!(md.contains("lit by a headlight"), "{md}");
+    assert!(
+        !md.contains("every scene, workload and backend ran"),
+        "{md}"
+    );
+    // By default a scene file runs ray casting and lists the modes it was not asked for.
+    assert_success(&report(&d("default"), &common));
+    let r = results(&d("default"));
+    let names: Vec<&str> = r["skipped"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|k| k["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["dark whitted", "dark path"]);
+    // Nothing to run: an error naming why, after the report lists it.
+    let out = report(&d("nothing"), &with(&common, &["--modes", "mip"]));
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains(
+            "error: nothing ran (workload dark mip: mip shows volumes, and the scene has none)"
+        ),
+        "{stderr}"
+    );
+    let md = markdown(&d("nothing"));
+    assert!(
+        md.contains("Nothing ran.") && md.contains("`dark mip`"),
+        "{md}"
+    );
+    // An empty ray file: skipped as such, not as a scene its rays miss.
+    let empty = d("empty.rays");
+    raybench_registry::rays_file::write(&empty, &[], false).unwrap();
+    #[rustfmt::skip]
+    let out = report(&d("replay"), &[
+        "--scenes", "spheres", "--backends", "naive,bvh", "--modes", "cast", "--rays", "primary",
+        "--rays-file", empty.to_str().unwrap(), "--size", "16", "--repeat", "1", "--min-sample",
+        "0", "--no-scaling",
+    ]);
+    assert_success(&out);
+    let r = results(&d("replay"));
+    let skipped = r["skipped"].as_array().unwrap();
+    assert!(
+        skipped.iter().any(|k| k["name"] == "spheres cast-file"
+            && k["reason"].as_str().unwrap().contains("holds none")),
+        "{skipped:?}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

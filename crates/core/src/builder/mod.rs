@@ -206,16 +206,24 @@ impl SceneBuilder {
     /// Adds a material and returns its index.
     ///
     /// # Errors
-    /// When a colour or parameter is not finite, or a colour or the emission has a negative
-    /// component.
+    /// When a colour or parameter is not finite, a colour or the emission has a negative
+    /// component, the ior is not above 0 or the shininess is below 0.
     pub fn add_material(&mut self, m: Material) -> Result<u32, SceneError> {
         let what = format!("material '{}'", m.name);
         colour(m.base_color, &format!("{what}: color"))?;
         colour(m.specular, &format!("{what}: specular"))?;
         colour(m.emission, &format!("{what}: emission"))?;
-        if !m.ior.is_finite() || !m.shininess.is_finite() || m.ior <= 0.0 {
+        if !(m.ior.is_finite() && m.ior > 0.0) {
             return Err(SceneError::Invalid(format!(
-                "{what}: ior must be positive and finite"
+                "{what}: ior {} must be positive and finite",
+                m.ior
+            )));
+        }
+        // A negative exponent makes the highlight infinite where n.h is 0.
+        if !(m.shininess.is_finite() && m.shininess >= 0.0) {
+            return Err(SceneError::Invalid(format!(
+                "{what}: shininess {} must be finite and at least 0",
+                m.shininess
             )));
         }
         for t in [m.base_color_texture, m.emission_texture]

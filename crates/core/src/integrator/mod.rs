@@ -19,7 +19,7 @@ pub use mip_composite::shade_volumes;
 pub use path::{DIMENSIONS_PER_BOUNCE, ROULETTE_DEPTH, SHADOW_SHORTEN};
 pub use tile::{PIXEL_BLOCK, Tile, TileOutput, assemble, tile_pixels, tiles};
 use wavefront::Wavefront;
-pub use whitted::AMBIENT;
+pub use whitted::{AMBIENT, HEADLIGHT_NOTE, headlight};
 
 /// Renders one tile with the integrator of `settings.mode`, tracing the tile's rays through
 /// `accel`'s batch entry point.

@@ -66,7 +66,7 @@ pub(super) struct Wavefront<'a, A, C> {
     /// The accelerator every batch goes through.
     accel: &'a A,
     /// The camera.
-    camera: &'a CameraRays,
+    pub camera: &'a CameraRays,
     /// Image size, samples, depth and seed.
     pub settings: &'a RenderSettings,
     /// Which tile.

@@ -50,14 +50,38 @@ pub(super) fn light_ray(light: &Light, p: Vec3, nf: Vec3, ns: Vec3) -> Option<(R
     }
 }
 
+/// What a message says of a scene Whitted ray tracing lights by its [`headlight`] (after the
+/// scene's name).
+pub const HEADLIGHT_NOTE: &str = "has no point or directional light, and Whitted ray tracing \
+    sees no area lights: it is lit by a headlight along the view direction";
+
+/// The light Whitted ray tracing uses in a scene without point or directional lights (it
+/// sees no area lights: emissive surfaces show only their own glow): a headlight, a
+/// directional light of radiance 1 travelling along the camera's view direction `forward`,
+/// so that everything the camera sees is lit.
+#[must_use]
+pub fn headlight(forward: Vec3) -> Light {
+    Light::Directional {
+        direction: forward,
+        radiance: Vec3::ONE,
+    }
+}
+
 /// Renders a tile by Whitted ray tracing: `max_depth` bounces of mirror and glass rays,
-/// direct light with shadow rays at diffuse hits.
+/// direct light with shadow rays at diffuse hits (from the scene's point and directional
+/// lights, or its [`headlight`] where it has none).
 pub(super) fn whitted_tile<A: Accel, C: Counters>(
     scene: &Scene,
     mut st: Wavefront<A, C>,
 ) -> TileOutput<C> {
     let settings = st.settings;
     let sample_weight = Vec3::splat(1.0 / settings.spp as f32);
+    let fallback = [headlight(st.camera.forward)];
+    let lights: &[Light] = if scene.lights.is_empty() {
+        &fallback
+    } else {
+        &scene.lights
+    };
 
     for s in 0..settings.spp {
         // One sample: the centre rays (already traced); several: jittered rays.
@@ -126,7 +150,7 @@ pub(super) fn whitted_tile<A: Accel, C: Counters>(
                 match m.kind {
                     MaterialKind::Diffuse => {
                         st.color[px] += seg.weight * albedo * AMBIENT;
-                        for light in &scene.lights {
+                        for light in lights {
                             let Some((ray, irradiance, wi)) = light_ray(light, p, nf, ns) else {
                                 continue;
                             };

@@ -10,6 +10,7 @@ use crate::fmt::{backends_in, bytes, label_in, noisy_mark, opt, repetitions, sec
 use crate::images::{self, Rgb8};
 use crate::results::{CameraRun, Equality, Images, Quality, Results, Run};
 use anyhow::Result;
+use raybench_core::integrator::HEADLIGHT_NOTE;
 use raybench_core::ray_sets::DerivedParams;
 use raybench_core::{Mode, QualityParams, RaySet, Scene};
 use raybench_registry::measure::{Measured, Prepared, explicit_rays, prepare};
@@ -97,7 +98,7 @@ impl Experiment for Matrix {
     fn plan(&self, ctx: &Ctx, unit: &str, results: &mut Results) -> Result<Option<Planned>> {
         Ok(match ctx.load(unit)? {
             Ok(scene) => Some(Planned {
-                steps: workloads(ctx, &scene).len() * ctx.chosen.len(),
+                steps: workloads(ctx, &scene).0.len() * ctx.chosen.len(),
                 scene: Some(scene),
             }),
             Err(reason) => {
@@ -376,9 +377,14 @@ impl Experiment for Matrix {
                 ),
             };
             let reference = runs.first().map_or("-", |r| r.reference.as_str());
+            let lit = if runs.iter().any(|r| r.headlight) {
+                format!("; lit by a headlight: `{scene}` {HEADLIGHT_NOTE}")
+            } else {
+                String::new()
+            };
             let _ = writeln!(
                 s,
-                "**{mode}, {set} rays** ({what}; reference `{reference}`)\n"
+                "**{mode}, {set} rays** ({what}; reference `{reference}`{lit})\n"
             );
             let _ = writeln!(
                 s,
@@ -472,11 +478,6 @@ impl Experiment for Matrix {
     }
 }
 
-/// The workloads of a scene: ray casting with every ray set of `--rays` (camera,
-/// incoherent, shadow, ambient-occlusion and diffuse rays; `cast-shadow` and so on)
-/// everywhere; Whitted
-/// and path tracing where its built-in `[benchmark]` table asks for them (lights to shadow
-/// and mirrors to follow; scenes built for path tracing); the volume modes where there are
 /// A run's throughput bar: Mrays/s over the median time, with the interval the median's
 /// interval gives where it has one.
 fn throughput_bar(r: &Run) -> Bar {
@@ -493,8 +494,15 @@ fn throughput_bar(r: &Run) -> Bar {
     }
 }
 
-/// volumes.
-fn workloads(ctx: &Ctx, scene: &Scene) -> Vec<Workload> {
+/// The workloads of a scene: ray casting with every ray set of `--rays` (camera,
+/// incoherent, shadow, ambient-occlusion and diffuse rays; `cast-shadow` and so on)
+/// everywhere; Whitted and path tracing where the built-in scene's `[benchmark]` table asks
+/// for them (lights to shadow and mirrors to follow; scenes built for path tracing), or on
+/// every scene when `--modes` names them; the volume modes where there are volumes.
+///
+/// Also returns the modes asked for that do not run on this scene, with the reason (so the
+/// report lists them under Skipped rather than claiming every workload ran).
+fn workloads(ctx: &Ctx, scene: &Scene) -> (Vec<Workload>, Vec<NoRays>) {
     let s = ctx.size;
     let mut w = Vec::new();
     let cast = |rays| Workload {
@@ -525,12 +533,32 @@ fn workloads(ctx: &Ctx, scene: &Scene) -> Vec<Workload> {
             });
         }
     }
-    let asks = |mode: Mode| {
-        ctx.modes.contains(&mode)
-            && raybench_scene::builtin(&scene.name)
-                .is_some_and(|b| b.benchmark.modes.contains(&mode.name()))
+    // Whitted and path tracing: named by --modes, on every scene; by default, where a
+    // built-in scene's table asks for them (a scene file or generator has no such table).
+    let named = ctx.opts.modes.is_some();
+    let table = raybench_scene::builtin(&scene.name).map(|b| b.benchmark.modes);
+    let mut not_run = Vec::new();
+    let mut asks = |mode: Mode| {
+        if !ctx.modes.contains(&mode) {
+            return false;
+        }
+        match table {
+            _ if named => true,
+            Some(modes) => modes.contains(&mode.name()),
+            None => {
+                not_run.push((
+                    mode.name().to_string(),
+                    format!(
+                        "a scene file or generator runs {} only when --modes names it",
+                        mode.name()
+                    ),
+                ));
+                false
+            }
+        }
     };
-    if asks(Mode::Whitted) {
+    let (whitted, path) = (asks(Mode::Whitted), asks(Mode::Path));
+    if whitted {
         w.push(Workload {
             mode: Mode::Whitted,
             ..cast(RaySet::Primary)
@@ -538,17 +566,23 @@ fn workloads(ctx: &Ctx, scene: &Scene) -> Vec<Workload> {
     }
     // The volume modes where there are volumes (their integration is the core's, the
     // same for every backend; the backend traces the surfaces that cut it).
-    if !scene.volumes.is_empty() {
-        for mode in [Mode::Mip, Mode::Composite] {
-            if ctx.modes.contains(&mode) {
-                w.push(Workload {
-                    mode,
-                    ..cast(RaySet::Primary)
-                });
-            }
+    for mode in [Mode::Mip, Mode::Composite] {
+        if !ctx.modes.contains(&mode) {
+            continue;
+        }
+        if !scene.volumes.is_empty() {
+            w.push(Workload {
+                mode,
+                ..cast(RaySet::Primary)
+            });
+        } else if named {
+            not_run.push((
+                mode.name().to_string(),
+                format!("{} shows volumes, and the scene has none", mode.name()),
+            ));
         }
     }
-    if asks(Mode::Path) {
+    if path {
         let (side, spp) = if ctx.opts.quick {
             (s / 2, 16)
         } else {
@@ -563,19 +597,23 @@ fn workloads(ctx: &Ctx, scene: &Scene) -> Vec<Workload> {
             replay: false,
         });
     }
-    w
+    (w, not_run)
 }
 
 /// Renders `scene` with every chosen backend on every workload, the reference first.
 ///
-/// Also returns the workloads left out because they have no rays ([`NoRays`]) (a derived set of a scene
-/// without lights, or whose camera sees nothing), with the reason.
+/// Also returns the workloads left out, with the reason ([`NoRays`]): modes asked for that
+/// do not run on the scene, and workloads without rays (a derived set of a scene without
+/// lights or whose camera sees nothing, an empty ray file).
 fn run_scene(
     ctx: &Ctx,
     scene: &Arc<Scene>,
     progress: &Progress,
 ) -> Result<(Vec<Run>, Vec<NoRays>)> {
-    let mut workloads = workloads(ctx, scene);
+    let (mut workloads, modes_not_run) = workloads(ctx, scene);
+    if scene.lights.is_empty() && workloads.iter().any(|w| w.mode == Mode::Whitted) {
+        eprintln!("note: scene '{}' {HEADLIGHT_NOTE}", scene.name);
+    }
     let prims = scene.geometry.total_len();
     // The reference: the oracle where it fits every workload's budget, else the
     // baseline. Brute-force backends run only within that budget.
@@ -606,7 +644,7 @@ fn run_scene(
         progress.remove(workloads.len());
     }
     if order.is_empty() {
-        return Ok((Vec::new(), Vec::new()));
+        return Ok((Vec::new(), modes_not_run));
     }
 
     let params = DerivedParams {
@@ -649,19 +687,18 @@ fn run_scene(
             .iter()
             .all(|(_, rays)| rays.as_ref().is_some_and(|b| b.rays.is_empty()))
     };
-    let mut empty = Vec::new();
+    let mut empty = modes_not_run;
     let kept: Vec<(Workload, Box<Views>)> = workloads
         .drain(..)
         .zip(explicit)
         .filter(|(w, views)| {
             if no_rays(views) {
                 progress.remove(order.len());
-                let why = if w.rays == RaySet::Shadow {
-                    "no rays: the scene has no light to aim shadow rays at".to_string()
-                } else {
-                    format!("no {} rays: no primary ray hits the scene", w.ray_set())
-                };
-                empty.push((w.key(), why));
+                let file = w.replay.then_some(ctx.opts.rays_file.as_deref()).flatten();
+                empty.push((
+                    w.key(),
+                    raybench_registry::measure::no_rays(w.rays, scene, file),
+                ));
                 false
             } else {
                 true
@@ -712,6 +749,7 @@ fn run_scene(
                 device_seconds: None,
                 device: None,
                 software_device: false,
+                headlight: w.mode == Mode::Whitted && scene.lights.is_empty(),
                 rays: None,
                 mrays_per_s: None,
                 tests_per_ray: None,
@@ -915,7 +953,7 @@ fn not_run(run: &mut Run, b: &Backend, reason: String) {
     run.reason = Some(reason);
 }
 
-/// A workload left out because it has no rays: its key (`cast-shadow`) and why.
+/// A workload left out: its key (`cast-shadow`, or a mode) and why.
 type NoRays = (String, String);
 
 /// The reference backend's measurement of one workload: over every camera, each camera's,

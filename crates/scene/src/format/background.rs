@@ -62,14 +62,22 @@ pub(super) fn add(
             let desc: MapDesc = toml::Value::Table(t)
                 .try_into()
                 .map_err(|e: toml::de::Error| parse(e.message().trim_end().to_owned()))?;
-            if !(desc.rotate.is_finite() && desc.scale.is_finite() && desc.scale >= 0.0) {
-                return Err(parse(
-                    "rotate must be finite and scale finite and at least 0".into(),
-                ));
+            if !desc.rotate.is_finite() {
+                return Err(parse(format!(
+                    "rotate {} must be finite (degrees about +y)",
+                    desc.rotate
+                )));
             }
-            let path = ctx.resolve(&desc.map)?;
+            if !(desc.scale.is_finite() && desc.scale >= 0.0) {
+                return Err(parse(format!(
+                    "scale {} must be finite and at least 0",
+                    desc.scale
+                )));
+            }
+            let path = ctx.resolve("map", &desc.map, &what)?;
             let context = format!("{}: {what}", ctx.file.display());
-            let (w, h, texels, negative) = read_map(&path, None, budget, &context)?;
+            let (w, h, texels, negative) =
+                read_map(&path, None, budget, &context).map_err(ctx.within(&what))?;
             if negative {
                 b.warn(format!(
                     "{context}: {} has negative texels, read as 0",
@@ -81,17 +89,41 @@ pub(super) fn add(
                     path: path.clone(),
                     message: "the map's radiance times the scale overflows f32".into(),
                 }
+                .within(&context)
             })?;
             b.environment(Arc::new(env));
             Ok(())
         }
-        other => {
-            let rgb: V3 = other.try_into().map_err(|_| {
-                parse("expected a colour [r, g, b] or a map { map = \"sky.exr\", ... }".into())
-            })?;
+        toml::Value::Array(values) => {
+            // A list: a colour, whose numbers are wrong.
+            let shown: Vec<String> = values
+                .iter()
+                .map(|v| match v {
+                    toml::Value::Integer(i) => i.to_string(),
+                    toml::Value::Float(f) => f.to_string(),
+                    toml::Value::String(s) => format!("{s:?}"),
+                    other => format!("a {}", other.type_str()),
+                })
+                .collect();
+            let shown = format!("[{}]", shown.join(", "));
+            let rgb: V3 = toml::Value::Array(values)
+                .try_into()
+                .map_err(|_| parse(format!("a colour needs 3 numbers [r, g, b], found {shown}")))?;
             b.background(Vec3::from(rgb))
                 .map_err(ctx.scene_err(&what))?;
             Ok(())
+        }
+        other => {
+            let kind = other.type_str();
+            let article = if kind.starts_with(['a', 'e', 'i', 'o', 'u']) {
+                "an"
+            } else {
+                "a"
+            };
+            Err(parse(format!(
+                "expected a colour [r, g, b] or a map {{ map = \"sky.exr\", ... }}, found \
+                 {article} {kind}"
+            )))
         }
     }
 }
@@ -227,9 +259,26 @@ mod tests {
             ),
             (
                 "background = { map = \"sky.hdr\", scale = -1 }",
-                "scale finite and at least 0",
+                "line 1: background: scale -1 must be finite and at least 0",
             ),
-            ("background = \"blue\"", "expected a colour"),
+            (
+                "background = { map = \"sky.hdr\", rotate = inf }",
+                "line 1: background: rotate inf must be finite (degrees about +y)",
+            ),
+            ("background = 3", "found an integer"),
+            (
+                "background = \"blue\"",
+                "line 1: background: expected a colour [r, g, b] or a map { map = \"sky.exr\", \
+                 ... }, found a string",
+            ),
+            (
+                "background = [1, 0]",
+                "line 1: background: a colour needs 3 numbers [r, g, b], found [1, 0]",
+            ),
+            (
+                "background = [1, \"a\", 0]",
+                "a colour needs 3 numbers [r, g, b], found [1, \"a\", 0]",
+            ),
             (
                 "background = { map = \"broken.exr\" }",
                 "not a readable image",

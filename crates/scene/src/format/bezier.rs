@@ -42,8 +42,8 @@ fn bezier(
     material: u32,
     budget: &mut Reservation,
 ) -> Result<(), LoadError> {
-    let path = ctx.resolve(&d.file)?;
-    let patches = load_bpt_file(&path)?;
+    let path = ctx.resolve("file", &d.file, what)?;
+    let patches = load_bpt_file(&path).map_err(ctx.within(what))?;
     let scene_err = |context: String| {
         move |cause| LoadError::Scene {
             context: format!("{}: {what}: {context}", ctx.file.display()),

@@ -25,7 +25,8 @@ impl GeneratorDesc {
     pub(super) fn add(&self, cx: &mut ObjectCx) -> Result<(), LoadError> {
         let err = cx.err();
         // Refuse before generating: a one-line spec can ask for 2e7 primitives.
-        let (info, n) = generators::parse_spec(&self.spec)?;
+        let within = cx.ctx.within(cx.what);
+        let (info, n) = generators::parse_spec(&self.spec).map_err(&within)?;
         let count = generators::primitive_count(&info, n);
         let limit = raybench_core::limits::MAX_PRIMITIVES as u64;
         if cx.b.primitive_count() as u64 + count > limit {
@@ -43,7 +44,8 @@ impl GeneratorDesc {
             &format!("{}: {}", cx.ctx.file.display(), cx.what),
         )?;
         let generated =
-            generators::generate(&self.spec, self.seed.unwrap_or(generators::DEFAULT_SEED))?;
+            generators::generate(&self.spec, self.seed.unwrap_or(generators::DEFAULT_SEED))
+                .map_err(within)?;
         let m = cx.material(self.material.as_ref())?.unwrap_or(0);
         let a = xf.affine();
         match generated {

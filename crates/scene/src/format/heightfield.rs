@@ -92,7 +92,7 @@ fn height_field(
         return Err(parse("size and format belong to raw height fields".into()));
     }
     let (cols, rows, heights) = if let Some(spec) = &h.source {
-        let (info, n) = generators::parse_spec(spec)?;
+        let (info, n) = generators::parse_spec(spec).map_err(ctx.within(what))?;
         if info.name != "terrain" {
             return Err(parse(format!(
                 "source '{spec}' is not a height generator (expected terrain:N)"
@@ -104,7 +104,9 @@ fn height_field(
     } else if let Some(png) = &h.png {
         // The header's size is checked against the vertex limit before decoding; the
         // budget counts the decoded heights.
-        let (cols, rows, heights) = read_png_gray(&ctx.resolve(png)?, MAX_HEIGHT_FIELD_VERTICES)?;
+        let (cols, rows, heights) =
+            read_png_gray(&ctx.resolve("png", png, what)?, MAX_HEIGHT_FIELD_VERTICES)
+                .map_err(ctx.within(what))?;
         budget.reserve(Holds::Vertices(heights.len() as u64), &context)?;
         (cols, rows, heights)
     } else if let Some(raw) = &h.raw {
@@ -117,11 +119,12 @@ fn height_field(
             budget.reserve(Holds::Vertices(count), &context)?;
         }
         let samples = read_raw(
-            &ctx.resolve(raw)?,
+            &ctx.resolve("raw", raw, what)?,
             count,
             h.format.unwrap_or(SampleFormat::U16),
             MAX_HEIGHT_FIELD_VERTICES,
-        )?;
+        )
+        .map_err(ctx.within(what))?;
         (cols, rows, samples.to_unit_f32())
     } else {
         let grid = h.heights.as_deref().unwrap_or_default();

@@ -172,6 +172,24 @@ pub(super) fn add(tables: Vec<toml::Table>, p: &mut Placing) -> Result<(), LoadE
         };
         let material = p.material(&what, d.material.as_ref())?;
         let (n, spacing, axis) = d.checked().map_err(fail)?;
+        // A zero spacing along an axis of several instances stacks them in one place:
+        // legal, but every ray that meets one tests them all.
+        let stacked: Vec<&str> = ["x", "y", "z"]
+            .into_iter()
+            .zip(d.count)
+            .zip(spacing.to_array())
+            .filter(|&((_, count), s)| count > 1 && s == 0.0)
+            .map(|((axis, _), _)| axis)
+            .collect();
+        if !stacked.is_empty() {
+            p.b.warn(format!(
+                "{}: {what}: `spacing` is 0 along {} where `count` places several instances: \
+                 they coincide, drawn over each other, and every ray that meets one tests them \
+                 all",
+                ctx.file.display(),
+                stacked.join(" and ")
+            ));
+        }
         p.b.check_instances(mesh, n).map_err(ctx.scene_err(&what))?;
         p.budget.reserve(
             Holds::Instances(n),
@@ -225,6 +243,23 @@ mod tests {
         assert_eq!(t(4), raybench_core::Vec3A::new(-3.0, 1.0, 3.0));
         assert_eq!(t(11), raybench_core::Vec3A::new(3.0, 1.0, 6.0));
         assert_eq!(s.material_of((5 * n) as u32).name, "red");
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    }
+
+    /// Instances stacked by a zero spacing are one warning; a zero spacing along an axis
+    /// of one instance is none.
+    #[test]
+    fn a_zero_spacing_is_a_warning() {
+        let s = load(&array("count = [3, 1, 2]\nspacing = 0")).unwrap();
+        assert_eq!(
+            s.warnings,
+            [
+                "t.toml: line 9: instance_array 1: `spacing` is 0 along x and z where `count` \
+              places several instances: they coincide, drawn over each other, and every ray \
+              that meets one tests them all"
+            ]
+        );
+        let s = load(&array("count = [3, 1, 2]\nspacing = [1, 0, 1]")).unwrap();
         assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     }
 

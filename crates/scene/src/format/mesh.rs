@@ -94,12 +94,13 @@ impl MeshDesc {
     pub(super) fn add(&self, cx: &mut ObjectCx) -> Result<(), LoadError> {
         let err = cx.err();
         let xf = self.transform.checked().map_err(&err)?;
-        let path = cx.ctx.resolve(&self.path)?;
+        let path = cx.ctx.resolve("path", &self.path, cx.what)?;
         let context = format!("{}: {}: {}", cx.ctx.file.display(), cx.what, path.display());
         let budget = &mut *cx.budget;
         let mut data = load_mesh_file(&path, &mut |n| {
             budget.reserve(Holds::Primitives(n), &context)
-        })?;
+        })
+        .map_err(cx.ctx.within(cx.what))?;
         if !xf.is_identity() {
             let a = xf.affine();
             data.mesh.transform(|v| a.transform_point3(v));
@@ -254,7 +255,8 @@ fn add_mesh_data(
         if materials.iter().any(|&m| b.material_emits(m)) {
             // Instanced emitters are not sampled as lights: the copies keep the image right.
             b.warn(format!(
-                "{context}: {} is placed {} times but emits light: copied per placement                  (instanced primitives are not sampled as lights in this version)",
+                "{context}: {} is placed {} times but emits light: copied per placement \
+                 (instanced primitives are not sampled as lights in this version)",
                 shared.name,
                 shared.placements.len()
             ));

@@ -430,34 +430,52 @@ struct Context<'a> {
 }
 
 impl Context<'_> {
-    fn resolve(&self, rel: &str) -> Result<PathBuf, LoadError> {
-        let p = Path::new(rel);
-        if p.is_absolute() {
-            return if p.is_file() {
-                Ok(p.to_owned())
-            } else {
-                Err(self.missing(p.to_owned()))
-            };
+    /// The file `name` (the value of the key `key` of the table labelled `what`): an
+    /// absolute path as it is; a relative one in the scene file's folder, then in the
+    /// assets folder. Only a regular file is found.
+    ///
+    /// # Errors
+    /// [`LoadError::MissingAsset`] naming the scene's file and line, every place looked in
+    /// and what is there instead (missing, a folder, a FIFO, a symbolic link loop), or a
+    /// parse error for an empty name.
+    fn resolve(&self, key: &str, name: &str, what: &str) -> Result<PathBuf, LoadError> {
+        if name.trim().is_empty() {
+            return Err(LoadError::Parse {
+                path: self.file.clone(),
+                message: format!("{what}: `{key}` is empty: it names a file"),
+            });
         }
-        if let Some(dir) = self.dir {
-            let candidate = dir.join(p);
-            if candidate.is_file() {
-                return Ok(candidate);
+        let p = Path::new(name);
+        let mut places = Vec::new();
+        if p.is_absolute() {
+            places.push(p.to_owned());
+        } else {
+            if let Some(dir) = self.dir {
+                places.push(dir.join(p));
+            }
+            places.push(self.assets.join(p));
+        }
+        let mut looked = Vec::new();
+        for place in places {
+            match crate::io::probe(&place) {
+                Ok(()) => return Ok(place),
+                Err(found) => looked.push((place, found)),
             }
         }
-        let candidate = self.assets.join(p);
-        if candidate.is_file() {
-            Ok(candidate)
-        } else {
-            Err(self.missing(candidate))
-        }
+        Err(LoadError::MissingAsset {
+            context: format!("{}: {what}", self.file.display()),
+            key: format!("`{key}`"),
+            name: name.to_owned(),
+            looked,
+            assets: !p.is_absolute(),
+        })
     }
 
-    fn missing(&self, path: PathBuf) -> LoadError {
-        LoadError::MissingAsset {
-            scene: self.scene.to_owned(),
-            path,
-        }
+    /// The scene file and the table labelled `what`, for the errors of a file it names
+    /// ([`LoadError::within`]).
+    fn within(&self, what: &str) -> impl Fn(LoadError) -> LoadError + use<> {
+        let context = format!("{}: {what}", self.file.display());
+        move |e| e.within(&context)
     }
 
     fn scene_err(&self, what: &str) -> impl Fn(SceneError) -> LoadError + use<> {
@@ -518,9 +536,17 @@ fn parse_and_build(text: &str, ctx: &Context) -> Result<Scene, LoadError> {
             let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
             format!("line {line}, column {column}: ")
         });
+        let mut message = e.message().trim_end().to_owned();
+        // The parser's "duplicate key" names no key: its span is the key.
+        if message == "duplicate key"
+            && let Some(key) = e.span().and_then(|span| text.get(span))
+        {
+            let key = key.trim().trim_matches(['"', '\'']);
+            message = format!("`{key}` is given twice (a key or a table may appear once)");
+        }
         LoadError::Parse {
             path: ctx.file.clone(),
-            message: format!("{position}{}", e.message()),
+            message: format!("{position}{message}"),
         }
     })?;
     let mut budget = Reservation::new()?;
@@ -828,6 +854,29 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.contains("line 2: camera: unknown field `fovy`"), "{e}");
+    }
+
+    /// A key or table given twice is named, at its second line.
+    #[test]
+    fn duplicate_keys_are_named() {
+        for (text, expected) in [
+            (
+                "name = \"a\"\nname = \"b\"\n",
+                "t.toml: line 2, column 1: `name` is given twice (a key or a table may \
+                 appear once)",
+            ),
+            (
+                "[[object]]\nkind = \"sphere\"\nradius = 1\nradius = 2\n",
+                "t.toml: line 4, column 1: `radius` is given twice",
+            ),
+            (
+                "[camera]\nfov = 1\n[camera]\nfov = 2\n",
+                "t.toml: line 3, column 2: `camera` is given twice",
+            ),
+        ] {
+            let e = load(text).unwrap_err().to_string();
+            assert!(e.starts_with(expected), "{e}");
+        }
     }
 
     #[test]

@@ -68,7 +68,7 @@ pub(super) fn volume(
             if v.dims.is_some() || v.format.is_some() {
                 return Err(parse("dims and format belong to raw volumes".into()));
             }
-            let n = phantom::parse_volume_spec(spec)?;
+            let n = phantom::parse_volume_spec(spec).map_err(ctx.within(what))?;
             budget.reserve(Holds::Voxels(u64::from(n).pow(3)), &context)?;
             let data = phantom::rasterize(&phantom::shepp_logan_ellipsoids(), n);
             // Generated volumes span [-1, 1]^3.
@@ -81,11 +81,12 @@ pub(super) fn volume(
             let count = check_volume_dims(dims).map_err(scene_err)?;
             budget.reserve(Holds::Voxels(count), &context)?;
             let samples = read_raw(
-                &ctx.resolve(raw)?,
+                &ctx.resolve("raw", raw, what)?,
                 count,
                 v.format.unwrap_or(SampleFormat::U16),
                 MAX_VOLUME_VOXELS,
-            )?;
+            )
+            .map_err(ctx.within(what))?;
             (dims, VolumeData::from(samples), Vec3::ONE)
         }
         _ => {

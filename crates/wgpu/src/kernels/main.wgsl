@@ -1129,6 +1129,25 @@ struct LightSample {
 fn light_ray(j: u32, p: vec3<f32>, n: vec3<f32>, ns: vec3<f32>) -> LightSample {
     let l0 = shading[params.light_first + 2u * j];
     let l1 = shading[params.light_first + 2u * j + 1u];
+    return light_sample(l0, l1, p, n, ns);
+}
+
+// Whitted's lights: the scene's point and directional lights, or where it has none the
+// headlight (`integrator::whitted::headlight`): radiance 1 along the view direction.
+fn whitted_light_count() -> u32 {
+    return select(params.light_count, 1u, params.light_count == 0u);
+}
+
+fn whitted_light(j: u32, p: vec3<f32>, n: vec3<f32>, ns: vec3<f32>) -> LightSample {
+    if params.light_count == 0u {
+        let kind = bitcast<f32>(LIGHT_DIRECTIONAL);
+        return light_sample(vec4<f32>(params.forward, kind), vec4<f32>(1.0), p, n, ns);
+    }
+    return light_ray(j, p, n, ns);
+}
+
+// Light `l0`, `l1` (as stored: position or direction with the kind, then the power).
+fn light_sample(l0: vec4<f32>, l1: vec4<f32>, p: vec3<f32>, n: vec3<f32>, ns: vec3<f32>) -> LightSample {
     let origin = offset_ray_origin(p, n);
     var s: LightSample;
     s.ok = false;
@@ -1385,8 +1404,8 @@ fn whitted_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
             if m.kind == MAT_DIFFUSE {
                 let albedo = sf.albedo;
                 color += seg.weight * albedo * AMBIENT;
-                for (var j = 0u; j < params.light_count; j++) {
-                    let l = light_ray(j, at, nf, ns);
+                for (var j = 0u; j < whitted_light_count(); j++) {
+                    let l = whitted_light(j, at, nf, ns);
                     if !l.ok {
                         continue;
                     }
