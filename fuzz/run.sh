@@ -4,7 +4,10 @@
 #   cargo install cargo-fuzz --locked          # once
 #   fuzz/run.sh [SECONDS] [TARGET...]          # default: 60 s, every target
 #
-# Targets: scene_toml obj gltf ply bpt raw_volume (fuzz/fuzz_targets/<name>.rs). cargo fuzz
+# Targets (fuzz/fuzz_targets/<name>.rs): the scene file and mesh loaders scene_toml obj gltf
+# ply bpt raw_volume; mtl (the material library of a fixed OBJ), env_map and texture (the
+# first byte chooses the map's format, OpenEXR or Radiance HDR, or the texture's wrap
+# modes; the rest is the image), rays_file (the registry crate's ray file reader). cargo fuzz
 # needs nightly flags (-Zsanitizer): on the stable toolchain they are unlocked with
 # RUSTC_BOOTSTRAP=1. One target by hand:
 #
@@ -17,14 +20,15 @@
 # Crashes, hangs (-timeout) and excessive allocations (-rss_limit_mb, -malloc_limit_mb)
 # are written to fuzz/artifacts/<name>/; reproduce one with
 #   RUSTC_BOOTSTRAP=1 cargo fuzz run <name> fuzz/artifacts/<name>/<file>
-# then fix the loader and add the input to crates/scene/tests/fuzz_regressions.rs.
+# then fix the loader and add the input to crates/scene/tests/fuzz_regressions.rs (ray
+# files: the tests of crates/registry/src/rays_file.rs).
 set -euo pipefail
 cd "$(dirname "$0")"
 secs=${1:-60}
 shift || true
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
-    targets=(scene_toml obj gltf ply bpt raw_volume)
+    targets=(scene_toml obj gltf ply bpt raw_volume mtl env_map texture rays_file)
 fi
 export RUSTC_BOOTSTRAP=1
 cargo fuzz build

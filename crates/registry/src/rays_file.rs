@@ -356,6 +356,20 @@ mod tests {
 
     /// Seeded random byte strings and random single-byte corruptions: an answer or an
     /// error, never a panic; a corrupted file that still parses has the right size.
+    /// The seeds of the `rays_file` fuzz target (`fuzz/seeds/rays_file/`) are valid files.
+    #[test]
+    fn fuzz_seeds_parse() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/seeds/rays_file");
+        let mut n = 0;
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let p = entry.unwrap().path();
+            let f = read(&p).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(std::fs::read(&p).unwrap(), to_bytes(&f.rays, f.any_hit));
+            n += 1;
+        }
+        assert!(n >= 2);
+    }
+
     #[test]
     fn random_bytes_never_panic() {
         let good = to_bytes(&rays(), true);

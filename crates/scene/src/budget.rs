@@ -201,7 +201,7 @@ pub(crate) enum Holds {
 
 /// Bytes per environment-map texel while it loads: the decoded RGBA f32 image (16), the
 /// linear RGB copy (12) and the sampling table (8).
-const ENVIRONMENT_TEXEL_BYTES_ESTIMATE: u64 = 36;
+pub(crate) const ENVIRONMENT_TEXEL_BYTES_ESTIMATE: u64 = 36;
 /// Estimated memory per texture texel, in bytes: 12 for the linear RGB texel the scene
 /// keeps, plus the decoding's transient 8-bit RGBA image and RGB copy (7).
 pub(crate) const TEXEL_BYTES_ESTIMATE: u64 = 19;
@@ -242,8 +242,8 @@ impl Holds {
 }
 
 impl Reservation {
-    /// A reservation against a budget of `bytes` (for tests of what a budget refuses).
-    #[cfg(test)]
+    /// A reservation against a budget of `bytes` (for tests of what a budget refuses, and
+    /// the fuzz targets).
     pub(crate) fn with_limit(bytes: u64) -> Self {
         Self {
             budget: MemoryBudget {

@@ -143,6 +143,12 @@ pub(crate) fn read_text(path: &Path, limit: u64, what: &str) -> Result<String, L
             message: format!("{what} exceeds the limit of {limit} bytes"),
         });
     }
+    text_from_bytes(path, bytes)
+}
+
+/// The UTF-8 text of a text file's `bytes`, less a leading byte-order mark (`path` names
+/// the file in the error).
+pub(crate) fn text_from_bytes(path: &Path, mut bytes: Vec<u8>) -> Result<String, LoadError> {
     if bytes.starts_with(UTF8_BOM) {
         bytes.drain(..UTF8_BOM.len());
     }

@@ -30,6 +30,8 @@ mod budget;
 mod builtin;
 mod error;
 mod format;
+#[doc(hidden)]
+pub mod fuzzing;
 pub mod generators;
 mod gltf_loader;
 mod io;

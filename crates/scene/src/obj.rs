@@ -212,6 +212,19 @@ pub fn load_obj_file(path: &Path) -> Result<MeshData, LoadError> {
         path: path.to_owned(),
         cause,
     })?;
+    parse_obj_with_mtl(&bytes, path, |mtl| {
+        crate::io::read_text(mtl, MAX_MTL_BYTES, "material library").ok()
+    })
+}
+
+/// Parses OBJ bytes (`path` names them; `mtllib` files are relative to its folder) whose
+/// material libraries `read_mtl` gives as text (`None`: unreadable, "no materials"):
+/// [`load_obj_file`] reads them from files, the fuzz targets from memory.
+pub(crate) fn parse_obj_with_mtl(
+    bytes: &[u8],
+    path: &Path,
+    read_mtl: impl Fn(&Path) -> Option<String>,
+) -> Result<MeshData, LoadError> {
     let dir = path.parent().unwrap_or(Path::new("."));
     // The folder of each material's MTL file, in material order (map_Kd is relative to it).
     let mtl_dirs = RefCell::new(Vec::new());
@@ -220,11 +233,11 @@ pub fn load_obj_file(path: &Path) -> Result<MeshData, LoadError> {
     // say that it failed, so the error waits here.
     let mtl_fault = RefCell::new(None);
     let data = parse_obj(
-        &bytes,
+        bytes,
         path,
         |mtl| {
             let mtl = dir.join(mtl);
-            let result = match load_mtl(&mtl) {
+            let result = match load_mtl(&mtl, read_mtl(&mtl)) {
                 Ok(result) => result,
                 Err(fault) => {
                     mtl_fault.borrow_mut().get_or_insert(fault);
@@ -250,12 +263,12 @@ pub fn load_obj_file(path: &Path) -> Result<MeshData, LoadError> {
 /// Largest MTL file read (material libraries are small text files).
 const MAX_MTL_BYTES: u64 = 16 << 20;
 
-/// Reads an MTL file as `tobj` would, but through [`crate::io::read_text`]: a regular
-/// file of bounded size, with a byte-order mark accepted. An unreadable file gives tobj's
-/// "no materials"; a malformed one, checked before tobj parses it ([`check_mtl`]), the
-/// error naming its line.
-fn load_mtl(path: &Path) -> Result<tobj::MTLLoadResult, LoadError> {
-    let Ok(text) = crate::io::read_text(path, MAX_MTL_BYTES, "material library") else {
+/// Parses the MTL file `path` as `tobj` would, from its `text` (read through
+/// [`crate::io::read_text`]: a regular file of bounded size, with a byte-order mark
+/// accepted). An unreadable file (`None`) gives tobj's "no materials"; a malformed one,
+/// checked before tobj parses it ([`check_mtl`]), the error naming its line.
+fn load_mtl(path: &Path, text: Option<String>) -> Result<tobj::MTLLoadResult, LoadError> {
+    let Some(text) = text else {
         return Ok(Err(tobj::LoadError::OpenFileFailed));
     };
     let text = crate::io::lone_cr_to_lf(text.as_bytes());

@@ -298,36 +298,31 @@ pub(crate) fn decode_checked<R: std::io::BufRead + std::io::Seek>(
 /// it from its header when it has more than `max_pixels` pixels, and calling `reserve`
 /// with its pixel count before decoding (the memory budget). Decoding may allocate
 /// `bytes_per_pixel` per pixel twice over (the widest decoded form and a conversion).
+/// `contents` are the file's bytes when they are already in memory (the fuzz targets);
+/// `None` reads the file.
 ///
 /// # Errors
 /// [`LoadError::Io`] when unreadable, [`LoadError::Parse`] when not decodable as `format`
 /// or too large, and what `reserve` returns.
 pub(crate) fn decode_image(
     path: &Path,
+    contents: Option<&[u8]>,
     format: image::ImageFormat,
     what: &str,
     max_pixels: u64,
     bytes_per_pixel: u64,
     reserve: impl FnOnce(u64) -> Result<(), LoadError>,
 ) -> Result<image::DynamicImage, LoadError> {
-    let parse = |message: String| LoadError::Parse {
-        path: path.to_owned(),
-        message,
+    // The file's length, which the decoded size is checked against.
+    let file_bytes = match contents {
+        Some(bytes) => bytes.len() as u64,
+        None => {
+            // A FIFO would block the reader.
+            crate::io::check_regular_file(path)?;
+            std::fs::metadata(path).map_or(u64::MAX, |m| m.len())
+        }
     };
-    // A FIFO would block the reader.
-    crate::io::check_regular_file(path)?;
-    let file_bytes = std::fs::metadata(path).map_or(u64::MAX, |m| m.len());
     let user_limit = crate::budget::MemoryBudget::current().is_ok_and(|b| b.is_set_by_user());
-    let open = || {
-        let mut r = image::ImageReader::open(path).map_err(|cause| {
-            DecodeError::Fatal(LoadError::Io {
-                path: path.to_owned(),
-                cause,
-            })
-        })?;
-        r.set_format(format);
-        Ok(r)
-    };
     let check = |w: u32, h: u32| {
         let pixels = u64::from(w) * u64::from(h);
         if pixels > max_pixels {
@@ -337,7 +332,31 @@ pub(crate) fn decode_image(
         }
         check_expansion(w, h, file_bytes, user_limit)
     };
-    decode_checked(open, check, reserve, 2 * bytes_per_pixel).map_err(|e| match e {
+    let decoded = if let Some(bytes) = contents {
+        let open = || {
+            let mut r = image::ImageReader::new(std::io::Cursor::new(bytes));
+            r.set_format(format);
+            Ok(r)
+        };
+        decode_checked(open, check, reserve, 2 * bytes_per_pixel)
+    } else {
+        let open = || {
+            let mut r = image::ImageReader::open(path).map_err(|cause| {
+                DecodeError::Fatal(LoadError::Io {
+                    path: path.to_owned(),
+                    cause,
+                })
+            })?;
+            r.set_format(format);
+            Ok(r)
+        };
+        decode_checked(open, check, reserve, 2 * bytes_per_pixel)
+    };
+    let parse = |message: String| LoadError::Parse {
+        path: path.to_owned(),
+        message,
+    };
+    decoded.map_err(|e| match e {
         DecodeError::Unreadable(m) => parse(format!("not a readable {what}: {m}")),
         DecodeError::Refused(m) => parse(m),
         DecodeError::Fatal(e) => e,
@@ -353,9 +372,15 @@ pub(crate) fn decode_image(
 /// large.
 pub fn read_png_gray(path: &Path, max_pixels: u64) -> Result<(u32, u32, Vec<f32>), LoadError> {
     // Room for the decoded image in its widest form (16-bit RGBA).
-    let img = decode_image(path, image::ImageFormat::Png, "PNG", max_pixels, 8, |_| {
-        Ok(())
-    })?;
+    let img = decode_image(
+        path,
+        None,
+        image::ImageFormat::Png,
+        "PNG",
+        max_pixels,
+        8,
+        |_| Ok(()),
+    )?;
     let (w, h) = (img.width(), img.height());
     let luma = img.into_luma16();
     Ok((

@@ -61,7 +61,7 @@ const MAX_IMAGE_FILE_BYTES: u64 = 1 << 30;
 /// Decodes `tex` (its size checked against [`MAX_TEXTURE_SIZE`] and the budget before its
 /// pixels are decoded). The outer error is the budget's refusal; the inner one says why
 /// the texture cannot be used.
-fn decode(
+pub(crate) fn decode(
     tex: &TextureRef,
     budget: &mut Reservation,
     context: &str,

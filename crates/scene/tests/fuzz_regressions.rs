@@ -217,6 +217,53 @@ fn fuzz_seeds_load() {
     assert!(n >= 10, "only {n} seeds");
 }
 
+/// The seeds of the fuzz targets for material libraries, environment maps and textures
+/// load through their entry points (`raybench_scene::fuzzing`), each into what its target
+/// checks: materials for the target's OBJ, a map, a texture. A map's and a texture's first
+/// byte chooses the format or the wrap modes; the rest is the file.
+#[test]
+fn fuzz_seeds_of_materials_and_images_load() {
+    use raybench_scene::fuzzing::{decode_texture, load_obj_with_mtl, read_environment_map};
+    let seeds = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/seeds");
+    let files = |target: &str| -> Vec<(std::path::PathBuf, Vec<u8>)> {
+        let mut v: Vec<_> = std::fs::read_dir(seeds.join(target))
+            .unwrap()
+            .map(|e| {
+                let p = e.unwrap().path();
+                let bytes = std::fs::read(&p).unwrap();
+                (p, bytes)
+            })
+            .collect();
+        v.sort();
+        assert!(v.len() >= 2, "{target}: {} seeds", v.len());
+        v
+    };
+    let obj = "mtllib fuzz.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n";
+    for (path, bytes) in files("mtl") {
+        let m = load_obj_with_mtl(obj.as_bytes(), &bytes, Path::new("/fuzz/f.obj"))
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert_eq!(m.materials.len(), 2, "{}", path.display());
+        assert_eq!(m.textures.len(), 1, "{}", path.display());
+        assert!(m.triangle_material[0].is_some(), "{}", path.display());
+    }
+    let mut formats = [false; 2];
+    for (path, bytes) in files("env_map") {
+        let hdr = bytes[0] & 1 == 1;
+        formats[usize::from(hdr)] = true;
+        let name = if hdr { "seed.hdr" } else { "seed.exr" };
+        let (w, h, texels, _) = read_environment_map(&bytes[1..], Path::new(name), 1 << 20)
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert_eq!(texels.len(), (w * h) as usize);
+    }
+    assert_eq!(formats, [true; 2], "both map formats have seeds");
+    for (path, bytes) in files("texture") {
+        let t = decode_texture(&bytes[1..], [raybench_core::Wrap::Repeat; 2], 1 << 20)
+            .unwrap()
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert!(t.width() > 1, "{}", path.display());
+    }
+}
+
 /// A GLB header declaring a total length below its own 12 bytes made the `gltf` crate
 /// subtract with overflow (found by the `gltf` fuzz target; the input is
 /// `fuzz-regressions/glb-header-length-underflow.glb`). It is refused first.

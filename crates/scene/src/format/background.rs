@@ -77,7 +77,7 @@ pub(super) fn add(
             let path = ctx.resolve("map", &desc.map, &what)?;
             let context = format!("{}: {what}", ctx.file.display());
             let (w, h, texels, negative) =
-                read_map(&path, budget, &context).map_err(ctx.within(&what))?;
+                read_map(&path, None, budget, &context).map_err(ctx.within(&what))?;
             if negative {
                 b.warn(format!(
                     "{context}: {} has negative texels, read as 0",
@@ -130,9 +130,12 @@ pub(super) fn add(
 
 /// Reads an OpenEXR (`.exr`) or Radiance (`.hdr`) image as linear RGB rows from the top,
 /// checking its size against [`MAX_ENVIRONMENT_TEXELS`] and the budget from its header.
-/// Also says whether negative texels were read as 0.
-fn read_map(
+/// Also says whether negative texels were read as 0. The extension of `path` gives the
+/// format; `contents` are the file's bytes when already in memory (the fuzz targets),
+/// `None` reads the file.
+pub(crate) fn read_map(
     path: &Path,
+    contents: Option<&[u8]>,
     budget: &mut Reservation,
     context: &str,
 ) -> Result<(u32, u32, Vec<Vec3>, bool), LoadError> {
@@ -155,6 +158,7 @@ fn read_map(
     };
     let img = crate::samples::decode_image(
         path,
+        contents,
         format,
         "image",
         MAX_ENVIRONMENT_TEXELS,

@@ -9,7 +9,7 @@
 //! file here with its table's struct and its `add`, plus its variant of [`ObjectDesc`] and
 //! the one match arm that calls that `add`.
 
-mod background;
+pub(crate) mod background;
 mod bezier;
 mod camera;
 mod csg;
