@@ -165,6 +165,7 @@ struct Selection {
     list: bool,
 }
 
+/// Criterion's `BenchmarkFilter`, the ids a [`Selection`] takes.
 enum Filter {
     All,
     Regex(regex::Regex),
@@ -199,10 +200,11 @@ impl Selection {
                 // A cluster of short flags (`-vn`); a short option with a value ends it, and
                 // takes the rest of the argument as its value or, when nothing is left, the
                 // next argument.
-                if let Some(i) = shorts.find(VALUE_SHORTS) {
-                    if i + 1 == shorts.len() {
-                        args.next();
-                    }
+                if shorts
+                    .find(VALUE_SHORTS)
+                    .is_some_and(|i| i + 1 == shorts.len())
+                {
+                    args.next();
                 }
             } else {
                 filter = filter.or(Some(arg));
