@@ -571,7 +571,7 @@ fn prepare(name: &'static str, plan: &Plan, sets: &RaySets) -> Option<Prepared> 
         #[cfg(feature = "embree")]
         let notes = if embree.is_some() || embree_packet.is_some() {
             let version = raybench_peers::embree_version().unwrap_or_default();
-            format!("{notes}; Embree {version}")
+            format!("{notes}; {version}")
         } else {
             notes
         };
