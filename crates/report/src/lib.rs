@@ -361,18 +361,31 @@ fn write_text(path: &Path, text: &str) -> Result<()> {
     Ok(raybench_render::write_file(path, text.as_bytes())?)
 }
 
+/// What a merge accepts beyond one whole plan run on one CPU model.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Allow {
+    /// Merge a set that lacks shards of its plan, listing the missing ones under Skipped
+    /// (`--allow-partial`).
+    pub partial: bool,
+    /// Merge shards that ran on different CPU models into one set of tables, the report
+    /// saying so (`--allow-mixed-machines`).
+    pub mixed_machines: bool,
+}
+
 /// Joins the `results.json` of several report folders into one report in `out` (images are
 /// copied; charts and `REPORT.md` are drawn anew).
 ///
 /// The folders must hold the shards of one plan ([`results::Plan`]): the same shard count,
-/// settings, binary and units, each shard once and every shard present; with
-/// `allow_partial` a missing shard is listed under Skipped with the units it would have run.
+/// settings, binary and units, each shard once and every shard present, all run on one CPU
+/// model; with `allow.partial` a missing shard is listed under Skipped with the units it
+/// would have run, and with `allow.mixed_machines` shards of different CPU models are
+/// merged and the report notes it.
 ///
 /// # Errors
 /// A folder without a readable `results.json`, shards of different plans, a shard given
-/// twice, a missing shard (without `allow_partial`), `out` being one of the folders, or an
-/// unwritable `out`.
-pub fn merge(dirs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Results> {
+/// twice, a missing shard (without `allow.partial`), shards of different CPU models
+/// (without `allow.mixed_machines`), `out` being one of the folders, or an unwritable `out`.
+pub fn merge(dirs: &[PathBuf], out: &Path, allow: Allow) -> Result<Results> {
     if dirs.is_empty() {
         bail!("merge needs at least one report folder");
     }
@@ -409,7 +422,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Result
         }
         inputs.push((dir, r));
     }
-    let missing = check_plan(&inputs, allow_partial)?;
+    let missing = check_plan(&inputs, allow)?;
     std::fs::create_dir_all(out.join("images"))
         .with_context(|| format!("cannot create {}", out.display()))?;
     for (dir, r) in inputs {
@@ -434,12 +447,10 @@ pub fn merge(dirs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Result
 }
 
 /// Checks that the shards of `inputs` form one plan: the same shard count, settings, binary
-/// and units, each shard once, every shard present. Returns the missing shards as skip
-/// records when `allow_partial`, else refuses them.
-fn check_plan(
-    inputs: &[(&PathBuf, Results)],
-    allow_partial: bool,
-) -> Result<Vec<results::Skipped>> {
+/// and units, each shard once, every shard present, and (unless `allow.mixed_machines`) one
+/// CPU model. Returns the missing shards as skip records when `allow.partial`, else
+/// refuses them.
+fn check_plan(inputs: &[(&PathBuf, Results)], allow: Allow) -> Result<Vec<results::Skipped>> {
     let shards: Vec<(&PathBuf, &Shard)> = inputs
         .iter()
         .flat_map(|(dir, r)| r.shards.iter().map(move |s| (*dir, s)))
@@ -501,11 +512,26 @@ fn check_plan(
         }
         seen.push((s.index, dir));
     }
+    // Timings of different CPU models in one table read as a comparison they are not.
+    if !allow.mixed_machines
+        && let Some((dir, s)) = shards
+            .iter()
+            .find(|(_, s)| s.machine.cpu != first.machine.cpu)
+    {
+        bail!(
+            "{} ({}) and {} ({}) ran on different CPU models, whose timings do not compare \
+             in one table; merge the shards of one CPU model, or pass --allow-mixed-machines",
+            first_dir.display(),
+            first.machine.cpu,
+            dir.display(),
+            s.machine.cpu
+        );
+    }
     let missing: Vec<u32> = (1..=first.count)
         .filter(|i| !seen.iter().any(|(s, _)| s == i))
         .collect();
     let holds = |i: u32| plan.units_of(i, first.count).join(", ");
-    if !missing.is_empty() && !allow_partial {
+    if !missing.is_empty() && !allow.partial {
         let list: Vec<String> = missing
             .iter()
             .map(|i| format!("{i}/{} ({})", first.count, holds(*i)))

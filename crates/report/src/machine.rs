@@ -7,6 +7,7 @@ use raybench_registry::Roles;
 #[must_use]
 pub fn describe(threads: usize) -> Machine {
     Machine {
+        host: host(),
         cpu: cpu_model(),
         cores: std::thread::available_parallelism().map_or(1, std::num::NonZero::get),
         threads,
@@ -28,6 +29,16 @@ fn gpu() -> String {
         (None, Err(why)) => format!("none ({why})"),
         (None, Ok(())) => "unknown".into(),
     }
+}
+
+/// The host name the kernel reports (on a cluster, the node's name), or `unknown`.
+fn host() -> String {
+    std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .ok()
+        .map(|s| s.trim().to_string())
+        .or_else(|| std::env::var("HOSTNAME").ok())
+        .filter(|h| !h.is_empty())
+        .unwrap_or_else(|| "unknown".into())
 }
 
 fn cpu_model() -> String {
@@ -149,6 +160,7 @@ mod tests {
     fn machine_is_described() {
         let m = describe(2);
         assert!(!m.cpu.is_empty() && m.cores >= 1 && m.threads == 2);
+        assert!(!m.host.is_empty());
         assert!(m.isa.contains("lanes"));
         assert!(now_utc().ends_with('Z'));
     }

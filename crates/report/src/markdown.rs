@@ -43,6 +43,26 @@ pub fn charts(results: &Results, dir: &Path) -> Charts {
     out
 }
 
+/// The note a report merged from shards on different CPU models carries (`merge
+/// --allow-mixed-machines`): its tables set their timings side by side, but they compare
+/// only within a shard. `None` when every shard ran on one CPU model.
+fn mixed_machines(results: &Results) -> Option<String> {
+    let models: BTreeSet<&str> = results
+        .shards
+        .iter()
+        .map(|sh| sh.machine.cpu.as_str())
+        .collect();
+    (models.len() > 1).then(|| {
+        let list: Vec<String> = models.iter().map(|m| format!("`{m}`")).collect();
+        format!(
+            "**Mixed machines**: the shards ran on different CPU models ({}), merged with \
+             `--allow-mixed-machines`; the timings of different shards share the tables but \
+             compare only within a shard.",
+            list.join(", ")
+        )
+    })
+}
+
 /// The report text.
 pub fn report(results: &Results, charts: &Charts) -> String {
     let mut s = String::new();
@@ -51,10 +71,15 @@ pub fn report(results: &Results, charts: &Charts) -> String {
         let m = &sh.machine;
         let _ = writeln!(
             s,
-            "**Shard {}/{}**{}: {}, {} logical cores ({} worker threads{}); {}; GPU: {}; {}; {}. Started {} UTC, took {:.0} s{}{}{}.\n\n`{}`\n",
+            "**Shard {}/{}**{}{}: {}, {} logical cores ({} worker threads{}); {}; GPU: {}; {}; {}. Started {} UTC, took {:.0} s{}{}{}.\n\n`{}`\n",
             sh.index,
             sh.count,
             if sh.quick { " (quick)" } else { "" },
+            if m.host.is_empty() {
+                String::new()
+            } else {
+                format!(" on `{}`", m.host)
+            },
             m.cpu,
             m.cores,
             m.threads,
@@ -85,6 +110,9 @@ pub fn report(results: &Results, charts: &Charts) -> String {
             },
             sh.command
         );
+    }
+    if let Some(note) = mixed_machines(results) {
+        let _ = writeln!(s, "> {note}\n");
     }
     crate::verdict::write(results, &mut s);
     section(

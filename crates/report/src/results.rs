@@ -185,6 +185,10 @@ impl Shard {
 /// The machine a shard ran on.
 #[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
 pub struct Machine {
+    /// The node's host name (a cluster's node name); empty in files written before it was
+    /// recorded.
+    #[serde(default)]
+    pub host: String,
     /// CPU model name.
     pub cpu: String,
     /// Logical cores available to the process.

@@ -115,6 +115,10 @@ pub(crate) struct MergeCmd {
     /// scenes and experiments they hold) under Skipped.
     #[arg(long)]
     pub(crate) allow_partial: bool,
+    /// Merge shards that ran on different CPU models (their timings share the tables but
+    /// compare only within a shard; the report says so).
+    #[arg(long)]
+    pub(crate) allow_mixed_machines: bool,
 }
 
 #[derive(Args)]
@@ -182,7 +186,11 @@ pub(crate) fn report(cmd: &ReportCmd, assets: &Path) -> Result<ExitCode> {
 
 /// `raybench merge`: the shards' results joined into one report.
 pub(crate) fn merge(cmd: &MergeCmd) -> Result<ExitCode> {
-    raybench_report::merge(&cmd.dirs, &cmd.out, cmd.allow_partial)?;
+    let allow = raybench_report::Allow {
+        partial: cmd.allow_partial,
+        mixed_machines: cmd.allow_mixed_machines,
+    };
+    raybench_report::merge(&cmd.dirs, &cmd.out, allow)?;
     Ok(ExitCode::SUCCESS)
 }
 

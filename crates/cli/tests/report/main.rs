@@ -2,7 +2,8 @@
 //! its modules by subject: `matrix` (the files a report promises, the results schema, several
 //! cameras, a baseline, a replayed ray file), `html` (`REPORT.html`), `merge` (sharding by
 //! scene, merging, bad options), `experiments` (the scaling, presets and instancing
-//! sections) and `skips` (what did not run, and how the report says so).
+//! sections), `skips` (what did not run, and how the report says so) and `slurm` (the
+//! Slurm scripts on a one-node cluster of the test's own).
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -12,6 +13,7 @@ mod html;
 mod matrix;
 mod merge;
 mod skips;
+mod slurm;
 mod timing;
 
 use common::{raybench, raybench_ok};

@@ -1,5 +1,6 @@
 //! Sharding by scene and merging back: every shard's runs and images in the merged report,
-//! a shard given twice refused, and bad `report` and `merge` options refused cleanly.
+//! a shard given twice refused, shards of different CPU models refused unless told, and bad
+//! `report` and `merge` options refused cleanly.
 
 use crate::common::{assert_clean_error, assert_success, merge, raybench, results};
 use crate::{markdown, small_report, tmp_dir};
@@ -111,6 +112,60 @@ fn merge_checks_the_shards_form_one_plan() {
     ]);
     assert_clean_error(&out, "shard 3 holds none; split it into at most 2 shards");
     for d in &dirs {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}
+
+/// Shards that ran on different CPU models are refused, naming both folders and models,
+/// unless `--allow-mixed-machines` is given; then the merge proceeds and the report says
+/// its timings compare only within a shard. Each shard records its host name.
+#[test]
+fn merge_refuses_mixed_cpu_models_unless_told() {
+    let (a, b, m) = (
+        tmp_dir("mixed1"),
+        tmp_dir("mixed2"),
+        tmp_dir("mixed-merged"),
+    );
+    for (dir, shard) in [(&a, "1/2"), (&b, "2/2")] {
+        small_report(dir, &["--shard", shard]);
+    }
+    let host = &results(&a)["shards"][0]["machine"]["host"];
+    assert!(host.as_str().is_some_and(|h| !h.is_empty()), "{host}");
+    let ours = results(&a)["shards"][0]["machine"]["cpu"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    let mut edited = results(&b);
+    edited["shards"][0]["machine"]["cpu"] = "Imaginary CPU 9000".into();
+    std::fs::write(
+        b.join("results.json"),
+        serde_json::to_string(&edited).unwrap(),
+    )
+    .unwrap();
+    assert_clean_error(
+        &merge(&[&a, &b], &m),
+        &format!(
+            "{} ({ours}) and {} (Imaginary CPU 9000) ran on different CPU models",
+            a.display(),
+            b.display()
+        ),
+    );
+    assert!(!m.join("results.json").exists());
+    let d = |p: &Path| p.to_str().unwrap().to_string();
+    let o = raybench(&[
+        "merge",
+        &d(&a),
+        &d(&b),
+        "--out",
+        &d(&m),
+        "--allow-mixed-machines",
+    ]);
+    assert_success(&o);
+    let text = markdown(&m);
+    assert!(text.contains("**Mixed machines**"), "{text}");
+    assert!(text.contains("`Imaginary CPU 9000`"));
+    assert_eq!(results(&m)["shards"].as_array().unwrap().len(), 2);
+    for d in [a, b, m] {
         let _ = std::fs::remove_dir_all(d);
     }
 }
