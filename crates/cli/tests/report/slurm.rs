@@ -1,6 +1,7 @@
 //! A report on a real Slurm cluster: a one-node cluster of its own (munged, slurmctld and
-//! slurmd from a generated `slurm.conf` in a scratch folder), `scripts/slurm/submit.sh`
-//! submitting three shards as an array job and the merge after them, and the merged report
+//! slurmd from a generated `slurm.conf` in a scratch folder), `scripts/slurm/report.sbatch`
+//! submitted as an array job of three shards, whose first task submits the merge after
+//! them, and the merged report
 //! checked against the same matrix run unsharded: every workload, bit-identical images, the
 //! same counts. Also the array script's refusal of an array that is not `1-N`, which needs
 //! no cluster.
@@ -319,7 +320,7 @@ fn key(run: &Value) -> String {
     .join(" ")
 }
 
-/// Three shards of a small matrix, submitted with `scripts/slurm/submit.sh` to a one-node
+/// Three shards of a small matrix, `sbatch --array=1-3 scripts/slurm/report.sbatch` on a one-node
 /// Slurm cluster of the test's own, merged by the job that depends on them: the merged
 /// report has every workload of the same matrix run unsharded, with bit-identical images and
 /// the same counts, each shard naming the node and CPU model it ran on; and the merge
@@ -351,20 +352,22 @@ fn a_slurm_array_job_runs_the_shards_and_merges_them() {
     let cluster = Cluster::start(common::tmp_dir("report", "slurm"), &tools);
     let run = cluster.dir.join("run");
 
-    let mut submit = cluster.command(Path::new("bash"));
+    let mut submit = cluster.command(&tools["sbatch"]);
     submit
         .current_dir(repo_root())
-        .arg("scripts/slurm/submit.sh")
-        .arg("3")
+        .args(["--array=1-3", "--cpus-per-task=1"])
+        .arg(format!("--output={}/report-%a.out", run.display()))
+        .arg("scripts/slurm/report.sbatch")
         .args(MATRIX)
         .env("RAYBENCH_BIN", env!("CARGO_BIN_EXE_raybench"))
         .env("RAYBENCH_SLURM_OUT", &run)
-        .env("RAYBENCH_SBATCH_OPTIONS", "--cpus-per-task=1")
+        .env_remove("RAYBENCH_SBATCH_OPTIONS")
         .env_remove("RAYBENCH_MERGE_OPTIONS");
-    let out = submit.output().expect("submit.sh runs");
+    std::fs::create_dir_all(&run).unwrap();
+    let out = submit.output().expect("sbatch runs");
     assert!(
         out.status.success(),
-        "submit.sh: {}\n{}",
+        "sbatch: {}\n{}",
         String::from_utf8_lossy(&out.stderr),
         cluster.logs()
     );
