@@ -186,18 +186,16 @@ fn whitted_mirrors_do_not_fade_with_many_samples() {
     }
 }
 
-/// Whitted: a diffuse plane lit by one point light straight above, no ambient occlusion:
-/// radiance `albedo * I / d^2 + ambient`.
-#[test]
-fn whitted_point_light_falls_off_with_distance_squared() {
-    let mut b = SceneBuilder::new("lamp");
+/// The Whitted radiance of the one pixel of a diffuse plane (albedo 0.5) seen from straight
+/// above at height 1 (the eye 0.001 off the axis, a 1-degree view), lit by `light` or, with
+/// `None`, by nothing but what Whitted ray tracing gives a scene without lights.
+fn whitted_plane_pixel(light: Option<raybench_core::Light>) -> Vec3 {
+    let mut b = SceneBuilder::new("plane");
     let m = b.add_material(material(0.5, 0.0)).unwrap();
     b.add_plane(Vec3::ZERO, Vec3::Y, m).unwrap();
-    b.add_light(raybench_core::Light::Point {
-        position: Vec3::new(0.0, 2.0, 0.0),
-        intensity: Vec3::splat(8.0),
-    })
-    .unwrap();
+    if let Some(light) = light {
+        b.add_light(light).unwrap();
+    }
     b.camera(Camera {
         position: Vec3::new(0.0, 1.0, 0.001),
         look_at: Vec3::ZERO,
@@ -212,14 +210,20 @@ fn whitted_point_light_falls_off_with_distance_squared() {
         mode: Mode::Whitted,
         ..Default::default()
     };
-    let frame = render_with(raybench_tests::ORACLE, &scene, &settings, 1);
+    render_with(raybench_tests::ORACLE, &scene, &settings, 1).color[0]
+}
+
+/// Whitted: a diffuse plane lit by one point light straight above, no ambient occlusion:
+/// radiance `albedo * I / d^2 + ambient`.
+#[test]
+fn whitted_point_light_falls_off_with_distance_squared() {
+    let c = whitted_plane_pixel(Some(raybench_core::Light::Point {
+        position: Vec3::new(0.0, 2.0, 0.0),
+        intensity: Vec3::splat(8.0),
+    }));
     // 0.5 * 8 / 2^2 + 0.05 * 0.5 (ambient).
     let expect = 0.5 * 8.0 / 4.0 + 0.05 * 0.5;
-    assert!(
-        (frame.color[0].x - expect).abs() < 1e-3,
-        "{}",
-        frame.color[0]
-    );
+    assert!((c.x - expect).abs() < 1e-3, "{c}");
 }
 
 /// Whitted in a scene without point or directional lights: the headlight, radiance 1 along
@@ -227,30 +231,8 @@ fn whitted_point_light_falls_off_with_distance_squared() {
 /// (without it the plane would show its ambient term alone).
 #[test]
 fn whitted_lights_a_scene_without_lights_by_a_headlight() {
-    let mut b = SceneBuilder::new("dark");
-    let m = b.add_material(material(0.5, 0.0)).unwrap();
-    b.add_plane(Vec3::ZERO, Vec3::Y, m).unwrap();
-    b.camera(Camera {
-        position: Vec3::new(0.0, 1.0, 0.001),
-        look_at: Vec3::ZERO,
-        up: Vec3::Z,
-        vfov_degrees: 1.0,
-    })
-    .unwrap();
-    let scene = Arc::new(b.build());
-    assert!(scene.lights.is_empty());
-    let settings = RenderSettings {
-        width: 1,
-        height: 1,
-        mode: Mode::Whitted,
-        ..Default::default()
-    };
-    let frame = render_with(raybench_tests::ORACLE, &scene, &settings, 1);
+    let c = whitted_plane_pixel(None);
     // Nearly head on (the eye is 0.001 off the axis): cos within 1e-6 of 1.
     let expect = 0.5 + 0.05 * 0.5;
-    assert!(
-        (frame.color[0].x - expect).abs() < 1e-3,
-        "{}",
-        frame.color[0]
-    );
+    assert!((c.x - expect).abs() < 1e-3, "{c}");
 }
