@@ -380,19 +380,17 @@ mod tests {
 
     /// The limit on instanced primitives is checked before anything is added: a million
     /// instances of a 16,000-triangle mesh (more than 2^32 primitives flattened) is
-    /// refused at once.
+    /// refused by the count alone (made one by one, they would not fit in memory).
     #[test]
     fn the_instanced_total_is_checked_first() {
         let text = "[[object]]\nname = \"m\"\ninstance_only = true\nkind = \"generator\"\n\
                     spec = \"soup:16000\"\n\
                     [[instance_array]]\nmesh = \"m\"\ncount = [1024, 1024, 1]\nspacing = 1\n";
-        let start = std::time::Instant::now();
         let e = load(text).expect_err("accepted").to_string();
         assert!(
             e.contains("primitives once its instances are counted"),
             "{e}"
         );
         assert!(e.contains("line 6: instance_array 1"), "{e}");
-        assert!(start.elapsed().as_secs_f64() < 5.0, "not refused at once");
     }
 }
