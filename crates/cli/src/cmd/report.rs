@@ -162,10 +162,14 @@ pub(crate) fn report(cmd: &ReportCmd, assets: &Path) -> Result<ExitCode> {
             .iter()
             .map(|k| format!("{} {}: {}", k.kind, k.name, k.reason))
             .collect();
-        eprintln!(
-            "error: nothing ran ({}); REPORT.md lists what was skipped",
-            why.join("; ")
-        );
+        if why.is_empty() {
+            eprintln!("error: nothing ran: the options leave no workload to run");
+        } else {
+            eprintln!(
+                "error: nothing ran ({}); REPORT.md lists what was skipped",
+                why.join("; ")
+            );
+        }
         return Ok(ExitCode::FAILURE);
     }
     let failed: Vec<String> = results
