@@ -1,7 +1,7 @@
 //! The peer benchmark (`benches/peers.rs`): the workload of `../shared/PEERS.md`, generated
 //! once per mesh, traced by every exact raybench CPU backend and every peer in one process.
 //!
-//! Per mesh (icosphere 81,920 triangles, soup 100,000, terrain 1,002,528) and contestant:
+//! Per mesh ([`MESHES`]: three generated meshes and three shared ones) and contestant:
 //! the build (best of `repeat`, all cores), then for each ray set (primary: the scene
 //! camera's `N x N` rays in the renderer's tile order; incoherent: seeded random rays in the
 //! mesh's box; shadow, ao and diffuse: derived from `bvh`'s primary hits by
@@ -30,12 +30,26 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
-/// The meshes of `../shared/PEERS.md`: short name and scene spec.
-pub const MESHES: [(&str, &str); 3] = [
+/// The default meshes: short name and scene spec. Three generated meshes (a closed
+/// sphere, a soup of small random triangles, a million-triangle terrain), then the shared
+/// meshes users bring: Sponza (Dabrovic's atrium: long thin triangles, many overlapping
+/// boxes), the Stanford bunny, and `bunny-field` flattened (144 bunnies and 400 teapots
+/// around Sponza, 12.6 million triangles stored flat, so that no level of the tree stays in
+/// the caches). The shared meshes need the assets directory; without it they are skipped
+/// with the reason, and the run goes on.
+pub const MESHES: [(&str, &str); 6] = [
     ("sphere", "icosphere:6"),
     ("soup", "soup:100000"),
     ("terrain", "terrain:708"),
+    ("sponza", "sponza"),
+    ("bunny", "bunny"),
+    ("bunny-field", "flat:bunny-field"),
 ];
+
+/// The prefix of a mesh spec that asks for the scene flattened
+/// ([`raybench_scene::flatten_within_budget`]: every instance's triangles carried to world
+/// space and stored flat): `flat:bunny-field`.
+pub const FLAT_PREFIX: &str = "flat:";
 
 /// The reference every contestant's answers are compared with, and whose closest hits end
 /// the any-hit rays.
@@ -101,7 +115,8 @@ options:
                         shadow, ao and diffuse start from the primary rays' hits)
   --ao-rays N           ambient-occlusion rays per primary hit (default 4)
   --rays-file FILE      replay a ray file (raybench rays export) instead of the sets
-  --meshes A,B          sphere, soup, terrain (default: all three), or scene specs
+  --meshes A,B          sphere, soup, terrain, sponza, bunny, bunny-field (default: all),
+                        or scene specs; `flat:SCENE` flattens an instanced scene
   --contestants A,B     only these (see --list); `bvh` is always built as the reference
   --repeat N            timed runs per figure and builds, best kept (default 3)
   --chunk N             rays per intersect_batch / occluded_batch call (default 1024)
@@ -336,6 +351,21 @@ pub fn ray_set(
     })
 }
 
+/// The scene of mesh `spec`: loaded from the assets directory, flattened when it starts
+/// with [`FLAT_PREFIX`].
+///
+/// # Errors
+/// The loader's or the flattening's error.
+pub fn load_mesh(spec: &str) -> Result<Scene, raybench_scene::LoadError> {
+    let assets = raybench_scene::assets_dir(None);
+    match spec.strip_prefix(FLAT_PREFIX) {
+        Some(inner) => {
+            raybench_scene::flatten_within_budget(&raybench_scene::load(inner, &assets)?)
+        }
+        None => raybench_scene::load(spec, &assets),
+    }
+}
+
 /// `rays` ending at [`SHADOW_FRACTION`] of `closest`'s `t` (unchanged where it is `None`).
 #[must_use]
 pub fn shadow_rays(rays: &[Ray], closest: &[Option<Hit>]) -> Vec<Ray> {
@@ -474,8 +504,9 @@ fn build(
 }
 
 impl Workload {
-    /// Loads mesh `spec` (a generator spec such as `icosphere:6`, or any scene raybench
-    /// loads) and makes its ray sets, with the answers of [`REFERENCE`] on `pool`.
+    /// Loads mesh `spec` (a generator spec such as `icosphere:6`, any scene raybench
+    /// loads, or either behind [`FLAT_PREFIX`] to flatten it) and makes its ray sets, with
+    /// the answers of [`REFERENCE`] on `pool`.
     ///
     /// # Errors
     /// When the scene cannot be loaded (its error, naming the spec).
@@ -485,9 +516,22 @@ impl Workload {
         o: &Options,
         pool: &ThreadPool,
     ) -> Result<Self, String> {
-        let scene = raybench_scene::load(spec, &raybench_scene::assets_dir(None))
-            .map(Arc::new)
-            .map_err(|e| format!("mesh {name} ({spec}): {e}"))?;
+        let scene = load_mesh(spec).map_err(|e| format!("mesh {name} ({spec}): {e}"))?;
+        Self::from_scene(name, spec, Arc::new(scene), o, pool)
+    }
+
+    /// The ray sets of the loaded mesh `scene`, with the answers of [`REFERENCE`] on
+    /// `pool`.
+    ///
+    /// # Errors
+    /// When a ray file cannot be read or a derived set cannot be made.
+    pub fn from_scene(
+        name: &str,
+        spec: &str,
+        scene: Arc<Scene>,
+        o: &Options,
+        pool: &ThreadPool,
+    ) -> Result<Self, String> {
         let reference = contestants::all()
             .into_iter()
             .find(|c| c.name == REFERENCE)
@@ -672,13 +716,28 @@ pub fn run(
             shadow_fraction: SHADOW_FRACTION,
         },
         meshes: Vec::new(),
+        skipped_meshes: Vec::new(),
     };
     let pools: Vec<(usize, ThreadPool)> = threads.iter().map(|&t| (t, pool(t))).collect();
     let all = &pools.last().expect("at least one pool").1;
     let contestants = o.selected();
     for (name, spec) in &o.meshes {
         let start = Instant::now();
-        let w = Workload::generate(name, spec, o, all)?;
+        let scene = match load_mesh(spec) {
+            Ok(scene) => Arc::new(scene),
+            // A shared mesh without the assets directory, or a scene this machine's memory
+            // cannot hold flattened: skipped with the reason, the other meshes still run.
+            Err(e) if e.is_missing_asset() || e.is_over_budget() => {
+                eprintln!("{name} ({spec}) skipped: {e}");
+                report.skipped_meshes.push(Skipped {
+                    name: name.clone(),
+                    reason: e.to_string(),
+                });
+                continue;
+            }
+            Err(e) => return Err(format!("mesh {name} ({spec}): {e}")),
+        };
+        let w = Workload::from_scene(name, spec, scene, o, all)?;
         eprintln!(
             "{name} ({spec}): {} primitives, ray sets and reference in {:.1?}",
             w.scene.geometry.len(),

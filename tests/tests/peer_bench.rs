@@ -31,7 +31,10 @@ fn defaults_are_the_peers_workload() {
         [
             ("sphere", "icosphere:6"),
             ("soup", "soup:100000"),
-            ("terrain", "terrain:708")
+            ("terrain", "terrain:708"),
+            ("sponza", "sponza"),
+            ("bunny", "bunny"),
+            ("bunny-field", "flat:bunny-field")
         ]
     );
     assert_eq!(
@@ -274,4 +277,59 @@ fn a_ray_file_replays_in_place_of_the_sets() {
         (bvh.ray_sets[0].closest.differ, bvh.ray_sets[0].any.differ),
         (0, 0)
     );
+}
+
+/// `flat:SCENE` traces an instanced scene flattened (every contestant, the peers too, sees
+/// plain triangles), and a mesh whose files are missing is skipped with its reason while
+/// the others run.
+#[test]
+fn flattened_meshes_run_and_missing_meshes_are_skipped() {
+    let dir = std::env::temp_dir().join(format!("raybench-peer-flat-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let missing = dir.join("missing.toml");
+    std::fs::write(
+        &missing,
+        "[[object]]\nkind = \"mesh\"\npath = \"nowhere.obj\"\n",
+    )
+    .unwrap();
+    let mut o = options(&[
+        "--size",
+        "16",
+        "--rays",
+        "500",
+        "--repeat",
+        "1",
+        "--threads",
+        "1",
+        "--sets",
+        "primary,incoherent",
+    ]);
+    let spec = missing.display().to_string();
+    o.meshes = vec![
+        ("gone".into(), spec),
+        ("grid".into(), "flat:instance-grid".into()),
+    ];
+    o.contestants = Some(vec!["bvh".into(), "packet".into()]);
+    o.json = dir.join("peers.json");
+    let report = peers::run(&o, |_| Ok(())).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(report.skipped_meshes.len(), 1);
+    assert_eq!(report.skipped_meshes[0].name, "gone");
+    assert!(
+        report.skipped_meshes[0].reason.contains("nowhere.obj"),
+        "{}",
+        report.skipped_meshes[0].reason
+    );
+    assert!(report.tables().contains("Skipped meshes:\n- gone: "));
+    let m = &report.meshes[0];
+    let instanced =
+        raybench_scene::load("instance-grid", &raybench_scene::assets_dir(None)).unwrap();
+    assert!(instanced.geometry.has_instances());
+    assert_eq!(m.triangles, instanced.geometry.total_len());
+    assert!(m.skipped.is_empty(), "{:?}", m.skipped);
+    for c in &m.contestants {
+        for s in &c.ray_sets {
+            assert_eq!(s.closest.differ, 0, "{} {}", c.name, s.name);
+        }
+    }
 }

@@ -28,7 +28,8 @@
 //!         "any": { ... }
 //!       } ]
 //!     } ]
-//!   } ]
+//!   } ],
+//!   "skipped_meshes": [ { "name": "sponza", "reason": "missing asset ..." } ]
 //! }
 //! ```
 
@@ -57,6 +58,9 @@ pub struct Report {
     pub workload: WorkloadInfo,
     /// One entry per mesh.
     pub meshes: Vec<MeshReport>,
+    /// Meshes that could not be loaded here (the shared meshes without the assets
+    /// directory, a flattened scene over the memory budget), with why.
+    pub skipped_meshes: Vec<Skipped>,
 }
 
 /// The workload's parameters.
@@ -108,10 +112,10 @@ pub struct RaySetInfo {
     pub hits: usize,
 }
 
-/// A contestant that did not run on a mesh.
+/// A contestant that did not run on a mesh, or a mesh that could not be loaded.
 #[derive(Clone, Debug, Serialize)]
 pub struct Skipped {
-    /// Contestant.
+    /// Contestant or mesh.
     pub name: String,
     /// Why.
     pub reason: String,
@@ -287,6 +291,20 @@ impl Report {
         let mut out = self.header();
         for m in &self.meshes {
             out.push_str(&self.mesh_tables(m));
+        }
+        out.push_str(&self.skipped_meshes_text());
+        out
+    }
+
+    /// The meshes that could not be loaded, one line each with why (empty when none).
+    #[must_use]
+    pub fn skipped_meshes_text(&self) -> String {
+        let mut out = String::new();
+        if !self.skipped_meshes.is_empty() {
+            let _ = writeln!(out, "\nSkipped meshes:");
+            for s in &self.skipped_meshes {
+                let _ = writeln!(out, "- {}: {}", s.name, s.reason);
+            }
         }
         out
     }
