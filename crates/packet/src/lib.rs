@@ -276,6 +276,9 @@ fn batch_occluded<L: Lanes, C: Counters>(
 ) {
     let g = &*accel.geometry;
     let size = PACKET_VECTORS * L::W;
+    let mut stack = [(0, 0.0); single::STACK];
+    let mut packet_stack: packet::AnyStack<PACKET_VECTORS> =
+        [(0, [0; PACKET_VECTORS]); single::STACK];
     // Rays that do not form coherent packets, traced interleaved afterwards.
     let mut pending = Vec::new();
     for (start, (chunk, out)) in (0..)
@@ -294,6 +297,8 @@ fn batch_occluded<L: Lanes, C: Counters>(
                 chunk,
                 oct,
                 out,
+                &mut packet_stack,
+                &mut stack,
                 counters,
             ),
             None => pending.extend(

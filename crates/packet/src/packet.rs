@@ -47,25 +47,40 @@ struct Frustum<S: Lanes> {
 }
 
 impl<S: Lanes> Frustum<S> {
+    /// The frustum of a packet from its box-test lanes ([`split`]; padding lanes repeat a
+    /// ray of the packet, so they change no bound). The ranges are reduced vector by
+    /// vector, then across one vector's lanes: packets hold finite origins and non-NaN
+    /// inverse directions, so plain comparisons give the exact minimum and maximum (the
+    /// per-ray `f32::min` loop this replaces spent a third of a primary any-hit packet's
+    /// time on its NaN checks).
     #[inline(always)]
-    fn new(rays: &[Ray], negative: [bool; 3]) -> Self {
-        let mut origin = [(f32::INFINITY, f32::NEG_INFINITY); 3];
-        let mut inv = [(f32::INFINITY, f32::NEG_INFINITY); 3];
-        let mut t_min = f32::INFINITY;
-        for r in rays {
-            for axis in 0..3 {
-                let (o, i) = (r.origin[axis], r.inv_dir[axis]);
-                origin[axis] = (origin[axis].0.min(o), origin[axis].1.max(o));
-                inv[axis] = (inv[axis].0.min(i), inv[axis].1.max(i));
+    fn new<L: Lanes, const K: usize>(
+        chunks: &[(SlabLanes<L>, L::V, u32); K],
+        negative: [bool; 3],
+    ) -> Self {
+        let mut origin = [(S::splat(0.0), S::splat(0.0)); 3];
+        let mut inv = [(S::splat(0.0), S::splat(0.0)); 3];
+        for axis in 0..3 {
+            let (mut o_lo, mut o_hi) = (chunks[0].0.origin[axis], chunks[0].0.origin[axis]);
+            let (mut i_lo, mut i_hi) = (chunks[0].0.inv[axis], chunks[0].0.inv[axis]);
+            for chunk in &chunks[1..] {
+                o_lo = L::min(o_lo, chunk.0.origin[axis]);
+                o_hi = L::max(o_hi, chunk.0.origin[axis]);
+                i_lo = L::min(i_lo, chunk.0.inv[axis]);
+                i_hi = L::max(i_hi, chunk.0.inv[axis]);
             }
-            t_min = t_min.min(r.t_min);
+            origin[axis] = (S::splat(lowest::<L>(o_lo)), S::splat(highest::<L>(o_hi)));
+            inv[axis] = (S::splat(lowest::<L>(i_lo)), S::splat(highest::<L>(i_hi)));
         }
-        let splat2 = |(a, b): (f32, f32)| (S::splat(a), S::splat(b));
+        let mut t_min = chunks[0].0.t_min;
+        for chunk in &chunks[1..] {
+            t_min = L::min(t_min, chunk.0.t_min);
+        }
         Self {
-            origin: origin.map(splat2),
-            inv: inv.map(splat2),
+            origin,
+            inv,
             negative,
-            t_min: S::splat(t_min),
+            t_min: S::splat(lowest::<L>(t_min)),
         }
     }
 
@@ -119,6 +134,34 @@ impl<S: Lanes> Frustum<S> {
         }
         (t0, S::bits(S::le(t0, t1)))
     }
+}
+
+/// The smallest lane of `v` (no lane is NaN).
+#[inline(always)]
+fn lowest<L: Lanes>(v: L::V) -> f32 {
+    let mut a = [0.0f32; 16];
+    L::store(v, &mut a);
+    let mut m = a[0];
+    for &x in &a[1..L::W] {
+        if x < m {
+            m = x;
+        }
+    }
+    m
+}
+
+/// The largest lane of `v` (no lane is NaN).
+#[inline(always)]
+fn highest<L: Lanes>(v: L::V) -> f32 {
+    let mut a = [0.0f32; 16];
+    L::store(v, &mut a);
+    let mut m = a[0];
+    for &x in &a[1..L::W] {
+        if x > m {
+            m = x;
+        }
+    }
+    m
 }
 
 /// Box-test lanes of one vector of a packet.
@@ -292,7 +335,7 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
     }
     let chunks = split::<L, K>(rays);
     let negative = [oct & 1 != 0, oct & 2 != 0, oct & 4 != 0];
-    let frustum = Frustum::<L::Single>::new(rays, negative);
+    let frustum = Frustum::<L::Single>::new(&chunks, negative);
     stack[0] = (0, f32::NEG_INFINITY, std::array::from_fn(|k| chunks[k].2));
     let mut tri_lanes: Option<[RayLanes<L>; K]> = None;
     let mut sp = 1;
@@ -340,15 +383,17 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
             continue;
         }
         let node = &layout.wide[index as usize];
-        let packet_limit = masks
-            .iter()
-            .enumerate()
-            .flat_map(|(k, m)| BitIter(*m).map(move |lane| k * L::W + lane))
-            .fold(f32::NEG_INFINITY, |a, i| a.max(st.limit[i]));
+        // The largest limit of the active lanes (limits are never NaN), in vectors.
         let mut limits = [L::splat(0.0); K];
+        let mut widest = L::splat(f32::NEG_INFINITY);
         for (k, limit) in limits.iter_mut().enumerate() {
             *limit = L::load(&st.limit[k * L::W..]);
+            if masks[k] != 0 {
+                let own = L::select(L::mask(masks[k]), *limit, L::splat(f32::NEG_INFINITY));
+                widest = L::max(widest, own);
+            }
         }
+        let packet_limit = highest::<L>(widest);
         // Children hit by some lane, sorted far to near by the frustum's entry bound.
         let mut found: [Entry<K>; WIDE] = [(0, 0.0, [0; K]); WIDE];
         let mut count = 0;
@@ -489,15 +534,29 @@ fn packet_leaf<L: Lanes, const K: usize, C: Counters>(
     }
 }
 
+/// An any-hit packet traversal stack entry: a child reference and the lanes (per vector)
+/// that entered it.
+pub(crate) type AnyEntry<const K: usize> = (u32, [u32; K]);
+
+/// An any-hit packet traversal stack (allocated once per batch: zeroing it per packet cost
+/// more than a packet's primary rays spend in some leaves).
+pub(crate) type AnyStack<const K: usize> = [AnyEntry<K>; STACK];
+
 /// Any-hit results of a coherent packet: `blocked[i]` arrives true for rays already
-/// blocked (by an unbounded primitive) and leaves true for every blocked ray.
+/// blocked (by an unbounded primitive) and leaves true for every blocked ray. A lane leaves
+/// the packet as soon as it is blocked, and the packet stops when none is left; as in
+/// [`closest`], a packet down to [`SPLIT_LANES`] lanes at an interior node finishes that
+/// subtree ray by ray, and a leaf block meets few lanes one lane at a time.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn occluded<L: Lanes, const K: usize, C: Counters>(
     layout: &Layout,
     g: &Geometry,
     rays: &[Ray],
     oct: u8,
     blocked: &mut [bool],
+    stack: &mut AnyStack<K>,
+    scratch: &mut Stack,
     counters: &mut C,
 ) {
     if layout.wide.is_empty() {
@@ -516,10 +575,9 @@ pub(crate) fn occluded<L: Lanes, const K: usize, C: Counters>(
     }
     let mut tri_lanes: Option<[RayLanes<L>; K]> = None;
     let negative = [oct & 1 != 0, oct & 2 != 0, oct & 4 != 0];
-    let frustum = Frustum::<L::Single>::new(rays, negative);
+    let frustum = Frustum::<L::Single>::new(&chunks, negative);
     let packet_limit = rays.iter().fold(f32::NEG_INFINITY, |a, r| a.max(r.t_max));
     let packet_limit = <L::Single as Lanes>::splat(packet_limit);
-    let mut stack = [(0u32, [0u32; K]); STACK];
     stack[0] = (0, open);
     let mut sp = 1;
     while sp > 0 && open.iter().any(|&m| m != 0) {
@@ -532,39 +590,28 @@ pub(crate) fn occluded<L: Lanes, const K: usize, C: Counters>(
         }
         if index & LEAF_BIT != 0 {
             let tri_lanes = tri_lanes.get_or_insert_with(|| triangle_lanes::<L, K>(rays));
-            let leaf = LeafRef::decode(index);
-            for block in &layout.blocks[leaf.first..leaf.first + leaf.blocks] {
-                let occupied = block.occupied();
-                if C::ENABLED {
-                    counters.add_tests(u64::from(active * occupied.count_ones()));
-                }
-                let scalar = if leaf.mixed {
-                    scalar_lanes(g, block)
-                } else {
-                    0
-                };
-                for j in BitIter(occupied) {
-                    let tri = block.triangle(j);
-                    let shape = g.shape(block.id[j]);
-                    for (k, (lanes, (_, t_max, _))) in tri_lanes.iter().zip(&chunks).enumerate() {
-                        let m = masks[k] & open[k];
-                        if m == 0 {
-                            continue;
-                        }
-                        let (mut hit, mut test) = (0, m);
-                        if scalar & (1 << j) == 0 {
-                            let r = rays_vs_triangle(&tri, lanes, *t_max, m);
-                            (hit, test) = (r.hit, r.zero);
-                        }
-                        for lane in BitIter(test) {
-                            if shape.intersect(&rays[k * L::W + lane]).is_some() {
-                                hit |= 1 << lane;
-                            }
-                        }
-                        for lane in BitIter(hit) {
-                            blocked[k * L::W + lane] = true;
-                        }
-                        open[k] &= !hit;
+            packet_leaf_any::<L, K, C>(
+                layout,
+                g,
+                rays,
+                tri_lanes,
+                &chunks,
+                LeafRef::decode(index),
+                masks,
+                &mut open,
+                blocked,
+                counters,
+            );
+            continue;
+        }
+        if active <= SPLIT_LANES {
+            // The packet has diverged: its last lanes finish this subtree one by one.
+            for (k, m) in masks.iter().enumerate() {
+                for lane in BitIter(*m) {
+                    let i = k * L::W + lane;
+                    if single::occluded::<L, C>(layout, g, &rays[i], index, scratch, counters) {
+                        blocked[i] = true;
+                        open[k] &= !(1 << lane);
                     }
                 }
             }
@@ -588,6 +635,83 @@ pub(crate) fn occluded<L: Lanes, const K: usize, C: Counters>(
                 }
             }
             first += <L::Single as Lanes>::W;
+        }
+    }
+}
+
+/// Tests the leaf `leaf` against the lanes `entered` of a packet that are still in `open`,
+/// marking the lanes it blocks in `blocked` and closing them in `open`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn packet_leaf_any<L: Lanes, const K: usize, C: Counters>(
+    layout: &Layout,
+    g: &Geometry,
+    rays: &[Ray],
+    tri_lanes: &[RayLanes<L>; K],
+    chunks: &[(SlabLanes<L>, L::V, u32); K],
+    leaf: LeafRef,
+    entered: [u32; K],
+    open: &mut [u32; K],
+    blocked: &mut [bool],
+    counters: &mut C,
+) {
+    for block in &layout.blocks[leaf.first..leaf.first + leaf.blocks] {
+        let occupied = block.occupied();
+        let tris = occupied.count_ones();
+        let masks: [u32; K] = std::array::from_fn(|k| entered[k] & open[k]);
+        let active: u32 = masks.iter().map(|m| m.count_ones()).sum();
+        if active == 0 {
+            return;
+        }
+        if C::ENABLED {
+            counters.add_tests(u64::from(active * tris));
+        }
+        let vectors = masks.iter().filter(|&&m| m != 0).count() as u32;
+        // Few lanes left: one SIMD test of the block per lane is cheaper than one SIMD
+        // test of the lanes per triangle.
+        if active < vectors * tris {
+            for (k, m) in masks.iter().enumerate() {
+                for lane in BitIter(*m) {
+                    let i = k * L::W + lane;
+                    let splat = SplatRay::<L::Narrow>::new(&rays[i]);
+                    if single::block_occluded(g, block, leaf.mixed, &rays[i], &splat) {
+                        blocked[i] = true;
+                        open[k] &= !(1 << lane);
+                    }
+                }
+            }
+            continue;
+        }
+        let scalar = if leaf.mixed {
+            scalar_lanes(g, block)
+        } else {
+            0
+        };
+        for j in BitIter(occupied) {
+            let tri = block.triangle(j);
+            for (k, (lanes, (_, t_max, _))) in tri_lanes.iter().zip(chunks).enumerate() {
+                let m = entered[k] & open[k];
+                if m == 0 {
+                    continue;
+                }
+                let (mut hit, mut test) = (0, m);
+                if scalar & (1 << j) == 0 {
+                    let r = rays_vs_triangle(&tri, lanes, *t_max, m);
+                    (hit, test) = (r.hit, r.zero);
+                }
+                if test != 0 {
+                    let shape = g.shape(block.id[j]);
+                    for lane in BitIter(test) {
+                        if shape.intersect(&rays[k * L::W + lane]).is_some() {
+                            hit |= 1 << lane;
+                        }
+                    }
+                }
+                for lane in BitIter(hit) {
+                    blocked[k * L::W + lane] = true;
+                }
+                open[k] &= !hit;
+            }
         }
     }
 }

@@ -173,20 +173,30 @@ pub(crate) fn leaf_occluded<L: Lanes>(
     ray: &Ray,
     splat: &SplatRay<L>,
 ) -> bool {
-    for block in &layout.blocks[leaf.first..leaf.first + leaf.blocks] {
-        let r = ray_vs_block(block, splat, ray.t_max, ALL_LANES);
-        if r.hit != 0 {
-            return true;
-        }
-        let mut scalar = r.zero;
-        if leaf.mixed {
-            scalar |= scalar_lanes(g, block);
-        }
-        if BitIter(scalar).any(|lane| g.shape(block.id[lane]).intersect(ray).is_some()) {
-            return true;
-        }
+    layout.blocks[leaf.first..leaf.first + leaf.blocks]
+        .iter()
+        .any(|block| block_occluded(g, block, leaf.mixed, ray, splat))
+}
+
+/// Whether a primitive of `block` blocks `ray` (its triangles in one SIMD test, the lanes
+/// that test cannot decide and, when `mixed`, its other primitives with the core's routine).
+#[inline(always)]
+pub(crate) fn block_occluded<L: Lanes>(
+    g: &Geometry,
+    block: &TriBlock,
+    mixed: bool,
+    ray: &Ray,
+    splat: &SplatRay<L>,
+) -> bool {
+    let r = ray_vs_block(block, splat, ray.t_max, ALL_LANES);
+    if r.hit != 0 {
+        return true;
     }
-    false
+    let mut scalar = r.zero;
+    if mixed {
+        scalar |= scalar_lanes(g, block);
+    }
+    BitIter(scalar).any(|lane| g.shape(block.id[lane]).intersect(ray).is_some())
 }
 
 /// Primitives in a leaf, for counting tests.
