@@ -3,8 +3,11 @@
 //! - Items are 32-byte records (a box, the primitive id in the spare lane of its minimum).
 //! - A node bins its items once for all three axes (bin index per axis from the centroid,
 //!   bin boxes as four-lane minimum and maximum vectors), sweeps the bins for the cheapest
-//!   split, and takes its children's boxes from the bins; the partition gathers the
-//!   children's centroid bounds as it classifies the items, so no node rescans its items.
+//!   split, and takes its children's boxes from the bins. The partition classifies blocks
+//!   of items without branches (see [`partition`]) and then gathers the children's
+//!   centroid bounds in one pass over each side, so no node bins to find them. Nodes of
+//!   two items, the most common, skip the sort of the small-node split (see
+//!   [`best_split_small`]).
 //! - Parallelism from the top: nodes of at least `parallel_threshold` primitives build their
 //!   two subtrees with `rayon::join`, and nodes of at least [`PARALLEL_BINNING`] items bin in
 //!   parallel chunks whose bins are then merged (minimum, maximum and counts are exact, so
@@ -233,17 +236,10 @@ impl Binner {
         (binner, valid)
     }
 
-    /// Bin of coordinate `x` on `axis`: truncation of a non-negative number, clamped so the
-    /// largest centroid lands in the last bin.
-    #[inline]
-    fn bin(&self, x: f32, axis: usize) -> usize {
-        let b = ((x - self.cmin.0[axis]) * self.scale.0[axis]) as i32;
-        (b.clamp(0, self.bins as i32 - 1) as usize).min(MAX_BINS - 1)
-    }
-
-    /// The bins of a centroid on the three axes, as [`Binner::bin`] computes them: the
-    /// clamp happens before the truncation, in all lanes at once (the same bins, since the
-    /// bounds are whole numbers; NaN goes to bin 0 either way).
+    /// The bins of a centroid on the three axes: per axis, the truncation of the scaled
+    /// distance from the smallest centroid, clamped so the largest centroid lands in the
+    /// last bin. The clamp happens before the truncation, in all lanes at once (the same
+    /// bins as clamping after it, since the bounds are whole numbers; NaN goes to bin 0).
     #[inline]
     fn bins_of(&self, c: V4) -> [usize; 3] {
         let last = (self.bins - 1) as f32;
@@ -263,7 +259,7 @@ impl Binner {
     }
 
     /// Whether coordinate `x` on `axis` falls in a bin below `bin` (at least 1): the
-    /// comparison [`Binner::bin`]`(x, axis) < bin` without the conversion, exact because
+    /// comparison of its [`Binner::bins_of`] bin with `bin` without the conversion, exact because
     /// `bin` is a whole number and the scaled coordinate is not negative.
     #[inline]
     fn below(&self, x: f32, axis: usize, bin: usize) -> bool {
@@ -409,7 +405,9 @@ const SMALL: usize = 12;
 /// boundary's sides are the items below and above it, so this evaluates the same partitions
 /// with the same boxes and costs as the bins would (boundaries next to empty bins repeat a
 /// partition at the same cost), and picks the same one; it skips clearing and sweeping
-/// mostly empty bins.
+/// mostly empty bins. Every item's bins come from one computation for all three axes; two
+/// items have one partition, the same on every axis that separates them, and go without
+/// the sort.
 fn best_split_small(
     items: &[Item],
     binner: &Binner,
@@ -419,12 +417,33 @@ fn best_split_small(
 ) -> Option<Split> {
     let n = items.len();
     debug_assert!((2..=SMALL).contains(&n));
+    // Every item's bins on the three axes at once.
+    let mut bins = [[0usize; 3]; SMALL];
+    for (b, it) in bins.iter_mut().zip(items) {
+        *b = binner.bins_of(it.centroid());
+    }
+    if n == 2 {
+        // One partition only, at the same cost on every axis that separates the two: the
+        // first such axis wins, as in the sweep below (later ones are not cheaper).
+        let axis = (0..3).find(|&a| valid[a] && bins[0][a] != bins[1][a])?;
+        let low = usize::from(bins[1][axis] < bins[0][axis]);
+        let (left, right) = (items[low].bounds(), items[1 - low].bounds());
+        let cost =
+            params.traversal_cost + (left.surface_area() * 1.0 + right.surface_area() * 1.0) / area;
+        return cost.is_finite().then_some(Split {
+            axis,
+            bin: bins[1 - low][axis],
+            cost,
+            left,
+            right,
+        });
+    }
     let mut best: Option<Split> = None;
     for axis in (0..3).filter(|&a| valid[a]) {
         // (bin, item) pairs, insertion-sorted by bin.
         let mut keys = [(0usize, 0usize); SMALL];
-        for (i, it) in items.iter().enumerate() {
-            let key = (binner.bin(it.centroid_on(axis), axis), i);
+        for (i, b) in bins[..n].iter().enumerate() {
+            let key = (b[axis], i);
             let mut k = i;
             while k > 0 && keys[k - 1].0 > key.0 {
                 keys[k] = keys[k - 1];
@@ -463,26 +482,74 @@ fn best_split_small(
     best
 }
 
+/// Items per block of the blocked partition.
+const PARTITION_BLOCK: usize = 64;
+
 /// In-place partition by the split's side; returns the number of items now at the front
 /// (those going left) and the extents of both sides (boxes from the split, centroid bounds
 /// gathered here).
+///
+/// Blocked, as in Edelkamp and Weiß's BlockQuicksort: the sides of a block of items at
+/// each end are classified without branches into lists of misplaced positions, and the
+/// lists are swapped pairwise, so an unpredictable split (a triangle soup) costs no branch
+/// mispredictions per item. What remains in the middle (under two blocks) goes through
+/// the plain two-pointer loop. The centroid bounds of the sides are gathered afterwards in
+/// one pass over each side (the order of items within a side does not matter to the build:
+/// every decision depends on the sets only).
 fn partition(items: &mut [Item], binner: &Binner, split: &Split) -> (usize, Extent, Extent) {
-    let (mut left, mut right) = (Box4::EMPTY, Box4::EMPTY);
-    let mut i = 0;
-    let mut j = items.len();
-    while i < j {
-        let it = items[i];
-        if binner.below(it.centroid_on(split.axis), split.axis, split.bin) {
-            left = left.grow(it.centroid());
-            i += 1;
-        } else {
-            right = right.grow(it.centroid());
-            j -= 1;
-            items.swap(i, j);
+    let goes_left = |it: &Item| binner.below(it.centroid_on(split.axis), split.axis, split.bin);
+    let (mut lo, mut hi) = (0, items.len());
+    let mut misplaced_lo = [0u8; PARTITION_BLOCK];
+    let mut misplaced_hi = [0u8; PARTITION_BLOCK];
+    let (mut start_lo, mut count_lo, mut start_hi, mut count_hi) = (0, 0, 0, 0);
+    while hi - lo >= 2 * PARTITION_BLOCK {
+        if count_lo == 0 {
+            start_lo = 0;
+            for (k, it) in items[lo..lo + PARTITION_BLOCK].iter().enumerate() {
+                misplaced_lo[count_lo] = k as u8;
+                count_lo += usize::from(!goes_left(it));
+            }
+        }
+        if count_hi == 0 {
+            start_hi = 0;
+            for (k, it) in items[hi - PARTITION_BLOCK..hi].iter().rev().enumerate() {
+                misplaced_hi[count_hi] = k as u8;
+                count_hi += usize::from(goes_left(it));
+            }
+        }
+        let m = count_lo.min(count_hi);
+        for k in 0..m {
+            items.swap(
+                lo + usize::from(misplaced_lo[start_lo + k]),
+                hi - 1 - usize::from(misplaced_hi[start_hi + k]),
+            );
+        }
+        (count_lo, count_hi) = (count_lo - m, count_hi - m);
+        (start_lo, start_hi) = (start_lo + m, start_hi + m);
+        if count_lo == 0 {
+            lo += PARTITION_BLOCK;
+        }
+        if count_hi == 0 {
+            hi -= PARTITION_BLOCK;
         }
     }
+    // Everything before `lo` goes left, everything from `hi` on goes right; a block left
+    // half done is classified again here.
+    while lo < hi {
+        if goes_left(&items[lo]) {
+            lo += 1;
+        } else {
+            hi -= 1;
+            items.swap(lo, hi);
+        }
+    }
+    let centroids = |side: &[Item]| side.iter().fold(Box4::EMPTY, |b, it| b.grow(it.centroid()));
     let extent = |bounds, centroids| Extent { bounds, centroids };
-    (i, extent(split.left, left), extent(split.right, right))
+    (
+        lo,
+        extent(split.left, centroids(&items[..lo])),
+        extent(split.right, centroids(&items[lo..])),
+    )
 }
 
 /// A node to build: its items (at `first` in the whole item array), their extent and its

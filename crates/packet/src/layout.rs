@@ -12,6 +12,11 @@
 //! two BVH2 children, or fewer. A greedy collapse (open the widest child until there are
 //! eight) filled 43-47% of the slots on the PEERS.md meshes with leaves of one or two
 //! triangles; this one decides leaves and node widths by cost.
+//! The program runs bottom up over the BVH2's depth-first array, the two children of a large
+//! subtree in parallel; the wide nodes and blocks are then written depth first, the slots of
+//! a wide node over many primitives each into a layout of its own in parallel, appended in
+//! slot order with their indices moved up. Both give the serial result bit for bit, on any
+//! number of threads.
 //!
 //! **A leaf** is one or more [`TriBlock`]s: four triangles' nine coordinates each as four
 //! lanes, then their primitive ids (160 bytes, Embree's `Triangle4` idea), so a leaf is one
@@ -22,6 +27,7 @@
 
 use raybench_bvh::{Bvh, Node};
 use raybench_geometry::{Aabb, Geometry, Shape, TreeView};
+use rayon::prelude::*;
 
 /// Children per wide node.
 pub(crate) const WIDE: usize = 8;
@@ -194,15 +200,46 @@ impl Layout {
             return layout;
         }
         let plans = plan(nodes);
-        let mut builder = Builder {
+        let builder = Builder {
             nodes,
             plans: &plans,
             ids: bvh.prim_ids(),
             geometry,
-            layout: &mut layout,
         };
-        builder.wide_node(0);
+        builder.wide_node(0, &mut layout);
         layout
+    }
+
+    /// Appends `part`, a layout of its own whose child reference `child` (a wide node, or a
+    /// leaf) roots it, and returns that reference as it reads here: `part`'s wide node
+    /// indices and block indices move up by what this layout holds.
+    fn append(&mut self, part: Self, child: u32) -> u32 {
+        let wide = self.wide.len() as u32;
+        let blocks = self.blocks.len() as u32;
+        assert!(
+            self.blocks.len() + part.blocks.len() <= FIRST_MASK as usize + 1,
+            "more than 2^27 leaf blocks"
+        );
+        let relocate = |c: u32| {
+            if c == EMPTY_CHILD {
+                c
+            } else if c & LEAF_BIT != 0 {
+                let mut leaf = LeafRef::decode(c);
+                leaf.first += blocks as usize;
+                leaf.encode()
+            } else {
+                c + wide
+            }
+        };
+        self.wide.extend(part.wide.iter().map(|node| WideNode {
+            child: node.child.map(relocate),
+            ..*node
+        }));
+        self.blocks.extend_from_slice(&part.blocks);
+        self.leaves += part.leaves;
+        self.slots += part.slots;
+        self.leaf_prims += part.leaf_prims;
+        relocate(child)
     }
 
     /// Percentage of the wide nodes' child slots that are occupied.
@@ -267,75 +304,110 @@ impl Layout {
     }
 }
 
-/// The dynamic program, bottom up (a depth-first layout puts children after parents).
+impl Plan {
+    const EMPTY: Self = Self {
+        cost: [0.0; WIDE],
+        choice: [0; WIDE],
+        expand: 0,
+        first: 0,
+        count: 0,
+    };
+}
+
+/// Subtrees of at least this many BVH2 nodes are planned in parallel with their sibling, and
+/// wide nodes over at least [`PARALLEL_PRIMS`] primitives lay out their children in
+/// parallel. Neither depends on the thread count, and both give the serial result.
+const PARALLEL_NODES: usize = 1 << 13;
+
+/// See [`PARALLEL_NODES`].
+const PARALLEL_PRIMS: u32 = 1 << 15;
+
+/// The dynamic program, bottom up (a depth-first layout puts children after parents; the
+/// two children's subtrees are independent and go in parallel while large).
 fn plan(nodes: &[Node]) -> Vec<Plan> {
-    let mut plans = vec![
-        Plan {
-            cost: [0.0; WIDE],
+    let mut plans = vec![Plan::EMPTY; nodes.len()];
+    plan_subtree(nodes, 0, &mut plans);
+    plans
+}
+
+/// Plans the subtree of BVH2 node `root`, whose nodes are `root..root + plans.len()`.
+fn plan_subtree(nodes: &[Node], root: usize, plans: &mut [Plan]) {
+    let node = &nodes[root];
+    if plans.len() < PARALLEL_NODES || node.is_leaf() {
+        for i in (0..plans.len()).rev() {
+            let node = &nodes[root + i];
+            plans[i] = if node.is_leaf() {
+                plan_node(node, &Plan::EMPTY, &Plan::EMPTY)
+            } else {
+                let right = node.first_or_right as usize - root;
+                plan_node(node, &plans[i + 1], &plans[right])
+            };
+        }
+        return;
+    }
+    let right = node.first_or_right as usize - root;
+    let (head, rest) = plans.split_at_mut(1);
+    let (l, r) = rest.split_at_mut(right - 1);
+    rayon::join(
+        || plan_subtree(nodes, root + 1, l),
+        || plan_subtree(nodes, root + right, r),
+    );
+    head[0] = plan_node(node, &l[0], &r[0]);
+}
+
+/// The plan of `node` from its children's (`l` and `r`, unused for a leaf).
+fn plan_node(node: &Node, l: &Plan, r: &Plan) -> Plan {
+    let area = node.aabb().surface_area();
+    if node.is_leaf() {
+        let cost = area * C_BLOCK * node.count.div_ceil(BLOCK as u32) as f32;
+        return Plan {
+            cost: [cost; WIDE],
             choice: [0; WIDE],
             expand: 0,
-            first: 0,
-            count: 0,
+            first: node.first_or_right,
+            count: node.count,
         };
-        nodes.len()
-    ];
-    for n in (0..nodes.len()).rev() {
-        let node = &nodes[n];
-        let area = node.aabb().surface_area();
-        if node.is_leaf() {
-            let cost = area * C_BLOCK * node.count.div_ceil(BLOCK as u32) as f32;
-            plans[n] = Plan {
-                cost: [cost; WIDE],
-                choice: [0; WIDE],
-                expand: 0,
-                first: node.first_or_right,
-                count: node.count,
-            };
-            continue;
-        }
-        let (l, r) = (&plans[n + 1], &plans[node.first_or_right as usize]);
-        let count = l.count + r.count;
-        // dist[i]: the best split of `i` slots between the children.
-        let mut dist = [(f32::INFINITY, 0u8); WIDE + 1];
-        for (i, d) in dist.iter_mut().enumerate().skip(2) {
-            for k in 1..i {
-                let c = l.cost[k - 1] + r.cost[i - k - 1];
-                if c < d.0 {
-                    *d = (c, k as u8);
-                }
-            }
-        }
-        let as_node = area * C_NODE + dist[WIDE].0;
-        let as_leaf = if count <= MAX_LEAF_PRIMS {
-            area * C_BLOCK * count.div_ceil(BLOCK as u32) as f32
-        } else {
-            f32::INFINITY
-        };
-        let mut p = Plan {
-            cost: [0.0; WIDE],
-            choice: [0; WIDE],
-            expand: dist[WIDE].1,
-            first: l.first,
-            count,
-        };
-        // `<=`: between equal costs, the leaf (fewer nodes to visit).
-        if as_leaf <= as_node {
-            p.cost[0] = as_leaf;
-        } else {
-            p.cost[0] = as_node;
-            p.choice[0] = 1;
-        }
-        for (i, &(cost, k)) in dist.iter().enumerate().skip(2) {
-            if cost < p.cost[i - 2] {
-                p.cost[i - 1] = cost;
-                p.choice[i - 1] = k;
-            } else {
-                p.cost[i - 1] = p.cost[i - 2];
-            }
-        }
-        plans[n] = p;
     }
-    plans
+    let count = l.count + r.count;
+    // dist[i]: the best split of `i` slots between the children.
+    let mut dist = [(f32::INFINITY, 0u8); WIDE + 1];
+    for (i, d) in dist.iter_mut().enumerate().skip(2) {
+        for k in 1..i {
+            let c = l.cost[k - 1] + r.cost[i - k - 1];
+            if c < d.0 {
+                *d = (c, k as u8);
+            }
+        }
+    }
+    let as_node = area * C_NODE + dist[WIDE].0;
+    let as_leaf = if count <= MAX_LEAF_PRIMS {
+        area * C_BLOCK * count.div_ceil(BLOCK as u32) as f32
+    } else {
+        f32::INFINITY
+    };
+    let mut p = Plan {
+        cost: [0.0; WIDE],
+        choice: [0; WIDE],
+        expand: dist[WIDE].1,
+        first: l.first,
+        count,
+    };
+    // `<=`: between equal costs, the leaf (fewer nodes to visit).
+    if as_leaf <= as_node {
+        p.cost[0] = as_leaf;
+    } else {
+        p.cost[0] = as_node;
+        p.choice[0] = 1;
+    }
+    for (i, &(cost, k)) in dist.iter().enumerate().skip(2) {
+        if cost < p.cost[i - 2] {
+            p.cost[i - 1] = cost;
+            p.choice[i - 1] = k;
+        } else {
+            p.cost[i - 1] = p.cost[i - 2];
+        }
+    }
+    p
 }
 
 /// Writes the wide nodes and blocks the plan describes.
@@ -344,12 +416,29 @@ struct Builder<'a> {
     plans: &'a [Plan],
     ids: &'a [u32],
     geometry: &'a Geometry,
-    layout: &'a mut Layout,
+}
+
+/// The BVH2 nodes filling a wide node's slots.
+#[derive(Default)]
+struct Slots {
+    node: [usize; WIDE],
+    len: usize,
+}
+
+impl Slots {
+    fn push(&mut self, n: usize) {
+        self.node[self.len] = n;
+        self.len += 1;
+    }
+
+    fn as_slice(&self) -> &[usize] {
+        &self.node[..self.len]
+    }
 }
 
 impl Builder<'_> {
     /// The BVH2 nodes that fill at most `slots` slots for node `n`'s subtree.
-    fn gather(&self, n: usize, slots: usize, out: &mut Vec<usize>) {
+    fn gather(&self, n: usize, slots: usize, out: &mut Slots) {
         let node = &self.nodes[n];
         if node.is_leaf() || slots == 1 {
             out.push(n);
@@ -365,10 +454,14 @@ impl Builder<'_> {
         }
     }
 
-    /// Appends the wide node standing for BVH2 node `n` and its subtree; returns its index.
-    fn wide_node(&mut self, n: usize) -> u32 {
+    /// Appends to `out` the wide node standing for BVH2 node `n` and its subtree, depth
+    /// first (the node, then each slot's subtree or leaf blocks in slot order); returns its
+    /// index. A node over at least [`PARALLEL_PRIMS`] primitives lays out its slots in
+    /// parallel, each into a layout of its own, and appends them in slot order: the same
+    /// arrays as one pass would write.
+    fn wide_node(&self, n: usize, out: &mut Layout) -> u32 {
         let node = self.nodes[n];
-        let mut slots = Vec::with_capacity(WIDE);
+        let mut slots = Slots::default();
         if node.is_leaf() {
             slots.push(n);
         } else {
@@ -376,35 +469,58 @@ impl Builder<'_> {
             self.gather(n + 1, k, &mut slots);
             self.gather(node.first_or_right as usize, WIDE - k, &mut slots);
         }
-        let index = self.layout.wide.len();
-        self.layout.wide.push(WideNode::EMPTY);
-        self.layout.slots += slots.len();
+        let slots = slots.as_slice();
+        let index = out.wide.len();
+        out.wide.push(WideNode::EMPTY);
+        out.slots += slots.len();
         let mut wide = WideNode::EMPTY;
         for (slot, &s) in slots.iter().enumerate() {
-            let child = self.nodes[s];
-            let b: Aabb = child.aabb();
+            let b = self.nodes[s].aabb();
             for axis in 0..3 {
                 wide.min[axis][slot] = b.min[axis];
                 wide.max[axis][slot] = b.max[axis];
             }
-            let plan = self.plans[s];
-            wide.child[slot] = if child.is_leaf() || plan.choice[0] == 0 {
-                self.leaf(plan.first as usize, plan.count as usize, b)
-            } else {
-                self.wide_node(s)
-            };
         }
-        self.layout.wide[index] = wide;
+        if self.plans[n].count >= PARALLEL_PRIMS {
+            let parts: Vec<(Layout, u32)> = slots
+                .par_iter()
+                .map(|&s| {
+                    let mut part = Layout::default();
+                    let child = self.child(s, &mut part);
+                    (part, child)
+                })
+                .collect();
+            for (slot, (part, child)) in parts.into_iter().enumerate() {
+                wide.child[slot] = out.append(part, child);
+            }
+        } else {
+            for (slot, &s) in slots.iter().enumerate() {
+                wide.child[slot] = self.child(s, out);
+            }
+        }
+        out.wide[index] = wide;
         index as u32
     }
 
+    /// Appends to `out` what the slot holding BVH2 node `s` refers to (a leaf or a wide
+    /// node); returns the reference.
+    fn child(&self, s: usize, out: &mut Layout) -> u32 {
+        let child = &self.nodes[s];
+        let plan = &self.plans[s];
+        if child.is_leaf() || plan.choice[0] == 0 {
+            self.leaf(plan.first as usize, plan.count as usize, child.aabb(), out)
+        } else {
+            self.wide_node(s, out)
+        }
+    }
+
     /// A reference to a leaf of the primitives at leaf-order positions `first..first +
-    /// count`, all inside `bounds`; more than eight blocks' worth become a wide node of
-    /// leaves with the same box.
-    fn leaf(&mut self, first: usize, count: usize, bounds: Aabb) -> u32 {
+    /// count`, all inside `bounds`, appended to `out`; more than eight blocks' worth become
+    /// a wide node of leaves with the same box.
+    fn leaf(&self, first: usize, count: usize, bounds: Aabb, out: &mut Layout) -> u32 {
         if count > MAX_REF_BLOCKS * BLOCK {
-            let index = self.layout.wide.len();
-            self.layout.wide.push(WideNode::EMPTY);
+            let index = out.wide.len();
+            out.wide.push(WideNode::EMPTY);
             let per = count.div_ceil(WIDE);
             let mut wide = WideNode::EMPTY;
             let mut slot = 0;
@@ -415,15 +531,15 @@ impl Builder<'_> {
                     wide.min[axis][slot] = bounds.min[axis];
                     wide.max[axis][slot] = bounds.max[axis];
                 }
-                wide.child[slot] = self.leaf(start, n, bounds);
+                wide.child[slot] = self.leaf(start, n, bounds, out);
                 slot += 1;
                 start += n;
             }
-            self.layout.slots += slot;
-            self.layout.wide[index] = wide;
+            out.slots += slot;
+            out.wide[index] = wide;
             return index as u32;
         }
-        let first_block = self.layout.blocks.len();
+        let first_block = out.blocks.len();
         let mut mixed = false;
         for chunk in self.ids[first..first + count].chunks(BLOCK) {
             let mut block = TriBlock::EMPTY;
@@ -440,14 +556,14 @@ impl Builder<'_> {
                     _ => mixed = true,
                 }
             }
-            self.layout.blocks.push(block);
+            out.blocks.push(block);
         }
         assert!(
-            self.layout.blocks.len() <= FIRST_MASK as usize + 1,
+            out.blocks.len() <= FIRST_MASK as usize + 1,
             "more than 2^27 leaf blocks"
         );
-        self.layout.leaves += 1;
-        self.layout.leaf_prims += count;
+        out.leaves += 1;
+        out.leaf_prims += count;
         LeafRef {
             first: first_block,
             blocks: count.div_ceil(BLOCK),
@@ -497,5 +613,43 @@ mod tests {
                 assert!(q.max_depth as usize <= bvh.depth(), "{q:?}");
             }
         }
+    }
+
+    #[test]
+    fn layout_is_the_same_on_any_thread_count() {
+        // Large enough for the parallel plan and the parallel layout of wide nodes.
+        let g = Arc::new(Geometry::new(
+            generators::soup(40_000, 9)
+                .triangles()
+                .map(Shape::Triangle)
+                .collect(),
+        ));
+        let bvh = Bvh::build_with(Arc::clone(&g), BvhParams::default());
+        let on = |threads| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| Layout::new(&bvh, &g))
+        };
+        let (one, four) = (on(1), on(4));
+        one.tree_view().check_leaves(&g).unwrap();
+        let bits = |l: &Layout| {
+            let mut v: Vec<u32> = Vec::new();
+            for n in &l.wide {
+                v.extend(n.min.iter().chain(&n.max).flatten().map(|x| x.to_bits()));
+                v.extend(n.child);
+            }
+            for b in &l.blocks {
+                v.extend(b.v.iter().flatten().map(|x| x.to_bits()));
+                v.extend(b.id);
+            }
+            v
+        };
+        assert_eq!(bits(&one), bits(&four));
+        assert_eq!(
+            (one.leaves, one.slots, one.leaf_prims),
+            (four.leaves, four.slots, four.leaf_prims)
+        );
     }
 }
