@@ -202,7 +202,7 @@ fn ray_intervals_planes_and_barycentrics() {
         Vec3::new(1.0, -1.0, 2.0),
         Vec3::new(0.0, 1.0, 2.0),
     ));
-    let g = Arc::new(Geometry::new(vec![tri]));
+    let g = Arc::new(Geometry::new(vec![tri.clone()]));
     for layout in TinyBvhLayout::ALL {
         let a = TinyBvhAccel::build_with(Arc::clone(&g), layout);
         for (t_min, t_max, hit) in [
