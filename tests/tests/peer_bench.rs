@@ -120,7 +120,9 @@ fn contestants_are_the_exact_registry_backends_then_the_peers() {
         peers.starts_with(&["bvh-crate", "obvhs-bvh2", "obvhs-cwbvh"]),
         "{peers:?}"
     );
-    assert_eq!(peers.len(), if cfg!(feature = "embree") { 7 } else { 3 });
+    let embree = if cfg!(feature = "embree") { 4 } else { 0 };
+    let tinybvh = if cfg!(feature = "tinybvh") { 2 } else { 0 };
+    assert_eq!(peers.len(), 3 + embree + tinybvh);
     let picked = contestants::select(&["obvhs-bvh2".into(), "bvh".into()]).unwrap();
     let names: Vec<_> = picked.iter().map(|c| c.name).collect();
     assert_eq!(names, ["bvh", "obvhs-bvh2"]);

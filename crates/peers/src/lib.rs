@@ -7,11 +7,17 @@
 //!   stack traversal that tests primitives with raybench's own routine;
 //! - with the cargo feature `embree` (it links the system library `libembree3`; Debian:
 //!   `apt install libembree-dev`): `EmbreeAccel` (backend `embree`, Intel Embree 3 with
-//!   single rays) and `EmbreePacketAccel` (backend `embree-packet`, packets of 16 rays).
+//!   single rays) and `EmbreePacketAccel` (backend `embree-packet`, packets of 16 rays);
+//! - with the cargo feature `tinybvh` (it compiles a C++ shim of ours against the
+//!   `tiny_bvh.h` that the `tinybvh-rs` crate ships, tinybvh 1.6.8, with AVX2 and FMA; the
+//!   crate's Rust API is not used): `TinyBvhAccel`, Jacco Bikker's tinybvh with its
+//!   `BVH4_CPU` or `BVH8_CPU` layout (`TinyBvhLayout`), built by tinybvh and traced with its
+//!   single-ray kernels (the peer benchmark's `tinybvh4` and `tinybvh8`; triangles only, on
+//!   x86-64 CPUs with AVX2 and FMA: `tinybvh_availability` says why not elsewhere).
 //!
 //! None of them is bound by the equivalence contract of [`Accel`]: the `bvh` crate's box
-//! test is not conservative and Embree tests triangles with its own routine, so they agree
-//! with naive on nearly every ray, not bit for bit. Planes are kept beside every structure
+//! test is not conservative and Embree and tinybvh test triangles with their own routines,
+//! so they agree with naive on nearly every ray, not bit for bit. Planes are kept beside every structure
 //! and tested by every ray, as in raybench's backends, and hits are completed (normals,
 //! surface parameters) by raybench's [`raybench_geometry::Geometry::complete`].
 //!
@@ -20,6 +26,8 @@
 mod bvh_crate;
 #[cfg(feature = "embree")]
 mod embree;
+#[cfg(feature = "tinybvh")]
+mod tinybvh;
 
 pub use bvh_crate::BvhCrateAccel;
 #[cfg(feature = "embree")]
@@ -27,4 +35,9 @@ pub use embree::{
     DEFAULT_PACKET_WIDTH, EmbreeAccel, EmbreeMode, EmbreePacketAccel, EmbreeQuality,
     MAX_SIDE_PRIMITIVES, availability as embree_availability, supports as embree_supports,
     version as embree_version,
+};
+#[cfg(feature = "tinybvh")]
+pub use tinybvh::{
+    TinyBvhAccel, TinyBvhLayout, VERSION as TINYBVH_VERSION, availability as tinybvh_availability,
+    availability_with as tinybvh_availability_with, supports as tinybvh_supports,
 };

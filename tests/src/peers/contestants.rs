@@ -134,7 +134,52 @@ pub const PEERS: &[Contestant] = &[
         description: "Embree 3, default mode (not watertight), rtcIntersect16 / rtcOccluded16 on consecutive rays",
         make: || embree::packet(embree::PACKET_DEFAULT, raybench_peers::EmbreeMode::Default),
     },
+    #[cfg(feature = "tinybvh")]
+    Contestant {
+        name: "tinybvh4",
+        kind: Kind::Peer,
+        description: TINYBVH4,
+        make: || tinybvh::renderer("tinybvh4", TINYBVH4, raybench_peers::TinyBvhLayout::Bvh4),
+    },
+    #[cfg(feature = "tinybvh")]
+    Contestant {
+        name: "tinybvh8",
+        kind: Kind::Peer,
+        description: TINYBVH8,
+        make: || tinybvh::renderer("tinybvh8", TINYBVH8, raybench_peers::TinyBvhLayout::Bvh8),
+    },
 ];
+
+#[cfg(feature = "tinybvh")]
+const TINYBVH4: &str = "tinybvh 1.6.8's BVH4_CPU: its own build (binned SAH, collapsed to 4-wide) and single-ray kernels (SSE, own triangle test), through a C++ shim";
+#[cfg(feature = "tinybvh")]
+const TINYBVH8: &str = "tinybvh 1.6.8's BVH8_CPU: its own build (binned SAH, collapsed to 8-wide) and single-ray kernels (AVX2, own triangle test), through a C++ shim";
+
+/// The tinybvh contestants' renderer.
+#[cfg(feature = "tinybvh")]
+mod tinybvh {
+    use super::TimedRenderer;
+    use raybench_peers::{TinyBvhAccel, TinyBvhLayout};
+
+    /// A renderer named `name` over tinybvh's `layout`, with tinybvh's availability (AVX2
+    /// and FMA) and support (triangles) checks; tinybvh counts no tests.
+    pub(super) fn renderer(
+        name: &'static str,
+        description: &'static str,
+        layout: TinyBvhLayout,
+    ) -> Box<dyn TimedRenderer> {
+        Box::new(
+            raybench_render::CpuRenderer::<TinyBvhAccel>::new(
+                name,
+                description,
+                Box::new(move |g| TinyBvhAccel::build_with(g, layout)),
+            )
+            .with_availability(raybench_peers::tinybvh_availability)
+            .with_support_check(raybench_peers::tinybvh_supports)
+            .without_test_counts(),
+        )
+    }
+}
 
 const OBVHS_BVH2: &str = "obvhs 0.4's BVH2 (PLOC, reinsertion, collapsed leaves) and its own traversal, raybench's triangle test";
 const OBVHS_CWBVH: &str = "obvhs 0.4's CWBVH (PLOC, reinsertion, compressed wide) and its own traversal, raybench's triangle test";
