@@ -309,8 +309,10 @@ pub struct Workload {
     pub spec: String,
     /// The scene.
     pub scene: Arc<Scene>,
-    /// Primary and incoherent rays.
+    /// The ray sets traced.
     pub sets: Vec<RaySetWork>,
+    /// The ray sets asked for that hold no ray here, with why.
+    pub skipped_sets: Vec<Skipped>,
 }
 
 /// The rays of `set` for `scene`: primary rays in the renderer's tile order
@@ -539,6 +541,7 @@ impl Workload {
         let (r, _) = build(&reference, &scene, pool, 1)?;
         let tracer = r.batch_tracer().expect("bvh is a CPU structure");
         let mut sources: Vec<(&'static str, Vec<Ray>, bool)> = Vec::new();
+        let mut skipped_sets = Vec::new();
         if let Some(path) = &o.rays_file {
             let file = raybench_registry::rays_file::read(path).map_err(|e| e.to_string())?;
             sources.push(("file", file.rays, file.any_hit));
@@ -553,6 +556,15 @@ impl Workload {
             for &set in RaySet::ALL.iter().filter(|s| o.sets.contains(s)) {
                 let rays = ray_set(&scene, set, o, &primary_hits)
                     .map_err(|e| format!("mesh {name} ({spec}): {e}"))?;
+                if rays.is_empty() {
+                    // A shadow set without lights, a derived set without primary hits:
+                    // no figure to print, so the reason instead.
+                    skipped_sets.push(Skipped {
+                        name: set.name().to_string(),
+                        reason: raybench_registry::measure::no_rays(set, &scene, None),
+                    });
+                    continue;
+                }
                 sources.push((set.name(), rays, set.any_hit()));
             }
         }
@@ -584,6 +596,7 @@ impl Workload {
             spec: spec.to_string(),
             scene,
             sets,
+            skipped_sets,
         })
     }
 }
@@ -757,6 +770,7 @@ pub fn run(
                 })
                 .collect(),
             skipped: Vec::new(),
+            skipped_sets: w.skipped_sets.clone(),
             contestants: Vec::new(),
         };
         for c in &contestants {

@@ -282,10 +282,11 @@ fn a_ray_file_replays_in_place_of_the_sets() {
 }
 
 /// `flat:SCENE` traces an instanced scene flattened (every contestant, the peers too, sees
-/// plain triangles), and a mesh whose files are missing is skipped with its reason while
-/// the others run.
+/// plain triangles), a mesh whose files are missing is skipped with its reason while the
+/// others run, and a ray set that holds no ray (shadow rays without lights) is skipped with
+/// its reason instead of printed as 0 Mrays/s.
 #[test]
-fn flattened_meshes_run_and_missing_meshes_are_skipped() {
+fn flattened_meshes_run_and_missing_meshes_and_empty_sets_are_skipped() {
     let dir = std::env::temp_dir().join(format!("raybench-peer-flat-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let missing = dir.join("missing.toml");
@@ -313,8 +314,35 @@ fn flattened_meshes_run_and_missing_meshes_are_skipped() {
     ];
     o.contestants = Some(vec!["bvh".into(), "packet".into()]);
     o.json = dir.join("peers.json");
+    // A scene without lights: its shadow set holds no ray and is skipped, saying why.
+    let dark = dir.join("dark.toml");
+    std::fs::write(
+        &dark,
+        "[[object]]\nkind = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1.0\n",
+    )
+    .unwrap();
+    let mut d = o.clone();
+    d.sets = vec![RaySet::Primary, RaySet::Shadow];
+    d.meshes = vec![("dark".into(), dark.display().to_string())];
+    d.contestants = Some(vec!["bvh".into()]);
+    let dark_report = peers::run(&d, |_| Ok(())).unwrap();
     let report = peers::run(&o, |_| Ok(())).unwrap();
     std::fs::remove_dir_all(&dir).unwrap();
+    let m = &dark_report.meshes[0];
+    let sets: Vec<_> = m.ray_sets.iter().map(|s| s.name).collect();
+    assert_eq!(sets, ["primary"]);
+    assert_eq!(m.skipped_sets.len(), 1);
+    assert_eq!(m.skipped_sets[0].name, "shadow");
+    assert!(
+        m.skipped_sets[0].reason.contains("no light"),
+        "{}",
+        m.skipped_sets[0].reason
+    );
+    assert!(
+        dark_report
+            .tables()
+            .contains("skipped ray set shadow: no shadow rays")
+    );
     assert_eq!(report.skipped_meshes.len(), 1);
     assert_eq!(report.skipped_meshes[0].name, "gone");
     assert!(

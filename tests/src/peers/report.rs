@@ -13,6 +13,7 @@
 //!     "name": "sphere", "spec": "icosphere:6", "triangles": 81920,
 //!     "ray_sets": [ { "name": "primary", "rays": 1048576, "hits": 640000 } ],
 //!     "skipped": [ { "name": "packet-avx512", "reason": "this CPU has no AVX-512F" } ],
+//!     "skipped_sets": [ { "name": "shadow", "reason": "no shadow rays: the scene has no light ..." } ],
 //!     "contestants": [ {
 //!       "name": "bvh", "kind": "raybench" | "peer",
 //!       "build_s": 0.012,            // best of `repeat`, all cores
@@ -97,6 +98,8 @@ pub struct MeshReport {
     pub ray_sets: Vec<RaySetInfo>,
     /// Contestants that could not run, with why.
     pub skipped: Vec<Skipped>,
+    /// Ray sets that hold no ray on this mesh (a shadow set without lights), with why.
+    pub skipped_sets: Vec<Skipped>,
     /// Contestants' figures, in table order.
     pub contestants: Vec<ContestantReport>,
 }
@@ -373,6 +376,9 @@ impl Report {
             );
             for s in &m.skipped {
                 let _ = writeln!(out, "skipped {}: {}", s.name, s.reason);
+            }
+            for s in &m.skipped_sets {
+                let _ = writeln!(out, "skipped ray set {}: {}", s.name, s.reason);
             }
             let _ = writeln!(
                 out,
