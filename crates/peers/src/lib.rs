@@ -41,3 +41,46 @@ pub use tinybvh::{
     TinyBvhAccel, TinyBvhLayout, VERSION as TINYBVH_VERSION, availability as tinybvh_availability,
     availability_with as tinybvh_availability_with, supports as tinybvh_supports,
 };
+
+/// The closest hit among the planes ([`raybench_geometry::Geometry::closest_unbounded`])
+/// and the `side` primitives a foreign structure keeps beside itself: the best hit its own
+/// answer must improve on. Counts the tests.
+#[cfg(any(feature = "embree", feature = "tinybvh"))]
+fn closest_beside<C: raybench_geometry::Counters>(
+    g: &raybench_geometry::Geometry,
+    side: &[u32],
+    ray: &raybench_geometry::Ray,
+    counters: &mut C,
+) -> Option<(u32, raybench_geometry::PrimHit)> {
+    let mut best = None;
+    let mut tests = g.closest_unbounded(ray, &mut best);
+    for &id in side {
+        g.test_closest(id, ray, &mut best);
+    }
+    tests += side.len() as u64;
+    counters.add_tests(tests);
+    best
+}
+
+/// Whether a plane or one of the `side` primitives blocks `ray`. Counts the tests.
+#[cfg(any(feature = "embree", feature = "tinybvh"))]
+fn occluded_beside<C: raybench_geometry::Counters>(
+    g: &raybench_geometry::Geometry,
+    side: &[u32],
+    ray: &raybench_geometry::Ray,
+    counters: &mut C,
+) -> bool {
+    let (hit, tests) = g.occluded_unbounded(ray);
+    counters.add_tests(tests);
+    if hit {
+        return true;
+    }
+    for (k, &id) in side.iter().enumerate() {
+        if g.shape(id).intersect(ray).is_some() {
+            counters.add_tests(k as u64 + 1);
+            return true;
+        }
+    }
+    counters.add_tests(side.len() as u64);
+    false
+}

@@ -267,33 +267,12 @@ impl TinyBvhAccel {
 
     /// Planes and side primitives: the best hit tinybvh must improve on.
     fn closest_beside<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<(u32, PrimHit)> {
-        let g = &*self.geometry;
-        let mut best = None;
-        let mut tests = g.closest_unbounded(ray, &mut best);
-        for &id in &self.side {
-            g.test_closest(id, ray, &mut best);
-        }
-        tests += self.side.len() as u64;
-        counters.add_tests(tests);
-        best
+        crate::closest_beside(&self.geometry, &self.side, ray, counters)
     }
 
     /// Whether a plane or a side primitive is hit.
     fn occluded_beside<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
-        let g = &*self.geometry;
-        let (hit, tests) = g.occluded_unbounded(ray);
-        counters.add_tests(tests);
-        if hit {
-            return true;
-        }
-        for (k, &id) in self.side.iter().enumerate() {
-            if g.shape(id).intersect(ray).is_some() {
-                counters.add_tests(k as u64 + 1);
-                return true;
-            }
-        }
-        counters.add_tests(self.side.len() as u64);
-        false
+        crate::occluded_beside(&self.geometry, &self.side, ray, counters)
     }
 }
 
