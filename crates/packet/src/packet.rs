@@ -538,8 +538,8 @@ fn packet_leaf<L: Lanes, const K: usize, C: Counters>(
 /// that entered it.
 pub(crate) type AnyEntry<const K: usize> = (u32, [u32; K]);
 
-/// An any-hit packet traversal stack (allocated once per batch: zeroing it per packet cost
-/// more than a packet's primary rays spend in some leaves).
+/// An any-hit packet traversal stack, allocated once per batch (made per packet, its 5.5 KB
+/// were zeroed for every 16 rays).
 pub(crate) type AnyStack<const K: usize> = [AnyEntry<K>; STACK];
 
 /// Any-hit results of a coherent packet: `blocked[i]` arrives true for rays already
