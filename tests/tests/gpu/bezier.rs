@@ -2,7 +2,7 @@
 //! parabolic cylinder's silhouette at grazing angles, besides the built-in `teapot-bezier`
 //! scene in `every_builtin_scene`.
 
-use crate::{assert_same_blocked, closest_hits};
+use super::{assert_same_blocked, closest_hits};
 
 /// The bound `kernels/bezier.wgsl` states on the true residual `|F| = |S(u, v) - o - t d|`
 /// of a hit it accepts, relative to the scale `M` of its f32 rounding (`M` = the largest

@@ -4,7 +4,7 @@
 //! f64); nested differences over shared faces. Each scene is a file of `tests/scenes/`
 //! (`csg-*.toml`, sharing their materials and light) and goes through `check` unchanged.
 
-use crate::{scene_file, scene_toml, scratch};
+use super::{scene_file, scene_toml, scratch};
 use raybench_tests::gpu::check;
 
 scene_file_tests! {

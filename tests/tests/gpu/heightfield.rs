@@ -2,7 +2,7 @@
 //! walked by the 2D-DDA, of one cell or one row, of non-square and bilinear cells; and the
 //! sub-primitives of their hits.
 
-use crate::{closest_hits, scene_toml, scratch};
+use super::{closest_hits, scene_toml, scratch};
 use raybench_tests::gpu::check;
 
 /// Height fields the built-in scenes do not cover, written as scene files and checked

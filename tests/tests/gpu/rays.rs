@@ -1,7 +1,7 @@
 //! Rays no camera makes, many samples split over dispatches, and the two GPU trees walking
 //! to the same hits.
 
-use crate::{assert_same_blocked, closest_hits};
+use super::{assert_same_blocked, closest_hits};
 
 /// Rays no camera makes: NaN, zero and infinite directions must miss on the GPU as on the
 /// CPU (and not poison their neighbours in the same workgroup); denormal, huge and

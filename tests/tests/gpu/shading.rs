@@ -6,7 +6,7 @@
 //! and a scene whose volumes are cut by surfaces and overlap
 //! (`raybench_tests::gpu::VOLUMES_SCENE`).
 
-use crate::scene_file;
+use super::scene_file;
 use raybench_tests::gpu::check;
 
 scene_file_tests! {
