@@ -7,11 +7,8 @@
 //! Deterministic: a fixed seed with the ChaCha generator and no failure files, so CI runs
 //! the same cases every time.
 
-#[path = "support/ply_writer.rs"]
-mod ply_writer;
-
+use crate::ply_writer::{Decl, ENCODINGS, Element, Val, header_len, ply};
 use base64::Engine as _;
-use ply_writer::{Decl, ENCODINGS, Element, Val, header_len, ply};
 use proptest::prelude::*;
 use proptest::test_runner::{RngAlgorithm, RngSeed};
 use raybench_core::limits::{MAX_BEZIER_PATCHES, MAX_PRIMITIVES, MAX_VOLUME_VOXELS};

@@ -3,10 +3,7 @@
 //! bit; normals and texture coordinates are read; every kind of malformed file is an error
 //! naming the place and the cause.
 
-#[path = "support/ply_writer.rs"]
-mod ply_writer;
-
-use ply_writer::{Decl, ENCODINGS, Element, Enc, Val, header_len, ply};
+use crate::ply_writer::{Decl, ENCODINGS, Element, Enc, Val, header_len, ply};
 use raybench_core::{Vec2, Vec3};
 use raybench_scene::{LoadError, MeshData, load_obj_bytes, load_obj_file, load_ply_bytes};
 use std::fmt::Write as _;
