@@ -225,3 +225,61 @@ fn the_dependency_checks_can_fail() {
     );
     assert!(LAYERS.iter().any(|(l, _)| *l == "core"));
 }
+
+/// The clock's names a test may not use: a test that reads the time asserts something about
+/// the machine's load, not the code (timings live in the benchmarks and the report).
+const CLOCKS: [&str; 2] = ["Instant", "SystemTime"];
+
+/// Which of `files` (path, text) name, in code (comments and literals aside), one of
+/// [`CLOCKS`], each with the name it uses.
+fn clock_readers(files: &[(String, String)]) -> Vec<String> {
+    files
+        .iter()
+        .flat_map(|(path, text)| {
+            let code = strip_comments_and_literals(text);
+            CLOCKS
+                .iter()
+                .filter(move |name| code.contains(*name))
+                .map(move |name| format!("{path}: {name}"))
+        })
+        .collect()
+}
+
+/// docs/testing.md: nothing in a test measures time. Every integration test (`tests/tests/`
+/// and each crate's `tests/`) is read; waits count their pauses instead of reading a clock.
+#[test]
+fn no_test_reads_a_clock() {
+    let mut files = rust_sources("tests/tests");
+    for krate in crate_dirs(&root()) {
+        if root().join("crates").join(&krate).join("tests").is_dir() {
+            files.extend(rust_sources(&format!("crates/{krate}/tests")));
+        }
+    }
+    assert!(files.len() > 40, "found only {} files", files.len());
+    let found = clock_readers(&files);
+    assert!(
+        found.is_empty(),
+        "tests that read a clock:\n{}",
+        found.join("\n")
+    );
+}
+
+/// The check sees a clock in code and ignores the word in comments and strings.
+#[test]
+fn the_clock_check_can_fail() {
+    let files = [
+        (
+            "a.rs".to_owned(),
+            "// Instant\nconst S: &str = \"SystemTime\";\n".to_owned(),
+        ),
+        (
+            "b.rs".to_owned(),
+            "fn f() { let t = std::time::Instant::now(); }\n".to_owned(),
+        ),
+        (
+            "c.rs".to_owned(),
+            "fn g() { let _ = std::time::SystemTime::now(); }\n".to_owned(),
+        ),
+    ];
+    assert_eq!(clock_readers(&files), ["b.rs: Instant", "c.rs: SystemTime"]);
+}

@@ -2,8 +2,9 @@
 //! process, talks to it over a plain WebSocket on localhost (`tungstenite`), and drives one
 //! page the way a user would (real key and mouse events through `Input.*`).
 //!
-//! Every wait has a deadline: a browser that hangs or dies fails the test with a message
-//! (and the tail of Chromium's stderr), never hangs it. Dropping [`Chromium`] closes the
+//! Every wait is bounded: a browser that hangs or dies fails the test with a message (and the
+//! tail of Chromium's stderr), never hangs it. The bound is a number of idle waits of
+//! [`SLICE`] each ([`Patience`]), not a clock read, so no test here reads the time. Dropping [`Chromium`] closes the
 //! browser, kills it if it does not exit, and removes its temporary profile.
 //!
 //! Protocol errors, timeouts and JavaScript exceptions panic with a message, as an assertion
@@ -17,7 +18,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::mpsc;
 use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 use tungstenite::{Message, WebSocket};
 
 /// The executable used when `RAYBENCH_CHROMIUM` is not set: Debian's `chromium` package.
@@ -32,6 +33,33 @@ const TIMEOUT: Duration = Duration::from_secs(30);
 
 /// How long a closing browser gets before it is killed.
 const CLOSE_TIMEOUT: Duration = Duration::from_secs(5);
+
+/// One idle wait: a read that times out, a poll's pause.
+const SLICE: Duration = Duration::from_millis(20);
+
+/// A bounded wait counted in idle [`SLICE`]s instead of read from a clock: a wait of `limit`
+/// gives up after `limit / SLICE` slices in which nothing happened (time spent handling
+/// messages is not counted, so the bound is a little longer than `limit` in wall time).
+struct Patience {
+    /// Idle slices left.
+    slices: u128,
+}
+
+impl Patience {
+    /// Patience for about `limit` of idle time.
+    fn new(limit: Duration) -> Self {
+        Self {
+            slices: limit.as_millis() / SLICE.as_millis(),
+        }
+    }
+
+    /// Spends one idle slice; false when none was left.
+    fn spend(&mut self) -> bool {
+        let left = self.slices > 0;
+        self.slices = self.slices.saturating_sub(1);
+        left
+    }
+}
 
 /// How many lines of Chromium's stderr a failure message quotes.
 const STDERR_TAIL: usize = 20;
@@ -213,9 +241,9 @@ impl Chromium {
         if let Err(e) = self.ws.send(Message::text(message.to_string())) {
             self.fail(&format!("cannot send {method}: {e}"));
         }
-        let deadline = Instant::now() + TIMEOUT;
+        let mut patience = Patience::new(TIMEOUT);
         loop {
-            let reply = match self.receive(deadline) {
+            let reply = match self.receive(&mut patience) {
                 Some(Incoming::Reply(reply)) => reply,
                 Some(Incoming::Event) => continue,
                 None => self.fail(&format!("no answer to {method} within {TIMEOUT:?}")),
@@ -232,18 +260,13 @@ impl Chromium {
         }
     }
 
-    /// Reads the next message before `deadline`: an event is recorded, a command's reply
-    /// returned. `None` when the deadline passes first.
-    fn receive(&mut self, deadline: Instant) -> Option<Incoming> {
+    /// Reads the next message: an event is recorded, a command's reply returned. `None` when
+    /// `patience` runs out first (each read that times out spends a slice).
+    fn receive(&mut self, patience: &mut Patience) -> Option<Incoming> {
         loop {
-            let left = deadline.saturating_duration_since(Instant::now());
-            if left.is_zero() {
-                return None;
-            }
-            // Reads wake up at least every 100 ms to check the deadline; tungstenite keeps a
-            // partly read frame across `WouldBlock`.
-            let slice = left.min(Duration::from_millis(100));
-            if let Err(e) = self.ws.get_ref().set_read_timeout(Some(slice)) {
+            // Reads time out after one slice; tungstenite keeps a partly read frame across
+            // `WouldBlock`.
+            if let Err(e) = self.ws.get_ref().set_read_timeout(Some(SLICE)) {
                 self.fail(&format!("cannot set a read timeout: {e}"));
             }
             match self.ws.read() {
@@ -260,7 +283,12 @@ impl Chromium {
                 }
                 Ok(_) => {}
                 Err(tungstenite::Error::Io(e))
-                    if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {}
+                    if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) =>
+                {
+                    if !patience.spend() {
+                        return None;
+                    }
+                }
                 Err(e) => self.fail(&format!("the DevTools connection failed: {e}")),
             }
         }
@@ -287,13 +315,11 @@ impl Drop for Chromium {
         let _ = self.ws.send(Message::text(
             json!({"id": id, "method": "Browser.close", "params": {}}).to_string(),
         ));
-        let deadline = Instant::now() + CLOSE_TIMEOUT;
+        let mut patience = Patience::new(CLOSE_TIMEOUT);
         loop {
             match self.child.try_wait() {
                 Ok(Some(_)) => break,
-                Ok(None) if Instant::now() < deadline => {
-                    std::thread::sleep(Duration::from_millis(20));
-                }
+                Ok(None) if patience.spend() => std::thread::sleep(SLICE),
                 _ => {
                     let _ = self.child.kill();
                     let _ = self.child.wait();
@@ -350,7 +376,7 @@ impl Page<'_> {
 
     /// Waits until this page sends event `method` (looking at events from index `from`).
     fn wait_event(&mut self, from: usize, method: &str, what: &str) {
-        let deadline = Instant::now() + TIMEOUT;
+        let mut patience = Patience::new(TIMEOUT);
         let mut seen = from;
         loop {
             let events = &self.browser.events;
@@ -361,11 +387,10 @@ impl Page<'_> {
                 return;
             }
             seen = events.len();
-            if Instant::now() >= deadline {
+            // A command reply cannot arrive here: every command waits for its own.
+            if self.browser.receive(&mut patience).is_none() {
                 self.browser.fail(&format!("no {what} within {TIMEOUT:?}"));
             }
-            // A command reply cannot arrive here: every command waits for its own.
-            let _ = self.browser.receive(deadline);
         }
     }
 
@@ -494,18 +519,18 @@ impl Page<'_> {
         [r[0], r[1], r[2], r[3]]
     }
 
-    /// Waits until the JavaScript expression `condition` is true (polling every 20 ms), for
+    /// Waits until the JavaScript expression `condition` is true (polling every [`SLICE`]), for
     /// what a page does after an event (an image loading).
     ///
     /// # Panics
     /// When it is still false after [`TIMEOUT`]; the message names `what`.
     pub fn wait_until(&mut self, condition: &str, what: &str) {
-        let deadline = Instant::now() + TIMEOUT;
+        let mut patience = Patience::new(TIMEOUT);
         while self.eval(condition) != json!(true) {
-            if Instant::now() >= deadline {
+            if !patience.spend() {
                 panic!("not {what} after {TIMEOUT:?} (`{condition}` is still false)");
             }
-            std::thread::sleep(Duration::from_millis(20));
+            std::thread::sleep(SLICE);
         }
     }
 
@@ -587,15 +612,15 @@ fn query(selector: &str) -> String {
 
 /// Waits for the line `DevTools listening on ws://...` and returns the address.
 fn wait_for_address(rx: &mpsc::Receiver<String>, child: &mut Child) -> Result<String, String> {
-    let deadline = Instant::now() + START_TIMEOUT;
+    let mut patience = Patience::new(START_TIMEOUT);
     loop {
-        let left = deadline.saturating_duration_since(Instant::now());
-        match rx.recv_timeout(left) {
+        match rx.recv_timeout(SLICE) {
             Ok(line) => {
                 if let Some(address) = line.strip_prefix("DevTools listening on ") {
                     return Ok(address.trim().to_string());
                 }
             }
+            Err(mpsc::RecvTimeoutError::Timeout) if patience.spend() => {}
             Err(mpsc::RecvTimeoutError::Timeout) => {
                 return Err(format!(
                     "printed no DevTools address within {START_TIMEOUT:?}"
@@ -632,11 +657,10 @@ fn connect(address: &str) -> Result<WebSocket<TcpStream>, String> {
 /// A new, empty profile directory for one browser (under the test's temporary directory
 /// in `target/`).
 fn fresh_profile_dir() -> PathBuf {
-    let nanos = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.subsec_nanos());
+    static BROWSERS: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+    let n = BROWSERS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("chromium-profile-{}-{nanos}", std::process::id()));
+        .join(format!("chromium-profile-{}-{n}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     dir
 }
