@@ -140,7 +140,15 @@ pub fn render_with(
     settings: &RenderSettings,
     threads: usize,
 ) -> Frame {
-    let r = prepared(name, scene);
+    render_in_pool(prepared(name, scene).as_ref(), settings, threads)
+}
+
+/// Renders with the prepared renderer `r` on a pool of `threads` threads.
+///
+/// # Panics
+/// When rendering fails.
+#[must_use]
+pub fn render_in_pool(r: &dyn Renderer, settings: &RenderSettings, threads: usize) -> Frame {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -218,9 +226,10 @@ pub fn assert_same_ray_hits(what: &str, reference: &[Option<Hit>], hits: &[Optio
 /// with each of `backends` on several threads, and asserts bit-identical ids and `t`; then
 /// the same for `size * size` seeded incoherent rays (origins inside the scene's box, so
 /// many start inside nodes and next to surfaces), and for the derived sets of a
-/// `size / 2` square image ([`check_derived`]: shadow, ambient-occlusion and diffuse rays).
+/// `size / 2` square image (`check_derived`: shadow, ambient-occlusion and diffuse rays).
 /// Also asserts naive's exact counter (`rays * M` closest-hit tests). Skips (or fails under
-/// CI) when the scene's meshes are absent.
+/// CI) when the scene's meshes are absent. Each backend's structure is built once and used
+/// for every thread count and ray set (its builds are deterministic: `determinism.rs`).
 ///
 /// # Panics
 /// When any backend differs from the reference.
@@ -234,7 +243,12 @@ pub fn check(backends: &[&str], scene: &str, size: u32) {
         count: true,
         ..RenderSettings::default()
     };
-    let reference = render_with(ORACLE, &scene_data, &settings, 1);
+    let oracle = prepared(ORACLE, &scene_data);
+    let mut renderers: Vec<(&str, Box<dyn Renderer>)> = backends
+        .iter()
+        .map(|&name| (name, prepared(name, &scene_data)))
+        .collect();
+    let reference = render_in_pool(oracle.as_ref(), &settings, 1);
     let m = scene_data.geometry.total_len() as u64;
     assert_eq!(reference.stats.rays, u64::from(size * size));
     assert_eq!(
@@ -242,9 +256,9 @@ pub fn check(backends: &[&str], scene: &str, size: u32) {
         reference.stats.rays * m,
         "naive must test every primitive for every ray"
     );
-    for &name in backends {
+    for (name, r) in &renderers {
         for threads in [2, 3] {
-            let frame = render_with(name, &scene_data, &settings, threads);
+            let frame = render_in_pool(r.as_ref(), &settings, threads);
             assert_same_hits(
                 &format!("{name} on {scene} ({threads} threads)"),
                 &reference,
@@ -261,20 +275,25 @@ pub fn check(backends: &[&str], scene: &str, size: u32) {
         (size * size) as usize,
         1,
     );
-    let (reference_rays, _) = prepared(ORACLE, &scene_data)
-        .trace_rays(&rays, false)
-        .unwrap();
-    for &name in backends {
-        let (hits, _) = prepared(name, &scene_data)
-            .trace_rays(&rays, false)
-            .unwrap();
+    let (reference_rays, _) = oracle.trace_rays(&rays, false).unwrap();
+    // Naive among `backends` checks its thread-count independence on the frames above; its
+    // explicit rays would be the reference's own computation again.
+    renderers.retain(|(name, _)| *name != ORACLE);
+    for (name, r) in &renderers {
+        let (hits, _) = r.trace_rays(&rays, false).unwrap();
         assert_same_ray_hits(
             &format!("{name} on {scene}, incoherent rays"),
             &reference_rays,
             &hits,
         );
     }
-    check_derived(backends, scene, &scene_data, (size / 2).max(1));
+    check_derived(
+        oracle.as_ref(),
+        &renderers,
+        scene,
+        &scene_data,
+        (size / 2).max(1),
+    );
 }
 
 /// A ray's stored fields as bits (rays compare so even where a cached value is NaN).
@@ -292,11 +311,18 @@ fn ray_bits(r: &Ray) -> ([u32; 3], [u32; 3], u32, u32) {
 /// same rays, bit for bit, when generated from each backend's own primary hits; then the
 /// closest-hit set traced with bit-identical ids and `t`, and the any-hit sets answered
 /// with the same booleans, by every backend (naive's any hits being its closest hits'
-/// `is_some`). Counters: naive's closest-hit tests are exactly `rays x M`.
+/// `is_some`). Counters: naive's closest-hit tests are exactly `rays x M`. `oracle` is
+/// naive prepared on `scene_data`, `renderers` each backend's, by name.
 ///
 /// # Panics
 /// When a backend differs from the reference.
-pub fn check_derived(backends: &[&str], scene: &str, scene_data: &Arc<Scene>, size: u32) {
+fn check_derived(
+    oracle: &dyn Renderer,
+    renderers: &[(&str, Box<dyn Renderer>)],
+    scene: &str,
+    scene_data: &Arc<Scene>,
+    size: u32,
+) {
     use raybench_core::ray_sets::{self, DerivedParams};
     let settings = RenderSettings {
         width: size,
@@ -310,7 +336,6 @@ pub fn check_derived(backends: &[&str], scene: &str, scene_data: &Arc<Scene>, si
         .into_iter()
         .filter(|s| s.is_derived())
         .collect();
-    let oracle = prepared(ORACLE, scene_data);
     let (primary_hits, _) = oracle.trace_rays(&primary, false).unwrap();
     let m = scene_data.geometry.total_len() as u64;
     let mut reference = Vec::new();
@@ -334,8 +359,7 @@ pub fn check_derived(backends: &[&str], scene: &str, scene_data: &Arc<Scene>, si
         );
         reference.push((set, rays, closest, occluded));
     }
-    for &name in backends {
-        let r = prepared(name, scene_data);
+    for (name, r) in renderers {
         let (hits, _) = r.trace_rays(&primary, false).unwrap();
         for (set, rays, closest, occluded) in &reference {
             let what = format!("{name} on {scene}, {} rays", set.name());
@@ -403,15 +427,21 @@ pub fn check_modes(backends: &[&str], scene: &str, size: u32) {
     let Some(scene_data) = load_or_skip(scene) else {
         return;
     };
+    // Each structure built once, for both modes and every thread count.
+    let oracle = prepared(ORACLE, &scene_data);
+    let renderers: Vec<(&str, Box<dyn Renderer>)> = backends
+        .iter()
+        .map(|&name| (name, prepared(name, &scene_data)))
+        .collect();
     for (mode, spp) in [
         (raybench_core::Mode::Whitted, 1),
         (raybench_core::Mode::Path, 2),
     ] {
         let settings = mode_settings(size, mode, spp);
-        let reference = render_with(ORACLE, &scene_data, &settings, 1);
-        for &name in backends {
+        let reference = render_in_pool(oracle.as_ref(), &settings, 1);
+        for (name, r) in &renderers {
             for threads in [2, 3] {
-                let frame = render_with(name, &scene_data, &settings, threads);
+                let frame = render_in_pool(r.as_ref(), &settings, threads);
                 let what = format!("{name} on {scene}, {} ({threads} threads)", mode.name());
                 assert_same_hits(&what, &reference, &frame);
                 assert_eq!(
@@ -512,8 +542,9 @@ pub fn packed(rays: &[Ray]) -> Vec<Ray> {
 /// relative error stays within a few hundred ULPs (1e-5); ids differ only on rays within
 /// that rounding of an edge or of a second surface.
 pub mod gpu {
-    use super::{in_ci, load_or_skip, prepared, render_with};
+    use super::{in_ci, load_or_skip, prepared};
     use raybench_core::{Frame, Mode, Vec3};
+    use std::sync::Arc;
 
     /// Least fraction of pixels (or rays) whose primitive id equals naive's, counting ties
     /// (another primitive at the same distance within `raybench_registry::TIE_TOLERANCE`: coincident
@@ -653,61 +684,110 @@ pub mod gpu {
         );
     }
 
-    /// Every GPU backend ([`super::DEVICES`]) against naive on `scene`: [`check_backend`],
-    /// the secondary modes on the second tree only for scenes of triangles, spheres and
-    /// planes (see the body).
+    /// Every GPU backend ([`super::DEVICES`]) against the CPU on `scene`: ray casting at
+    /// `size x size` and as many seeded incoherent rays, closest hits and any hits (at full
+    /// length and shortened to a twentieth of the scene's diagonal); with `modes`, ray
+    /// casting at 4 samples, Whitted (4 bounces) and path tracing (4 samples, 4 bounces, the
+    /// same seed) at `size x size` too. Ray counts agree: exactly in ray casting and for
+    /// explicit rays, within 1% where paths may branch differently.
+    ///
+    /// The scene is loaded and the CPU's answers computed once, with [`super::BASELINE`] (the
+    /// BVH, bit-identical to naive: `equivalence.rs` checks it on every built-in scene and
+    /// kind), and shared by the GPU backends. The other trees' kernels differ from the
+    /// first's only in the tree walk, which ray casting and explicit rays exercise on every
+    /// scene (and, bit for bit, `the_gpu_trees_find_the_same_hits`); their Whitted and path
+    /// kernels are checked on scenes of triangles, spheres and planes only, as each kind's
+    /// pipelines take 4 to 8 s each to compile on lavapipe.
     ///
     /// # Panics
     /// When a GPU backend differs beyond the tolerances.
     pub fn check(scene: &str, size: u32, modes: bool) {
-        let (first, rest) = super::DEVICES.split_first().expect("a GPU backend");
-        check_backend(first, scene, size, modes);
-        // The other trees' kernels differ from the first's only in the tree walk, which ray
-        // casting and explicit rays exercise on every scene (and, bit for bit,
-        // `the_gpu_trees_find_the_same_hits`); their Whitted and path kernels are checked on
-        // scenes of triangles, spheres and planes, as each kind's pipelines take 4 to 8 s
-        // each to compile on lavapipe.
-        let plain = load_or_skip(scene).is_some_and(|s| {
-            !s.geometry.has_instances()
-                && s.geometry.shapes().iter().all(|shape| {
-                    use raybench_core::PrimitiveKind as K;
-                    matches!(shape.kind(), K::Triangle | K::Sphere | K::Plane)
-                })
-        });
-        for name in rest {
-            check_backend(name, scene, size, modes && plain);
-        }
-    }
-
-    /// GPU backend `name` against naive on `scene`: ray casting at `size x size` and as many
-    /// seeded incoherent rays, closest hits and any hits (at full length and shortened to
-    /// a twentieth of the scene's diagonal); with `modes`, Whitted (4 bounces) and path
-    /// tracing (4 samples, 4 bounces, the same seed) at `size x size` too. Ray counts agree:
-    /// exactly in ray casting and for explicit rays, within 1% where paths may branch
-    /// differently.
-    ///
-    /// # Panics
-    /// When the GPU differs beyond the tolerances.
-    pub fn check_backend(name: &str, scene: &str, size: u32, modes: bool) {
         if !available() {
             return;
         }
         let Some(s) = load_or_skip(scene) else {
             return;
         };
-        let gpu = prepared(name, &s);
-        let mut cases = vec![(Mode::Cast, 1)];
-        if modes {
-            cases.extend([(Mode::Cast, 4), (Mode::Whitted, 1), (Mode::Path, 4)]);
+        let plain = !s.geometry.has_instances()
+            && s.geometry.shapes().iter().all(|shape| {
+                use raybench_core::PrimitiveKind as K;
+                matches!(shape.kind(), K::Triangle | K::Sphere | K::Plane)
+            });
+        let reference = Reference::new(&s, size, modes);
+        let (first, rest) = super::DEVICES.split_first().expect("a GPU backend");
+        check_backend(first, scene, &s, &reference, modes);
+        for name in rest {
+            check_backend(name, scene, &s, &reference, modes && plain);
         }
-        for (mode, spp) in cases {
-            let settings = super::mode_settings(size, mode, spp);
-            let reference = render_with(super::ORACLE, &s, &settings, 2);
+    }
+
+    /// The CPU's answers on one scene, for every GPU backend: frames by mode and sample
+    /// count (ray casting at one sample first), seeded incoherent rays (each twice: at full
+    /// length, then shortened) with their closest hits and any-hit answers.
+    struct Reference {
+        frames: Vec<(Mode, u32, Frame)>,
+        rays: Vec<raybench_core::Ray>,
+        closest: Vec<Option<raybench_core::Hit>>,
+        blocked: Vec<bool>,
+    }
+
+    impl Reference {
+        /// [`super::BASELINE`]'s answers on `s` at `size x size` (with `modes`, the
+        /// secondary modes too).
+        fn new(s: &Arc<raybench_core::Scene>, size: u32, modes: bool) -> Self {
+            let cpu = prepared(super::BASELINE, s);
+            let mut cases = vec![(Mode::Cast, 1)];
+            if modes {
+                cases.extend([(Mode::Cast, 4), (Mode::Whitted, 1), (Mode::Path, 4)]);
+            }
+            let frames = cases
+                .into_iter()
+                .map(|(mode, spp)| {
+                    let settings = super::mode_settings(size, mode, spp);
+                    (mode, spp, cpu.render(&settings).unwrap())
+                })
+                .collect();
+            let mut rays = raybench_core::ray_sets::incoherent(
+                s.geometry.world_bounds(),
+                (size * size) as usize,
+                1,
+            );
+            let (closest, _) = cpu.trace_rays(&rays, false).unwrap();
+            // Any hit, at full length and shortened (shadow rays end before the light).
+            let short = s.geometry.world_bounds().extent().length() / 20.0;
+            let n = rays.len();
+            rays.extend_from_within(..);
+            for r in &mut rays[n..] {
+                r.t_max = short / r.dir.length();
+            }
+            let (blocked, _) = cpu.occlude_rays(&rays, false).unwrap();
+            Self {
+                frames,
+                rays,
+                closest,
+                blocked,
+            }
+        }
+    }
+
+    /// GPU backend `name` against `reference` on scene `s` (named `scene`): every frame of
+    /// the reference with `modes`, the first (ray casting, one sample) only without.
+    fn check_backend(
+        name: &str,
+        scene: &str,
+        s: &Arc<raybench_core::Scene>,
+        reference: &Reference,
+        modes: bool,
+    ) {
+        let gpu = prepared(name, s);
+        let cases = if modes { reference.frames.len() } else { 1 };
+        for (mode, spp, expected) in &reference.frames[..cases] {
+            let settings = super::mode_settings(expected.width, *mode, *spp);
             let frame = gpu.render(&settings).unwrap();
             let what = format!("{name} on {scene}, {} spp {spp}", mode.name());
-            assert_close_hits(&what, &reference, &frame);
-            let (a, b) = (reference.stats.rays, frame.stats.rays);
-            if mode == Mode::Cast {
+            assert_close_hits(&what, expected, &frame);
+            let (a, b) = (expected.stats.rays, frame.stats.rays);
+            if *mode == Mode::Cast {
                 assert_eq!(a, b, "{what}: rays");
             } else {
                 assert!(
@@ -715,50 +795,36 @@ pub mod gpu {
                     "{what}: rays {a} vs {b}"
                 );
             }
-            let max_mismatch = if mode == Mode::Path {
+            let max_mismatch = if *mode == Mode::Path {
                 MAX_PATH_COLOR_MISMATCH
             } else {
                 MAX_COLOR_MISMATCH
             };
-            assert_close_colors(&what, &reference.color, &frame.color, max_mismatch);
+            assert_close_colors(&what, &expected.color, &frame.color, max_mismatch);
         }
-        let mut rays = raybench_core::ray_sets::incoherent(
-            s.geometry.world_bounds(),
-            (size * size) as usize,
-            1,
-        );
-        let oracle = prepared(super::ORACLE, &s);
-        let (reference, ref_counts) = oracle.trace_rays(&rays, true).unwrap();
-        let (hits, counts) = gpu.trace_rays(&rays, true).unwrap();
-        assert_eq!(hits.len(), rays.len());
-        let ((ri, rt), (gi, gt)) = (hit_keys(&reference), hit_keys(&hits));
+        let n = reference.closest.len();
+        let rays = &reference.rays[..n];
+        let (hits, _) = gpu.trace_rays(rays, false).unwrap();
+        assert_eq!(hits.len(), n);
+        let ((ri, rt), (gi, gt)) = (hit_keys(&reference.closest), hit_keys(&hits));
         let c = raybench_registry::compare_hits(&ri, &rt, &gi, &gt);
-        eprintln!(
-            "{name} on {scene}, incoherent rays: {c:?}, counters {counts:?} (naive {ref_counts:?})"
-        );
-        let id_match = c.id_match + c.tie_mismatch as f64 / rays.len().max(1) as f64;
-        let dt = reach_dt(&rays, (&ri, &rt), (&gi, &gt));
+        eprintln!("{name} on {scene}, incoherent rays: {c:?}");
+        let id_match = c.id_match + c.tie_mismatch as f64 / n.max(1) as f64;
+        let dt = reach_dt(rays, (&ri, &rt), (&gi, &gt));
         eprintln!("{name} on {scene}, incoherent rays: dt relative to reach {dt:.1e}");
         assert!(
             id_match >= MIN_ID_MATCH && dt <= MAX_REL_DT,
             "{name} on {scene}, incoherent rays: {c:?}, dt relative to reach {dt:.1e}"
         );
-        // Any hit, at full length and shortened (shadow rays end before the light).
-        let short = s.geometry.world_bounds().extent().length() / 20.0;
-        let n = rays.len();
-        rays.extend_from_within(..);
-        for r in &mut rays[n..] {
-            r.t_max = short / r.dir.length();
-        }
-        let (reference, _) = oracle.occlude_rays(&rays, false).unwrap();
-        let (blocked, _) = gpu.occlude_rays(&rays, false).unwrap();
-        assert_eq!(blocked.len(), rays.len());
+        let (blocked, _) = gpu.occlude_rays(&reference.rays, false).unwrap();
+        assert_eq!(blocked.len(), reference.rays.len());
         let agree = reference
+            .blocked
             .iter()
             .zip(&blocked)
             .filter(|(a, b)| a == b)
             .count();
-        let fraction = agree as f64 / rays.len().max(1) as f64;
+        let fraction = agree as f64 / blocked.len().max(1) as f64;
         eprintln!(
             "{name} on {scene}, any-hit rays: {:.4}% agree",
             fraction * 100.0
@@ -841,7 +907,7 @@ transform = { scale = 0.6, rotate = [10, 30, 0], translate = [0.5, 0.3, 0.4] }
         )
     }
 
-    /// Every GPU backend against naive on `scene` (a built-in name, or
+    /// Every GPU backend against the CPU (the BVH) on `scene` (a built-in name, or
     /// [`VOLUMES_SCENE`] for `"volumes-cut"`) in the volume modes at `size x size`:
     /// maximum-intensity projection and compositing at one sample, compositing at 4
     /// jittered samples. Centre-ray ids and `t` within [`MIN_ID_MATCH`] and
@@ -864,14 +930,23 @@ transform = { scale = 0.6, rotate = [10, 30, 0], translate = [0.5, 0.3, 0.4] }
             s
         };
         assert!(!s.volumes.is_empty(), "{scene} has no volumes");
+        // The CPU's frames once for every GPU backend ([`super::BASELINE`], bit-identical to
+        // naive in the volume modes too: `volumes.rs`).
+        let cpu = prepared(super::BASELINE, &s);
+        let references: Vec<_> = [(Mode::Mip, 1), (Mode::Composite, 1), (Mode::Composite, 4)]
+            .into_iter()
+            .map(|(mode, spp)| {
+                let settings = super::mode_settings(size, mode, spp);
+                let frame = cpu.render(&settings).unwrap();
+                (mode, spp, settings, frame)
+            })
+            .collect();
         for name in super::DEVICES {
             let gpu = prepared(name, &s);
-            for (mode, spp) in [(Mode::Mip, 1), (Mode::Composite, 1), (Mode::Composite, 4)] {
-                let settings = super::mode_settings(size, mode, spp);
-                let reference = render_with(super::ORACLE, &s, &settings, 2);
-                let frame = gpu.render(&settings).unwrap();
+            for (mode, spp, settings, reference) in &references {
+                let frame = gpu.render(settings).unwrap();
                 let what = format!("{name} on {scene}, {} spp {spp}", mode.name());
-                assert_close_hits(&what, &reference, &frame);
+                assert_close_hits(&what, reference, &frame);
                 assert_eq!(reference.stats.rays, frame.stats.rays, "{what}: rays");
                 let worst = reference
                     .color
