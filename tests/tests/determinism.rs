@@ -1,8 +1,9 @@
 //! Determinism: every exact CPU backend renders bit-identical frames (colours, primitive ids
 //! and `t`, and the ray count) on 1, 2 and 7 rayon threads and across two runs on the same
 //! thread count, in every mode: ray casting, Whitted, path tracing (2 samples), and the
-//! volume modes mip and composite on the `phantom` volume. Frames are small (24 x 24) so
-//! naive stays fast.
+//! volume modes mip and composite on the `phantom` volume; on every kind of scene: meshes and
+//! spheres, CSG, quadrics, SDFs, volumes, instances, motion, height fields, Bezier patches,
+//! textures and smooth normals. Frames are small (24 x 24) so naive stays fast.
 //!
 //! Cross-backend agreement is `equivalence.rs`' and `volumes.rs`' business; this suite
 //! proves that no backend's result depends on scheduling (work stealing, tile order, shared
@@ -86,4 +87,36 @@ fn surface_modes_on_mixed_primitives() {
 #[test]
 fn volume_modes_on_the_phantom() {
     check("phantom", &[(Mode::Mip, 1), (Mode::Composite, 2)]);
+}
+
+/// A scene file of `tests/scenes/`.
+fn test_scene(name: &str) -> String {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name);
+    path.to_str().expect("a UTF-8 path").to_owned()
+}
+
+#[test]
+fn surface_modes_on_instanced_and_moving_scenes() {
+    // Instances (per-instance transforms, the two-level walk) and motion (the frame's time).
+    for scene in ["instances", "moving"] {
+        check(scene, SURFACE_MODES);
+    }
+}
+
+#[test]
+fn surface_modes_on_height_fields_and_bezier_patches() {
+    // Walked directly, not tessellated: the height-field walk and the patches' Newton steps.
+    for scene in ["heightfield", "teapot-bezier"] {
+        check(scene, SURFACE_MODES);
+    }
+}
+
+#[test]
+fn surface_modes_on_textured_and_smooth_shaded_meshes() {
+    // Texture lookups and interpolated normals, on a glTF mesh and on instanced OBJ meshes.
+    for scene in ["textured-smooth.toml", "instanced-smooth.toml"] {
+        check(&test_scene(scene), SURFACE_MODES);
+    }
 }

@@ -9,8 +9,9 @@
 use raybench_core::{Ray, Vec3};
 use raybench_tests::{assert_same_ray_hits, available, check, load_or_skip, prepared};
 
-/// Backends under test (naive itself checks thread-count independence).
-const BACKENDS: &[&str] = raybench_tests::EXACT_BACKENDS;
+/// Backends under test: every exact one but the oracle, which is the reference (its own
+/// independence of the thread count is `determinism.rs`' business, on every scene kind).
+const BACKENDS: &[&str] = raybench_tests::ACCELERATED_BACKENDS;
 
 /// 64 x 64 ray casting: about 4k rays, so naive on the 69k-triangle meshes stays near 1 s.
 const SIZE: u32 = 64;
@@ -34,27 +35,30 @@ scene_tests! {
     heightfield_generator => "heightfield:64",
 }
 
-/// Every built-in scene: `raybench_scene::BUILTIN_SCENES` is found from `bench-scenes/`, so
-/// a new scene file is checked by itself; but those over
-/// [`raybench_tests::ORACLE_PRIMITIVES`] flattened, which `instances.rs` checks against the
-/// baseline.
-#[test]
-fn every_builtin_scene() {
-    let backends = available(BACKENDS);
-    for b in raybench_scene::BUILTIN_SCENES {
-        if b.benchmark.heavy
-            && load_or_skip(b.name)
-                .is_some_and(|s| s.geometry.total_len() > raybench_tests::ORACLE_PRIMITIVES)
-        {
-            eprintln!(
-                "{}: too large for the oracle, checked by instances.rs",
-                b.name
-            );
-            continue;
-        }
-        check(&backends, b.name, SIZE);
+/// Every built-in scene, a test each (`builtin_scene_tests!`, which fails when a scene file
+/// has no test): ray casting, explicit and derived rays ([`check`], 64 x 64), then Whitted
+/// and path tracing (`check_modes`) at 24 x 24, the `heavy` scenes at 12 x 12 (naive's
+/// secondary rays over their tens of thousands of primitives cost seconds a frame). Left out:
+/// scenes over [`raybench_tests::ORACLE_PRIMITIVES`] flattened, which `instances.rs` checks
+/// against the baseline.
+fn builtin_scene(name: &str) {
+    let heavy = raybench_scene::builtin(name)
+        .expect("a built-in scene")
+        .benchmark
+        .heavy;
+    if heavy
+        && load_or_skip(name)
+            .is_some_and(|s| s.geometry.total_len() > raybench_tests::ORACLE_PRIMITIVES)
+    {
+        eprintln!("{name}: too large for the oracle, checked by instances.rs");
+        return;
     }
+    let backends = available(BACKENDS);
+    check(&backends, name, SIZE);
+    raybench_tests::check_modes(&backends, name, if heavy { 12 } else { 24 });
 }
+
+builtin_scene_tests!(super::builtin_scene);
 
 macro_rules! mode_tests {
     ($($test:ident => $scene:literal,)*) => {
@@ -71,19 +75,6 @@ macro_rules! mode_tests {
 mode_tests! {
     modes_random_spheres => "spheres:2000",
     modes_terrain => "terrain:32",
-}
-
-/// Whitted and path tracing on every built-in scene but the `heavy` ones (too many
-/// primitives for naive's secondary rays; their `[benchmark]` table says so).
-#[test]
-fn modes_on_builtin_scenes() {
-    let backends = available(BACKENDS);
-    for b in raybench_scene::BUILTIN_SCENES
-        .iter()
-        .filter(|b| !b.benchmark.heavy)
-    {
-        raybench_tests::check_modes(&backends, b.name, 24);
-    }
 }
 
 /// Backends not bound by the bit-exact contract, and where each is compared with naive
@@ -163,7 +154,7 @@ fn empty_scene_renders_background() {
         height: 8,
         ..Default::default()
     };
-    for name in available(BACKENDS) {
+    for name in available(raybench_tests::EXACT_BACKENDS) {
         let f = raybench_tests::render_with(name, &scene, &settings, 2);
         assert!(f.ids.iter().all(|&id| id == raybench_core::NO_HIT));
         assert!(f.color.iter().all(|&c| c == Vec3::new(0.25, 0.5, 0.75)));

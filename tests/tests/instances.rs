@@ -251,7 +251,8 @@ fn builtin_instances_against_their_flattened_form() {
 /// The built-in scenes too large for the oracle's check in `equivalence.rs` (over
 /// [`raybench_tests::ORACLE_PRIMITIVES`] flattened: the field of bunnies and teapots, 12.6
 /// million instanced triangles): every accelerated exact backend against the baseline, bit
-/// for bit, on camera and incoherent rays. Each builds a two-level structure over the
+/// for bit, on camera and incoherent rays, and in Whitted and path-traced frames (16 x 16,
+/// colours too). Each builds a two-level structure over the
 /// distinct meshes only, so this is cheap where naive would take minutes.
 #[test]
 fn large_instanced_scenes_against_the_baseline() {
@@ -282,7 +283,16 @@ fn large_instanced_scenes_against_the_baseline() {
             .count();
         assert!(seen > 1000, "{}: {seen} pixels hit", b.name);
         let rays = raybench_core::ray_sets::incoherent(scene.geometry.world_bounds(), 2304, 1);
-        let (ref_hits, _) = prepared(BASELINE, &scene).trace_rays(&rays, false).unwrap();
+        let baseline = prepared(BASELINE, &scene);
+        let (ref_hits, _) = baseline.trace_rays(&rays, false).unwrap();
+        let mode_references: Vec<_> = MODES
+            .iter()
+            .map(|&(mode, spp)| {
+                baseline
+                    .render(&raybench_tests::mode_settings(16, mode, spp))
+                    .unwrap()
+            })
+            .collect();
         for &name in &backends {
             let r = prepared(name, &scene);
             let frame = r.render(&settings).unwrap();
@@ -293,9 +303,32 @@ fn large_instanced_scenes_against_the_baseline() {
                 &ref_hits,
                 &hits,
             );
+            for (i, reference) in mode_references.iter().enumerate() {
+                let (mode, spp) = MODES[i];
+                let what = format!("{name} on {}, {}", b.name, mode.name());
+                let frame = r
+                    .render(&raybench_tests::mode_settings(16, mode, spp))
+                    .unwrap();
+                assert_same_hits(&what, reference, &frame);
+                let bits = |c: &raybench_core::Vec3| c.to_array().map(f32::to_bits);
+                assert!(
+                    frame
+                        .color
+                        .iter()
+                        .map(bits)
+                        .eq(reference.color.iter().map(bits)),
+                    "{what}: colours differ"
+                );
+            }
         }
     }
 }
+
+/// Whitted and path tracing (2 samples) on the large instanced scenes, against the baseline.
+const MODES: [(raybench_core::Mode, u32); 2] = [
+    (raybench_core::Mode::Whitted, 1),
+    (raybench_core::Mode::Path, 2),
+];
 
 /// Every exact backend's two-level structure holds each distinct mesh's structure once
 /// (its memory stays far below 60 copies' worth), and so do the GPU backends.

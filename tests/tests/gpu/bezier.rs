@@ -1,6 +1,6 @@
 //! Bezier patches (`kernels/bezier.wgsl`): a flat patch with its analytic hits and a
 //! parabolic cylinder's silhouette at grazing angles, besides the built-in `teapot-bezier`
-//! scene in `every_builtin_scene`.
+//! scene in `builtin::teapot_bezier`.
 
 use super::{assert_same_blocked, closest_hits};
 

@@ -1,13 +1,15 @@
 //! The GPU backends (`wgpu` over the BVH2, `wgpu-cwbvh` over the compressed wide BVH:
-//! `raybench_tests::DEVICES`) against the naive oracle on every built-in scene, within the
-//! tolerances of `raybench_tests::gpu`, closest hits and any hits. Runs on whatever adapter
+//! `raybench_tests::DEVICES`) against the CPU (the BVH, bit-identical to the naive oracle)
+//! on every built-in scene, within the tolerances of `raybench_tests::gpu`, closest hits and
+//! any hits. Runs on whatever adapter
 //! wgpu finds: Mesa's lavapipe (software Vulkan, about one CPU thread's speed) in CI, so
 //! images stay small. Skips when there is no adapter, except under `CI=true`.
 //!
-//! One test binary: here the built-in scenes and the generators, and what the modules
-//! share; the modules by subject: `backend` (what the backend accepts without an adapter,
+//! A module of the integration tests: here the built-in scenes and the generators, and what
+//! the submodules share; the submodules by subject: `backend` (what the backend accepts without an adapter,
 //! and the empty scene), `rays` (degenerate rays, split dispatches, the two trees' hits),
 //! `shading` (textures, normals, emitters, the environment map, the volume modes),
+//! `sampling` (the same frame twice, BSDF-only light sampling, the derived ray sets),
 //! `heightfield`, `bezier`, `csg` and `sdf` (each kind's kernel on scenes of its own).
 
 use raybench_core::{Hit, Ray, Renderer, Scene};
@@ -42,10 +44,11 @@ mod bezier;
 mod csg;
 mod heightfield;
 mod rays;
+mod sampling;
 mod sdf;
 mod shading;
 
-/// Built-in scenes that `every_builtin_scene` leaves to another test, and why.
+/// Built-in scenes that [`builtin_scene`] leaves to another test, and why.
 const ELSEWHERE: &[(&str, &str)] = &[(
     "phantom",
     "volumes without surfaces: phantom_volume_modes compares its modes (mip, composite)",
@@ -55,40 +58,36 @@ const ELSEWHERE: &[(&str, &str)] = &[(
 /// that are not `heavy`), and why.
 const CAST_ONLY: &[(&str, &str)] = &[(
     "bunny-lowres",
-    "3,674 triangles: its secondary modes on the oracle and on lavapipe cost minutes for \
+    "3,674 triangles: its secondary modes on lavapipe cost minutes for \
      what the smaller triangle scenes already check",
 )];
 
-/// Ray casting at 64 x 64 (the equivalence test's size) on every built-in scene
-/// (`raybench_scene::BUILTIN_SCENES`, found from `bench-scenes/`, so a new scene file is
-/// checked by itself); the modes with secondary rays at 32 x 32 on the scenes that are not
-/// `heavy` (their `[benchmark]` table says so) nor in [`CAST_ONLY`]. Left out: the scenes of
-/// [`ELSEWHERE`], and, as in the equivalence tests, the heavy ones over
-/// [`raybench_tests::ORACLE_PRIMITIVES`] flattened, too large for the oracle.
+/// Ray casting at 64 x 64 (the equivalence test's size) on every built-in scene, a test each
+/// (`builtin_scene_tests!`, which fails when a scene file has no test); the modes with
+/// secondary rays at 32 x 32 on the scenes that are not `heavy` (their `[benchmark]` table
+/// says so) nor in [`CAST_ONLY`]. The heavy scenes of millions of instanced triangles are
+/// checked too: the CPU's answers come from the BVH, not the oracle. Left out: the scenes of
+/// [`ELSEWHERE`].
+fn builtin_scene(name: &str) {
+    if let Some((_, why)) = ELSEWHERE.iter().find(|(n, _)| *n == name) {
+        eprintln!("{name}: left out: {why}");
+        return;
+    }
+    let b = raybench_scene::builtin(name).expect("a built-in scene");
+    let modes = !b.benchmark.heavy && !CAST_ONLY.iter().any(|(n, _)| *n == name);
+    check(name, if modes { 32 } else { 64 }, modes);
+}
+
+builtin_scene_tests!(super::builtin_scene);
+
+/// The scenes [`ELSEWHERE`] and [`CAST_ONLY`] name are built-in scenes.
 #[test]
-fn every_builtin_scene() {
+fn the_scenes_left_out_exist() {
     for (name, why) in ELSEWHERE.iter().chain(CAST_ONLY) {
         assert!(
-            raybench_scene::BUILTIN_SCENES
-                .iter()
-                .any(|b| b.name == *name),
+            raybench_scene::builtin(name).is_some(),
             "{name} is no built-in scene ({why})"
         );
-    }
-    for b in raybench_scene::BUILTIN_SCENES {
-        if let Some((_, why)) = ELSEWHERE.iter().find(|(n, _)| *n == b.name) {
-            eprintln!("{}: left out: {why}", b.name);
-            continue;
-        }
-        if b.benchmark.heavy
-            && raybench_tests::load_or_skip(b.name)
-                .is_some_and(|s| s.geometry.total_len() > raybench_tests::ORACLE_PRIMITIVES)
-        {
-            eprintln!("{}: left out: too large for the oracle", b.name);
-            continue;
-        }
-        let modes = !b.benchmark.heavy && !CAST_ONLY.iter().any(|(n, _)| *n == b.name);
-        check(b.name, if modes { 32 } else { 64 }, modes);
     }
 }
 

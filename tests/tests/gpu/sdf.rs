@@ -1,5 +1,5 @@
 //! SDF models (`kernels/sdf.wgsl`, `geo/sdf.rs`): beyond the built-in `sdf` scene (in
-//! `every_builtin_scene`), every operation (intersection too), a capsule whose ends
+//! `builtin::sdf`), every operation (intersection too), a capsule whose ends
 //! coincide, rotated and scaled transforms, and the deepest trees the loader accepts, which
 //! fill the kernel's value stack (a right-leaning chain: `MAX_SDF_DEPTH` values) and point
 //! stack (nested transforms with a sibling at every level, so that every saved point is
