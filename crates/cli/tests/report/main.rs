@@ -13,6 +13,7 @@ mod html;
 mod matrix;
 mod merge;
 mod skips;
+mod synthetic;
 mod slurm;
 mod timing;
 
