@@ -51,7 +51,14 @@ fn valid(r: &Run) -> bool {
 
 /// `x` as a speed-up factor: two decimals below 10, none above.
 fn factor(x: f64) -> String {
-    if x >= 10.0 {
+    factor_as(x, x)
+}
+
+/// `x` with the decimals [`factor`] gives `ratio`: the ends of a ratio's interval are
+/// written as the ratio is, so that one straddling 10 reads `9.90x [9.60-10.20]`, not
+/// `[9.60-10]`.
+fn factor_as(x: f64, ratio: f64) -> String {
+    if ratio >= 10.0 {
         format!("{x:.0}")
     } else {
         format!("{x:.2}")
@@ -70,8 +77,8 @@ fn speed_up(best: &Run, other: &Run, by_device: bool) -> String {
         Some(i) => format!(
             "{}x [{}-{}] {}",
             factor(ratio),
-            factor(i.lo),
-            factor(i.hi),
+            factor_as(i.lo, ratio),
+            factor_as(i.hi, ratio),
             other.label()
         ),
         None => format!("{}x {}", factor(ratio), other.label()),
@@ -572,6 +579,24 @@ mod tests {
         assert_eq!(factor(10.0), "10");
         assert_eq!(factor(12.5), "12");
         assert_eq!(factor(12.6), "13");
+    }
+
+    /// The ends of an interval take the ratio's decimals, either side of 10.
+    #[test]
+    fn a_speed_up_interval_reads_as_its_ratio() {
+        let best = run("s", "best", &QUIET);
+        let times = |ratios: [f64; 6]| -> Vec<f64> {
+            QUIET.iter().zip(ratios).map(|(t, r)| t * r).collect()
+        };
+        // Ratios 9.6, 9.8, 9.9, 9.9, 10.0, 10.2: median 9.9, interval [9.6, 10.2].
+        let below = run("s", "below", &times([9.6, 9.9, 10.2, 9.9, 10.0, 9.8]));
+        assert_eq!(speed_up(&best, &below, false), "9.90x [9.60-10.20] below");
+        // 9.6, 10.2, 10.3, 10.4, 10.5, 10.6: median 10.35, no decimals throughout.
+        let above = run("s", "above", &times([9.6, 10.5, 10.2, 10.4, 10.6, 10.3]));
+        assert_eq!(speed_up(&best, &above, false), "10x [10-11] above");
+        // A single repetition: the ratio alone.
+        let once = run("s", "once", &[4.0]);
+        assert_eq!(speed_up(&best, &once, false), "4.00x once");
     }
 
     /// Clear leads, ties and unknown noise, each cell figured by hand: 1,000 rays a
