@@ -1,9 +1,11 @@
-//! `REPORT.html` in a real browser: renders a small report with the `raybench` binary, loads
-//! its page from the file in headless Chromium (through the DevTools protocol, `cdp.rs`),
-//! and drives it like a user, with real key presses and mouse clicks: the table of
-//! contents, an image viewer (backends, layers, zoom, pixel-exact on a screenshot) and the
-//! sortable tables, checking the DOM after every step and that the page reported no error.
-//! A screenshot of the viewer is written to `target/tmp/report-viewer.png`.
+//! `REPORT.html` in a real browser: merges the synthetic shards of the report tests
+//! (`tests/report/fixtures/synthetic/`: a peer backend whose image differs from the
+//! reference's, with its id and FLIP maps, and noisy timings) with the `raybench` binary,
+//! loads the page from the file in headless Chromium (through the DevTools protocol,
+//! `cdp.rs`), and drives it like a user, with real key presses and mouse clicks: the table
+//! of contents, an image viewer (backends, layers, zoom, pixel-exact on a screenshot) and
+//! the sortable tables, checking the DOM after every step and that the page reported no
+//! error. A screenshot of the viewer is written to `target/tmp/report-viewer.png`.
 //!
 //! Without Chromium (`/usr/bin/chromium`, Debian's `chromium`, or `RAYBENCH_CHROMIUM`) the
 //! test prints `skipped: <reason>` and passes, except under `CI=true`, where it fails.
@@ -17,10 +19,14 @@ use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// The report's scenes (built in, self-contained: no shared meshes needed) and backends
-/// (the reference, `naive`, first).
-const SCENES: &str = "spheres,whitted";
-const BACKENDS: &str = "naive,bvh,packet";
+/// The viewer driven: `spheres` cast by `naive` (the reference), `bvh` and `packet`
+/// (bit-identical) and `bvh-crate` (differing in a square of 64 pixels).
+const SCENE: &str = "spheres";
+const MODE: &str = "cast";
+/// The backend whose image differs, and its maps' files.
+const DIFFERING: &str = "bvh-crate";
+const DIFFERING_IDS: &str = "images/spheres-cast-primary-bvh-crate-ids-diff.png";
+const DIFFERING_FLIP: &str = "images/spheres-cast-primary-bvh-crate-flip.png";
 
 /// Where the screenshot of the viewer goes.
 const SCREENSHOT: &str = concat!(env!("CARGO_TARGET_TMPDIR"), "/report-viewer.png");
@@ -50,39 +56,28 @@ fn report_page_works_in_chromium() {
     check_images_loaded(&mut page);
     check_table_of_contents(&mut page);
     check_viewers(&mut page, &results);
-    drive_viewer(&mut page, &results, "whitted", "whitted");
+    drive_viewer(&mut page, &results, SCENE, MODE);
     check_noisy_cells(&mut page);
     sort_tables(&mut page);
     assert_no_errors(&mut page, "driving the page");
 }
 
-/// Renders the report into `target/tmp/browser-report` (left there for people to open)
-/// and returns the directory.
+/// Merges the synthetic shards into `target/tmp/browser-report` (left there for people to
+/// open) and returns the directory.
 fn render_report() -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("browser-report");
     let _ = std::fs::remove_dir_all(&dir);
+    let shards = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/report/fixtures/synthetic");
     let out = Command::new(env!("CARGO_BIN_EXE_raybench"))
-        .args([
-            "report",
-            "--scenes",
-            SCENES,
-            "--backends",
-            BACKENDS,
-            "--size",
-            "64",
-            "--repeat",
-            "1",
-            "--min-sample",
-            "0",
-            "--no-scaling",
-            "--out",
-        ])
+        .arg("merge")
+        .args([shards.join("shard-1"), shards.join("shard-2")])
+        .arg("--out")
         .arg(&dir)
         .output()
         .expect("raybench runs");
     assert!(
         out.status.success(),
-        "raybench report failed:\n{}",
+        "raybench merge failed:\n{}",
         String::from_utf8_lossy(&out.stderr)
     );
     dir
@@ -227,8 +222,8 @@ fn check_viewers(page: &mut Page, results: &Value) {
         .collect();
     pairs.sort();
     pairs.dedup();
-    // spheres: cast and whitted; whitted: cast, whitted and path.
-    assert_eq!(pairs.len(), 5, "scene and mode pairs: {pairs:?}");
+    // spheres and cornell-box, cast each.
+    assert_eq!(pairs.len(), 2, "scene and mode pairs: {pairs:?}");
     for (scene, mode) in pairs {
         let id = format!("viewer-{}-{mode}", file_safe(&scene));
         let viewer = page.eval(&format!(
@@ -300,6 +295,9 @@ struct ViewerState {
     stats_backend: Option<String>,
     /// The stats' text.
     stats: String,
+    /// `data-derived` of the image: the layer drawn from the reference image because no
+    /// map was stored (a result identical to the reference).
+    derived: Option<String>,
 }
 
 /// Drives the viewer of `scene` and `mode` with keys and clicks, checking after each step
@@ -319,6 +317,11 @@ fn drive_viewer(page: &mut Page, results: &Value, scene: &str, mode: &str) {
         .collect();
     assert!(picks.len() >= 3, "{sel}: {picks:?}");
     let identical = |backend: &str| runs.iter().any(|r| r.0 == backend && r.2);
+    let differing = picks
+        .iter()
+        .position(|b| b == DIFFERING)
+        .unwrap_or_else(|| panic!("{sel}: no pick {DIFFERING}: {picks:?}"));
+    assert!(!identical(DIFFERING), "{sel}: {DIFFERING} is identical");
 
     // Focus the viewer as a user does: click its image (the section is focusable).
     let focus = |page: &mut Page| {
@@ -365,6 +368,15 @@ fn drive_viewer(page: &mut Page, results: &Value, scene: &str, mode: &str) {
                 "{context}: the stats of a bit-identical backend do not say so"
             );
         }
+        if expect.pick == differing {
+            // 4,032 of 4,096 ids, the PSNR and FLIP of its image; it fails the tolerance.
+            for figure in ["FAILS", "98.4375 %", "28.4 dB", "0.0211"] {
+                assert!(
+                    s.stats.contains(figure),
+                    "{context}: no {figure} in the stats"
+                );
+            }
+        }
         s
     };
 
@@ -406,11 +418,38 @@ fn drive_viewer(page: &mut Page, results: &Value, scene: &str, mode: &str) {
     focus(page);
     page.press("2");
     expect.pick = 1;
-    step(page, "key 2", &expect);
+    let same = step(page, "key 2", &expect);
+    assert!(identical(&picks[1]), "{sel}: {} differs", picks[1]);
+    // A bit-identical backend's maps are derived from the reference image: none is stored.
     for (key, layer) in [("d", "ids"), ("f", "flip"), ("i", "image")] {
         page.press(key);
         expect.layer = layer;
-        step(page, &format!("key {key}"), &expect);
+        let s = step(page, &format!("key {key}"), &expect);
+        let derived = (layer != "image").then(|| layer.to_string());
+        assert_eq!(s.derived, derived, "{sel}: {s:?}");
+        assert_eq!(s.src, same.src, "{sel}: {s:?}");
+    }
+    // The differing backend shows its own image and its stored maps, each a file of its own.
+    page.press(&(differing + 1).to_string());
+    expect.pick = differing;
+    let own = step(page, "its pick key", &expect);
+    assert_ne!(
+        own.src, reference.src,
+        "{sel}: {DIFFERING} shows the reference's image"
+    );
+    for (key, layer, file) in [
+        ("d", "ids", DIFFERING_IDS),
+        ("f", "flip", DIFFERING_FLIP),
+        ("i", "image", own.src.as_str()),
+    ] {
+        page.press(key);
+        expect.layer = layer;
+        let s = step(page, &format!("key {key} on {DIFFERING}"), &expect);
+        assert_eq!(
+            (s.src.as_str(), s.derived.as_deref()),
+            (file, None),
+            "{sel}: {s:?}"
+        );
     }
     // Zoom doubles the image's size on screen (pixel-exact) and halves it back.
     let base = state(page, &sel).width;
@@ -502,14 +541,39 @@ fn state(page: &mut Page, sel: &str) -> ViewerState {
            rendering: getComputedStyle(img).imageRendering, \
            pressed: [...v.querySelectorAll('button.viewer-pick[aria-pressed=\"true\"]')]\
              .map(b => b.dataset.backend), \
-           stats_backend: stats.dataset.backend ?? null, stats: stats.textContent }}; }})()"
+           stats_backend: stats.dataset.backend ?? null, stats: stats.textContent, \
+           derived: img.dataset.derived ?? null }}; }})()"
     ));
     serde_json::from_value(value.clone())
         .unwrap_or_else(|e| panic!("{sel}: unexpected state {value}: {e}"))
 }
 
-/// Every cell that flags a noisy figure (`†`) has class `noisy`, and no other.
+/// Every cell that flags a noisy figure (`†`) has class `noisy`, and no other; the page has
+/// the six the synthetic shards make (the verdict's Cornell box cell, the summary's two
+/// Cornell box figures, the three noisy times of the per-scene tables).
 fn check_noisy_cells(page: &mut Page) {
+    let noisy = page
+        .eval("[...document.querySelectorAll('table.sortable td.noisy')].map(c => c.textContent)");
+    let noisy: Vec<&str> = noisy
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c.as_str().unwrap())
+        .collect();
+    assert_eq!(noisy.len(), 6, "noisy cells: {noisy:?}");
+    for text in [
+        "3.90 †",
+        "1.95 †",
+        "0.00300 [0.00240-0.00360] †",
+        "0.00210 [0.00180-0.00250] †",
+        "0.00105 [0.000900-0.00130] †",
+    ] {
+        assert!(noisy.contains(&text), "no noisy cell {text:?}: {noisy:?}");
+    }
+    assert!(
+        noisy.iter().any(|c| c.starts_with("packet 3.90 †")),
+        "the verdict's noisy cell: {noisy:?}"
+    );
     let wrong = page.eval(
         "[...document.querySelectorAll('table.sortable td')]\
          .filter(c => c.textContent.includes('\u{2020}') !== c.classList.contains('noisy'))\

@@ -226,3 +226,164 @@ pub fn report(results: &Results, charts: &Charts) -> String {
     }
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::results::{Machine, Shard, Skipped};
+
+    fn shard(index: u32, cpu: &str) -> Shard {
+        Shard {
+            index,
+            count: 2,
+            machine: Machine {
+                host: String::new(),
+                cpu: cpu.into(),
+                cores: 4,
+                threads: 3,
+                isa: "isa".into(),
+                gpu: "none".into(),
+                os: "os".into(),
+                version: "v".into(),
+            },
+            started: "2026-01-02T03:04:05Z".into(),
+            wall_seconds: 12.4,
+            command: "raybench report".into(),
+            quick: false,
+            load: None,
+            ranked_by_device: false,
+            others: None,
+            pinned: false,
+            repeat: String::new(),
+            min_sample: 0.0,
+            plan: None,
+        }
+    }
+
+    fn text(results: &Results) -> String {
+        report(
+            results,
+            &Charts {
+                drawn: Vec::new(),
+                problem: None,
+            },
+        )
+    }
+
+    #[test]
+    fn mixed_machines_are_noted_only_when_the_models_differ() {
+        let mut results = Results {
+            shards: vec![shard(1, "B"), shard(2, "B")],
+            ..Results::default()
+        };
+        assert_eq!(mixed_machines(&results), None);
+        assert!(!text(&results).contains("Mixed machines"));
+        results.shards[0].machine.cpu = "C".into();
+        results.shards.push(shard(2, "A"));
+        let note = mixed_machines(&results).unwrap();
+        // Each model once, sorted.
+        assert!(note.contains("CPU models (`A`, `B`, `C`)"), "{note}");
+        assert!(text(&results).contains(&format!("> {note}\n")));
+    }
+
+    #[test]
+    fn each_shard_is_described_with_what_it_recorded() {
+        let mut plain = shard(1, "cpu");
+        plain.machine.host = String::new();
+        let mut full = shard(2, "cpu");
+        full.machine.host = "node7".into();
+        (full.quick, full.pinned) = (true, true);
+        full.load = Some([[0.5, 0.0, 0.0], [1.25, 0.0, 0.0]]);
+        full.others = Some([0.123, 0.004]);
+        (full.repeat, full.min_sample) = ("auto".into(), 0.05);
+        let s = text(&Results {
+            shards: vec![plain, full],
+            ..Results::default()
+        });
+        assert!(
+            s.contains(
+                "**Shard 1/2**: cpu, 4 logical cores (3 worker threads); isa; GPU: none; os; v. \
+                 Started 2026-01-02 03:04:05 UTC, took 12 s.\n\n`raybench report`\n"
+            ),
+            "{s}"
+        );
+        assert!(
+            s.contains(
+                "**Shard 2/2** (quick) on `node7`: cpu, 4 logical cores (3 worker threads, \
+                 pinned to cores); isa; GPU: none; os; v. Started 2026-01-02 03:04:05 UTC, took \
+                 12 s; load average 0.50 before, 1.25 after (1 minute); other processes took \
+                 12.3% of the CPUs' time meanwhile (0.4% stolen by the hypervisor); repetitions \
+                 auto, each at least 50 ms.\n"
+            ),
+            "{s}"
+        );
+    }
+
+    #[test]
+    fn the_skipped_table_names_the_shard_and_escapes_bars() {
+        let mut results = Results {
+            shards: vec![shard(1, "cpu"), shard(2, "cpu")],
+            ..Results::default()
+        };
+        assert!(!text(&results).contains("## Skipped"));
+        for (shard, reason) in [(1, "a | b"), (7, "lost")] {
+            results.skipped.push(Skipped {
+                shard,
+                kind: "scene".into(),
+                name: "x".into(),
+                status: "skipped".into(),
+                reason: reason.into(),
+            });
+        }
+        let s = text(&results);
+        assert!(
+            s.contains(
+                "| 2/2 | scene `x` | skipped | a \\| b |\n| ? | scene `x` | skipped | lost |\n"
+            ),
+            "{s}"
+        );
+    }
+
+    #[test]
+    fn the_scaling_table_gives_each_series_once_with_both_slopes() {
+        let point = |backend: &str, x: f64, seconds: f64, tests: Option<f64>| {
+            crate::results::ScalingPoint {
+                shard: 0,
+                experiment: "pixels".into(),
+                series: "s".into(),
+                backend: backend.into(),
+                x,
+                seconds,
+                timing: None,
+                rays: 1,
+                tests_per_ray: tests,
+                load_seconds: None,
+                build_seconds: None,
+                memory_bytes: None,
+                difference: None,
+                stored_primitives: None,
+            }
+        };
+        // a: time 1, 4, 16 over x 1, 2, 4: slope 2; tests 3, 3, 3: slope 0. b: time 2, 2
+        // over x 1, 100: slope 0, no tests.
+        let mut results = Results {
+            scaling: vec![
+                point("a", 1.0, 1.0, Some(3.0)),
+                point("a", 2.0, 4.0, Some(3.0)),
+                point("a", 4.0, 16.0, Some(3.0)),
+                point("b", 1.0, 2.0, None),
+                point("b", 100.0, 2.0, None),
+            ],
+            ..Results::default()
+        };
+        results.fit();
+        let s = text(&results);
+        assert!(
+            s.contains(
+                "|---|---|---|---:|---:|---:|\n| pixels | s | a | 2.00 | 0.00 | 3 |\n\
+                 | pixels | s | b | 0.00 | - | 2 |\n\n"
+            ),
+            "{s}"
+        );
+    }
+}

@@ -51,7 +51,14 @@ fn valid(r: &Run) -> bool {
 
 /// `x` as a speed-up factor: two decimals below 10, none above.
 fn factor(x: f64) -> String {
-    if x >= 10.0 {
+    factor_as(x, x)
+}
+
+/// `x` with the decimals [`factor`] gives `ratio`: the ends of a ratio's interval are
+/// written as the ratio is, so that one straddling 10 reads `9.90x [9.60-10.20]`, not
+/// `[9.60-10]`.
+fn factor_as(x: f64, ratio: f64) -> String {
+    if ratio >= 10.0 {
         format!("{x:.0}")
     } else {
         format!("{x:.2}")
@@ -70,8 +77,8 @@ fn speed_up(best: &Run, other: &Run, by_device: bool) -> String {
         Some(i) => format!(
             "{}x [{}-{}] {}",
             factor(ratio),
-            factor(i.lo),
-            factor(i.hi),
+            factor_as(i.lo, ratio),
+            factor_as(i.hi, ratio),
             other.label()
         ),
         None => format!("{}x {}", factor(ratio), other.label()),
@@ -456,4 +463,386 @@ fn slopes(results: &Results, s: &mut String) {
             format!("; these disagree:\n\n{}", off.join("\n"))
         }
     );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::results::{Equality, Images, Skipped};
+
+    /// The baseline and the oracle, as the registry names them.
+    fn names() -> (&'static str, &'static str) {
+        (
+            raybench_registry::name_with(Roles::BASELINE),
+            raybench_registry::name_with(Roles::ORACLE),
+        )
+    }
+
+    /// A run of `backend` on `scene`, camera rays, 1,000 rays a repetition timed `samples`
+    /// (ms), passing and identical.
+    fn run(scene: &str, backend: &str, samples: &[f64]) -> Run {
+        let timing =
+            (!samples.is_empty()).then(|| Timing::of(samples.iter().map(|s| s * 1e-3).collect()));
+        Run {
+            shard: 0,
+            scene: scene.into(),
+            primitives: 1,
+            mode: "cast".into(),
+            ray_set: "primary".into(),
+            width: 10,
+            height: 100,
+            spp: 1,
+            backend: backend.into(),
+            exact: true,
+            reference: names().1.into(),
+            status: "ok".into(),
+            reason: None,
+            build_seconds: None,
+            memory_bytes: None,
+            structure: BTreeMap::new(),
+            mrays_per_s: timing.as_ref().map(|t| 1000.0 / t.median / 1e6),
+            seconds: timing,
+            device_seconds: None,
+            device: None,
+            software_device: false,
+            headlight: false,
+            rays: Some(1000),
+            tests_per_ray: None,
+            visits_per_ray: None,
+            equality: Some(Equality {
+                id_match: 1.0,
+                hit_mismatch: 0,
+                t_mismatch: 0,
+                tie_mismatch: 0,
+                max_abs_dt: 0.0,
+                identical: true,
+                psnr_db: None,
+                flip_mean: None,
+                pass: true,
+            }),
+            images: Images::default(),
+            phases: BTreeMap::new(),
+            cameras: Vec::new(),
+            quality: None,
+        }
+    }
+
+    /// `r`, failing the equality check (outside the contract, 90 % of the ids).
+    fn failed(mut r: Run) -> Run {
+        r.exact = false;
+        let e = r.equality.as_mut().unwrap();
+        (e.id_match, e.identical, e.pass) = (0.9, false, false);
+        r
+    }
+
+    /// `r`, not run, for `reason`.
+    fn refused(mut r: Run, status: &str, reason: &str) -> Run {
+        r.status = status.into();
+        r.reason = Some(reason.into());
+        (r.seconds, r.mrays_per_s, r.equality) = (None, None, None);
+        r
+    }
+
+    fn cell(runs: &[Run]) -> String {
+        let (baseline, oracle) = names();
+        fastest_cell(&runs.iter().collect::<Vec<_>>(), baseline, oracle, false)
+    }
+
+    fn section(f: fn(&Results, &mut String), results: &Results) -> String {
+        let mut s = String::new();
+        f(results, &mut s);
+        s
+    }
+
+    const QUIET: [f64; 6] = [1.0, 1.01, 0.99, 1.0, 1.02, 0.98];
+
+    #[test]
+    fn a_run_counts_when_it_ran_and_passed() {
+        let ok = run("s", "a", &QUIET);
+        assert!(valid(&ok));
+        assert!(!valid(&failed(ok.clone())));
+        assert!(!valid(&refused(ok.clone(), "unsupported", "no")));
+        // Without an equality record (nothing to compare with) it counts.
+        let mut alone = ok.clone();
+        alone.equality = None;
+        assert!(valid(&alone));
+        let mut untimed = ok;
+        untimed.mrays_per_s = None;
+        assert!(!valid(&untimed));
+    }
+
+    #[test]
+    fn factors_keep_two_decimals_below_ten() {
+        assert_eq!(factor(1.0), "1.00");
+        assert_eq!(factor(9.99), "9.99");
+        assert_eq!(factor(9.996), "10.00");
+        assert_eq!(factor(10.0), "10");
+        assert_eq!(factor(12.5), "12");
+        assert_eq!(factor(12.6), "13");
+    }
+
+    /// The ends of an interval take the ratio's decimals, either side of 10.
+    #[test]
+    fn a_speed_up_interval_reads_as_its_ratio() {
+        let best = run("s", "best", &QUIET);
+        let times = |ratios: [f64; 6]| -> Vec<f64> {
+            QUIET.iter().zip(ratios).map(|(t, r)| t * r).collect()
+        };
+        // Ratios 9.6, 9.8, 9.9, 9.9, 10.0, 10.2: median 9.9, interval [9.6, 10.2].
+        let below = run("s", "below", &times([9.6, 9.9, 10.2, 9.9, 10.0, 9.8]));
+        assert_eq!(speed_up(&best, &below, false), "9.90x [9.60-10.20] below");
+        // 9.6, 10.2, 10.3, 10.4, 10.5, 10.6: median 10.35, no decimals throughout.
+        let above = run("s", "above", &times([9.6, 10.5, 10.2, 10.4, 10.6, 10.3]));
+        assert_eq!(speed_up(&best, &above, false), "10x [10-11] above");
+        // A single repetition: the ratio alone.
+        let once = run("s", "once", &[4.0]);
+        assert_eq!(speed_up(&best, &once, false), "4.00x once");
+    }
+
+    /// Clear leads, ties and unknown noise, each cell figured by hand: 1,000 rays a
+    /// repetition, so Mrays/s = 1 / the median in ms.
+    #[test]
+    fn the_fastest_cell_names_a_backend_only_when_it_leads_clearly() {
+        let (baseline, oracle) = names();
+        // "fast" at 1.0 ms: 1.00 Mrays/s. The baseline at exactly 2x and the oracle at
+        // exactly 12x every round: 2.00x [2.00-2.00] and 12x [12-12] (no decimals from 10).
+        let fast = run("s", "fast", &QUIET);
+        let double: Vec<f64> = QUIET.iter().map(|t| 2.0 * t).collect();
+        let twelve: Vec<f64> = QUIET.iter().map(|t| 12.0 * t).collect();
+        let clear = [
+            run("s", oracle, &twelve),
+            run("s", baseline, &double),
+            fast.clone(),
+        ];
+        assert_eq!(
+            cell(&clear),
+            format!("`fast` 1.00 (2.00x [2.00-2.00] {baseline}, 12x [12-12] {oracle})")
+        );
+        // A faster run that failed its check is left out: the same cell.
+        let mut with_failed = clear.to_vec();
+        with_failed.push(failed(run("s", "wrong", &[0.1; 6])));
+        assert_eq!(cell(&with_failed), cell(&clear));
+        // "close" is slower in every round, by 1.0 to 2.0 % (ratios 1.010, 1.020, 1.010,
+        // 1.010, 1.020, 1.010): the interval lies above 1 but the median ratio 1.01 is
+        // below the 2 % minimum effect: a tie, "fast" (the lower median) first.
+        let close = run("s", "close", &[1.01, 1.03, 1.0, 1.01, 1.04, 0.99]);
+        let tie = cell(&[fast.clone(), close, run("s", baseline, &double)]);
+        assert!(
+            tie.starts_with("tie: `fast`, `close` within noise; `fast` 1.00 (2.00x"),
+            "{tie}"
+        );
+        // A lead of 5 % whose rounds overlap (ratios 0.95 .. 1.15): a tie too.
+        let overlapping = run("s", "overlap", &[1.15, 1.06, 0.94, 1.05, 1.07, 1.05]);
+        let tie = cell(&[fast.clone(), overlapping]);
+        assert!(
+            tie.starts_with("tie: `fast`, `overlap` within noise"),
+            "{tie}"
+        );
+        // A single repetition anywhere: named by its median, noise unknown.
+        let unknown = cell(&[fast.clone(), run("s", "once", &[3.0])]);
+        assert_eq!(unknown, "`fast` 1.00 ? (noise unknown)");
+        // A noisy leader is marked: 1.0 .. 1.3 ms, median 1.05 ms (0.95 Mrays/s), half
+        // width 0.2 / 1.05 = 19 %; the baseline is 3x every round.
+        let noisy_samples = [1.0, 1.2, 0.9, 1.1, 1.0, 1.3];
+        let noisy = run("s", "noisy", &noisy_samples);
+        let triple: Vec<f64> = noisy_samples.iter().map(|t| 3.0 * t).collect();
+        assert_eq!(
+            cell(&[noisy, run("s", baseline, &triple)]),
+            format!("`noisy` 0.95 † (3.00x [3.00-3.00] {baseline})")
+        );
+        // Nothing valid, or nothing at all.
+        assert_eq!(cell(&[failed(fast.clone())]), "none passed");
+        assert_eq!(cell(&[refused(fast, "unsupported", "no")]), "none passed");
+        assert_eq!(cell(&[]), "");
+    }
+
+    #[test]
+    fn agreement_lists_failures_per_backend() {
+        let (_, oracle) = names();
+        let mut results = Results {
+            runs: vec![
+                run("a", oracle, &QUIET),
+                run("a", "same", &QUIET),
+                failed(run("a", "peer", &QUIET)),
+                run("b", "peer", &QUIET),
+                refused(run("b", "gone", &QUIET), "unavailable", "not here"),
+            ],
+            ..Results::default()
+        };
+        results.runs[3].exact = false;
+        let s = section(identical, &results);
+        assert!(
+            s.contains(
+                "- `peer`, outside the contract: bit-identical in 1 of 2 workloads, passed 1 of 2; \
+                 **failed**: a cast-primary.\n"
+            ),
+            "{s}"
+        );
+        assert!(
+            s.contains(
+                "- `same`, exact (bound by the contract): bit-identical in 1 of 1 workloads, \
+                 passed 1 of 1.\n"
+            ),
+            "{s}"
+        );
+        // The reference and the runs that did not run are not compared.
+        assert!(
+            !s.contains(&format!("`{oracle}`,")) && !s.contains("`gone`"),
+            "{s}"
+        );
+        // Only references: no section.
+        results.runs.truncate(1);
+        assert_eq!(section(identical, &results), "");
+    }
+
+    #[test]
+    fn skipped_says_what_did_not_run_or_that_everything_did() {
+        let empty = Results::default();
+        assert_eq!(
+            section(skipped, &empty),
+            "**Skipped**: nothing was planned.\n\n"
+        );
+        let mut results = Results {
+            runs: vec![run("a", "x", &QUIET)],
+            ..Results::default()
+        };
+        assert_eq!(
+            section(skipped, &results),
+            "**Skipped**: nothing; every scene, workload and backend ran.\n\n"
+        );
+        results.skipped.push(Skipped {
+            shard: 0,
+            kind: "scene".into(),
+            name: "big".into(),
+            status: "skipped".into(),
+            reason: "missing big.obj".into(),
+        });
+        for scene in ["a", "b"] {
+            results.runs.push(refused(
+                run(scene, "y", &QUIET),
+                "unsupported",
+                "no volumes",
+            ));
+        }
+        assert_eq!(
+            section(skipped, &results),
+            "**Skipped or refused**:\n\n- scene `big` (skipped): missing big.obj\n\
+             - `y` unsupported on a cast-primary, b cast-primary: no volumes\n\n"
+        );
+    }
+
+    #[test]
+    fn noise_names_the_wide_intervals_only() {
+        let quiet = run("a", "quiet", &QUIET);
+        // 0.96 .. 1.04 around 1.0 is ±4 %: not noisy.
+        let edge = run("a", "edge", &[1.0, 0.96, 1.04, 1.0, 1.0, 1.0]);
+        let mut results = Results {
+            runs: vec![quiet, edge],
+            ..Results::default()
+        };
+        let s = section(noisy, &results);
+        assert!(
+            s.starts_with(
+                "**Noise**: 2 timed runs, 12 timed repetitions; no median's 95% interval is \
+                 wider than ±5%; 0 repetitions redone"
+            ),
+            "{s}"
+        );
+        // Wider than 5 %: 0.9 .. 1.12 around 1.0 is ±11 %; a single repetition is unknown.
+        results
+            .runs
+            .push(run("b", "wide", &[1.0, 0.9, 1.12, 1.0, 1.0, 1.0]));
+        results.runs.push(run("b", "once", &[1.0]));
+        results.runs[0].seconds.as_mut().unwrap().redone = 3;
+        let s = section(noisy, &results);
+        assert!(
+            s.starts_with(
+                "**Noise**: 4 timed runs, 19 timed repetitions; 1 with a median's interval \
+                 wider than ±5% (marked †): b cast-primary `wide` (±11%); 1 with a single \
+                 repetition, whose noise is unknown (marked ?); 3 repetitions redone"
+            ),
+            "{s}"
+        );
+        // Past twelve, the rest are counted.
+        results.runs = (0..14)
+            .map(|i| run("c", &format!("w{i:02}"), &[1.0, 0.9, 1.12, 1.0, 1.0, 1.0]))
+            .collect();
+        let s = section(noisy, &results);
+        assert!(s.contains("`w11` (±11%), and 2 more;"), "{s}");
+        assert!(!s.contains("`w12`"), "{s}");
+    }
+
+    fn fit(experiment: &str, backend: &str, slope: f64) -> Fit {
+        Fit {
+            experiment: experiment.into(),
+            series: "s".into(),
+            backend: backend.into(),
+            quantity: "seconds".into(),
+            slope,
+            intercept: None,
+            points: 3,
+        }
+    }
+
+    #[test]
+    fn slopes_are_judged_against_their_theory_ranges() {
+        let (baseline, oracle) = names();
+        // The oracle is brute force: linear in M, 0.75 to 1.25 (ends included); a tree
+        // logarithmic, -0.15 to 0.4; every backend linear in pixels, 0.8 to 1.2; the
+        // experiments without a theory are not judged.
+        let results = Results {
+            fits: vec![
+                fit("primitives", oracle, 1.25),
+                fit("primitives", baseline, 0.4),
+                fit("pixels", baseline, 0.8),
+                fit("presets", baseline, 3.0),
+                Fit {
+                    quantity: "tests_per_ray".into(),
+                    ..fit("primitives", baseline, 9.0)
+                },
+            ],
+            ..Results::default()
+        };
+        let s = section(slopes, &results);
+        assert!(
+            s.starts_with("**Scaling against theory**: 3 of 3 fits of render time agree"),
+            "{s}"
+        );
+        assert!(s.ends_with("samples; the ranges allow for the few points of each fit).\n\n"));
+        let results = Results {
+            fits: vec![
+                fit("primitives", oracle, 1.26),
+                fit("primitives", baseline, -0.16),
+                fit("spp", baseline, 1.0),
+            ],
+            ..Results::default()
+        };
+        let s = section(slopes, &results);
+        assert!(s.contains("1 of 3 fits of render time agree"), "{s}");
+        assert!(
+            s.contains(&format!(
+                "- `{oracle}` on primitives `s`: slope 1.26, theory linear in M (slope about 1) \
+                 (0.75 to 1.25); likely: the primitives outgrow the caches at the largest M.\n"
+            )),
+            "{s}"
+        );
+        assert!(
+            s.contains(&format!(
+                "- `{baseline}` on primitives `s`: slope -0.16, theory logarithmic in M (a \
+                 slope near 0 on log-log axes) (-0.15 to 0.40); likely: {FIXED_COSTS}."
+            )),
+            "{s}"
+        );
+        // No fits of time: no paragraph.
+        assert_eq!(section(slopes, &Results::default()), "");
+    }
+
+    #[test]
+    fn the_verdict_of_nothing_says_so() {
+        let s = section(write, &Results::default());
+        assert_eq!(
+            s,
+            "## Verdict\n\nNothing ran.\n\n**Skipped**: nothing was planned.\n\n"
+        );
+    }
 }

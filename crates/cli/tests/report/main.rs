@@ -2,8 +2,10 @@
 //! its modules by subject: `matrix` (the files a report promises, the results schema, several
 //! cameras, a baseline, a replayed ray file), `html` (`REPORT.html`), `merge` (sharding by
 //! scene, merging, bad options), `experiments` (the scaling, presets and instancing
-//! sections), `skips` (what did not run, and how the report says so) and `slurm` (the
-//! Slurm scripts on a one-node cluster of the test's own).
+//! sections), `skips` (what did not run, and how the report says so), `slurm` (the
+//! Slurm scripts on a one-node cluster of the test's own), `synthetic` (committed shards
+//! merged, every figure of the report checked against hand arithmetic) and `timing` (how
+//! timings and their noise are stated).
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -14,6 +16,7 @@ mod matrix;
 mod merge;
 mod skips;
 mod slurm;
+mod synthetic;
 mod timing;
 
 use common::{raybench, raybench_ok};

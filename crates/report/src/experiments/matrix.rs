@@ -244,9 +244,13 @@ impl Experiment for Matrix {
             }
             let _ = writeln!(s);
             // Ratios to the yardstick peers (Embree's single rays and packets) where they ran
-            // (read from the registry, built or not: a merge may hold runs of either).
+            // (read from the registry, built or not: a merge may hold runs of either); none
+            // for a yardstick without a figure (unavailable everywhere: every ratio is `-`).
             for base_name in backends.iter().filter(|b| {
                 raybench_registry::roles_of(b).is_some_and(|r| r.contains(Roles::YARDSTICK))
+                    && summary
+                        .iter()
+                        .any(|r| &r.backend == *b && r.mrays_per_s.is_some())
             }) {
                 let _ = writeln!(
                     s,
@@ -1060,4 +1064,245 @@ fn write_cameras(runs: &[&Run], s: &mut String) {
         );
     }
     let _ = writeln!(s);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ctx::Options;
+    use crate::rounds::{Policy, Repeat};
+    use raybench_core::{NO_HIT, Vec3};
+
+    /// Options whose only use here is the output folder `out`.
+    fn options(out: std::path::PathBuf) -> Options {
+        Options {
+            quick: true,
+            scenes: None,
+            backends: None,
+            modes: None,
+            out,
+            shard: (1, 1),
+            size: None,
+            repeat: None,
+            min_sample: None,
+            scaling: false,
+            experiments: None,
+            ray_sets: None,
+            ao_rays: 1,
+            rays_file: None,
+            assets: std::path::PathBuf::new(),
+            threads: 1,
+            command: String::new(),
+            baseline: None,
+            device_time: false,
+            pin: false,
+        }
+    }
+
+    /// A 2 x 2 frame: ids, `t` and colours.
+    fn measured(ids: [u32; 4], t: [f32; 4], color: Option<[f32; 4]>) -> Measured {
+        Measured {
+            ids: ids.to_vec(),
+            t: t.to_vec(),
+            rays: 4,
+            counters: None,
+            seconds: 0.0,
+            phases: raybench_core::Timings::default(),
+            color: color.map(|c| c.iter().map(|&v| Vec3::splat(v)).collect()),
+            interference: None,
+        }
+    }
+
+    /// An exact backend (the baseline) and one outside the contract (a peer made up here).
+    fn backends() -> (&'static Backend, Backend) {
+        let exact = raybench_registry::with_role(Roles::BASELINE).unwrap();
+        let peer = Backend {
+            roles: Roles::PEER,
+            ..*exact
+        };
+        (exact, peer)
+    }
+
+    /// `equality` of `m` against `reference` for backend `b`, a 2 x 2 camera workload, the
+    /// images written to a fresh folder `name`: the figures and the files named.
+    fn compare(b: &Backend, reference: &Measured, m: &Measured, name: &str) -> (Equality, Images) {
+        let out = std::env::temp_dir().join(format!(
+            "raybench-matrix-equality-{}-{name}",
+            std::process::id()
+        ));
+        std::fs::create_dir_all(out.join("images")).unwrap();
+        let opts = options(out.clone());
+        let ctx = Ctx {
+            opts: &opts,
+            replay: None,
+            chosen: &[],
+            modes: &[],
+            size: 2,
+            repeat: 1,
+            policy: Policy {
+                repeat: Repeat::Fixed(1),
+                min_sample: 0.0,
+                budget: 0.0,
+            },
+            budget: 0.0,
+        };
+        let w = Workload {
+            mode: Mode::Cast,
+            rays: RaySet::Primary,
+            width: 2,
+            height: 2,
+            spp: 1,
+            replay: false,
+        };
+        let image = |m: &Measured| {
+            m.color
+                .as_ref()
+                .map(|c| crate::images::Rgb8::from_linear(2, 2, c))
+        };
+        let (ri, ti) = (image(reference), image(m));
+        let mut files = Images::default();
+        let e = equality(
+            &ctx,
+            b,
+            (reference, reference, ri.as_ref()),
+            (m, m, ti.as_ref()),
+            &w,
+            "s",
+            &mut files,
+        )
+        .unwrap();
+        for f in [&files.color, &files.ids_diff, &files.flip]
+            .into_iter()
+            .flatten()
+        {
+            assert!(out.join(f).is_file(), "{f} named but not written");
+        }
+        let _ = std::fs::remove_dir_all(out);
+        (e, files)
+    }
+
+    const IDS: [u32; 4] = [0, 1, NO_HIT, 2];
+    const T: [f32; 4] = [1.0, 2.0, f32::INFINITY, 3.0];
+    const GREY: [f32; 4] = [0.1, 0.2, 0.0, 0.3];
+
+    #[test]
+    fn same_colors_compares_every_bit_of_every_pixel() {
+        let a = measured(IDS, T, Some(GREY));
+        assert!(same_colors(&a, &a.clone()));
+        // One channel of one pixel one bit away.
+        let mut b = a.clone();
+        let c = &mut b.color.as_mut().unwrap()[3];
+        c.y = f32::from_bits(c.y.to_bits() + 1);
+        assert!(!same_colors(&a, &b));
+        // -0 and 0 compare equal as numbers, not as bits.
+        let (zero, negative) = (
+            measured(IDS, T, Some([0.0; 4])),
+            measured(IDS, T, Some([0.0, 0.0, -0.0, 0.0])),
+        );
+        assert!(!same_colors(&zero, &negative));
+        // A frame of another size differs.
+        let mut short = a.clone();
+        short.color.as_mut().unwrap().pop();
+        assert!(!same_colors(&a, &short));
+        // Without colours on either side (ray sets), there is nothing to differ.
+        let rays = measured(IDS, T, None);
+        assert!(same_colors(&rays, &rays) && same_colors(&a, &rays));
+    }
+
+    #[test]
+    fn identical_results_pass_and_write_no_images() {
+        let (exact, peer) = backends();
+        let a = measured(IDS, T, Some(GREY));
+        for b in [exact, &peer] {
+            let (e, files) = compare(b, &a, &a.clone(), &format!("same-{}", b.exact()));
+            assert!(e.identical && e.pass, "{e:?}");
+            assert_eq!((e.id_match, e.psnr_db, e.flip_mean), (1.0, None, Some(0.0)));
+            assert_eq!(files, Images::default());
+        }
+    }
+
+    #[test]
+    fn an_exact_backend_passes_only_bit_identical() {
+        let (exact, _) = backends();
+        let a = measured(IDS, T, Some(GREY));
+        // The same ids and t, one colour off: not identical, so not passed, and the
+        // difference's images are written.
+        let mut colour = a.clone();
+        colour.color.as_mut().unwrap()[0] = Vec3::splat(0.9);
+        let (e, files) = compare(exact, &a, &colour, "colour");
+        assert!(!e.identical && !e.pass, "{e:?}");
+        assert!(e.psnr_db.is_some_and(f64::is_finite), "{e:?}");
+        assert!(e.flip_mean.is_some_and(|f| f > 0.0), "{e:?}");
+        assert_eq!(
+            files,
+            Images {
+                color: Some("images/s.png".into()),
+                ids_diff: Some("images/s-ids-diff.png".into()),
+                flip: Some("images/s-flip.png".into()),
+            }
+        );
+        // One t a bit off, colours the same: not identical either.
+        let mut t = a.clone();
+        t.t[1] = f32::from_bits(t.t[1].to_bits() + 1);
+        let (e, _) = compare(exact, &a, &t, "t");
+        assert!(!e.identical && !e.pass && e.t_mismatch == 1, "{e:?}");
+        // Without images (a ray set), ids and t alone decide.
+        let rays = measured(IDS, T, None);
+        let (e, files) = compare(exact, &rays, &rays.clone(), "rays");
+        assert!(e.identical && e.pass && e.flip_mean.is_none(), "{e:?}");
+        assert_eq!(files, Images::default());
+    }
+
+    /// A peer passes with at least 99.9 % of the ids (ties counted as matches) and a mean
+    /// FLIP of at most 0.05; bit-identical or not does not matter.
+    #[test]
+    fn a_peer_passes_within_the_tolerance() {
+        let (_, peer) = backends();
+        // 1,000 rays without images: 999 the same is exactly the threshold, 998 is below;
+        // a tie (another primitive at the same distance) counts as a match.
+        let n = 1000;
+        let rays = |ids: Vec<u32>, t: Vec<f32>| Measured {
+            ids,
+            t,
+            rays: n as u64,
+            ..measured(IDS, T, None)
+        };
+        let reference = rays((0..n).collect(), vec![1.0; n as usize]);
+        let off_by = |k: u32, same_t: bool| {
+            let mut ids: Vec<u32> = (0..n).collect();
+            let mut t = vec![1.0; n as usize];
+            for i in 0..k as usize {
+                ids[i] = n + i as u32;
+                if !same_t {
+                    t[i] = 2.0;
+                }
+            }
+            compare(
+                &peer,
+                &reference,
+                &rays(ids, t),
+                &format!("peer-{k}-{same_t}"),
+            )
+            .0
+        };
+        let one = off_by(1, false);
+        assert!(one.pass && !one.identical, "{one:?}");
+        let two = off_by(2, false);
+        assert!(!two.pass, "{two:?}");
+        let ties = off_by(5, true);
+        assert_eq!(ties.tie_mismatch, 5);
+        assert!(ties.pass, "{ties:?}");
+        // On a frame: the ids all match, so the mean FLIP decides (an image half black,
+        // half white against grey is far over 0.05; a colour one step off is under).
+        let a = measured(IDS, T, Some([0.5; 4]));
+        let mut far = a.clone();
+        far.color = Some(vec![Vec3::ZERO, Vec3::ONE, Vec3::ZERO, Vec3::ONE]);
+        let (e, _) = compare(&peer, &a, &far, "far");
+        assert!(e.flip_mean.is_some_and(|f| f > 0.05) && !e.pass, "{e:?}");
+        let mut near = a.clone();
+        near.color = Some(vec![Vec3::splat(0.51); 4]);
+        let (e, _) = compare(&peer, &a, &near, "near");
+        assert!(e.flip_mean.is_some_and(|f| f <= 0.05), "{e:?}");
+        assert!(e.pass && !e.identical, "{e:?}");
+    }
 }
