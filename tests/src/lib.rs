@@ -234,19 +234,26 @@ pub fn assert_same_ray_hits(what: &str, reference: &[Option<Hit>], hits: &[Optio
 /// # Panics
 /// When any backend differs from the reference.
 pub fn check(backends: &[&str], scene: &str, size: u32) {
-    let Some(scene_data) = load_or_skip(scene) else {
-        return;
-    };
+    if let Some(scene_data) = load_or_skip(scene) {
+        check_loaded(backends, scene, &scene_data, size);
+    }
+}
+
+/// [`check`] on `scene_data`, already loaded (named `scene` in messages).
+///
+/// # Panics
+/// When any backend differs from the reference.
+pub fn check_loaded(backends: &[&str], scene: &str, scene_data: &Arc<Scene>, size: u32) {
     let settings = RenderSettings {
         width: size,
         height: size,
         count: true,
         ..RenderSettings::default()
     };
-    let oracle = prepared(ORACLE, &scene_data);
+    let oracle = prepared(ORACLE, scene_data);
     let mut renderers: Vec<(&str, Box<dyn Renderer>)> = backends
         .iter()
-        .map(|&name| (name, prepared(name, &scene_data)))
+        .map(|&name| (name, prepared(name, scene_data)))
         .collect();
     let reference = render_in_pool(oracle.as_ref(), &settings, 1);
     let m = scene_data.geometry.total_len() as u64;
@@ -291,7 +298,7 @@ pub fn check(backends: &[&str], scene: &str, size: u32) {
         oracle.as_ref(),
         &renderers,
         scene,
-        &scene_data,
+        scene_data,
         (size / 2).max(1),
     );
 }
@@ -424,14 +431,21 @@ pub fn mode_settings(size: u32, mode: raybench_core::Mode, spp: u32) -> RenderSe
 /// # Panics
 /// When any backend differs from the reference.
 pub fn check_modes(backends: &[&str], scene: &str, size: u32) {
-    let Some(scene_data) = load_or_skip(scene) else {
-        return;
-    };
+    if let Some(scene_data) = load_or_skip(scene) {
+        check_modes_loaded(backends, scene, &scene_data, size);
+    }
+}
+
+/// [`check_modes`] on `scene_data`, already loaded (named `scene` in messages).
+///
+/// # Panics
+/// When any backend differs from the reference.
+pub fn check_modes_loaded(backends: &[&str], scene: &str, scene_data: &Arc<Scene>, size: u32) {
     // Each structure built once, for both modes and every thread count.
-    let oracle = prepared(ORACLE, &scene_data);
+    let oracle = prepared(ORACLE, scene_data);
     let renderers: Vec<(&str, Box<dyn Renderer>)> = backends
         .iter()
-        .map(|&name| (name, prepared(name, &scene_data)))
+        .map(|&name| (name, prepared(name, scene_data)))
         .collect();
     for (mode, spp) in [
         (raybench_core::Mode::Whitted, 1),
