@@ -568,19 +568,26 @@ pub mod gpu {
     pub const MAX_REL_DT: f64 = 1e-4;
     /// Largest fraction of pixels whose colour differs from the CPU's by more than
     /// [`COLOR_EPS`] in some channel, in ray casting and Whitted ray tracing: a ray that
-    /// takes another branch (another primitive at a tie) changes its pixel wholly.
-    pub const MAX_COLOR_MISMATCH: f64 = 0.01;
+    /// takes another branch (another primitive at a tie) changes its pixel wholly. About
+    /// three times the worst measured (lavapipe on a 2-vCPU AMD EPYC KVM guest, 2026-12-04,
+    /// every GPU test): 0.098 %, one pixel of 1,024, on `cornell-box` (a tie between its
+    /// coincident faces, cast and Whitted) and on `sdf` (Whitted); 0 elsewhere.
+    pub const MAX_COLOR_MISMATCH: f64 = 0.003;
     /// The same for path tracing: a diffuse bounce's direction goes through `sin` and `cos`,
     /// which GPUs approximate (absolute error about 1e-6), and a path that then grazes an
-    /// edge differently changes its pixel wholly. Measured on lavapipe: 0.98% of pixels on
-    /// `spheres:2000` (2,000 small spheres), 0 on the other scenes, at 4 samples and 4
-    /// bounces.
-    pub const MAX_PATH_COLOR_MISMATCH: f64 = 0.05;
+    /// edge differently changes its pixel wholly. About three times the worst measured
+    /// (lavapipe on a 2-vCPU AMD EPYC KVM guest, 2026-12-04, every GPU test, 4 samples and 4
+    /// bounces): 0.977 % of pixels, 10 of 1,024, on `spheres:2000` (2,000 small spheres);
+    /// one pixel on `csg` and `quadrics`, 0 on the other scenes.
+    pub const MAX_PATH_COLOR_MISMATCH: f64 = 0.03;
     /// Per-channel colour difference counted as equal (relative to the pixel's value).
     pub const COLOR_EPS: f32 = 1e-3;
     /// Largest relative difference of the mean colour of the whole image (one pixel in a
-    /// 32 x 32 image that takes the other side of a tie moves the mean by about 1e-3).
-    pub const MAX_MEAN_DIFF: f32 = 1e-2;
+    /// 32 x 32 image that takes the other side of a tie moves the mean by about 1e-3). About
+    /// three times the worst measured (lavapipe on a 2-vCPU AMD EPYC KVM guest, 2026-12-04,
+    /// every GPU test): 1.5e-3, `cornell-box` in ray casting (its one tie); at most 2.3e-4
+    /// elsewhere.
+    pub const MAX_MEAN_DIFF: f32 = 5e-3;
 
     /// Largest difference of `t` where the ids agree, relative to the ray's reach
     /// `max(t, |origin| / |dir|)` rather than to `t` alone: rounding the origin (carrying it
@@ -851,18 +858,20 @@ pub mod gpu {
         );
     }
 
-    /// Largest fraction of pixels whose colour differs from the CPU's by more than
-    /// [`COLOR_EPS`] in the volume modes. The kernels port the integration operation for
+    /// Most pixels whose colour may differ from the CPU's by more than [`COLOR_EPS`] in the
+    /// volume modes (a count: none is measured to). The kernels port the integration operation for
     /// operation in f32 (`crates/wgpu/src/volume.rs`), but the GPU's division (2.5 ULP),
     /// `exp` (3 + 2|x| ULP) and fused multiply-adds move a DDA crossing, a trilinear weight
     /// or a segment's opacity by a few ULP, and compositing sums one such error per voxel
     /// segment (at most 382 on the 128^3 phantom). That stays near 1e-5; a pixel differs beyond
     /// [`COLOR_EPS`] only where a sample lands on the other side of a sharp step of the
     /// transfer function (the phantom's orange ellipsoids, sigma 12 against 0.6), or where
-    /// early termination stops one segment earlier. Measured on lavapipe at 32 x 32 and
-    /// 64 x 64: no pixel beyond [`COLOR_EPS`], the largest difference 8.6e-5 (compositing
-    /// on the phantom; [`check_volumes`] logs it).
-    pub const MAX_VOLUME_COLOR_MISMATCH: f64 = 0.01;
+    /// early termination stops one segment earlier. Measured on lavapipe (a 2-vCPU AMD EPYC
+    /// KVM guest, 2026-12-04, both GPU trees, `phantom` and `volumes-cut` at 32 x 32, every
+    /// volume mode): no pixel beyond [`COLOR_EPS`], the largest difference 4.7e-5
+    /// (compositing on the phantom; [`check_volumes`] logs it). So two pixels: a sample that
+    /// lands on the other side of one step, not a share of the image.
+    pub const MAX_VOLUME_COLOR_MISMATCH_PIXELS: usize = 2;
 
     /// A scene whose volumes are cut by surfaces, overlap and differ in every option the
     /// volume kernels read: a trilinear phantom with empty-space skipping and the phantom's
@@ -926,7 +935,7 @@ transform = { scale = 0.6, rotate = [10, 30, 0], translate = [0.5, 0.3, 0.4] }
     /// maximum-intensity projection and compositing at one sample, compositing at 4
     /// jittered samples. Centre-ray ids and `t` within [`MIN_ID_MATCH`] and
     /// [`MAX_REL_DT`], ray counts exactly (camera rays only, as on the CPU), colours within
-    /// [`COLOR_EPS`] but for [`MAX_VOLUME_COLOR_MISMATCH`] of the pixels, and the mean
+    /// [`COLOR_EPS`] but for [`MAX_VOLUME_COLOR_MISMATCH_PIXELS`] pixels, and the mean
     /// colour within [`MAX_MEAN_DIFF`].
     ///
     /// # Panics
@@ -973,7 +982,7 @@ transform = { scale = 0.6, rotate = [10, 30, 0], translate = [0.5, 0.3, 0.4] }
                     &what,
                     &reference.color,
                     &frame.color,
-                    MAX_VOLUME_COLOR_MISMATCH,
+                    MAX_VOLUME_COLOR_MISMATCH_PIXELS as f64 / reference.color.len().max(1) as f64,
                 );
             }
         }

@@ -388,8 +388,16 @@ fn rays_along_grid_cell_planes() {
     check("grid cell planes", &scene, &rays);
 }
 
+/// Edge- and vertex-aimed rays are where the GPU's rounding may pick the neighbour: the
+/// most rays of [`gpu_on_adversarial_rays`] (3,426) that may disagree with naive (another
+/// primitive, or `t` beyond `raybench_tests::gpu::MAX_REL_DT`). Three times the worst
+/// measured: one ray, on both GPU trees (lavapipe on a 2-vCPU AMD EPYC KVM guest,
+/// 2026-12-04).
+const MAX_GPU_ADVERSARIAL_DISAGREE: usize = 3;
+
 /// The GPU on the same adversarial sets, within its tolerance (`raybench_tests::gpu`):
-/// invalid rays miss, and valid ones agree with naive on nearly all rays.
+/// invalid rays miss, and valid ones agree with naive on all but
+/// [`MAX_GPU_ADVERSARIAL_DISAGREE`] rays.
 #[test]
 fn gpu_on_adversarial_rays() {
     if !raybench_tests::gpu::available() {
@@ -435,12 +443,16 @@ fn gpu_on_adversarial_rays() {
             };
             agree += usize::from(same);
         }
-        // Edge- and vertex-aimed rays are where the GPU's rounding may pick the neighbour,
-        // so the bound is looser than for random rays: 95% of rays agree.
-        assert!(
-            agree * 100 >= rays.len() * 95,
+        let disagree = rays.len() - agree;
+        eprintln!(
             "{device} agrees with naive on {agree} of {} adversarial rays",
             rays.len()
+        );
+        assert!(
+            disagree <= MAX_GPU_ADVERSARIAL_DISAGREE,
+            "{device} agrees with naive on {agree} of {} adversarial rays (at most {} may differ)",
+            rays.len(),
+            MAX_GPU_ADVERSARIAL_DISAGREE
         );
     }
 }

@@ -6,36 +6,144 @@ use crate::common::{assert_success, raybench_command, write};
 use crate::{root, tmp_dir};
 use std::process::Command;
 
-/// Ctrl-C during a render leaves no partial image under the final name: the previous file
-/// there stays whole (images are written to a temporary name and renamed into place only
-/// when complete), and the process ends by the signal, not a panic.
+/// Ctrl-C while the image is being written, the moment an in-place write would leave a
+/// truncated file under the final name: the previous file there stays whole (images are
+/// written to a temporary name and renamed into place only when complete), and the process
+/// ends by the signal. The temporary name is made a named pipe before the run, so that the
+/// writer opens it and then blocks half-way (a pipe holds 64 KiB; the 128 x 128 PFM is
+/// 192 KiB): the interrupt comes once the image's first bytes have arrived, with no clock.
+/// A write that does not go through the temporary name ends the run first, and fails here.
+/// The temporary name is all that is left beside the image (a killed process removes
+/// nothing; the next write replaces it).
 #[cfg(unix)]
 #[test]
 fn an_interrupted_render_leaves_the_previous_image_whole() {
+    use std::io::Read as _;
     let dir = tmp_dir("interrupt");
-    let out = write(&dir, "out.png", b"the previous image");
-    // Long enough to be interrupted: path tracing at 1024 spp (minutes).
+    let out = write(&dir, "out.pfm", b"the previous image");
+    let partial = dir.join("out.partial.pfm");
+    let made = Command::new("mkfifo")
+        .arg(&partial)
+        .status()
+        .expect("mkfifo runs");
+    assert!(made.success());
     let mut child = raybench_command()
         .args([
-            "render", "spheres", "--mode", "path", "--spp", "1024", "--width", "512", "--height",
-            "512", "--out", &out,
+            "render", "spheres", "--width", "128", "--height", "128", "--out", &out,
         ])
         .stderr(std::process::Stdio::null())
         .spawn()
         .expect("raybench runs");
-    std::thread::sleep(std::time::Duration::from_millis(1500));
+    // The pipe's reader: opening blocks until raybench opens the temporary file to write;
+    // then the image's first two bytes. The open file is handed over and kept open until
+    // the process has ended, so that the writer stays blocked (not broken off).
+    let (tx, rx) = std::sync::mpsc::channel();
+    let fifo = partial.clone();
+    std::thread::spawn(move || {
+        let mut file = std::fs::File::open(&fifo).unwrap();
+        let mut head = [0u8; 2];
+        file.read_exact(&mut head).unwrap();
+        let _ = tx.send((file, head));
+    });
+    // At most 3,000 polls 20 ms apart (a minute; the render takes well under a second).
+    let mut writing = None;
+    for _ in 0..3000 {
+        if let Ok(w) = rx.try_recv() {
+            writing = Some(w);
+            break;
+        }
+        if let Some(status) = child.try_wait().unwrap() {
+            panic!(
+                "raybench ended ({status}) without writing through the temporary name; \
+                 out.pfm holds {} bytes",
+                std::fs::metadata(&out).map_or(0, |m| m.len())
+            );
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let Some((reader, head)) = writing else {
+        let _ = child.kill();
+        panic!("nothing written to the temporary file");
+    };
+    assert_eq!(&head, b"PF", "not a PFM image");
     let sent = Command::new("kill")
         .args(["-INT", &child.id().to_string()])
         .status()
         .expect("kill runs");
     assert!(sent.success());
     let status = child.wait().unwrap();
-    assert!(
-        !status.success(),
-        "the render finished before the interrupt"
+    drop(reader);
+    assert_eq!(
+        std::os::unix::process::ExitStatusExt::signal(&status),
+        Some(2),
+        "not ended by SIGINT: {status}"
     );
-    assert_ne!(status.code(), Some(101), "panicked");
-    assert_eq!(std::fs::read(&out).unwrap(), b"the previous image");
+    assert_eq!(
+        std::fs::read(&out).ok().as_deref(),
+        Some(&b"the previous image"[..]),
+        "the previous image at the output path is not whole"
+    );
+    let mut left: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    left.sort();
+    assert_eq!(left, ["out.partial.pfm", "out.pfm"], "files left: {left:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Ctrl-C while the render runs (its progress line has said so) writes nothing: the
+/// previous image at the output path stays whole, no other file appears, and the process
+/// ends by the signal.
+#[cfg(unix)]
+#[test]
+fn an_interrupt_during_the_render_writes_nothing() {
+    use std::io::BufRead as _;
+    let dir = tmp_dir("interrupt-render");
+    let out = write(&dir, "out.png", b"the previous image");
+    // Path tracing at 1024 spp (minutes): interrupted once its step has begun.
+    let mut child = raybench_command()
+        .args([
+            "render", "spheres", "--mode", "path", "--spp", "1024", "--width", "512", "--height",
+            "512", "--out", &out,
+        ])
+        .env("RAYBENCH_PROGRESS", "always")
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("raybench runs");
+    // Read up to the step's first progress line (the end of stderr if it never comes); the
+    // pipe stays open until the process has ended.
+    let mut lines = std::io::BufReader::new(child.stderr.take().unwrap()).lines();
+    let mut seen = Vec::new();
+    for line in lines.by_ref() {
+        let line = line.unwrap();
+        let rendering = line.starts_with('[') && line.ends_with("render path 512x512, 1024 spp");
+        seen.push(line);
+        if rendering {
+            break;
+        }
+    }
+    assert!(
+        seen.last().is_some_and(|l| l.ends_with("1024 spp")),
+        "the render never began: {seen:?}"
+    );
+    let sent = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(sent.success());
+    let status = child.wait().unwrap();
+    drop(lines);
+    assert_eq!(
+        std::os::unix::process::ExitStatusExt::signal(&status),
+        Some(2),
+        "not ended by SIGINT: {status}; {seen:?}"
+    );
+    assert_eq!(
+        std::fs::read(&out).ok().as_deref(),
+        Some(&b"the previous image"[..]),
+        "the previous image at the output path is not whole"
+    );
     let left: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().file_name())
