@@ -103,11 +103,17 @@ const OUTSIDE_THE_CORE: [&str; 9] = [
 /// Which of `files` (path, text) name, in code (comments and literals aside), one of
 /// [`OUTSIDE_THE_CORE`], each with the name it uses.
 fn outside_the_core(files: &[(String, String)]) -> Vec<String> {
+    named_in_code(files, &OUTSIDE_THE_CORE)
+}
+
+/// Which of `files` (path, text) name, in code (comments and literals aside), one of
+/// `names`, as `path: name`.
+fn named_in_code(files: &[(String, String)], names: &[&str]) -> Vec<String> {
     files
         .iter()
         .flat_map(|(path, text)| {
             let code = strip_comments_and_literals(text);
-            OUTSIDE_THE_CORE
+            names
                 .iter()
                 .filter(move |name| code.contains(*name))
                 .map(move |name| format!("{path}: {name}"))
@@ -233,16 +239,7 @@ const CLOCKS: [&str; 2] = ["Instant", "SystemTime"];
 /// Which of `files` (path, text) name, in code (comments and literals aside), one of
 /// [`CLOCKS`], each with the name it uses.
 fn clock_readers(files: &[(String, String)]) -> Vec<String> {
-    files
-        .iter()
-        .flat_map(|(path, text)| {
-            let code = strip_comments_and_literals(text);
-            CLOCKS
-                .iter()
-                .filter(move |name| code.contains(*name))
-                .map(move |name| format!("{path}: {name}"))
-        })
-        .collect()
+    named_in_code(files, &CLOCKS)
 }
 
 /// docs/testing.md: nothing in a test measures time. Every integration test (`tests/tests/`

@@ -66,23 +66,8 @@ fn an_interrupted_render_leaves_the_previous_image_whole() {
         panic!("nothing written to the temporary file");
     };
     assert_eq!(&head, b"PF", "not a PFM image");
-    let sent = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .expect("kill runs");
-    assert!(sent.success());
-    let status = child.wait().unwrap();
+    interrupt_and_check(&mut child, &out, "");
     drop(reader);
-    assert_eq!(
-        std::os::unix::process::ExitStatusExt::signal(&status),
-        Some(2),
-        "not ended by SIGINT: {status}"
-    );
-    assert_eq!(
-        std::fs::read(&out).ok().as_deref(),
-        Some(&b"the previous image"[..]),
-        "the previous image at the output path is not whole"
-    );
     let mut left: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().file_name())
@@ -127,29 +112,36 @@ fn an_interrupt_during_the_render_writes_nothing() {
         seen.last().is_some_and(|l| l.ends_with("1024 spp")),
         "the render never began: {seen:?}"
     );
-    let sent = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .expect("kill runs");
-    assert!(sent.success());
-    let status = child.wait().unwrap();
+    interrupt_and_check(&mut child, &out, &format!("{seen:?}"));
     drop(lines);
-    assert_eq!(
-        std::os::unix::process::ExitStatusExt::signal(&status),
-        Some(2),
-        "not ended by SIGINT: {status}; {seen:?}"
-    );
-    assert_eq!(
-        std::fs::read(&out).ok().as_deref(),
-        Some(&b"the previous image"[..]),
-        "the previous image at the output path is not whole"
-    );
     let left: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().file_name())
         .collect();
     assert_eq!(left, ["out.png"], "files left behind: {left:?}");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Sends SIGINT to `child`, waits for it, and asserts that the signal ended it and that
+/// `out` still holds "the previous image" (`context` is added to the messages).
+#[cfg(unix)]
+fn interrupt_and_check(child: &mut std::process::Child, out: &str, context: &str) {
+    let sent = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(sent.success());
+    let status = child.wait().unwrap();
+    assert_eq!(
+        std::os::unix::process::ExitStatusExt::signal(&status),
+        Some(2),
+        "not ended by SIGINT: {status}; {context}"
+    );
+    assert_eq!(
+        std::fs::read(out).ok().as_deref(),
+        Some(&b"the previous image"[..]),
+        "the previous image at the output path is not whole; {context}"
+    );
 }
 
 #[test]
