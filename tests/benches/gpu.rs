@@ -9,7 +9,8 @@
 //!
 //! - `trace/<backend>/<scene>/primary`: a ray-casting frame at `RAYBENCH_GPU_SIZE` squared
 //!   pixels (default 1024): one centre ray per pixel, shading included;
-//! - `trace/<backend>/<scene>/incoherent`: 65,536 seeded random rays inside the scene's box
+//! - `trace/<backend>/<scene>/incoherent`: `RAYBENCH_GPU_RAYS` (default 65,536; a large GPU
+//!   needs about a million to fill) seeded random rays inside the scene's box
 //!   ([`raybench_core::ray_sets::incoherent`], seed 1, as the CPU suite's), uploaded and read
 //!   back around the timed dispatch;
 //! - `trace/<backend>/<scene>/occlusion`: the same rays as any-hit queries (the any-hit
@@ -50,6 +51,15 @@ fn size() -> u32 {
         .and_then(|s| s.parse().ok())
         .filter(|&s| (1..=raybench_core::limits::MAX_DIMENSION).contains(&s))
         .unwrap_or(1024)
+}
+
+/// The number of incoherent rays per batch: `RAYBENCH_GPU_RAYS`, default 65,536.
+fn ray_count() -> usize {
+    std::env::var("RAYBENCH_GPU_RAYS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .filter(|&n| (1..=1 << 24).contains(&n))
+        .unwrap_or(65_536)
 }
 
 fn scenes() -> Vec<String> {
@@ -149,7 +159,7 @@ fn benches_all(c: &mut Criterion) {
             }
             Err(e) => panic!("cannot load scene {name}: {e}"),
         };
-        let rays = raybench_core::ray_sets::incoherent(scene.geometry.bounds(), 65_536, 1);
+        let rays = raybench_core::ray_sets::incoherent(scene.geometry.bounds(), ray_count(), 1);
         for backend in raybench_tests::DEVICES {
             let mut r = (raybench_registry::backend(backend)
                 .expect("registered")
@@ -205,9 +215,10 @@ fn benches_all(c: &mut Criterion) {
                 },
             );
         }
+        // After every scene, so a run cut short still leaves its figures so far.
+        write_json(&adapter, size);
     }
     group.finish();
-    write_json(&adapter, size);
 }
 
 criterion_group! {
