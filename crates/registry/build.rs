@@ -2,7 +2,9 @@
 //! machine description of every report: the environment variable `RAYBENCH_REVISION` at
 //! build time when set (for packagers), else the short commit hash of the git checkout the
 //! workspace is, else `unknown` (a source tarball, or a workspace inside another project's
-//! repository).
+//! repository). Also records how it was compiled (`RAYBENCH_BUILD`: the compiler's version,
+//! the optimisation level, debug assertions, the target and `RUSTFLAGS`), for the reports'
+//! reproducibility block.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -18,6 +20,43 @@ fn main() {
         .or_else(|| git_revision(&manifest))
         .unwrap_or_else(|| "unknown".into());
     println!("cargo:rustc-env=RAYBENCH_REVISION={revision}");
+    println!("cargo:rustc-env=RAYBENCH_BUILD={}", build_description());
+}
+
+/// `rustc 1.x.y (hash date), opt-level 3, debug assertions off, x86_64-unknown-linux-gnu,
+/// RUSTFLAGS none`: what decides the code's speed besides the source. Cargo gives a build
+/// script the compiler (`RUSTC`), the profile's settings and the flags of the crate it builds.
+fn build_description() -> String {
+    let var = |name: &str| std::env::var(name).unwrap_or_default();
+    let rustc = Command::new(std::env::var_os("RUSTC").unwrap_or_else(|| "rustc".into()))
+        .arg("--version")
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map_or_else(
+            || "rustc (version unknown)".to_string(),
+            |o| String::from_utf8_lossy(&o.stdout).trim().to_string(),
+        );
+    let flags: Vec<String> = var("CARGO_ENCODED_RUSTFLAGS")
+        .split('\u{1f}')
+        .filter(|f| !f.is_empty())
+        .map(str::to_string)
+        .collect();
+    format!(
+        "{rustc}, opt-level {}, debug assertions {}, {}, RUSTFLAGS {}",
+        var("OPT_LEVEL"),
+        if std::env::var_os("CARGO_CFG_DEBUG_ASSERTIONS").is_some() {
+            "on"
+        } else {
+            "off"
+        },
+        var("TARGET"),
+        if flags.is_empty() {
+            "none".to_string()
+        } else {
+            flags.join(" ")
+        }
+    )
 }
 
 /// The output of `git ARGS` run in `dir`, trimmed; `None` when git is missing or fails.

@@ -8,10 +8,11 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// The keys of a `[benchmark]` table (documented in `docs/scene-format.md`).
-const KEYS: [&str; 6] = [
+const KEYS: [&str; 7] = [
     "description",
     "order",
     "matrix",
+    "purpose",
     "modes",
     "experiments",
     "heavy",
@@ -112,6 +113,18 @@ fn scene(path: &Path) -> Result<(i64, String), String> {
             ));
         }
     };
+    let purpose = match string("purpose")? {
+        Some("performance") => "Performance",
+        Some("coverage") => "Coverage",
+        Some(other) => {
+            return Err(format!(
+                "[benchmark] purpose = \"{other}\": must be \"performance\" or \"coverage\""
+            ));
+        }
+        None => {
+            return Err("[benchmark] needs a purpose (\"performance\" or \"coverage\")".into());
+        }
+    };
     let heavy = match meta.get("heavy") {
         None => false,
         Some(v) => v
@@ -151,7 +164,7 @@ fn scene(path: &Path) -> Result<(i64, String), String> {
         entry,
         "    BuiltinScene {{\n        name: {name:?},\n        description: {description:?},\n        \
          assets: &[{}],\n        source: include_str!({:?}),\n        benchmark: Benchmark {{\n            \
-         order: {order},\n            matrix: Matrix::{matrix},\n            modes: &[{}],\n            \
+         order: {order},\n            matrix: Matrix::{matrix},\n            purpose: Purpose::{purpose},\n            modes: &[{}],\n            \
          experiments: &[{}],\n            heavy: {heavy},\n        }},\n    }},\n",
         list(&assets),
         source.display().to_string(),

@@ -194,15 +194,19 @@ impl std::error::Error for DerivedError {}
 /// largest coordinate magnitude of the scene and of the hit point (its `t_min`): rounding
 /// of the surface it leaves. The `t` ranges below start there.
 ///
-/// - `shadow` (any hit): one ray to every light of `scene.lights`, whether or not it lies
-///   behind the surface (a light behind it is blocked by the surface itself): to a point
-///   light parametrised from the origin to the light, `t` up to [`SHADOW_SHORTEN`]; along
-///   a directional light, `t` unbounded. Then, when the scene has emitters (emissive
+/// - `shadow` (any hit): one ray to every light of `scene.lights`: to a point light
+///   parametrised from the origin to the light, `t` up to [`SHADOW_SHORTEN`]; along a
+///   directional light, `t` unbounded. Then, when the scene has emitters (emissive
 ///   primitives or an environment map), one light sample of [`crate::Emitters::sample`]
 ///   (the light chosen by power, a point or direction on it), as path tracing's
 ///   next-event estimation makes it: to a point likewise stopping [`SHADOW_SHORTEN`] short
 ///   of it, towards the environment unbounded; none where that sample finds nothing (the
-///   chosen emitter faces away). Sample 0, dimensions 0..3.
+///   chosen emitter faces away). Sample 0, dimensions 0..3. A ray that would leave the
+///   surface on its far side or along it (its direction at 90 degrees or more from the
+///   normal above) is not made: the surface itself blocks that light, as renderers count
+///   it without tracing, and whether such a ray found its own surface would depend on the
+///   origin's offset, not on the scene. [`derived_set`] counts them
+///   ([`Derived::facing_away`]).
 /// - `ao` (any hit): `params.ao_rays` cosine-distributed directions about the normal
 ///   (sample `k` for the `k`-th, dimensions 3..5), `t` up to `params.ao_distance x
 ///   diagonal` where `diagonal` is the length of the scene's bounding box' diagonal
@@ -222,6 +226,32 @@ pub fn derived(
     hits: &[Option<Hit>],
     params: &DerivedParams,
 ) -> Result<Vec<Ray>, DerivedError> {
+    derived_set(set, scene, primary, hits, params).map(|d| d.rays)
+}
+
+/// A derived ray set and the rays it leaves out.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Derived {
+    /// The rays ([`derived`]).
+    pub rays: Vec<Ray>,
+    /// Shadow rays not made because they would leave the surface on its far side (the light
+    /// lies behind the surface, which blocks it): blocked without being traced. 0 for the
+    /// other sets.
+    pub facing_away: u64,
+}
+
+/// [`derived`], with the count of the shadow rays it leaves out because the surface itself
+/// blocks their light ([`Derived::facing_away`]).
+///
+/// # Errors
+/// As [`derived`].
+pub fn derived_set(
+    set: RaySet,
+    scene: &Scene,
+    primary: &[Ray],
+    hits: &[Option<Hit>],
+    params: &DerivedParams,
+) -> Result<Derived, DerivedError> {
     if !set.is_derived() {
         return Err(DerivedError::NotDerived(set));
     }
@@ -268,6 +298,7 @@ pub fn derived(
         0.0
     };
     let mut out = Vec::with_capacity(count as usize);
+    let mut facing_away = 0;
     for (i, (ray, hit)) in primary.iter().zip(hits).enumerate() {
         let Some(hit) = hit else { continue };
         let p = ray.at(hit.t);
@@ -280,11 +311,14 @@ pub fn derived(
         let origin = offset_ray_origin(p, n);
         let start = Start {
             origin,
+            normal: n,
             t_min: SELF_HIT_FRACTION * scale.max(p.abs().max_element()),
         };
         let pixel = i as u32;
         match set {
-            RaySet::Shadow => shadow_rays(scene, start, pixel, params.seed, &mut out),
+            RaySet::Shadow => {
+                facing_away += shadow_rays(scene, start, pixel, params.seed, &mut out);
+            }
             RaySet::Ao => {
                 for k in 0..params.ao_rays {
                     let mut s = Sampler::new(pixel, k, params.seed);
@@ -302,14 +336,18 @@ pub fn derived(
             }
         }
     }
-    Ok(out)
+    Ok(Derived {
+        rays: out,
+        facing_away,
+    })
 }
 
-/// Where a hit's rays start: the offset origin, and the distance (in scene units) under
-/// which hits are not counted.
+/// Where a hit's rays start: the offset origin, the geometric normal on the side they
+/// leave from, and the distance (in scene units) under which hits are not counted.
 #[derive(Clone, Copy)]
 struct Start {
     origin: Vec3,
+    normal: Vec3,
     t_min: f32,
 }
 
@@ -320,29 +358,38 @@ impl Start {
     }
 }
 
-/// The shadow rays of one hit (see [`derived`]).
-fn shadow_rays(scene: &Scene, start: Start, pixel: u32, seed: u32, out: &mut Vec<Ray>) {
+/// The shadow rays of one hit (see [`derived`]); returns how many it left out because they
+/// would leave the surface on its far side.
+fn shadow_rays(scene: &Scene, start: Start, pixel: u32, seed: u32, out: &mut Vec<Ray>) -> u64 {
     let origin = start.origin;
+    let mut facing_away = 0;
+    let mut push = |ray: Ray| {
+        if ray.dir.dot(start.normal) > 0.0 {
+            out.push(ray);
+        } else {
+            facing_away += 1;
+        }
+    };
     for light in &scene.lights {
-        out.push(match *light {
+        push(match *light {
             Light::Point { position, .. } => start.ray(position - origin, SHADOW_SHORTEN),
             Light::Directional { direction, .. } => start.ray(-direction, f32::INFINITY),
         });
     }
-    if scene.emitters.is_empty() {
-        return;
+    if !scene.emitters.is_empty() {
+        let mut s = Sampler::new(pixel, 0, seed);
+        s.set_dimension(SHADOW_DIMENSION);
+        let u_light = s.next_f32();
+        let u_point = s.next_2d();
+        if let Some(ls) = scene.emitters.sample(scene, origin, u_light, u_point) {
+            push(if ls.dist.is_finite() {
+                start.ray(ls.wi * ls.dist, SHADOW_SHORTEN)
+            } else {
+                start.ray(ls.wi, f32::INFINITY)
+            });
+        }
     }
-    let mut s = Sampler::new(pixel, 0, seed);
-    s.set_dimension(SHADOW_DIMENSION);
-    let u_light = s.next_f32();
-    let u_point = s.next_2d();
-    if let Some(ls) = scene.emitters.sample(scene, origin, u_light, u_point) {
-        out.push(if ls.dist.is_finite() {
-            start.ray(ls.wi * ls.dist, SHADOW_SHORTEN)
-        } else {
-            start.ray(ls.wi, f32::INFINITY)
-        });
-    }
+    facing_away
 }
 
 /// The primary rays of a `width x height` image, row by row from the top.
@@ -464,16 +511,31 @@ mod tests {
         let (rays, hits) = primary_hits();
         assert_eq!(hits.iter().filter(|h| h.is_some()).count(), 2);
         let p = DerivedParams::default();
-        // Two lights and one emitter sample (the triangle faces the sphere's top, which the
-        // +z hits see: the sample may fall behind the surface, and is still made).
-        let shadow = derived(RaySet::Shadow, &scene, &rays, &hits, &p).unwrap();
-        assert!(shadow.len() >= 4 && shadow.len() <= 6, "{}", shadow.len());
+        // Two lights and one emitter sample per hit, less those behind the surface: the
+        // directional light (from +y) grazes the first hit (normal +z) and is left out; the
+        // emitter triangle above lies behind the first hit's tangent plane.
+        let set = derived_set(RaySet::Shadow, &scene, &rays, &hits, &p).unwrap();
+        let shadow = set.rays.clone();
+        assert_eq!(
+            shadow,
+            derived(RaySet::Shadow, &scene, &rays, &hits, &p).unwrap()
+        );
+        assert!(set.facing_away >= 2, "{}", set.facing_away);
+        assert!(shadow.len() + set.facing_away as usize <= 6);
+        assert!(shadow.len() >= 3, "{}", shadow.len());
         let to_light = shadow[0];
         assert_eq!(to_light.t_max, SHADOW_SHORTEN);
         assert!((to_light.at(1.0) - Vec3::new(0.0, 0.0, 5.0)).length() < 1e-5);
         assert!(to_light.origin.z > 1.0, "offset towards the viewer");
-        assert_eq!(shadow[1].dir, Vec3::Y);
-        assert_eq!(shadow[1].t_max, f32::INFINITY);
+        // The second hit's rays: the point light, then the directional light.
+        assert!((shadow[1].at(1.0) - Vec3::new(0.0, 0.0, 5.0)).length() < 1e-5);
+        assert_eq!(shadow[2].dir, Vec3::Y);
+        assert_eq!(shadow[2].t_max, f32::INFINITY);
+        // Every ray leaves its surface on the lit side (the origins are offset along the
+        // normal, which on the unit sphere is the origin's direction).
+        for r in &shadow {
+            assert!(r.dir.dot(r.origin.normalize()) > 0.0, "{r:?}");
+        }
 
         let ao = derived(RaySet::Ao, &scene, &rays, &hits, &p).unwrap();
         assert_eq!(ao.len(), 2 * DEFAULT_AO_RAYS as usize);

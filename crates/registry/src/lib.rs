@@ -27,6 +27,11 @@ pub const VERSION: &str = concat!(
     ")"
 );
 
+/// How this binary was compiled (`rustc 1.x.y (...), opt-level 3, debug assertions off,
+/// x86_64-unknown-linux-gnu, RUSTFLAGS none`; see `build.rs`): what every report's
+/// reproducibility block records beside the revision.
+pub const BUILD: &str = env!("RAYBENCH_BUILD");
+
 use raybench_bvh::{Bvh, ObvhsAccel};
 use raybench_core::{Frame, Mode, NO_HIT, RaySet, RenderSettings};
 use raybench_grid::{Grid, TwoLevelGrid};

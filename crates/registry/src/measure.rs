@@ -26,6 +26,9 @@ pub struct RayBatch {
     /// Any hit ([`TimedRenderer::occlude_rays_timed`]) rather than the closest hit
     /// ([`TimedRenderer::trace_rays_timed`]).
     pub any_hit: bool,
+    /// Shadow rays of the set left out untraced because their light lies behind the surface
+    /// they leave, which blocks it ([`ray_sets::Derived::facing_away`]); 0 for other sets.
+    pub facing_away: u64,
 }
 
 impl RayBatch {
@@ -35,6 +38,7 @@ impl RayBatch {
         Self {
             rays: file.rays,
             any_hit: file.any_hit,
+            facing_away: 0,
         }
     }
 }
@@ -53,6 +57,7 @@ pub fn explicit_rays(
     params: &DerivedParams,
 ) -> Result<Option<RayBatch>> {
     let count = u64::from(settings.width) * u64::from(settings.height);
+    let mut facing_away = 0;
     let rays = match set {
         RaySet::Primary => return Ok(None),
         RaySet::Incoherent if count > limits::MAX_EXPLICIT_RAYS => bail!(
@@ -67,12 +72,15 @@ pub fn explicit_rays(
         _ => {
             let baseline = crate::with_role(Roles::BASELINE)
                 .ok_or_else(|| anyhow!("no baseline backend to trace the primary rays"))?;
-            derived_rays(set, scene, settings, params, baseline)?
+            let derived = derived_rays(set, scene, settings, params, baseline)?;
+            facing_away = derived.facing_away;
+            derived.rays
         }
     };
     Ok(Some(RayBatch {
         rays,
         any_hit: set.any_hit(),
+        facing_away,
     }))
 }
 
@@ -86,13 +94,16 @@ pub fn no_rays(set: RaySet, scene: &Scene, file: Option<&std::path::Path>) -> St
         None if set == RaySet::Shadow && scene.lights.is_empty() && scene.emitters.is_empty() => {
             "no shadow rays: the scene has no light or emitter to aim them at".into()
         }
+        None if set == RaySet::Shadow => "no shadow rays: no primary ray hits the scene, or \
+                                          every light lies behind the surfaces they hit"
+            .into(),
         None => format!("no {} rays: no primary ray hits the scene", set.name()),
     }
 }
 
 /// The rays of the derived set `set` (`shadow`, `ao`, `diffuse`): the [`primary_rays`]
 /// traced with `tracer` (any exact backend gives the same hits, so the same set), then
-/// [`ray_sets::derived`] with seed `params.seed`.
+/// [`ray_sets::derived_set`] with seed `params.seed`.
 ///
 /// # Errors
 /// Too many primary or derived rays, a backend that cannot run or trace, bad parameters.
@@ -102,7 +113,7 @@ pub fn derived_rays(
     settings: &RenderSettings,
     params: &DerivedParams,
     tracer: &Backend,
-) -> Result<Vec<Ray>> {
+) -> Result<ray_sets::Derived> {
     let primary = primary_rays(scene, settings)?;
     let p = prepare(tracer, scene).map_err(|reason| {
         anyhow!(
@@ -112,7 +123,7 @@ pub fn derived_rays(
         )
     })?;
     let (hits, _) = p.renderer.trace_rays(&primary, false)?;
-    Ok(ray_sets::derived(set, scene, &primary, &hits, params)?)
+    Ok(ray_sets::derived_set(set, scene, &primary, &hits, params)?)
 }
 
 /// The camera's `width x height` primary rays ([`settings`'s camera](Scene::view)) in the
@@ -370,12 +381,13 @@ mod tests {
         for set in [RaySet::Shadow, RaySet::Ao, RaySet::Diffuse] {
             let a = derived_rays(set, &scene, &settings(), &params, oracle).unwrap();
             let b = derived_rays(set, &scene, &settings(), &params, baseline).unwrap();
-            assert!(!a.is_empty(), "{}", set.name());
+            assert!(!a.rays.is_empty(), "{}", set.name());
             assert_eq!(a, b, "{}", set.name());
             let batch = explicit_rays(set, &scene, &settings(), &params)
                 .unwrap()
                 .unwrap();
-            assert_eq!(batch.rays, a);
+            assert_eq!(batch.rays, a.rays);
+            assert_eq!(batch.facing_away, a.facing_away);
             assert_eq!(batch.any_hit, set.any_hit());
         }
         assert!(

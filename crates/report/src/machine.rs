@@ -15,6 +15,85 @@ pub fn describe(threads: usize) -> Machine {
         gpu: gpu(),
         os: os(),
         version: version(),
+        build: raybench_registry::BUILD.to_string(),
+        frequency: frequency(),
+        smt: smt(),
+    }
+}
+
+/// The first line of `/proc/cpuinfo` starting with `key`, its value trimmed.
+fn cpuinfo(key: &str) -> Option<String> {
+    std::fs::read_to_string("/proc/cpuinfo").ok().and_then(|s| {
+        s.lines()
+            .find(|l| l.starts_with(key))
+            .and_then(|l| l.split_once(':'))
+            .map(|(_, v)| v.trim().to_string())
+    })
+}
+
+/// The contents of a sysfs file, trimmed; `None` when it is missing or empty.
+fn sysfs(path: &str) -> Option<String> {
+    std::fs::read_to_string(path)
+        .ok()
+        .map(|s| s.trim().to_string())
+        .filter(|s| !s.is_empty())
+}
+
+/// The frequency policy of CPU 0: `governor performance, 1500-3700 MHz` where the OS
+/// manages the frequency (`cpufreq`); otherwise the frequency `/proc/cpuinfo` reports and
+/// why nothing more is known (a virtual machine's guest, or firmware that decides alone).
+fn frequency() -> String {
+    let base = "/sys/devices/system/cpu/cpu0/cpufreq";
+    let mhz = |file: &str| {
+        sysfs(&format!("{base}/{file}"))
+            .and_then(|k| k.parse::<u64>().ok())
+            .map(|khz| khz / 1000)
+    };
+    if let Some(governor) = sysfs(&format!("{base}/scaling_governor")) {
+        let range = match (mhz("scaling_min_freq"), mhz("scaling_max_freq")) {
+            (Some(lo), Some(hi)) => format!(", {lo}-{hi} MHz"),
+            _ => String::new(),
+        };
+        let boost = sysfs("/sys/devices/system/cpu/cpufreq/boost")
+            .map(|b| format!(", boost {}", if b == "1" { "on" } else { "off" }))
+            .unwrap_or_default();
+        return format!("governor {governor}{range}{boost}");
+    }
+    let reported = cpuinfo("cpu MHz")
+        .and_then(|m| m.parse::<f64>().ok())
+        .map_or_else(String::new, |m| format!("{m:.0} MHz reported; "));
+    format!(
+        "{reported}no cpufreq policy exposed (a virtual machine's guest, or the firmware decides)"
+    )
+}
+
+/// Simultaneous multithreading: `off (1 thread per core)`, `on (2 threads per core)`, or
+/// what the OS says where it cannot tell (`notsupported`: a guest that sees no siblings).
+fn smt() -> String {
+    let per_core =
+        sysfs("/sys/devices/system/cpu/cpu0/topology/thread_siblings_list").map(|list| {
+            list.split(',')
+                .map(|part| match part.split_once('-') {
+                    Some((a, b)) => match (a.parse::<u32>(), b.parse::<u32>()) {
+                        (Ok(a), Ok(b)) if b >= a => b - a + 1,
+                        _ => 1,
+                    },
+                    None => 1,
+                })
+                .sum::<u32>()
+        });
+    let control = sysfs("/sys/devices/system/cpu/smt/control");
+    let active = sysfs("/sys/devices/system/cpu/smt/active");
+    let threads = per_core.map_or_else(String::new, |n| {
+        format!(" ({n} thread{} per core)", if n == 1 { "" } else { "s" })
+    });
+    match (active.as_deref(), control.as_deref()) {
+        (Some("1"), _) => format!("on{threads}"),
+        (_, Some("notsupported" | "notimplemented")) => {
+            format!("not supported as the OS sees the CPU{threads}")
+        }
+        (Some("0"), _) => format!("off{threads}"),
+        _ => format!("unknown{threads}"),
     }
 }
 
@@ -42,15 +121,7 @@ fn host() -> String {
 }
 
 fn cpu_model() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split_once(':'))
-                .map(|(_, v)| v.trim().to_string())
-        })
-        .unwrap_or_else(|| format!("unknown ({})", std::env::consts::ARCH))
+    cpuinfo("model name").unwrap_or_else(|| format!("unknown ({})", std::env::consts::ARCH))
 }
 
 /// What the backends with a [`raybench_registry::Backend::detail`] chose (the packet backend's
@@ -162,6 +233,8 @@ mod tests {
         assert!(!m.cpu.is_empty() && m.cores >= 1 && m.threads == 2);
         assert!(!m.host.is_empty());
         assert!(m.isa.contains("lanes"));
+        assert!(m.build.starts_with("rustc ") && m.build.contains("opt-level"));
+        assert!(!m.frequency.is_empty() && !m.smt.is_empty());
         assert!(now_utc().ends_with('Z'));
     }
 }

@@ -63,6 +63,78 @@ fn mixed_machines(results: &Results) -> Option<String> {
     })
 }
 
+/// The reproducibility block: per shard, what decides its timings besides the source
+/// (the revision, the compiler and its settings, the CPU, its frequency policy, SMT, the
+/// threads), and a note when the shards differ in any of them.
+fn reproducibility(results: &Results, s: &mut String) {
+    if results.shards.is_empty() {
+        return;
+    }
+    section(
+        s,
+        "Reproducibility",
+        "What each shard's timings depend on besides the scenes and settings: the code \
+         (revision), the compiler and its settings, the CPU and how its frequency and \
+         threads were managed. `-`: not recorded (a file written before it was).",
+    );
+    let _ = writeln!(
+        s,
+        "| shard | revision | compiler and settings | CPU | frequency policy | SMT | cores / worker threads | OS |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|");
+    let or_dash = |v: &str| {
+        if v.is_empty() {
+            "-".to_string()
+        } else {
+            v.replace('|', "\\|")
+        }
+    };
+    for sh in &results.shards {
+        let m = &sh.machine;
+        let _ = writeln!(
+            s,
+            "| {}/{} | {} | {} | {} | {} | {} | {} / {}{} | {} |",
+            sh.index,
+            sh.count,
+            or_dash(&m.version),
+            or_dash(&m.build),
+            or_dash(&m.cpu),
+            or_dash(&m.frequency),
+            or_dash(&m.smt),
+            m.cores,
+            m.threads,
+            if sh.pinned { ", pinned" } else { "" },
+            or_dash(&m.os)
+        );
+    }
+    let _ = writeln!(s);
+    let distinct = |f: fn(&crate::results::Machine) -> &str| {
+        results
+            .shards
+            .iter()
+            .map(|sh| f(&sh.machine))
+            .collect::<BTreeSet<_>>()
+            .len()
+            > 1
+    };
+    let differing: Vec<&str> = [
+        ("revisions", distinct(|m| &m.version)),
+        ("compilers or settings", distinct(|m| &m.build)),
+        ("CPU models", distinct(|m| &m.cpu)),
+    ]
+    .into_iter()
+    .filter_map(|(what, differs)| differs.then_some(what))
+    .collect();
+    if !differing.is_empty() {
+        let _ = writeln!(
+            s,
+            "> **The shards differ in their {}**: their timings share the tables below but \
+             compare only within a shard.\n",
+            differing.join(" and ")
+        );
+    }
+}
+
 /// The report text.
 pub fn report(results: &Results, charts: &Charts) -> String {
     let mut s = String::new();
@@ -152,6 +224,7 @@ pub fn report(results: &Results, charts: &Charts) -> String {
             crate::results::NOISY_HALF_WIDTH * 100.0
         ),
     );
+    reproducibility(results, &mut s);
     if let Some(p) = &charts.problem {
         let _ = writeln!(s, "> Charts: {p}\n");
     }
@@ -245,6 +318,7 @@ mod tests {
                 gpu: "none".into(),
                 os: "os".into(),
                 version: "v".into(),
+                ..Machine::default()
             },
             started: "2026-01-02T03:04:05Z".into(),
             wall_seconds: 12.4,
@@ -316,6 +390,40 @@ mod tests {
                  auto, each at least 50 ms.\n"
             ),
             "{s}"
+        );
+    }
+
+    #[test]
+    fn the_reproducibility_block_lists_each_shard_and_notes_differences() {
+        let mut one = shard(1, "cpu");
+        one.machine.build = "rustc 1.0, opt-level 3".into();
+        one.machine.frequency = "governor performance".into();
+        one.machine.smt = "off (1 thread per core)".into();
+        one.pinned = true;
+        let two = shard(2, "cpu");
+        let mut results = Results {
+            shards: vec![one, two],
+            ..Results::default()
+        };
+        let s = text(&results);
+        assert!(
+            s.contains(
+                "| 1/2 | v | rustc 1.0, opt-level 3 | cpu | governor performance | off (1 thread \
+                 per core) | 4 / 3, pinned | os |\n| 2/2 | v | - | cpu | - | - | 4 / 3 | os |\n"
+            ),
+            "{s}"
+        );
+        // The builds differ (one is unrecorded); the revisions and CPUs do not.
+        assert!(
+            s.contains("> **The shards differ in their compilers or settings**"),
+            "{s}"
+        );
+        results.shards[1].machine.build = "rustc 1.0, opt-level 3".into();
+        assert!(!text(&results).contains("The shards differ"));
+        results.shards[1].machine.version = "w".into();
+        results.shards[1].machine.cpu = "other".into();
+        assert!(
+            text(&results).contains("> **The shards differ in their revisions and CPU models**")
         );
     }
 

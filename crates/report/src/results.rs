@@ -203,6 +203,20 @@ pub struct Machine {
     pub os: String,
     /// The raybench version and, when known, the source revision.
     pub version: String,
+    /// How the binary was compiled: the compiler's version, optimisation level, debug
+    /// assertions, target and `RUSTFLAGS` ([`raybench_registry::BUILD`]); empty in files
+    /// written before it was recorded.
+    #[serde(default)]
+    pub build: String,
+    /// The CPU frequency policy: the governor and the frequency range where the OS exposes
+    /// them (`cpufreq`), else what `/proc/cpuinfo` reports and why the policy is unknown;
+    /// empty in files written before it was recorded.
+    #[serde(default)]
+    pub frequency: String,
+    /// Simultaneous multithreading: whether the OS runs sibling threads on one core, and how
+    /// many logical CPUs share a core; empty in files written before it was recorded.
+    #[serde(default)]
+    pub smt: String,
 }
 
 /// The timed repetitions of one workload: their median with its confidence interval, the
@@ -410,6 +424,22 @@ pub struct Run {
     pub tests_per_ray: Option<f64>,
     /// Node or cell visits per ray.
     pub visits_per_ray: Option<f64>,
+    /// The share of the rays with a hit, as this backend answered them: for frames the
+    /// camera rays (pixels) that hit a surface, for closest-hit sets the rays that hit, for
+    /// any-hit sets the rays blocked. Absent in files written before it was recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hit_fraction: Option<f64>,
+    /// Shadow rays of the set not traced because their light lies behind the surface they
+    /// would leave, which blocks it ([`raybench_core::ray_sets::Derived::facing_away`]):
+    /// blocked, and left out of `rays` and `hit_fraction`. Absent for other sets and in
+    /// older files.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub facing_away: Option<u64>,
+    /// The scene is a coverage scene ([`raybench_scene::Purpose::Coverage`]: small, checking
+    /// modes and kinds): timed, but the verdict names no winner on it. False for performance
+    /// scenes, scene files, generated scenes and in older files.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub coverage: bool,
     /// Comparison with the reference.
     pub equality: Option<Equality>,
     /// Files.
@@ -553,7 +583,10 @@ impl Quality {
         };
         Some([
             format!("{sah:.2}"),
-            format!("{epo:.2} ± {epo_std_error:.2}"),
+            self.measured_epo().map_or_else(
+                || "not measured".to_string(),
+                |_| format!("{epo:.2} ± {epo_std_error:.2}"),
+            ),
             leaves.to_string(),
             interior_nodes.to_string(),
             format!("{max_depth}/{mean_leaf_depth:.1}"),
@@ -602,6 +635,18 @@ impl Quality {
     pub fn sah_epo(&self) -> Option<(f64, f64)> {
         match self {
             Self::Tree { sah, epo, .. } => Some((*sah, *epo)),
+            _ => None,
+        }
+    }
+
+    /// A tree's EPO when it was measured: `None` when no point was sampled (the scene holds
+    /// only kinds the EPO leaves out, so its 0 says nothing) and for other structures.
+    #[must_use]
+    pub fn measured_epo(&self) -> Option<f64> {
+        match self {
+            Self::Tree {
+                epo, epo_samples, ..
+            } if *epo_samples > 0 => Some(*epo),
             _ => None,
         }
     }

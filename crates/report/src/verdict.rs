@@ -176,7 +176,18 @@ fn fastest(results: &Results, s: &mut String) {
             .join(" | ")
     );
     let _ = writeln!(s, "|---|{}", "---|".repeat(kinds.len()));
-    for scene in &scenes {
+    // Coverage scenes (small scenes that check modes and kinds) are timed, but their times
+    // are a frame's fixed costs, not a structure's: no winner is named on them.
+    let coverage = |scene: &String| {
+        results
+            .runs
+            .iter()
+            .filter(|r| &r.scene == scene)
+            .all(|r| r.coverage)
+    };
+    let (left_out, scenes): (Vec<&String>, Vec<&String>) =
+        scenes.iter().partition(|sc| coverage(sc));
+    for scene in scenes {
         let cells: Vec<String> = kinds
             .iter()
             .map(|(mode, set)| {
@@ -191,6 +202,16 @@ fn fastest(results: &Results, s: &mut String) {
         let _ = writeln!(s, "| {scene} | {} |", cells.join(" | "));
     }
     let _ = writeln!(s);
+    if !left_out.is_empty() {
+        let names: Vec<String> = left_out.iter().map(|sc| format!("`{sc}`")).collect();
+        let _ = writeln!(
+            s,
+            "Coverage scenes, timed in the tables below but judged here on nothing: {} (small \
+             scenes that check modes, primitive kinds and features; their times are mostly a \
+             frame's fixed costs, not a structure's).\n",
+            names.join(", ")
+        );
+    }
 }
 
 /// Per backend: how many of its runs were bit-identical to the reference, and which failed.
@@ -466,7 +487,7 @@ fn slopes(results: &Results, s: &mut String) {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::results::{Equality, Images, Skipped};
 
@@ -480,7 +501,7 @@ mod tests {
 
     /// A run of `backend` on `scene`, camera rays, 1,000 rays a repetition timed `samples`
     /// (ms), passing and identical.
-    fn run(scene: &str, backend: &str, samples: &[f64]) -> Run {
+    pub(crate) fn run(scene: &str, backend: &str, samples: &[f64]) -> Run {
         let timing =
             (!samples.is_empty()).then(|| Timing::of(samples.iter().map(|s| s * 1e-3).collect()));
         Run {
@@ -509,6 +530,9 @@ mod tests {
             rays: Some(1000),
             tests_per_ray: None,
             visits_per_ray: None,
+            hit_fraction: None,
+            facing_away: None,
+            coverage: false,
             equality: Some(Equality {
                 id_match: 1.0,
                 hit_mismatch: 0,
@@ -579,6 +603,40 @@ mod tests {
         assert_eq!(factor(10.0), "10");
         assert_eq!(factor(12.5), "12");
         assert_eq!(factor(12.6), "13");
+    }
+
+    /// A coverage scene keeps its times in the tables but gets no row in the fastest-backend
+    /// table; a performance scene does.
+    #[test]
+    fn no_winner_is_named_on_a_coverage_scene() {
+        let small = |backend: &str, ms: f64| Run {
+            coverage: true,
+            ..run("tiny", backend, &QUIET.map(|t| t * ms))
+        };
+        let results = Results {
+            runs: vec![
+                small("a", 1.0),
+                small("b", 3.0),
+                run("big", "a", &QUIET),
+                run("big", "b", &QUIET.map(|t| 3.0 * t)),
+            ],
+            ..Results::default()
+        };
+        let text = section(fastest, &results);
+        assert!(text.contains("| big | `a`"), "{text}");
+        assert!(!text.contains("| tiny |"), "{text}");
+        assert!(
+            text.contains(
+                "Coverage scenes, timed in the tables below but judged here on nothing: `tiny`"
+            ),
+            "{text}"
+        );
+        // Without coverage scenes there is no such line.
+        let only_big = Results {
+            runs: results.runs[2..].to_vec(),
+            ..Results::default()
+        };
+        assert!(!section(fastest, &only_big).contains("Coverage scenes"));
     }
 
     /// The ends of an interval take the ratio's decimals, either side of 10.

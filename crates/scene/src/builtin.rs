@@ -16,6 +16,18 @@ pub enum Matrix {
     None,
 }
 
+/// What a built-in scene is for in the report.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Purpose {
+    /// A scene large enough that its time is the acceleration structure's (the shared
+    /// meshes, the large instanced scenes): the report's verdict names winners on it.
+    Performance,
+    /// A small scene that checks a mode, a primitive kind or a feature (a handful of
+    /// spheres, CSG trees, one height field): timed, but the verdict names no winner on it,
+    /// since its time is the fixed costs of a frame, not a structure's.
+    Coverage,
+}
+
 /// A built-in scene's report and test metadata: its `[benchmark]` table
 /// (`docs/scene-format.md`).
 #[derive(Clone, Copy, Debug)]
@@ -24,6 +36,8 @@ pub struct Benchmark {
     pub order: i64,
     /// The matrix that runs it.
     pub matrix: Matrix,
+    /// Whether the report's verdict judges speed on it.
+    pub purpose: Purpose,
     /// The report's render modes beyond ray casting (`whitted`, `path`); the volume modes
     /// follow from the scene's volumes.
     pub modes: &'static [&'static str],

@@ -48,7 +48,7 @@ pub use budget::{
     human_bytes, parse_size, set_memory_limit,
 };
 pub use builtin::{
-    BUILTIN_SCENES, Benchmark, BuiltinScene, Matrix, builtin, for_experiment, matrix,
+    BUILTIN_SCENES, Benchmark, BuiltinScene, Matrix, Purpose, builtin, for_experiment, matrix,
 };
 pub use error::LoadError;
 pub use format::{load_scene_str, load_toml_file};

@@ -55,16 +55,47 @@ fn phase(t: &Timings, names: &[&str]) -> Option<f64> {
     (!v.is_empty()).then(|| v.iter().sum())
 }
 
+/// Frames on either side of a frame whose times [`rebuild_pays`] takes the median of.
+const SMOOTHING_RADIUS: usize = 2;
+
+/// Each value replaced by the median of the values at most `radius` places away (fewer at
+/// the ends): a lone outlier, one frame the machine interrupted, cannot move a running sum.
+fn running_median(values: &[f64], radius: usize) -> Vec<f64> {
+    (0..values.len())
+        .map(|i| {
+            let window = &values[i.saturating_sub(radius)..(i + radius + 1).min(values.len())];
+            crate::stats::median(window).unwrap_or(0.0)
+        })
+        .collect()
+}
+
 /// When rebuilding pays, from per-frame `(refit + top, rebuild + top, trace refitted, trace
 /// rebuilt)` seconds of frames 1, 2, ...: the first frame (1-based index into the list) at
 /// which refitting every frame has cost more in total than rebuilding every frame, and the
 /// first frame at which the refitted tree's extra trace time, summed since frame 0, exceeds
-/// that frame's rebuild (one rebuild there would have paid for itself already).
+/// that frame's rebuild (one rebuild there would have paid for itself already). Each frame
+/// is timed once, so each series is first replaced by its running median over
+/// 2 x [`SMOOTHING_RADIUS`] + 1 frames: a single slow frame (an interruption) does not move
+/// a break-even, while a trend (the refitted tree decaying) does.
 #[must_use]
 pub(super) fn rebuild_pays(frames: &[(f64, f64, f64, f64)]) -> (Option<usize>, Option<usize>) {
+    let column = |f: fn(&(f64, f64, f64, f64)) -> f64| {
+        running_median(&frames.iter().map(f).collect::<Vec<_>>(), SMOOTHING_RADIUS)
+    };
+    let smoothed: Vec<(f64, f64, f64, f64)> = {
+        let (a, b, c, d) = (
+            column(|f| f.0),
+            column(|f| f.1),
+            column(|f| f.2),
+            column(|f| f.3),
+        );
+        (0..frames.len())
+            .map(|i| (a[i], b[i], c[i], d[i]))
+            .collect()
+    };
     let (mut refit_total, mut rebuild_total, mut extra) = (0.0, 0.0, 0.0);
     let (mut always, mut once) = (None, None);
-    for (i, &(refit, rebuild, traced_refit, traced_rebuilt)) in frames.iter().enumerate() {
+    for (i, &(refit, rebuild, traced_refit, traced_rebuilt)) in smoothed.iter().enumerate() {
         refit_total += refit + traced_refit;
         rebuild_total += rebuild + traced_rebuilt;
         extra += traced_refit - traced_rebuilt;
@@ -111,7 +142,9 @@ const INTRO: &str = "\
     casting) through each, and each one's SAH cost over the flat primitives (where \
     the twisting mesh is). Both give the same ids and `t` on every frame (checked \
     here, and against naive by `tests/tests/motion.rs`). One run on a shared \
-    machine: trace times within a few per cent of each other are noise.";
+    machine: trace times within a few per cent of each other are noise. Each frame \
+    is timed once, so the break-evens below use each series' running median over \
+    five frames: one slow frame (an interruption) moves neither, a trend does.";
 
 impl Experiment for Motion {
     fn name(&self) -> &'static str {
@@ -403,5 +436,21 @@ mod tests {
             (0..4).map(|_| (0.001, 0.010, 0.035, 0.020)).collect();
         assert_eq!(rebuild_pays(&fast), (Some(1), Some(1)));
         assert_eq!(rebuild_pays(&[]), (None, None));
+    }
+
+    /// One frame the machine interrupted (its refitted trace 30 ms slower) does not make a
+    /// rebuild pay at that frame; a lasting slowdown still does.
+    #[test]
+    fn a_lone_slow_frame_is_no_break_even() {
+        let mut frames: Vec<(f64, f64, f64, f64)> =
+            (0..12).map(|_| (0.001, 0.010, 0.0205, 0.020)).collect();
+        frames[4].2 += 0.030;
+        assert_eq!(rebuild_pays(&frames), (None, None));
+        // Slower from that frame on: a trend, so a rebuild pays there (frame 5).
+        for f in &mut frames[4..] {
+            f.2 += 0.030;
+        }
+        assert_eq!(rebuild_pays(&frames).1, Some(5));
+        assert_eq!(running_median(&[1.0, 9.0, 1.0, 1.0, 1.0], 2), vec![1.0; 5]);
     }
 }

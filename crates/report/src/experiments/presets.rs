@@ -75,8 +75,9 @@ pub(super) fn break_even(fast: (f64, f64), slow: (f64, f64)) -> Option<f64> {
     (gain > 0.0).then(|| ((slow.0 - fast.0) / gain).max(0.0))
 }
 
-/// One preset's figures on one scene: `(preset, build s, primary trace s)`.
-type Measured = (String, f64, f64);
+/// One preset's figures on one scene: `(preset, build s, primary trace s, the trace
+/// median's interval where recorded)`.
+type Measured = (String, f64, f64, Option<[f64; 2]>);
 
 /// The presets of experiment `presets` on scene `scene` with their build and camera-ray
 /// trace seconds, grouped by backend (the part before `:`), in the order they ran.
@@ -90,9 +91,12 @@ fn by_backend(results: &Results, scene: &str) -> BTreeMap<String, Vec<Measured>>
     {
         let backend = p.backend.split(':').next().unwrap_or_default();
         if let Some(build) = p.build_seconds {
-            out.entry(backend.into())
-                .or_default()
-                .push((p.backend.clone(), build, p.seconds));
+            out.entry(backend.into()).or_default().push((
+                p.backend.clone(),
+                build,
+                p.seconds,
+                p.timing.as_ref().and_then(|t| t.interval),
+            ));
         }
     }
     out
@@ -112,6 +116,12 @@ fn scenes_in(results: &Results) -> Vec<String> {
     scenes
 }
 
+/// Whether two medians' intervals overlap (both recorded): then neither trace is shown
+/// faster, and a break-even computed from their difference would be noise.
+fn overlap(a: Option<[f64; 2]>, b: Option<[f64; 2]>) -> bool {
+    matches!((a, b), (Some([a0, a1]), Some([b0, b1])) if a0 <= b1 && b0 <= a1)
+}
+
 /// The preset of `list` fastest to an image after `k` frames.
 fn fastest_at(list: &[Measured], k: f64) -> Option<&Measured> {
     list.iter()
@@ -127,7 +137,9 @@ const INTRO: &str = "\
     (median). Memory: primitives plus structure (Embree's own BVH is not counted). \
     Time to an image is `build + k x frame` with the camera-ray frame; the \
     break-even is the frame count after which the backend's fastest-tracing preset \
-    overtakes the one fastest to a first image. One run on a shared machine: a \
+    overtakes the one fastest to a first image, given only where the two presets' \
+    trace medians have intervals that do not overlap (else no preset traces faster, \
+    and the table says so). One run on a shared machine: a \
     difference of a few per cent between presets is within its noise (the \
     matrix's min-max spreads show how much).";
 
@@ -268,7 +280,7 @@ impl Experiment for Presets {
             let series: Vec<Series> = by_backend(results, &scene)
                 .into_values()
                 .flatten()
-                .map(|(name, build, trace)| Series {
+                .map(|(name, build, trace, _)| Series {
                     label: name,
                     points: FRAMES.iter().map(|&k| (k, build + k * trace)).collect(),
                     fit: None,
@@ -339,6 +351,9 @@ impl Experiment for Presets {
                 let best = list.iter().min_by(|a, b| a.2.total_cmp(&b.2));
                 let even = match (first, best) {
                     (Some(f), Some(b)) if f.0 == b.0 => "none: it is also fastest to trace".into(),
+                    (Some(f), Some(b)) if overlap(f.3, b.3) => {
+                        "none: their trace times' intervals overlap (no trace is faster)".into()
+                    }
                     (Some(f), Some(b)) => {
                         break_even((f.1, f.2), (b.1, b.2)).map_or("-".into(), |k| format!("{k:.1}"))
                     }
@@ -363,6 +378,14 @@ mod tests {
     use super::*;
 
     #[test]
+    fn overlapping_intervals_are_no_difference() {
+        assert!(overlap(Some([1.0, 2.0]), Some([2.0, 3.0])));
+        assert!(overlap(Some([1.0, 4.0]), Some([2.0, 3.0])));
+        assert!(!overlap(Some([1.0, 1.9]), Some([2.0, 3.0])));
+        assert!(!overlap(None, Some([2.0, 3.0])));
+    }
+
+    #[test]
     fn break_even_is_where_the_lines_cross() {
         // 10 ms build + 4 ms/frame against 50 ms + 2 ms/frame: equal after 20 frames.
         assert_eq!(break_even((0.010, 0.004), (0.050, 0.002)), Some(20.0));
@@ -375,8 +398,8 @@ mod tests {
     #[test]
     fn the_fastest_preset_depends_on_the_frames() {
         let list = vec![
-            ("a:fast".to_string(), 0.010, 0.004),
-            ("a:quality".to_string(), 0.050, 0.002),
+            ("a:fast".to_string(), 0.010, 0.004, None),
+            ("a:quality".to_string(), 0.050, 0.002, None),
         ];
         assert_eq!(fastest_at(&list, 1.0).unwrap().0, "a:fast");
         assert_eq!(fastest_at(&list, 16.0).unwrap().0, "a:fast");
