@@ -81,9 +81,13 @@ impl Roles {
     /// do not carry it): the experiments that compare a few representative structures
     /// (`instancing`) take it beside the baseline and the yardstick.
     pub const SIMD: Roles = Roles(1 << 8);
+    /// A grid walked cell by cell (3D-DDA): a ray crosses about M^(1/3) cells of a grid
+    /// sized to M primitives, so the report's scaling judges its time against that power
+    /// law, not against a tree's logarithm.
+    pub const GRID: Roles = Roles(1 << 9);
 
     /// Every role with its name, in the order `raybench backends --json` lists them.
-    pub const NAMED: [(Roles, &'static str); 9] = [
+    pub const NAMED: [(Roles, &'static str); 10] = [
         (Roles::EXACT, "exact"),
         (Roles::ORACLE, "oracle"),
         (Roles::BRUTE_FORCE, "brute-force"),
@@ -93,6 +97,7 @@ impl Roles {
         (Roles::PEER, "peer"),
         (Roles::YARDSTICK, "yardstick"),
         (Roles::SIMD, "simd"),
+        (Roles::GRID, "grid"),
     ];
 
     /// These roles and `other`'s.
@@ -292,14 +297,14 @@ pub const BACKENDS: &[Backend] = &[
     Backend {
         name: "grid",
         description: GRID,
-        roles: Roles::EXACT,
+        roles: Roles::EXACT.with(Roles::GRID),
         detail: None,
         make: || Box::new(CpuRenderer::<Grid>::with_default_build("grid", GRID)),
     },
     Backend {
         name: "grid2",
         description: GRID2,
-        roles: Roles::EXACT,
+        roles: Roles::EXACT.with(Roles::GRID),
         detail: None,
         make: || {
             Box::new(CpuRenderer::<TwoLevelGrid>::with_default_build(

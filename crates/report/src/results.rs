@@ -435,6 +435,12 @@ pub struct Run {
     /// older files.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub facing_away: Option<u64>,
+    /// Ray casting's camera rays (`cast`, `primary`) traced once more as a batch made
+    /// beforehand (no ray generation, shading or image): the trace throughput, where the run's
+    /// own `seconds` and `mrays_per_s` time the whole frame. Absent for other workloads and in
+    /// older files.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trace: Option<Trace>,
     /// The scene is a coverage scene ([`raybench_scene::Purpose::Coverage`]: small, checking
     /// modes and kinds): timed, but the verdict names no winner on it. False for performance
     /// scenes, scene files, generated scenes and in older files.
@@ -462,6 +468,37 @@ pub struct Run {
     /// structure and in files written before it was added.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub quality: Option<Quality>,
+}
+
+/// A workload's rays traced as a batch ([`Run::trace`]).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Trace {
+    /// The timed repetitions (every camera's batch once per repetition).
+    pub seconds: Timing,
+    /// Rays per repetition.
+    pub rays: u64,
+    /// Rays per second over the median, in millions.
+    pub mrays_per_s: f64,
+}
+
+impl Run {
+    /// The run as the verdict judges it: where its camera rays were also traced as a batch
+    /// ([`Run::trace`]), the batch's time and throughput in place of the frame's, so that
+    /// every ray set is judged on tracing alone.
+    #[must_use]
+    pub fn traced(&self) -> std::borrow::Cow<'_, Run> {
+        match &self.trace {
+            Some(t) => std::borrow::Cow::Owned(Run {
+                seconds: Some(t.seconds.clone()),
+                rays: Some(t.rays),
+                mrays_per_s: Some(t.mrays_per_s),
+                // The device's time belongs to the frame.
+                device_seconds: None,
+                ..self.clone()
+            }),
+            None => std::borrow::Cow::Borrowed(self),
+        }
+    }
 }
 
 /// One camera of a [`Run`] over a scene with several cameras.
@@ -825,6 +862,94 @@ pub struct Fit {
     pub intercept: Option<f64>,
     /// Points fitted.
     pub points: usize,
+    /// The logarithmic model `y = a + b log10 x` fitted to the same points (least squares on
+    /// relative residuals): `b`, the growth of `y` per decade of `x`. Absent with fewer
+    /// than three points and in older files.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub per_decade: Option<f64>,
+    /// The power law's Akaike criterion less the logarithm's, over relative residuals (both
+    /// models have two parameters: `n ln(RSS_power / RSS_log)`): below -2 the points favour
+    /// the power law, above 2 the logarithm, between them neither ([`Fit::favoured`]).
+    /// Absent with fewer than three points and in older files.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub delta_aic: Option<f64>,
+}
+
+/// The model a [`Fit`]'s points favour.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Favoured {
+    /// `y ~ x^slope` fits better by more than 2 in the Akaike criterion.
+    PowerLaw,
+    /// `y = a + b log10 x` fits better by more than 2.
+    Logarithm,
+    /// Within 2 of each other: the points do not tell the models apart.
+    Neither,
+}
+
+/// The difference in the Akaike criterion that counts as a preference (Burnham and
+/// Anderson's rule of thumb: below 2, the models are about equally supported).
+pub const AIC_MARGIN: f64 = 2.0;
+
+impl Fit {
+    /// Which model the points favour, where they were compared.
+    #[must_use]
+    pub fn favoured(&self) -> Option<Favoured> {
+        self.delta_aic.map(|d| {
+            if d < -AIC_MARGIN {
+                Favoured::PowerLaw
+            } else if d > AIC_MARGIN {
+                Favoured::Logarithm
+            } else {
+                Favoured::Neither
+            }
+        })
+    }
+}
+
+/// The logarithmic model `y = a + b log10 x` by weighted least squares (weights `1 / y^2`,
+/// so that relative residuals count, as in the power law's log-log fit), and both models'
+/// relative residual sums: `(b, a, RSS_power, RSS_log)` for the power law `(slope,
+/// intercept)`; `None` with fewer than three positive points or one distinct `x`.
+#[must_use]
+pub fn log_model(points: &[(f64, f64)], power: (f64, f64)) -> Option<(f64, f64, f64, f64)> {
+    let pts: Vec<(f64, f64)> = points
+        .iter()
+        .copied()
+        .filter(|(x, y)| *x > 0.0 && *y > 0.0 && x.is_finite() && y.is_finite())
+        .collect();
+    if pts.len() < 3 {
+        return None;
+    }
+    let w: Vec<f64> = pts.iter().map(|(_, y)| 1.0 / (y * y)).collect();
+    let sw: f64 = w.iter().sum();
+    let mx = pts
+        .iter()
+        .zip(&w)
+        .map(|((x, _), w)| w * x.log10())
+        .sum::<f64>()
+        / sw;
+    let my = pts.iter().zip(&w).map(|((_, y), w)| w * y).sum::<f64>() / sw;
+    let sxx: f64 = pts
+        .iter()
+        .zip(&w)
+        .map(|((x, _), w)| w * (x.log10() - mx).powi(2))
+        .sum();
+    if sxx <= 0.0 {
+        return None;
+    }
+    let sxy: f64 = pts
+        .iter()
+        .zip(&w)
+        .map(|((x, y), w)| w * (x.log10() - mx) * (y - my))
+        .sum();
+    let b = sxy / sxx;
+    let a = my - b * mx;
+    let rel = |f: &dyn Fn(f64) -> f64| -> f64 {
+        pts.iter().map(|(x, y)| ((y - f(*x)) / y).powi(2)).sum()
+    };
+    let rss_power = rel(&|x| 10f64.powf(power.1 + power.0 * x.log10()));
+    let rss_log = rel(&|x| a + b * x.log10());
+    Some((b, a, rss_power, rss_log))
 }
 
 /// The slope and intercept of the least-squares line through `(log10 x, log10 y)` for
@@ -869,6 +994,13 @@ impl Results {
                 .collect();
             for (quantity, data) in [("seconds", time), ("tests_per_ray", tests)] {
                 if let Some((slope, intercept)) = log_log_fit(&data) {
+                    let log = log_model(&data, (slope, intercept));
+                    // Residuals of exactly 0 (a perfect fit) would make the ratio 0 or
+                    // infinite: a floor far below any timing's noise.
+                    let delta_aic = log.map(|(_, _, power, log)| {
+                        let floor = 1e-12;
+                        data.len() as f64 * ((power + floor) / (log + floor)).ln()
+                    });
                     self.fits.push(Fit {
                         experiment: experiment.clone(),
                         series: series.clone(),
@@ -877,6 +1009,8 @@ impl Results {
                         slope,
                         intercept: Some(intercept),
                         points: data.len(),
+                        per_decade: log.map(|l| l.0),
+                        delta_aic,
                     });
                 }
             }
@@ -992,6 +1126,52 @@ impl Results {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Points on a power law favour it, points on a logarithm favour that, and a flat line
+    /// (both models fit it exactly) favours neither.
+    #[test]
+    fn the_better_model_is_named_by_its_residuals() {
+        let fit_of = |points: Vec<(f64, f64)>| {
+            let mut r = Results::default();
+            for (x, y) in points {
+                r.scaling.push(ScalingPoint {
+                    shard: 0,
+                    experiment: "primitives".into(),
+                    series: "soup".into(),
+                    backend: "tree".into(),
+                    x,
+                    seconds: y,
+                    timing: None,
+                    rays: 1,
+                    tests_per_ray: None,
+                    load_seconds: None,
+                    build_seconds: None,
+                    memory_bytes: None,
+                    difference: None,
+                    stored_primitives: None,
+                });
+            }
+            r.fit();
+            r.fits[0].clone()
+        };
+        let sizes: [f64; 5] = [1e3, 1e4, 1e5, 1e6, 1e7];
+        let power = fit_of(
+            sizes
+                .iter()
+                .map(|&m| (m, 1e-3 * m.powf(1.0 / 3.0)))
+                .collect(),
+        );
+        assert!((power.slope - 1.0 / 3.0).abs() < 1e-9);
+        assert_eq!(power.favoured(), Some(Favoured::PowerLaw), "{power:?}");
+        let log = fit_of(sizes.iter().map(|&m| (m, 1.0 + 0.5 * m.log10())).collect());
+        assert_eq!(log.favoured(), Some(Favoured::Logarithm), "{log:?}");
+        assert!((log.per_decade.unwrap() - 0.5).abs() < 1e-9);
+        let flat = fit_of(sizes.iter().map(|&m| (m, 2.0)).collect());
+        assert_eq!(flat.favoured(), Some(Favoured::Neither), "{flat:?}");
+        // Two points: no comparison.
+        let two = fit_of(vec![(1e3, 1.0), (1e4, 2.0)]);
+        assert_eq!((two.per_decade, two.favoured()), (None, None));
+    }
 
     #[test]
     fn slopes_of_power_laws() {

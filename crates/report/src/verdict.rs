@@ -5,7 +5,7 @@
 //! the scaling slopes compare with the theory the report states.
 
 use crate::fmt::noisy_mark;
-use crate::results::{Fit, NOISY_HALF_WIDTH, Noise, Results, Run, Timing};
+use crate::results::{AIC_MARGIN, Favoured, Fit, NOISY_HALF_WIDTH, Noise, Results, Run, Timing};
 use crate::stats::{self, Fastest};
 use raybench_registry::Roles;
 use std::collections::BTreeMap;
@@ -151,7 +151,9 @@ fn fastest(results: &Results, s: &mut String) {
     let _ = writeln!(
         s,
         "**Fastest backend** per scene and workload (Mrays/s over every ray traced, by the \
-         wall-clock time of the whole call{}; only \
+         wall-clock time of the whole call{}; camera rays by their trace as a batch made \
+         beforehand, without the frame's ray generation, shading and image, where it was \
+         measured; only \
          backends whose result passed the equality check count), with its speed-up over \
          `{baseline}` (the baseline structure) and `{oracle}` (the oracle, where it fitted \
          its time budget) and the {:.0}% interval of each speed-up. A backend is named \
@@ -196,6 +198,20 @@ fn fastest(results: &Results, s: &mut String) {
                     .iter()
                     .filter(|r| &r.scene == scene && &r.mode == mode && &r.ray_set == set)
                     .collect();
+                // Camera rays are judged on their batch trace where every backend that ran
+                // has one (never a frame against a trace).
+                let traced: Vec<std::borrow::Cow<Run>> = if runs
+                    .iter()
+                    .filter(|r| r.status == "ok")
+                    .all(|r| r.trace.is_some())
+                {
+                    runs.iter().map(|r| r.traced()).collect()
+                } else {
+                    runs.iter()
+                        .map(|r| std::borrow::Cow::Borrowed(*r))
+                        .collect()
+                };
+                let runs: Vec<&Run> = traced.iter().map(AsRef::as_ref).collect();
                 fastest_cell(&runs, baseline, oracle, by_device)
             })
             .collect();
@@ -398,17 +414,17 @@ fn noisy(results: &Results, s: &mut String) {
     let _ = writeln!(s, "**Noise**: {}.\n", parts.join("; "));
 }
 
-/// The slope a scaling fit should have by the theory the report states, with the range a
-/// measured slope may fall in and the likely reasons when it falls outside.
+/// What the theory the report states says of a scaling fit: the model it predicts, and
+/// the range a measured slope may fall in where that is what is judged.
 struct Theory {
     /// The claim, in words.
     claim: &'static str,
-    /// Lowest and highest slope that agree with it.
+    /// Lowest and highest slope that agree with it: what is judged for a power law, and for
+    /// a logarithm where the points are too few to compare the two models.
     range: (f64, f64),
-    /// The likely reason for a slope below the range ...
-    low: &'static str,
-    /// ... and above it.
-    high: &'static str,
+    /// A logarithm (`y = a + b log M`), judged by which model the points favour
+    /// ([`Fit::favoured`]) where they were compared; otherwise a power law of the range.
+    logarithmic: bool,
 }
 
 /// Fixed per-frame costs (camera rays, shading, the threads' start) weigh most on the
@@ -418,29 +434,66 @@ const FIXED_COSTS: &str = "fixed per-frame and per-ray costs (camera rays, shadi
 
 /// The theory for experiment `experiment` and backend `backend`, if the report states one.
 fn theory(experiment: &str, backend: &str) -> Option<Theory> {
-    let brute =
-        raybench_registry::roles_of(backend).is_some_and(|r| r.contains(Roles::BRUTE_FORCE));
-    match (experiment, brute) {
-        ("primitives", true) => Some(Theory {
+    let roles = raybench_registry::roles_of(backend).unwrap_or(Roles::NONE);
+    let structure = matches!(experiment, "primitives" | "heightfield" | "bezier");
+    if structure && roles.contains(Roles::BRUTE_FORCE) {
+        (experiment == "primitives").then_some(Theory {
             claim: "linear in M (slope about 1)",
             range: (0.75, 1.25),
-            low: FIXED_COSTS,
-            high: "the primitives outgrow the caches at the largest M",
-        }),
-        ("primitives" | "heightfield" | "bezier", false) => Some(Theory {
-            claim: "logarithmic in M (a slope near 0 on log-log axes)",
-            range: (-0.15, 0.4),
-            low: FIXED_COSTS,
-            high: "the rays' work grows faster than log M: the structure outgrows the caches, \
-                   or the generated scenes change their depth complexity or hit rate with M",
-        }),
-        ("pixels" | "spp", _) => Some(Theory {
+            logarithmic: false,
+        })
+    } else if structure && roles.contains(Roles::GRID) {
+        Some(Theory {
+            claim: "a power law near M^(1/3), the cells a ray crosses in a grid sized to M",
+            range: (0.2, 0.5),
+            logarithmic: false,
+        })
+    } else if structure {
+        Some(Theory {
+            claim: "logarithmic in M",
+            // Without a model comparison: a slope near 0, short of a grid's 1/3.
+            range: (-0.15, 0.25),
+            logarithmic: true,
+        })
+    } else if matches!(experiment, "pixels" | "spp") {
+        Some(Theory {
             claim: "linear in the number of samples (slope about 1)",
             range: (0.8, 1.2),
-            low: FIXED_COSTS,
-            high: "larger frames leave the caches or the tiles balance worse over the threads",
-        }),
-        _ => None,
+            logarithmic: false,
+        })
+    } else {
+        None
+    }
+}
+
+/// Why a fit of render time strays from its theory, read from the same series' fit of tests
+/// per ray where there is one: work per ray that grows with it, or time that grows while
+/// the work does not (memory, fixed costs).
+fn diagnosis(results: &Results, f: &Fit, low: bool) -> String {
+    let tests = results.slope(&f.experiment, &f.series, &f.backend, "tests_per_ray");
+    match (tests, low) {
+        (None, true) => format!("{FIXED_COSTS} (tests per ray not counted)"),
+        (None, false) => "the rays' work or memory traffic grows faster than the theory's \
+                          (tests per ray not counted, so which is not known)"
+            .into(),
+        (Some(t), true) => format!(
+            "tests per ray scale as M^{t:.2}: {}",
+            if t > f.slope + 0.1 {
+                "the work grows while the time does not keep up, so fixed per-frame and \
+                 per-ray costs hide it at the small points"
+            } else {
+                FIXED_COSTS
+            }
+        ),
+        (Some(t), false) if t >= f.slope - 0.1 => format!(
+            "tests per ray grow as fast (M^{t:.2}): each ray does more work as M grows (the \
+             scenes' depth complexity or hit rate change with M, or the structure is worse \
+             at large M)"
+        ),
+        (Some(t), false) => format!(
+            "tests per ray grow only as M^{t:.2}: the time per test grows, so the structure \
+             or the primitives outgrow the caches"
+        ),
     }
 }
 
@@ -462,22 +515,40 @@ fn slopes(results: &Results, s: &mut String) {
             continue;
         };
         judged += 1;
-        if (t.range.0..=t.range.1).contains(&f.slope) {
-            agree += 1;
-        } else {
-            let why = if f.slope < t.range.0 { t.low } else { t.high };
-            off.push(format!(
-                "- `{}` on {} `{}`: slope {:.2}, theory {} ({:.2} to {:.2}); likely: {why}.",
-                f.backend, f.experiment, f.series, f.slope, t.claim, t.range.0, t.range.1
-            ));
+        let in_range = (t.range.0..=t.range.1).contains(&f.slope);
+        let verdict = match (t.logarithmic, f.favoured()) {
+            (true, Some(Favoured::PowerLaw)) => Err(format!(
+                "the points favour a power law (M^{:.2}) over a logarithm (Akaike criterion \
+                 {:.1} lower)",
+                f.slope,
+                -f.delta_aic.unwrap_or(0.0)
+            )),
+            (true, Some(_)) => Ok(()),
+            _ if in_range => Ok(()),
+            _ => Err(format!(
+                "slope {:.2}, outside {:.2} to {:.2}",
+                f.slope, t.range.0, t.range.1
+            )),
+        };
+        match verdict {
+            Ok(()) => agree += 1,
+            Err(what) => {
+                let why = diagnosis(results, f, f.slope < t.range.0);
+                off.push(format!(
+                    "- `{}` on {} `{}`: theory {}; {what}; likely: {why}.",
+                    f.backend, f.experiment, f.series, t.claim
+                ));
+            }
         }
     }
     let _ = writeln!(
         s,
         "**Scaling against theory**: {agree} of {judged} fits of render time agree with the \
-         slope the theory predicts (naive linear in the primitive count M, a tree logarithmic \
-         in it, every backend linear in pixels and samples; the ranges allow for the few \
-         points of each fit){}\n",
+         theory (naive linear in the primitive count M; a tree logarithmic in it, judged by \
+         whether the points favour a logarithm over a power law by the Akaike criterion on \
+         relative residuals, by more than {AIC_MARGIN} either way, or with two points by a \
+         slope of -0.15 to 0.25; a grid a power law of slope 0.2 to 0.5, about M^(1/3); every \
+         backend linear in pixels and samples, slope 0.8 to 1.2){}\n",
         if off.is_empty() {
             ".".to_string()
         } else {
@@ -532,6 +603,7 @@ pub(crate) mod tests {
             visits_per_ray: None,
             hit_fraction: None,
             facing_away: None,
+            trace: None,
             coverage: false,
             equality: Some(Equality {
                 id_match: 1.0,
@@ -839,19 +911,24 @@ pub(crate) mod tests {
             slope,
             intercept: None,
             points: 3,
+            per_decade: None,
+            delta_aic: None,
         }
     }
 
     #[test]
     fn slopes_are_judged_against_their_theory_ranges() {
         let (baseline, oracle) = names();
+        let grid = raybench_registry::name_with(Roles::GRID);
         // The oracle is brute force: linear in M, 0.75 to 1.25 (ends included); a tree
-        // logarithmic, -0.15 to 0.4; every backend linear in pixels, 0.8 to 1.2; the
-        // experiments without a theory are not judged.
+        // without a model comparison by its slope, -0.15 to 0.25; a grid 0.2 to 0.5;
+        // every backend linear in pixels, 0.8 to 1.2; the experiments without a theory are
+        // not judged.
         let results = Results {
             fits: vec![
                 fit("primitives", oracle, 1.25),
-                fit("primitives", baseline, 0.4),
+                fit("primitives", baseline, 0.25),
+                fit("primitives", grid, 1.0 / 3.0),
                 fit("pixels", baseline, 0.8),
                 fit("presets", baseline, 3.0),
                 Fit {
@@ -863,34 +940,62 @@ pub(crate) mod tests {
         };
         let s = section(slopes, &results);
         assert!(
-            s.starts_with("**Scaling against theory**: 3 of 3 fits of render time agree"),
+            s.starts_with("**Scaling against theory**: 4 of 4 fits of render time agree"),
             "{s}"
         );
-        assert!(s.ends_with("samples; the ranges allow for the few points of each fit).\n\n"));
+        assert!(s.ends_with("samples, slope 0.8 to 1.2).\n\n"), "{s}");
+        // The grid's 1/3 is no tree's logarithm; the tree's 0.33 with the points favouring
+        // a power law disagrees, diagnosed from its tests per ray.
         let results = Results {
             fits: vec![
                 fit("primitives", oracle, 1.26),
                 fit("primitives", baseline, -0.16),
                 fit("spp", baseline, 1.0),
+                Fit {
+                    series: "soup".into(),
+                    delta_aic: Some(-7.5),
+                    ..fit("primitives", baseline, 0.33)
+                },
+                Fit {
+                    series: "soup".into(),
+                    quantity: "tests_per_ray".into(),
+                    ..fit("primitives", baseline, 0.31)
+                },
+                Fit {
+                    series: "flat".into(),
+                    delta_aic: Some(1.0),
+                    ..fit("primitives", baseline, 0.33)
+                },
             ],
             ..Results::default()
         };
         let s = section(slopes, &results);
-        assert!(s.contains("1 of 3 fits of render time agree"), "{s}");
+        assert!(s.contains("2 of 5 fits of render time agree"), "{s}");
         assert!(
             s.contains(&format!(
-                "- `{oracle}` on primitives `s`: slope 1.26, theory linear in M (slope about 1) \
-                 (0.75 to 1.25); likely: the primitives outgrow the caches at the largest M.\n"
+                "- `{oracle}` on primitives `s`: theory linear in M (slope about 1); slope \
+                 1.26, outside 0.75 to 1.25; likely: the rays' work or memory traffic grows \
+                 faster than the theory's (tests per ray not counted, so which is not known).\n"
             )),
             "{s}"
         );
         assert!(
             s.contains(&format!(
-                "- `{baseline}` on primitives `s`: slope -0.16, theory logarithmic in M (a \
-                 slope near 0 on log-log axes) (-0.15 to 0.40); likely: {FIXED_COSTS}."
+                "- `{baseline}` on primitives `s`: theory logarithmic in M; slope -0.16, \
+                 outside -0.15 to 0.25; likely: {FIXED_COSTS} (tests per ray not counted)."
             )),
             "{s}"
         );
+        assert!(
+            s.contains(&format!(
+                "- `{baseline}` on primitives `soup`: theory logarithmic in M; the points \
+                 favour a power law (M^0.33) over a logarithm (Akaike criterion 7.5 lower); \
+                 likely: tests per ray grow as fast (M^0.31)"
+            )),
+            "{s}"
+        );
+        // Points that do not tell the models apart agree with the logarithm.
+        assert!(!s.contains("`flat`"), "{s}");
         // No fits of time: no paragraph.
         assert_eq!(section(slopes, &Results::default()), "");
     }

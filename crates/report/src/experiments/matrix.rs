@@ -4,16 +4,18 @@
 
 use super::{Chart, Experiment, Planned, Plot};
 use crate::charts::{Bar, Bars};
-use crate::ctx::{Ctx, PEER_MAX_FLIP, PEER_MIN_ID_MATCH, Views, Workload, skip};
+use crate::ctx::{Ctx, Measurement, PEER_MAX_FLIP, PEER_MIN_ID_MATCH, Views, Workload, skip};
 use crate::fmt::file_safe;
 use crate::fmt::{backends_in, bytes, label_in, noisy_mark, opt, repetitions, secs, section};
 use crate::images::{self, Rgb8};
-use crate::results::{CameraRun, Equality, Images, Quality, Results, Run};
+use crate::results::{CameraRun, Equality, Images, Quality, Results, Run, Trace};
 use anyhow::Result;
 use raybench_core::integrator::HEADLIGHT_NOTE;
 use raybench_core::ray_sets::DerivedParams;
 use raybench_core::{Mode, NO_HIT, QualityParams, RaySet, Scene};
-use raybench_registry::measure::{Measured, Prepared, explicit_rays, prepare};
+use raybench_registry::measure::{
+    Measured, Prepared, RayBatch, explicit_rays, prepare, primary_rays,
+};
 use raybench_registry::progress::Progress;
 use raybench_registry::{Backend, Roles, TimedRenderer, compare_hits};
 use std::collections::BTreeMap;
@@ -211,6 +213,14 @@ impl Experiment for Matrix {
                 }
             }
             let _ = writeln!(s, "## Summary: ray casting, camera rays, Mrays/s\n");
+            if summary.iter().any(|r| r.trace.is_some()) {
+                let _ = writeln!(
+                    s,
+                    "Each cell: the camera rays traced as a batch made beforehand (the trace \
+                     throughput) / the whole frame (ray generation, tracing, shading, the \
+                     image); the verdict and the ratios below judge the first.\n"
+                );
+            }
             let labels: Vec<String> = backends.iter().map(|b| label_in(&summary, b)).collect();
             let _ = writeln!(
                 s,
@@ -239,14 +249,15 @@ impl Experiment for Matrix {
                             .map_or("-".into(), |r| {
                                 let fail = r.equality.as_ref().is_some_and(|e| !e.pass);
                                 let noise = r.seconds.as_ref().map_or("", noisy_mark);
-                                match r.mrays_per_s {
-                                    Some(v) => {
-                                        format!(
-                                            "{v:.2}{noise}{}",
-                                            if fail { " (differs)" } else { "" }
-                                        )
-                                    }
-                                    None => r.status.clone(),
+                                let differs = if fail { " (differs)" } else { "" };
+                                match (r.mrays_per_s, &r.trace) {
+                                    (Some(v), Some(t)) => format!(
+                                        "{:.2}{} / {v:.2}{noise}{differs}",
+                                        t.mrays_per_s,
+                                        noisy_mark(&t.seconds)
+                                    ),
+                                    (Some(v), None) => format!("{v:.2}{noise}{differs}"),
+                                    (None, _) => r.status.clone(),
                                 }
                             })
                     })
@@ -271,17 +282,25 @@ impl Experiment for Matrix {
                 let _ = writeln!(s, "| scene | {} |", labels.join(" | "));
                 let _ = writeln!(s, "|---|{}", "---:|".repeat(backends.len()));
                 for sc in &scenes {
-                    let base = summary
+                    // Trace against trace where both have one, else frame against frame.
+                    let figure = |r: &Run, traced: bool| {
+                        if traced {
+                            r.trace.as_ref().map(|t| t.mrays_per_s)
+                        } else {
+                            r.mrays_per_s
+                        }
+                    };
+                    let base_run = summary
                         .iter()
-                        .find(|r| r.scene == *sc && &r.backend == base_name)
-                        .and_then(|r| r.mrays_per_s);
+                        .find(|r| r.scene == *sc && &r.backend == base_name);
                     let cells: Vec<String> = backends
                         .iter()
                         .map(|b| {
-                            let v = summary
-                                .iter()
-                                .find(|r| r.scene == *sc && &r.backend == b)
-                                .and_then(|r| r.mrays_per_s);
+                            let run = summary.iter().find(|r| r.scene == *sc && &r.backend == b);
+                            let traced = run.is_some_and(|r| r.trace.is_some())
+                                && base_run.is_some_and(|r| r.trace.is_some());
+                            let base = base_run.and_then(|r| figure(r, traced));
+                            let v = run.and_then(|r| figure(r, traced));
                             opt(v.zip(base).map(|(v, e)| v / e), |x| format!("{x:.2}"))
                         })
                         .collect();
@@ -463,6 +482,7 @@ impl Experiment for Matrix {
                 );
             }
             let _ = writeln!(s);
+            write_trace(&runs, s);
             write_cameras(&runs, s);
             let mut pictures = Vec::new();
             for r in &runs {
@@ -778,6 +798,7 @@ fn run_scene(
                 visits_per_ray: None,
                 hit_fraction: None,
                 facing_away: None,
+                trace: None,
                 equality: None,
                 images: Images::default(),
                 phases: BTreeMap::new(),
@@ -805,10 +826,33 @@ fn run_scene(
         let renderers: Vec<&dyn TimedRenderer> =
             timed.iter().map(|(_, p)| p.renderer.as_ref()).collect();
         let measured = ctx.measure_all(&renderers, &w.settings(), &explicit[wi])?;
+        // Ray casting's camera rays once more, made beforehand and traced as a batch: the
+        // trace throughput, without the frame's ray generation, shading and image.
+        let traced: Vec<Option<Measurement>> =
+            if w.mode == Mode::Cast && w.rays == RaySet::Primary && !w.replay {
+                progress.begin(format!(
+                    "{} {}: the camera rays as a batch, {} backends in rounds",
+                    scene.name,
+                    w.key(),
+                    renderers.len()
+                ));
+                let views = camera_batches(scene, &w.settings(), &explicit[wi])?;
+                ctx.measure_all(&renderers, &w.settings(), &views)?
+                    .into_iter()
+                    .map(|(m, _)| Some(m))
+                    .collect()
+            } else {
+                renderers.iter().map(|_| None).collect()
+            };
         let mut reference: Option<Reference> = None;
-        for ((i, p), (m, each)) in timed.into_iter().zip(measured) {
+        for (((i, p), (m, each)), trace) in timed.into_iter().zip(measured).zip(traced) {
             let (b, _, quality) = &prepared[i];
             let run = &mut of_workload[i];
+            run.trace = trace.map(|t| Trace {
+                rays: t.warm.rays,
+                mrays_per_s: t.warm.rays as f64 / t.timing.median.max(1e-12) / 1e6,
+                seconds: t.timing,
+            });
             let r = &p.renderer;
             run.build_seconds = Some(p.build);
             run.quality.clone_from(quality);
@@ -1091,6 +1135,76 @@ fn write_cameras(runs: &[&Run], s: &mut String) {
         );
     }
     let _ = writeln!(s);
+}
+
+/// The camera rays traced as a batch beside their frame ([`Run::trace`]): the trace
+/// throughput, and what the frame's pipeline (ray generation, shading, the image) adds per
+/// camera ray. Nothing for workloads without it.
+fn write_trace(runs: &[&Run], s: &mut String) {
+    let traced: Vec<(&Run, &Trace)> = runs
+        .iter()
+        .filter_map(|r| Some((*r, r.trace.as_ref()?)))
+        .collect();
+    if traced.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "The same camera rays made beforehand and traced as a batch (closest hits; no ray \
+         generation, shading or image): the **trace** throughput, which the verdict judges, \
+         beside the whole frame's, and what the frame adds per camera ray.\n"
+    );
+    let _ = writeln!(
+        s,
+        "| backend | trace s [interval] | repetitions | trace Mrays/s | frame Mrays/s | frame adds, ns per camera ray |"
+    );
+    let _ = writeln!(s, "|---|---|---|---:|---:|---:|");
+    for (r, t) in traced {
+        let interval = t.seconds.interval.map_or("[?]".into(), |[lo, hi]| {
+            format!("[{}-{}]", secs(lo), secs(hi))
+        });
+        let added = r.seconds.as_ref().map_or("-".into(), |frame| {
+            let rays = t.rays.max(1) as f64;
+            format!("{:.1}", (frame.median - t.seconds.median) / rays * 1e9)
+        });
+        let _ = writeln!(
+            s,
+            "| {} | {} {interval}{} | {} | {:.3} | {} | {added} |",
+            r.label(),
+            secs(t.seconds.median),
+            noisy_mark(&t.seconds),
+            repetitions(&t.seconds),
+            t.mrays_per_s,
+            opt(r.mrays_per_s, |v| format!("{v:.3}")),
+        );
+    }
+    let _ = writeln!(s);
+}
+
+/// Each view's camera rays (`primary_rays` of its camera, in the order the frame traces
+/// them) as a closest-hit batch, for the trace throughput of ray casting's camera rays.
+fn camera_batches(
+    scene: &Arc<Scene>,
+    settings: &raybench_core::RenderSettings,
+    views: &Views,
+) -> Result<Vec<(Option<u32>, Option<RayBatch>)>> {
+    views
+        .iter()
+        .map(|(camera, _)| {
+            let settings = raybench_core::RenderSettings {
+                camera: *camera,
+                ..*settings
+            };
+            Ok((
+                *camera,
+                Some(RayBatch {
+                    rays: primary_rays(scene, &settings)?,
+                    any_hit: false,
+                    facing_away: 0,
+                }),
+            ))
+        })
+        .collect()
 }
 
 /// What share of a run's rays hit (the reference's answers, which every exact backend
