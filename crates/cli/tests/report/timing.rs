@@ -8,12 +8,13 @@ use crate::{markdown, report, tmp_dir};
 use serde_json::Value;
 use std::path::Path;
 
-/// A report of two backends on the spheres, cast only, 16 x 16, with `repeat` repetitions
-/// of at least 2 ms each.
+/// A report of two backends on a small generated mesh (a performance scene, as every
+/// generated one: the verdict judges it), cast only, 16 x 16, with `repeat` repetitions of
+/// at least 2 ms each.
 fn tiny(dir: &Path, repeat: &str) -> Value {
     #[rustfmt::skip]
     let out = report(dir, &[
-        "--scenes", "spheres", "--backends", "naive,bvh", "--modes", "cast",
+        "--scenes", "icosphere:1", "--backends", "naive,bvh", "--modes", "cast",
         "--rays", "primary,incoherent", "--size", "16", "--repeat", repeat,
         "--min-sample", "2", "--no-scaling",
     ]);
@@ -43,6 +44,20 @@ fn every_timing_carries_its_interval_and_counts() {
         for count in ["redone", "contended"] {
             assert!(t[count].as_u64().is_some(), "{count}: {t}");
         }
+        // Camera rays also as a batch, timed the same way; the other sets are batches.
+        let trace = &run["trace"];
+        if run["ray_set"] == "primary" {
+            assert_eq!(
+                trace["seconds"]["samples"].as_array().unwrap().len(),
+                6,
+                "{run}"
+            );
+            assert!(trace["seconds"]["interval"].is_array(), "{run}");
+            assert_eq!(trace["rays"], 256, "{run}");
+            assert!(trace["mrays_per_s"].as_f64().unwrap() > 0.0, "{run}");
+        } else {
+            assert!(trace.is_null(), "{run}");
+        }
     }
     // The Markdown: the shard's header states the rule, every row its interval, minimum
     // and repetitions; the verdict names a winner or a tie.
@@ -55,11 +70,21 @@ fn every_timing_carries_its_interval_and_counts() {
     for run in runs {
         let t = &run["seconds"];
         let backend = run["backend"].as_str().unwrap();
-        let scene_rows: Vec<&str> = md
-            .lines()
-            .filter(|l| l.starts_with(&format!("| {backend} | ")) && l.contains(" | 6 ("))
-            .collect();
+        // The workload tables' rows (repetitions in the sixth column); the batch trace's
+        // table has them in the third.
+        let rows_with = |column: usize| -> Vec<&str> {
+            md.lines()
+                .filter(|l| {
+                    l.starts_with(&format!("| {backend} | "))
+                        && l.split(" | ")
+                            .nth(column)
+                            .is_some_and(|c| c.starts_with("6 ("))
+                })
+                .collect()
+        };
+        let scene_rows = rows_with(5);
         assert_eq!(scene_rows.len(), 2, "{backend}: {md}");
+        assert_eq!(rows_with(2).len(), 1, "{backend}'s batch trace: {md}");
         // `median [lo-hi]`, then the minimum, then the repetitions.
         let cells: Vec<&str> = scene_rows[0].split(" | ").collect();
         let (median, interval) = cells[3].split_once(" [").unwrap();
