@@ -199,9 +199,11 @@ pub fn report(results: &Results, charts: &Charts) -> String {
              `[lo-hi]` is the median's {:.0}% interval. Build time is separate. **Mrays/s** counts every ray traced (camera, secondary, shadow) over the \
              median time; **tests/ray** and **visits/ray** are ray/primitive tests and node or \
              cell visits per ray, counted in the warm-up. Ray casting runs on several ray sets: \
-             `primary` (camera rays, as frames), `incoherent` (seeded random rays in the scene's \
-             box), and, derived from the primary hits and the same for every backend, `shadow` \
-             (any hit, to every light and one sampled emitter point), `ao` (any hit, cosine rays a \
+             `primary` (camera rays, as frames, and once more as a batch made beforehand: the \
+             trace throughput the verdict judges), `incoherent` (seeded random rays in the \
+             scene's box), and, derived from the primary hits and the same for every backend, \
+             `shadow` (any hit, to every light and one sampled emitter point, except where the \
+             light lies behind the surface, which blocks it untraced), `ao` (any hit, cosine rays a \
              tenth of the scene's diagonal long) and `diffuse` (one cosine bounce, closest hit); \
              any-hit sets are compared on whether each ray is blocked. **Equality** compares each \
              backend with the reference backend of its scene (naive where it fits its time budget, \
