@@ -667,11 +667,11 @@ impl Quality {
         ])
     }
 
-    /// The SAH cost and the EPO of a tree.
+    /// A tree's SAH cost; `None` for other structures.
     #[must_use]
-    pub fn sah_epo(&self) -> Option<(f64, f64)> {
+    pub fn sah(&self) -> Option<f64> {
         match self {
-            Self::Tree { sah, epo, .. } => Some((*sah, *epo)),
+            Self::Tree { sah, .. } => Some(*sah),
             _ => None,
         }
     }

@@ -382,9 +382,9 @@ fn merged_synthetic_report_states_hand_computed_figures() {
     assert_eq!(
         line(&md, "- `bvh` on primitives"),
         "- `bvh` on primitives `soup`: theory logarithmic in M; the points favour a power law \
-         (M^0.30) over a logarithm (Akaike criterion 72.4 lower); likely: tests per ray grow \
-         only as M^0.15: the time per test grows, so the structure or the primitives outgrow \
-         the caches."
+         (M^0.30) over a logarithm (Akaike criterion 72.4 lower); likely: tests per ray scale \
+         as M^0.15, slower than the time: the time per test grows, so the structure or the \
+         primitives outgrow the caches."
     );
     for want in [
         "| primitives | soup | bvh | 0.30 | 0.15 | 3 |",

@@ -37,7 +37,7 @@ fn timed_trees<'a>(results: &'a Results, mode: &str, set: &str) -> Vec<TimedTree
         .into_iter()
         .filter_map(|s| {
             let q = s.quality.as_ref()?;
-            let (sah, _) = q.sah_epo()?;
+            let sah = q.sah()?;
             let epo = q.measured_epo();
             let times: Vec<f64> = results
                 .runs
