@@ -240,6 +240,55 @@ fn traced(r: &dyn TimedRenderer, batch: &RayBatch, count: bool) -> Result<Measur
     })
 }
 
+/// Each ray's own work: every ray of `rays` traced alone (a batch of one, through
+/// [`raybench_core::Renderer::trace_rays`], or [`raybench_core::Renderer::occlude_rays`] for
+/// `any_hit`) with a fresh count, in the order of `rays`; `None` where the backend does not
+/// count. Untimed, for per-ray cost distributions: never call it inside a timed pass.
+///
+/// A ray traced alone does the work it does in a batch wherever the structure's batch entry
+/// point walks ray by ray; a packet traversal shares node visits between the rays of a
+/// packet. A caller that reads these counts as a batch's work split by ray checks first that
+/// they add up to the batch's counters. The rays are spread over the machine's threads in
+/// contiguous chunks (each batch of one runs on its caller's thread), so the counts do not
+/// depend on the thread count.
+///
+/// # Errors
+/// When tracing fails (not prepared, or a backend that traces only whole frames).
+pub fn counts_per_ray(
+    r: &dyn TimedRenderer,
+    rays: &[Ray],
+    any_hit: bool,
+) -> Result<Option<Vec<RayCounters>>> {
+    let one = |ray: &Ray| -> Result<Option<RayCounters>> {
+        let ray = std::slice::from_ref(ray);
+        Ok(if any_hit {
+            r.occlude_rays(ray, true)?.1
+        } else {
+            r.trace_rays(ray, true)?.1
+        })
+    };
+    let threads = std::thread::available_parallelism().map_or(1, usize::from);
+    let chunk = rays.len().div_ceil(threads).max(1);
+    let parts: Vec<Result<Option<Vec<RayCounters>>>> = std::thread::scope(|scope| {
+        let handles: Vec<_> = rays
+            .chunks(chunk)
+            .map(|part| scope.spawn(move || part.iter().map(one).collect()))
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
+            .collect()
+    });
+    let mut out = Vec::with_capacity(rays.len());
+    for part in parts {
+        match part? {
+            Some(counts) => out.extend(counts),
+            None => return Ok(None),
+        }
+    }
+    Ok(Some(out))
+}
+
 /// The seconds a measurement reports: phase `render`, the wall-clock time of the whole call,
 /// for every backend. A GPU's execution time alone (phase `gpu`) stays among the phases: a
 /// user waits for the whole call, and on a software adapter the two differ most.
@@ -395,6 +444,42 @@ mod tests {
                 .unwrap()
                 .is_none()
         );
+    }
+
+    /// Each ray traced alone through a tree walked ray by ray does the work it does in the
+    /// batch: the per-ray counts add up to the batch's counters, for closest and any hits.
+    #[test]
+    fn per_ray_counts_add_up_to_the_batch() {
+        let scene = scene();
+        let baseline = crate::with_role(Roles::BASELINE).unwrap();
+        let p = prepare(baseline, &scene).unwrap();
+        let batch = explicit_rays(
+            RaySet::Shadow,
+            &scene,
+            &settings(),
+            &DerivedParams::default(),
+        )
+        .unwrap()
+        .unwrap();
+        let primary = primary_rays(&scene, &settings()).unwrap();
+        for (rays, any_hit) in [(&primary, false), (&batch.rays, true)] {
+            let each = counts_per_ray(p.renderer.as_ref(), rays, any_hit)
+                .unwrap()
+                .unwrap();
+            assert_eq!(each.len(), rays.len());
+            let mut sum = RayCounters::default();
+            for c in &each {
+                raybench_core::Counters::merge(&mut sum, c);
+            }
+            let whole = RayBatch {
+                rays: rays.clone(),
+                any_hit,
+                facing_away: 0,
+            };
+            let m = measure(p.renderer.as_ref(), &settings(), Some(&whole), true).unwrap();
+            assert_eq!(Some(sum), m.counters, "any hit: {any_hit}");
+            assert!(each.iter().any(|c| c.node_visits != each[0].node_visits));
+        }
     }
 
     /// Any-hit answers are recorded as [`OCCLUDED`] / [`NO_HIT`], equal to whether the

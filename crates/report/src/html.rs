@@ -13,7 +13,8 @@
 //! The page's structure is a contract with its script and with the browser test
 //! (`crates/cli/tests/browser.rs`): `nav#toc`; each viewer a `section.viewer` with
 //! `button.viewer-pick[data-backend]` (the reference first, `data-reference="true"`),
-//! `button.viewer-layer[data-layer=image|ids|flip]`, one `img.viewer-image` and one
+//! `button.viewer-layer[data-layer=image|ids|flip]` (and `visits` where a backend has a
+//! heat map of node visits per pixel), one `img.viewer-image` and one
 //! `.viewer-stats`; every data table a `table.sortable`, its noisy cells `td.noisy`.
 
 use crate::charts::escape as esc;
@@ -409,6 +410,8 @@ struct Pick<'r> {
     ids: Option<String>,
     /// The FLIP map, `None` where the images are identical.
     flip: Option<String>,
+    /// The heat map of node or cell visits per pixel, `None` where none was written.
+    visits: Option<String>,
 }
 
 /// The image viewer of one workload (empty without a reference image).
@@ -428,6 +431,7 @@ fn viewer(results: &Results, key: &WorkloadKey) -> String {
         image: reference_image.clone(),
         ids: None,
         flip: None,
+        visits: reference.images.visits.clone(),
     }];
     let mut absent = Vec::new();
     for r in runs.iter().filter(|r| !std::ptr::eq(**r, reference)) {
@@ -439,6 +443,7 @@ fn viewer(results: &Results, key: &WorkloadKey) -> String {
                 image: reference_image.clone(),
                 ids: None,
                 flip: None,
+                visits: r.images.visits.clone(),
             }),
             (Some(color), false) => picks.push(Pick {
                 run: r,
@@ -446,6 +451,7 @@ fn viewer(results: &Results, key: &WorkloadKey) -> String {
                 image: color.clone(),
                 ids: r.images.ids_diff.clone(),
                 flip: r.images.flip.clone(),
+                visits: r.images.visits.clone(),
             }),
             (None, false) => absent.push(format!(
                 "{} ({}{})",
@@ -492,7 +498,7 @@ fn viewer(results: &Results, key: &WorkloadKey) -> String {
         let _ = write!(
             s,
             "<button type=\"button\" class=\"viewer-pick{}\" data-backend=\"{}\"{} \
-             data-image=\"{}\" data-ids=\"{}\" data-flip=\"{}\" aria-pressed=\"{}\" \
+             data-image=\"{}\" data-ids=\"{}\" data-flip=\"{}\" data-visits=\"{}\" aria-pressed=\"{}\" \
              title=\"key {}\">{}{}</button>",
             pick_class(p),
             esc(&p.run.backend),
@@ -504,6 +510,7 @@ fn viewer(results: &Results, key: &WorkloadKey) -> String {
             esc(&p.image),
             d(&p.ids),
             d(&p.flip),
+            d(&p.visits),
             n == 0,
             if n < 9 {
                 (n + 1).to_string()
@@ -519,9 +526,15 @@ fn viewer(results: &Results, key: &WorkloadKey) -> String {
         "<span class=\"viewer-layers\" role=\"group\" aria-label=\"Layer\">\
          <button type=\"button\" class=\"viewer-layer\" data-layer=\"image\" aria-pressed=\"true\" title=\"key i\">image</button>\
          <button type=\"button\" class=\"viewer-layer\" data-layer=\"ids\" aria-pressed=\"false\" title=\"key d\">id differences</button>\
-         <button type=\"button\" class=\"viewer-layer\" data-layer=\"flip\" aria-pressed=\"false\" title=\"key f\">FLIP</button>\
-         </span>",
+         <button type=\"button\" class=\"viewer-layer\" data-layer=\"flip\" aria-pressed=\"false\" title=\"key f\">FLIP</button>",
     );
+    // The visits layer only where some backend has a heat map of its camera rays' visits.
+    if picks.iter().any(|p| p.visits.is_some()) {
+        s.push_str(
+            "<button type=\"button\" class=\"viewer-layer\" data-layer=\"visits\" aria-pressed=\"false\" title=\"key v\">visits</button>",
+        );
+    }
+    s.push_str("</span>");
     let _ = write!(
         s,
         "<span class=\"viewer-zoom\"><button type=\"button\" class=\"viewer-zoom-out\" title=\"key -\">−</button>\
@@ -689,7 +702,7 @@ fn seconds(s: f64) -> String {
     }
 }
 
-/// The colour keys of the two maps and the keyboard's.
+/// The colour keys of the maps (id differences, FLIP, visits) and the keyboard's.
 fn keys_legend() -> String {
     let stops: Vec<String> = crate::images::magma_stops(9)
         .iter()
@@ -702,10 +715,14 @@ fn keys_legend() -> String {
          <li><span class=\"swatch\" style=\"background: rgb(255,140,0)\"></span>a different primitive</li>\
          <li><span class=\"swatch\" style=\"background: #fff\"></span>one hits, the other misses</li></ul></div>\
          <div class=\"viewer-key viewer-key-flip\"><p>FLIP error (magma):</p>\
-         <div class=\"ramp\" style=\"background: linear-gradient(to right, {})\"></div>\
+         <div class=\"ramp\" style=\"background: linear-gradient(to right, {0})\"></div>\
          <div class=\"ramp-labels\"><span>0 (same)</span><span>0.5</span><span>1</span></div></div>\
+         <div class=\"viewer-key viewer-key-visits\"><p>Node or cell visits per pixel (magma, linear \
+         from 0 to the image's own largest count):</p>\
+         <div class=\"ramp\" style=\"background: linear-gradient(to right, {0})\"></div>\
+         <div class=\"ramp-labels\"><span>0</span><span>half the maximum</span><span>the maximum</span></div></div>\
          <p class=\"viewer-help\">Keys (click the viewer first): ←/→ or j/k backend, 1-9 pick, \
-         r reference, i image, d id differences, f FLIP, +/− zoom.</p>",
+         r reference, i image, d id differences, f FLIP, v visits (where offered), +/− zoom.</p>",
         stops.join(", ")
     )
 }

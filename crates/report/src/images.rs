@@ -128,9 +128,58 @@ pub fn ids_diff(
     }
 }
 
+/// A heat map of node or cell visits per pixel, `visits` row by row: each pixel's count
+/// mapped linearly from 0 to the largest count in the image onto the magma colour map (the
+/// [`magma_stops`] of the FLIP maps: 0 visits black, the image's maximum pale yellow); all
+/// black where no pixel visits anything. The scale is the image's own, so the maps of two
+/// backends share a colour only where they share a maximum (the report tables give it).
+///
+/// # Panics
+/// When `visits` does not hold `width * height` counts.
+#[must_use]
+pub fn visits_heat_map(width: u32, height: u32, visits: &[u64]) -> Rgb8 {
+    assert_eq!(visits.len() as u64, u64::from(width) * u64::from(height));
+    let lut = nv_flip::magma_lut().to_vec();
+    let last = (lut.len() / 3 - 1) as u128;
+    let max = u128::from(visits.iter().copied().max().unwrap_or(0).max(1));
+    let data = visits
+        .iter()
+        .flat_map(|&v| {
+            // Rounded to the nearest entry, in integers.
+            let j = 3 * ((u128::from(v) * last * 2 + max) / (2 * max)) as usize;
+            [lut[j], lut[j + 1], lut[j + 2]]
+        })
+        .collect();
+    Rgb8 {
+        width,
+        height,
+        data,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The heat map's ends are magma's: 0 visits its first colour, the image's maximum its
+    /// last, and half the maximum the middle of the map.
+    #[test]
+    fn visits_heat_map_runs_from_zero_to_the_image_maximum() {
+        let lut = nv_flip::magma_lut().to_vec();
+        let n = lut.len() / 3;
+        let entry = |i: usize| lut[3 * i..3 * i + 3].to_vec();
+        let m = visits_heat_map(3, 1, &[0, 40, 80]);
+        assert_eq!((m.width, m.height, m.data.len()), (3, 1, 9));
+        assert_eq!(m.data[0..3], entry(0)[..]);
+        assert_eq!(m.data[6..9], entry(n - 1)[..]);
+        assert_eq!(
+            m.data[3..6],
+            entry(((n - 1) as f64 / 2.0).round() as usize)[..]
+        );
+        // Nothing visited: all the first colour, no division by zero.
+        let none = visits_heat_map(2, 1, &[0, 0]);
+        assert_eq!(none.data, [entry(0), entry(0)].concat());
+    }
 
     fn image(v: u8) -> Rgb8 {
         Rgb8 {

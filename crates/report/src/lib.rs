@@ -427,9 +427,14 @@ pub fn merge(dirs: &[PathBuf], out: &Path, allow: Allow) -> Result<Results> {
         .with_context(|| format!("cannot create {}", out.display()))?;
     for (dir, r) in inputs {
         for run in &r.runs {
-            for name in [&run.images.color, &run.images.ids_diff, &run.images.flip]
-                .into_iter()
-                .flatten()
+            for name in [
+                &run.images.color,
+                &run.images.ids_diff,
+                &run.images.flip,
+                &run.images.visits,
+            ]
+            .into_iter()
+            .flatten()
             {
                 let (from, to) = (dir.join(name), out.join(name));
                 if from != to {

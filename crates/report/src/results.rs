@@ -359,6 +359,11 @@ pub struct Images {
     pub ids_diff: Option<String>,
     /// FLIP error map against the reference.
     pub flip: Option<String>,
+    /// Heat map of node or cell visits per pixel of the first camera's rays
+    /// ([`crate::images::visits_heat_map`]), for ray casting's camera rays on a backend with
+    /// a per-ray cost distribution ([`Run::ray_costs`]). Absent otherwise and in older files.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub visits: Option<String>,
 }
 
 /// One backend on one workload of one scene.
@@ -424,6 +429,12 @@ pub struct Run {
     pub tests_per_ray: Option<f64>,
     /// Node or cell visits per ray.
     pub visits_per_ray: Option<f64>,
+    /// How the work spreads over the rays: each ray's own tests and visits, as percentiles
+    /// ([`RayCosts`]). Recorded for ray casting's workloads on CPU backends that count node or
+    /// cell visits, where the rays traced one at a time do exactly the work of the run's
+    /// counted pass; absent otherwise and in older files.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ray_costs: Option<RayCosts>,
     /// The share of the rays with a hit, as this backend answered them: for frames the
     /// camera rays (pixels) that hit a surface, for closest-hit sets the rays that hit, for
     /// any-hit sets the rays blocked. Absent in files written before it was recorded.
@@ -468,6 +479,52 @@ pub struct Run {
     /// structure and in files written before it was added.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub quality: Option<Quality>,
+}
+
+/// The distribution of one per-ray count over a run's rays: the minimum, the nearest-rank
+/// percentiles 50, 90 and 99 ([`crate::stats::nearest_rank`]) and the maximum.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+pub struct Distribution {
+    /// The smallest count.
+    pub min: u64,
+    /// The median (nearest rank).
+    pub p50: u64,
+    /// The 90th percentile (nearest rank).
+    pub p90: u64,
+    /// The 99th percentile (nearest rank).
+    pub p99: u64,
+    /// The largest count.
+    pub max: u64,
+}
+
+impl Distribution {
+    /// The distribution of `counts`; `None` for none.
+    #[must_use]
+    pub fn of(counts: &[u64]) -> Option<Self> {
+        let mut v = counts.to_vec();
+        v.sort_unstable();
+        let at = |p| crate::stats::nearest_rank(&v, p);
+        Some(Self {
+            min: *v.first()?,
+            p50: at(50)?,
+            p90: at(90)?,
+            p99: at(99)?,
+            max: *v.last()?,
+        })
+    }
+}
+
+/// Each ray's own work on a run's rays ([`Run::ray_costs`]): every ray traced alone, with a
+/// fresh count, in an untimed pass after the timed ones. The distributions are over every
+/// camera's rays; their means are the run's `tests_per_ray` and `visits_per_ray`.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+pub struct RayCosts {
+    /// Rays the distributions are over.
+    pub rays: u64,
+    /// Ray/primitive tests per ray.
+    pub tests: Distribution,
+    /// Node or cell visits per ray.
+    pub visits: Distribution,
 }
 
 /// A workload's rays traced as a batch ([`Run::trace`]).

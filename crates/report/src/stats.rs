@@ -264,6 +264,19 @@ pub fn fastest(times: &[&[f64]]) -> Option<Fastest> {
     })
 }
 
+/// The `p`-th percentile (`p` in percent, `0..=100`) of `sorted`, which must be in ascending
+/// order, by the nearest-rank definition: the value of rank `ceil(p / 100 * n)` (ranks from 1,
+/// and at least 1), that is the smallest value with at least `p` % of the `n` values at or
+/// below it. Every percentile is therefore one of the values (no interpolation), `p = 0`
+/// gives the minimum and `p = 100` the maximum. The rank is computed in integers, so no
+/// rounding can move it. `None` for no values; a `p` above 100 is read as 100.
+#[must_use]
+pub fn nearest_rank(sorted: &[u64], p: u32) -> Option<u64> {
+    let n = sorted.len() as u128;
+    let rank = (u128::from(p.min(100)) * n).div_ceil(100).max(1);
+    sorted.get(usize::try_from(rank).ok()? - 1).copied()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -414,5 +427,36 @@ mod tests {
         // Only the rounds both took part in are paired; one pair has no interval.
         assert_eq!(paired_ratio(&[2.0, 9.0], &[1.0]), (2.0, None));
         assert!(paired_ratio(&[], &[1.0]).0.is_nan());
+    }
+
+    /// Nearest-rank percentiles on hand-made lists, each value chosen so that an off-by-one
+    /// in the rank (rounding down instead of up, or indexing from 1) gives another answer.
+    #[test]
+    fn nearest_rank_percentiles_are_exact() {
+        let tens: Vec<u64> = (1..=10).map(|i| i * 10).collect();
+        // n = 10: p50 is rank 5, p90 rank 9, p99 rank ceil(9.9) = 10.
+        assert_eq!(nearest_rank(&tens, 50), Some(50));
+        assert_eq!(nearest_rank(&tens, 90), Some(90));
+        assert_eq!(nearest_rank(&tens, 99), Some(100));
+        assert_eq!(nearest_rank(&tens, 0), Some(10));
+        assert_eq!(nearest_rank(&tens, 100), Some(100));
+        assert_eq!(nearest_rank(&tens, 101), Some(100));
+        // n = 7: p50 is rank ceil(3.5) = 4 (rounding down would give 3), p90 rank
+        // ceil(6.3) = 7 (not 6), p10 rank ceil(0.7) = 1.
+        let seven = [1, 2, 3, 4, 5, 6, 7];
+        assert_eq!(nearest_rank(&seven, 50), Some(4));
+        assert_eq!(nearest_rank(&seven, 90), Some(7));
+        assert_eq!(nearest_rank(&seven, 10), Some(1));
+        // n = 200: p99 is rank 198 exactly, p1 rank 2.
+        let many: Vec<u64> = (1..=200).collect();
+        assert_eq!(nearest_rank(&many, 99), Some(198));
+        assert_eq!(nearest_rank(&many, 1), Some(2));
+        assert_eq!(nearest_rank(&many, 50), Some(100));
+        // Ties: half the rays do no work, so the median is 0 and p90 the rest.
+        assert_eq!(nearest_rank(&[0, 0, 0, 5], 50), Some(0));
+        assert_eq!(nearest_rank(&[0, 0, 0, 5], 75), Some(0));
+        assert_eq!(nearest_rank(&[0, 0, 0, 5], 76), Some(5));
+        assert_eq!(nearest_rank(&[42], 50), Some(42));
+        assert_eq!(nearest_rank(&[], 50), None);
     }
 }

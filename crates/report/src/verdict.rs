@@ -603,6 +603,7 @@ pub(crate) mod tests {
             rays: Some(1000),
             tests_per_ray: None,
             visits_per_ray: None,
+            ray_costs: None,
             hit_fraction: None,
             facing_away: None,
             trace: None,

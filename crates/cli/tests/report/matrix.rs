@@ -71,7 +71,56 @@ fn report_writes_markdown_json_images_and_charts() {
             None => assert!(run["backend"] != "naive" || run["ray_set"] != "primary"),
         }
     }
+    // Each ray's own work: percentiles on every ray-casting workload of bvh (walked ray by
+    // ray, so its rays traced alone do the work of its counted pass), and the camera rays'
+    // heat map of visits per pixel; none for naive, which visits no nodes.
+    for run in runs.iter().filter(|r| r["mode"] == "cast") {
+        let costs = &run["ray_costs"];
+        let heat = run["images"]["visits"].as_str();
+        if run["backend"] == "naive" {
+            assert!(costs.is_null() && heat.is_none(), "{run}");
+            continue;
+        }
+        if run["backend"] != "bvh" {
+            continue;
+        }
+        assert_eq!(costs["rays"].as_u64(), run["rays"].as_u64(), "{run}");
+        for (what, mean) in [("tests", "tests_per_ray"), ("visits", "visits_per_ray")] {
+            let at = |k: &str| {
+                costs[what][k]
+                    .as_u64()
+                    .unwrap_or_else(|| panic!("{what} {k}: {run}"))
+            };
+            let order = ["min", "p50", "p90", "p99", "max"].map(at);
+            assert!(order.windows(2).all(|w| w[0] <= w[1]), "{what}: {order:?}");
+            let mean = run[mean].as_f64().unwrap();
+            assert!(
+                order[0] as f64 <= mean && mean <= order[4] as f64,
+                "{what}: mean {mean}, {order:?}"
+            );
+        }
+        assert!(
+            costs["visits"]["max"].as_u64() > costs["visits"]["min"].as_u64(),
+            "{run}"
+        );
+        if run["ray_set"] == "primary" {
+            let file = heat.unwrap_or_else(|| panic!("no heat map: {run}"));
+            let img = image::open(dir.join(file)).unwrap();
+            assert_eq!((img.width(), img.height()), (32, 32), "{file}");
+        } else {
+            assert!(heat.is_none(), "{run}");
+        }
+    }
     let md = markdown(&dir);
+    assert!(
+        md.contains(
+            "Each ray's own work, every ray traced alone in an untimed pass: the nearest-rank \
+             percentiles of the primitive tests and of the node or cell visits per ray, over 1024 \
+             rays (the means are the table's above).\n\n\
+             | backend | tests p50 | tests p90 | tests p99 | tests max |"
+        ),
+        "{md}"
+    );
     assert!(md.starts_with("# raybench report"));
     assert!(md.contains("## Summary") && md.contains("### cornell-box"));
     assert!(md.contains("## Structure quality"), "{md}");

@@ -6,7 +6,8 @@
   // ---- Image viewers --------------------------------------------------------------------
   // Each section.viewer holds one button.viewer-pick per image (the reference first), with
   // the file of each layer in data-image, data-ids and data-flip (empty where the result is
-  // identical to the reference, so the map is derived from the reference image by a filter).
+  // identical to the reference, so the map is derived from the reference image by a filter),
+  // and data-visits, the heat map of node visits per pixel (empty where none was written).
   const ZOOMS = [1, 2, 4, 8, 16];
 
   function setUpViewer(viewer) {
@@ -29,7 +30,12 @@
       const file = state.layer === "image" ? pick.dataset.image : pick.dataset[state.layer];
       let derived = "";
       let note = "";
-      if (state.layer !== "image" && !file) {
+      if (state.layer === "visits" && !file) {
+        // No heat map for this backend: it counts no node visits, or its rays traced one at a
+        // time do other work than in its batches (a packet traversal).
+        derived = state.layer;
+        note = "No visits heat map for this backend: it has no per-ray cost distribution.";
+      } else if (state.layer !== "image" && !file) {
         // No map was written: this result equals the reference, whose own map against itself
         // is the reference darkened (ids) or zero everywhere (FLIP).
         derived = state.layer;
@@ -91,6 +97,7 @@
       else if (k === "i") { state.layer = "image"; show(); }
       else if (k === "d") { state.layer = "ids"; show(); }
       else if (k === "f") { state.layer = "flip"; show(); }
+      else if (k === "v" && layerButtons.some((b) => b.dataset.layer === "visits")) { state.layer = "visits"; show(); }
       else if (k === "+" || k === "=") zoomBy(1);
       else if (k === "-" || k === "_") zoomBy(-1);
       else return;

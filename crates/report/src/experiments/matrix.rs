@@ -8,13 +8,15 @@ use crate::ctx::{Ctx, Measurement, PEER_MAX_FLIP, PEER_MIN_ID_MATCH, Views, Work
 use crate::fmt::file_safe;
 use crate::fmt::{backends_in, bytes, label_in, noisy_mark, opt, repetitions, secs, section};
 use crate::images::{self, Rgb8};
-use crate::results::{CameraRun, Equality, Images, Quality, Results, Run, Trace};
+use crate::results::{
+    CameraRun, Distribution, Equality, Images, Quality, RayCosts, Results, Run, Trace,
+};
 use anyhow::Result;
 use raybench_core::integrator::HEADLIGHT_NOTE;
 use raybench_core::ray_sets::DerivedParams;
 use raybench_core::{Mode, NO_HIT, QualityParams, RaySet, Scene};
 use raybench_registry::measure::{
-    Measured, Prepared, RayBatch, explicit_rays, prepare, primary_rays,
+    Measured, Prepared, RayBatch, counts_per_ray, explicit_rays, prepare, primary_rays,
 };
 use raybench_registry::progress::Progress;
 use raybench_registry::{Backend, Roles, TimedRenderer, compare_hits};
@@ -483,6 +485,7 @@ impl Experiment for Matrix {
             }
             let _ = writeln!(s);
             write_trace(&runs, s);
+            write_ray_costs(&runs, s);
             write_cameras(&runs, s);
             let mut pictures = Vec::new();
             for r in &runs {
@@ -494,6 +497,9 @@ impl Experiment for Matrix {
                 }
                 if let Some(f) = &r.images.flip {
                     pictures.push(format!("[{} FLIP map]({f})", r.backend));
+                }
+                if let Some(v) = &r.images.visits {
+                    pictures.push(format!("[{} visits heat map]({v})", r.backend));
                 }
             }
             // REPORT.html replaces what lies between the markers with its image viewer.
@@ -796,6 +802,7 @@ fn run_scene(
                 mrays_per_s: None,
                 tests_per_ray: None,
                 visits_per_ray: None,
+                ray_costs: None,
                 hit_fraction: None,
                 facing_away: None,
                 trace: None,
@@ -889,6 +896,36 @@ fn run_scene(
                 run.visits_per_ray =
                     (c.node_visits > 0).then(|| c.node_visits as f64 / rays as f64);
             }
+            // Each ray's own work, in an untimed pass after the timed ones.
+            let stem = format!(
+                "{}-{}-{}",
+                file_safe(&scene.name),
+                w.key(),
+                file_safe(b.name)
+            );
+            if w.mode == Mode::Cast && run.visits_per_ray.is_some() && r.device().is_none() {
+                progress.begin(format!(
+                    "{} {} {}: each ray's own work",
+                    scene.name,
+                    w.key(),
+                    b.name
+                ));
+                if let Some((costs, first)) = ray_costs(
+                    scene,
+                    &w.settings(),
+                    &explicit[wi],
+                    r.as_ref(),
+                    m.warm.counters,
+                )? {
+                    run.ray_costs = Some(costs);
+                    if w.rays == RaySet::Primary && !w.replay {
+                        let name = format!("images/{stem}-visits.png");
+                        images::visits_heat_map(w.width, w.height, &first)
+                            .save(&ctx.opts.out.join(&name))?;
+                        run.images.visits = Some(name);
+                    }
+                }
+            }
             run.seconds = Some(m.timing);
             run.device_seconds = m.device;
             run.device = r.device();
@@ -900,12 +937,6 @@ fn run_scene(
                 .color
                 .as_ref()
                 .map(|c| Rgb8::from_linear(w.width, w.height, c));
-            let stem = format!(
-                "{}-{}-{}",
-                file_safe(&scene.name),
-                w.key(),
-                file_safe(b.name)
-            );
             match &reference {
                 None => {
                     if let Some(img) = &image {
@@ -1181,6 +1212,107 @@ fn write_trace(runs: &[&Run], s: &mut String) {
     let _ = writeln!(s);
 }
 
+/// Each ray's own work on a ray-casting workload (every view's rays, each traced alone by
+/// [`counts_per_ray`]) as percentiles, with the first view's node or cell visits per ray in
+/// its order (for frames, pixels row by row: the heat map's). `None` where the renderer does
+/// not count, or where the per-ray counts do not add up to `counted`, the counters of the
+/// run's own counted pass (a packet traversal shares node visits between rays, so a ray
+/// traced alone does other work than in its packet): the distribution is only ever the
+/// run's own work split by ray.
+///
+/// # Errors
+/// When the rays cannot be made or traced.
+fn ray_costs(
+    scene: &Scene,
+    settings: &raybench_core::RenderSettings,
+    views: &Views,
+    r: &dyn TimedRenderer,
+    counted: Option<raybench_core::RayCounters>,
+) -> Result<Option<(RayCosts, Vec<u64>)>> {
+    let Some(counted) = counted else {
+        return Ok(None);
+    };
+    let mut all = Vec::new();
+    let mut first = None;
+    for (camera, batch) in views {
+        let each = match batch {
+            Some(batch) => counts_per_ray(r, &batch.rays, batch.any_hit)?,
+            None => {
+                // A frame's camera rays: the centre ray of each pixel, row by row.
+                let settings = raybench_core::RenderSettings {
+                    camera: *camera,
+                    ..*settings
+                };
+                let view = scene.view(&settings)?;
+                let rays = raybench_core::ray_sets::primary(view, settings.width, settings.height);
+                counts_per_ray(r, &rays, false)?
+            }
+        };
+        let Some(each) = each else {
+            return Ok(None);
+        };
+        first.get_or_insert_with(|| each.iter().map(|c| c.node_visits).collect::<Vec<u64>>());
+        all.extend(each);
+    }
+    let sum = |f: fn(&raybench_core::RayCounters) -> u64| all.iter().map(f).sum::<u64>();
+    if sum(|c| c.prim_tests) != counted.prim_tests || sum(|c| c.node_visits) != counted.node_visits
+    {
+        return Ok(None);
+    }
+    let of = |f: fn(&raybench_core::RayCounters) -> u64| {
+        Distribution::of(&all.iter().map(f).collect::<Vec<u64>>())
+    };
+    let (Some(tests), Some(visits)) = (of(|c| c.prim_tests), of(|c| c.node_visits)) else {
+        return Ok(None);
+    };
+    let costs = RayCosts {
+        rays: all.len() as u64,
+        tests,
+        visits,
+    };
+    Ok(Some((costs, first.unwrap_or_default())))
+}
+
+/// The table of each ray's own work ([`Run::ray_costs`]), for the runs that have it.
+fn write_ray_costs(runs: &[&Run], s: &mut String) {
+    let costs: Vec<(&Run, &RayCosts)> = runs
+        .iter()
+        .filter_map(|r| Some((*r, r.ray_costs.as_ref()?)))
+        .collect();
+    if costs.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "Each ray's own work, every ray traced alone in an untimed pass: the nearest-rank \
+         percentiles of the primitive tests and of the node or cell visits per ray, over {} \
+         rays (the means are the table's above).\n",
+        costs[0].1.rays
+    );
+    let _ = writeln!(
+        s,
+        "| backend | tests p50 | tests p90 | tests p99 | tests max | visits p50 | visits p90 | visits p99 | visits max |"
+    );
+    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    for (r, c) in costs {
+        let (t, v) = (&c.tests, &c.visits);
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            r.label(),
+            t.p50,
+            t.p90,
+            t.p99,
+            t.max,
+            v.p50,
+            v.p90,
+            v.p99,
+            v.max
+        );
+    }
+    let _ = writeln!(s);
+}
+
 /// Each view's camera rays (`primary_rays` of its camera, in the order the frame traces
 /// them) as a closest-hit batch, for the trace throughput of ray casting's camera rays.
 fn camera_batches(
@@ -1410,6 +1542,7 @@ mod tests {
                 color: Some("images/s.png".into()),
                 ids_diff: Some("images/s-ids-diff.png".into()),
                 flip: Some("images/s-flip.png".into()),
+                visits: None,
             }
         );
         // One t a bit off, colours the same: not identical either.
