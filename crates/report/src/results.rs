@@ -1184,6 +1184,26 @@ impl Results {
 mod tests {
     use super::*;
 
+    /// A distribution sorts the counts first (they come in ray order), and reads its
+    /// percentiles by nearest rank: 7 counts, p50 the 4th, p90 and p99 the 7th.
+    #[test]
+    fn a_distribution_of_counts_in_ray_order() {
+        let d = Distribution::of(&[9, 0, 4, 1, 30, 4, 2]).unwrap();
+        assert_eq!(
+            d,
+            Distribution {
+                min: 0,
+                p50: 4,
+                p90: 30,
+                p99: 30,
+                max: 30
+            }
+        );
+        let d = Distribution::of(&(1..=100).rev().collect::<Vec<u64>>()).unwrap();
+        assert_eq!((d.min, d.p50, d.p90, d.p99, d.max), (1, 50, 90, 99, 100));
+        assert_eq!(Distribution::of(&[]), None);
+    }
+
     /// Points on a power law favour it, points on a logarithm favour that, and a flat line
     /// (both models fit it exactly) favours neither.
     #[test]
