@@ -7,6 +7,8 @@
 //!   (Wald, "On fast Construction of SAH-based Bounding Volume Hierarchies", 2007), parallel
 //!   with rayon; a flattened depth-first layout of 32-byte nodes whose first child follows
 //!   its parent; stack traversal, nearest child first, with strict early exits.
+//!   [`Bvh::build_ploc`] fills the same layout with obvhs's PLOC topology, so builders can
+//!   be compared under one traversal kernel.
 //! - [`ObvhsAccel`] (backend `obvhs`): the `obvhs` crate's production layout (PLOC with
 //!   reinsertion, compressed wide CWBVH8 nodes) with its own traversal.
 //!
@@ -18,6 +20,7 @@ mod build;
 mod node;
 mod obvhs_adapter;
 mod params;
+mod ploc;
 mod refit;
 mod traverse;
 

@@ -27,7 +27,7 @@ impl Bvh {
     }
 
     /// One reverse pass over the nodes (children before parents).
-    fn refit_boxes(&mut self) {
+    pub(crate) fn refit_boxes(&mut self) {
         let g = &*self.geometry;
         for i in (0..self.nodes.len()).rev() {
             let node = self.nodes[i];

@@ -95,7 +95,7 @@ macro_rules! embree_preset {
 }
 
 /// Every preset, grouped by backend in registry order, each backend's fastest build
-/// first.
+/// first (for `bvh`: its binned builds, then its PLOC topologies, each group fastest first).
 pub const PRESETS: &[Preset] = &[
     preset!(
         "bvh",
@@ -123,6 +123,60 @@ pub const PRESETS: &[Preset] = &[
         Bvh,
         "bvh built with BvhParams::quality (32 bins, leaves of up to 2)",
         |g| Bvh::build_with(g, BvhParams::quality())
+    ),
+    preset!(
+        "bvh",
+        "ploc_fastest_build",
+        false,
+        EXACT_PRESET,
+        Bvh,
+        "bvh's layout and traversal over obvhs's PLOC tree at BvhBuildParams::fastest_build (minimum search, no reinsertion): the builder varied, the kernel fixed",
+        |g| Bvh::build_ploc(g, ObvhsBuildParams::fastest_build())
+    ),
+    preset!(
+        "bvh",
+        "ploc_very_fast_build",
+        false,
+        EXACT_PRESET,
+        Bvh,
+        "bvh's layout and traversal over obvhs's PLOC tree at BvhBuildParams::very_fast_build: the builder varied, the kernel fixed",
+        |g| Bvh::build_ploc(g, ObvhsBuildParams::very_fast_build())
+    ),
+    preset!(
+        "bvh",
+        "ploc_fast_build",
+        false,
+        EXACT_PRESET,
+        Bvh,
+        "bvh's layout and traversal over obvhs's PLOC tree at BvhBuildParams::fast_build: the builder varied, the kernel fixed",
+        |g| Bvh::build_ploc(g, ObvhsBuildParams::fast_build())
+    ),
+    preset!(
+        "bvh",
+        "ploc_medium_build",
+        false,
+        EXACT_PRESET,
+        Bvh,
+        "bvh's layout and traversal over obvhs's PLOC tree at BvhBuildParams::medium_build: the builder varied, the kernel fixed",
+        |g| Bvh::build_ploc(g, ObvhsBuildParams::medium_build())
+    ),
+    preset!(
+        "bvh",
+        "ploc_slow_build",
+        false,
+        EXACT_PRESET,
+        Bvh,
+        "bvh's layout and traversal over obvhs's PLOC tree at BvhBuildParams::slow_build: the builder varied, the kernel fixed",
+        |g| Bvh::build_ploc(g, ObvhsBuildParams::slow_build())
+    ),
+    preset!(
+        "bvh",
+        "ploc_very_slow_build",
+        false,
+        EXACT_PRESET,
+        Bvh,
+        "bvh's layout and traversal over obvhs's PLOC tree at BvhBuildParams::very_slow_build (full reinsertion): the builder varied, the kernel fixed",
+        |g| Bvh::build_ploc(g, ObvhsBuildParams::very_slow_build())
     ),
     preset!(
         "obvhs",
@@ -353,7 +407,9 @@ mod tests {
         let e = crate::backend("bvh:nope").unwrap_err();
         assert_eq!(
             e,
-            "unknown preset 'nope' of backend 'bvh' (known: fast, medium, quality)"
+            "unknown preset 'nope' of backend 'bvh' (known: fast, medium, quality, \
+             ploc_fastest_build, ploc_very_fast_build, ploc_fast_build, ploc_medium_build, \
+             ploc_slow_build, ploc_very_slow_build)"
         );
         let e = crate::backend("naive:fast").unwrap_err();
         assert!(

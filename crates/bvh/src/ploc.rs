@@ -1,0 +1,160 @@
+//! [`Bvh`] with obvhs's PLOC topology: obvhs builds its binary tree (PLOC, reinsertion and
+//! leaf collapse at one of its presets), and the tree is copied into the workspace's
+//! depth-first layout with boxes recomputed from raybench's own primitive boxes.
+//!
+//! The result is traversed by [`Bvh`]'s kernel like any tree its binned SAH builder makes, so
+//! the builders can be compared with the traversal held fixed (Aila, Karras and Laine, "On
+//! Quality Metrics of Bounding Volume Hierarchies", HPG 2013, varied the builder under one
+//! kernel). Only obvhs's topology is used: its boxes (and any rounding in them) are not, so
+//! the hits are bit-identical to the naive backend's as for every [`Bvh`].
+
+use crate::build::MAX_DEPTH;
+use crate::{Bvh, BvhParams, Node};
+use glam::Vec3A;
+use obvhs::BvhBuildParams;
+use raybench_geometry::{Aabb, Geometry};
+use std::sync::Arc;
+use std::time::Duration;
+
+impl Bvh {
+    /// Builds with obvhs's PLOC builder at `params` (its presets: `fastest_build()` ..
+    /// `very_slow_build()`), the tree copied into the depth-first layout and refitted
+    /// exactly. Subtrees that would lie deeper than the traversal's depth limit are made
+    /// leaves holding all their primitives (PLOC does not bound the depth; the binned
+    /// builder does), so every ray still finds its exact hit. [`Bvh::params`] reports
+    /// [`BvhParams::medium`] with obvhs's leaf size limit.
+    #[must_use]
+    pub fn build_ploc(geometry: Arc<Geometry>, params: BvhBuildParams) -> Self {
+        let bounded = geometry.bounded();
+        let boxes: Vec<obvhs::aabb::Aabb> = bounded
+            .iter()
+            .map(|&id| {
+                let b = geometry.shape(id).bounds().unwrap_or(Aabb::EMPTY);
+                obvhs::aabb::Aabb {
+                    min: Vec3A::from(b.min),
+                    max: Vec3A::from(b.max),
+                }
+            })
+            .collect();
+        let mut bvh = Self {
+            geometry: Arc::clone(&geometry),
+            nodes: Vec::new(),
+            prim_ids: Vec::with_capacity(bounded.len()),
+            params: BvhParams {
+                max_leaf_size: params.max_prims_per_leaf.max(1) as usize,
+                ..BvhParams::medium()
+            },
+        };
+        if boxes.is_empty() {
+            return bvh;
+        }
+        let tree = obvhs::bvh2::builder::build_bvh2(&boxes, params, &mut Duration::default());
+        let ids = |first: u32, count: u32| {
+            (first..first + count).map(|i| bounded[tree.primitive_indices[i as usize] as usize])
+        };
+        // Depth first, left subtree before right: (obvhs node, node to patch with this
+        // node's index as its second child, depth).
+        let mut stack: Vec<(usize, Option<usize>, usize)> = vec![(0, None, 1)];
+        while let Some((o, patch, depth)) = stack.pop() {
+            let index = bvh.nodes.len();
+            if let Some(p) = patch {
+                bvh.nodes[p].first_or_right = index as u32;
+            }
+            let node = &tree.nodes[o];
+            let first = bvh.prim_ids.len() as u32;
+            if node.is_leaf() {
+                bvh.prim_ids.extend(ids(node.first_index, node.prim_count));
+            } else if depth >= MAX_DEPTH {
+                let mut below = vec![o];
+                while let Some(n) = below.pop() {
+                    let n = &tree.nodes[n];
+                    if n.is_leaf() {
+                        bvh.prim_ids.extend(ids(n.first_index, n.prim_count));
+                    } else {
+                        below.extend([n.first_index as usize, n.first_index as usize + 1]);
+                    }
+                }
+            } else {
+                bvh.nodes.push(Node::default());
+                stack.push((node.first_index as usize + 1, Some(index), depth + 1));
+                stack.push((node.first_index as usize, None, depth + 1));
+                continue;
+            }
+            bvh.nodes.push(Node {
+                first_or_right: first,
+                count: bvh.prim_ids.len() as u32 - first,
+                ..Node::default()
+            });
+        }
+        bvh.refit_boxes();
+        bvh
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::Bvh;
+    use obvhs::BvhBuildParams;
+    use raybench_geometry::{Accel, Geometry, Ray, RayCounters, Shape, Triangle, Vec3};
+    use std::sync::Arc;
+
+    /// A soup of small triangles on a 12 x 12 x 12 lattice.
+    fn soup() -> Arc<Geometry> {
+        let mut shapes = Vec::new();
+        for i in 0..1728u32 {
+            let p = Vec3::new((i % 12) as f32, ((i / 12) % 12) as f32, (i / 144) as f32);
+            let q = p + Vec3::new(0.3 * (i % 5) as f32, 0.7, 0.1);
+            shapes.push(Shape::Triangle(Triangle::new(p, q, p + Vec3::Z * 0.6)));
+        }
+        Arc::new(Geometry::new(shapes))
+    }
+
+    #[test]
+    fn every_preset_gives_a_valid_tree_and_the_binned_trees_hits() {
+        let g = soup();
+        let reference = Bvh::build(Arc::clone(&g));
+        for params in [
+            BvhBuildParams::fastest_build(),
+            BvhBuildParams::medium_build(),
+            BvhBuildParams::very_slow_build(),
+        ] {
+            let t = Bvh::build_ploc(Arc::clone(&g), params);
+            t.validate().unwrap();
+            assert!(t.depth() <= crate::build::MAX_DEPTH);
+            for k in 0..500u32 {
+                let o = Vec3::new(-3.0, 0.1 + 0.023 * k as f32, 0.05 + 0.021 * k as f32);
+                let ray = Ray::new(o, Vec3::new(1.0, 0.01 * (k % 7) as f32, 0.002));
+                let mut c = RayCounters::default();
+                let (a, b) = (
+                    t.intersect(&ray, &mut c),
+                    reference.intersect(&ray, &mut RayCounters::default()),
+                );
+                assert_eq!(
+                    a.map(|h| (h.prim, h.t.to_bits())),
+                    b.map(|h| (h.prim, h.t.to_bits()))
+                );
+                assert_eq!(t.occluded(&ray, &mut c), b.is_some());
+            }
+        }
+    }
+
+    #[test]
+    fn subtrees_below_the_depth_limit_become_leaves() {
+        // Every triangle at the same place: PLOC's Morton codes all tie.
+        let tri = Shape::Triangle(Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y));
+        let g = Arc::new(Geometry::new(vec![tri; 5000]));
+        let t = Bvh::build_ploc(g, BvhBuildParams::fastest_build());
+        t.validate().unwrap();
+        assert!(t.depth() <= crate::build::MAX_DEPTH);
+    }
+
+    #[test]
+    fn an_empty_scene_has_no_nodes() {
+        let t = Bvh::build_ploc(
+            Arc::new(Geometry::new(Vec::new())),
+            BvhBuildParams::medium_build(),
+        );
+        assert!(t.nodes().is_empty());
+        t.validate().unwrap();
+    }
+}
