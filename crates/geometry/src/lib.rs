@@ -75,8 +75,8 @@ pub use motion::{
 };
 pub use plane::Plane;
 pub use quality::{
-    CostConstants, Epo, GridQuality, QualityParams, SizeHistogram, StructureQuality, TreeQuality,
-    TreeView,
+    CostConstants, Epo, GridQuality, LeafCounts, QualityParams, SizeHistogram, StructureQuality,
+    TreeQuality, TreeView,
 };
 pub use ray::Ray;
 pub use sdf::{March, Sdf, SdfNode, SdfNodeView, SdfOp, SdfParams, SdfPrimitive};

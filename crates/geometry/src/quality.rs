@@ -19,13 +19,19 @@
 //!   subtree, `C(n)` = `C_t` for an interior node and `C_i * |prims(n)|` for a leaf. It is
 //!   estimated from points sampled uniformly by area, with its standard error;
 //! - leaf and interior node counts, the leaf-size histogram ([`SizeHistogram`]), the depth
-//!   (maximum and mean over leaves, the root at depth 1), bytes per primitive.
+//!   (maximum and mean over leaves, the root at depth 1), bytes per primitive;
+//! - given rays, the **leaf counts** ([`TreeView::leaf_counts`]): per ray, the leaves whose
+//!   box its segment up to its closest hit enters, which every exact closest-hit traversal
+//!   must open, with their mean and standard deviation (the spread is the leaf-count
+//!   variability of Aila, Karras and Laine 2013).
 //!
 //! Grids describe themselves by their cell lists' lengths ([`GridQuality::from_lists`]).
 
 use crate::aabb::Aabb;
 use crate::geometry::{Geometry, Shape};
+use crate::ray::Ray;
 use crate::sampling::{pcg3d, to_unit_f32};
+use std::sync::Arc;
 
 /// EPO samples drawn by default ([`QualityParams::default`]): a standard error of a few per
 /// cent of the estimate on the built-in scenes, in milliseconds.
@@ -55,8 +61,9 @@ impl CostConstants {
     };
 }
 
-/// What to measure and how: the cost constants, the number of EPO samples and their seed.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// What to measure and how: the cost constants, the number of EPO samples and their seed,
+/// and the rays of the leaf counts.
+#[derive(Clone, Debug, PartialEq)]
 pub struct QualityParams {
     /// The SAH and EPO constants.
     pub costs: CostConstants,
@@ -64,6 +71,9 @@ pub struct QualityParams {
     pub epo_samples: u32,
     /// Seed of the sampled points.
     pub seed: u32,
+    /// Rays whose segments give the leaf counts ([`TreeView::leaf_counts`]), each clipped at
+    /// its closest hit (`t_max`; a miss keeps its own); empty (the default): not measured.
+    pub rays: Arc<[Ray]>,
 }
 
 impl Default for QualityParams {
@@ -72,8 +82,22 @@ impl Default for QualityParams {
             costs: CostConstants::UNIT,
             epo_samples: DEFAULT_EPO_SAMPLES,
             seed: 0,
+            rays: Arc::from(Vec::new()),
         }
     }
+}
+
+/// Leaves entered per ray ([`TreeView::leaf_counts`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LeafCounts {
+    /// Rays counted.
+    pub rays: u64,
+    /// Mean leaves per ray.
+    pub mean: f64,
+    /// Their standard deviation over the rays (population): the leaf-count variability.
+    pub std_dev: f64,
+    /// The most leaves one ray entered.
+    pub max: u32,
 }
 
 /// Labels of the buckets of a [`SizeHistogram`].
@@ -159,6 +183,8 @@ pub struct TreeQuality {
     /// The structure's bytes (its `AccelStats::memory_bytes`) over the scene's bounded
     /// primitives (0 when there are none).
     pub bytes_per_primitive: f64,
+    /// Leaves entered per ray over [`QualityParams::rays`]; `None` without rays.
+    pub leaf_counts: Option<LeafCounts>,
 }
 
 /// The quality of a grid ([`GridQuality::from_lists`]).
@@ -557,6 +583,53 @@ impl TreeView {
         epo
     }
 
+    /// The leaves whose box the segment of `ray` (`t_min` to `t_max`) enters: every exact
+    /// closest-hit traversal opens at least these when `t_max` is the ray's closest hit, since
+    /// a box entered before the hit may hold a closer one until its primitives are tested.
+    #[must_use]
+    pub fn leaves_entered(&self, ray: &Ray) -> u32 {
+        let Some(root) = self.root() else {
+            return 0;
+        };
+        let mut count = 0;
+        let mut stack = vec![root as u32];
+        while let Some(n) = stack.pop() {
+            let node = &self.nodes[n as usize];
+            if node.bounds.intersect(ray, ray.t_max).is_none() {
+                continue;
+            }
+            if node.leaf {
+                count += 1;
+            } else {
+                stack.extend_from_slice(self.items_of(node));
+            }
+        }
+        count
+    }
+
+    /// [`TreeView::leaves_entered`] over `rays`: mean, standard deviation and maximum;
+    /// `None` without rays.
+    #[must_use]
+    pub fn leaf_counts(&self, rays: &[Ray]) -> Option<LeafCounts> {
+        if rays.is_empty() {
+            return None;
+        }
+        let counts: Vec<u32> = rays.iter().map(|r| self.leaves_entered(r)).collect();
+        let n = counts.len() as f64;
+        let mean = counts.iter().map(|&c| f64::from(c)).sum::<f64>() / n;
+        let var = counts
+            .iter()
+            .map(|&c| (f64::from(c) - mean).powi(2))
+            .sum::<f64>()
+            / n;
+        Some(LeafCounts {
+            rays: counts.len() as u64,
+            mean,
+            std_dev: var.sqrt(),
+            max: counts.iter().copied().max().unwrap_or(0),
+        })
+    }
+
     /// Every figure of [`TreeQuality`], for a structure of `memory_bytes` bytes built over
     /// `geometry`.
     #[must_use]
@@ -577,6 +650,7 @@ impl TreeView {
             mean_leaf_depth: 0.0,
             references: 0,
             bytes_per_primitive: per_primitive(memory_bytes, geometry.bounded().len() as u64),
+            leaf_counts: self.leaf_counts(&params.rays),
         };
         let mut depth_sum = 0u64;
         for (n, depth, _) in self.depth_first() {
@@ -626,6 +700,33 @@ mod tests {
         let all: Vec<u32> = left.iter().chain(right).copied().collect();
         t.interior(bounds(g, &all), &[l, r]);
         t
+    }
+
+    #[test]
+    fn leaves_entered_stop_at_the_segment_end() {
+        let g = two_apart();
+        let t = binary(&g, &[0], &[1]);
+        // Along x at y = z = 0.25... in the plane z = 0: both leaves' (flat) boxes lie on the
+        // ray's line; a ray through z = 0 enters them.
+        let along = |t_max: f32| {
+            let mut r = Ray::new(Vec3::new(-1.0, 0.25, 0.0), Vec3::X);
+            r.t_max = t_max;
+            r
+        };
+        assert_eq!(t.leaves_entered(&along(f32::INFINITY)), 2);
+        // Ending at x = 2 (t = 3): only the first leaf's box is entered.
+        assert_eq!(t.leaves_entered(&along(3.0)), 1);
+        // Ending before x = 0: none.
+        assert_eq!(t.leaves_entered(&along(0.5)), 0);
+        let c = t
+            .leaf_counts(&[along(f32::INFINITY), along(3.0), along(0.5)])
+            .unwrap();
+        assert_eq!((c.rays, c.max), (3, 2));
+        assert!((c.mean - 1.0).abs() < 1e-12);
+        // Counts 2, 1, 0 around 1: variance 2/3.
+        assert!((c.std_dev - (2.0f64 / 3.0).sqrt()).abs() < 1e-12);
+        assert_eq!(t.leaf_counts(&[]), None);
+        assert_eq!(TreeView::new().leaves_entered(&along(1.0)), 0);
     }
 
     #[test]
