@@ -47,6 +47,9 @@ pub struct Chart {
 pub enum Plot {
     /// Each series a line through its points on log-log axes, with its fitted power law.
     LogLog(Vec<Series>),
+    /// As [`Plot::LogLog`], with labelled vertical marks on the `x` axis (where the
+    /// memory of the scaling experiment's data outgrows each cache level).
+    Marked(Vec<Series>, Vec<XMark>),
     /// Unjoined points on log-log axes (one point per structure, preset or scene).
     Scatter(Vec<Series>),
     /// Bars on a log axis: one group per category name, one bar per series.
@@ -68,6 +71,18 @@ pub struct Series {
     /// A power law fitted to the points, drawn dashed over their `x` range; its exponent is
     /// given in the legend.
     pub fit: Option<PowerLaw>,
+}
+
+/// A labelled vertical mark at `x` of a [`Plot::Marked`], drawn dashed across the plot
+/// with its label at the top; one outside the `x` axis's range is not drawn.
+#[derive(Clone, Debug, PartialEq)]
+pub struct XMark {
+    /// Where it stands on the `x` axis.
+    pub x: f64,
+    /// Its short label (`L2`).
+    pub label: String,
+    /// Its tooltip: what it marks.
+    pub title: String,
 }
 
 /// `y = coefficient * x^exponent`: a straight line on log-log axes.
@@ -772,6 +787,31 @@ mod tests {
             3,
             "{out}"
         );
+    }
+
+    /// An `x` mark inside the axis's range is a dotted grey line across the plot with its
+    /// label and tooltip; one outside the range is not drawn.
+    #[test]
+    fn x_marks_inside_the_range_are_drawn() {
+        let mark = |x: f64, label: &str| XMark {
+            x,
+            label: label.into(),
+            title: format!("{label} reached"),
+        };
+        let s = series(b(1), &[(10.0, 0.01), (1000.0, 0.04)]);
+        let plot = Plot::Marked(vec![s], vec![mark(100.0, "L2"), mark(1e9, "L3")]);
+        let out = svg(&chart("marked", "t", plot)).unwrap();
+        let elements = parse(&out);
+        let inside: Vec<&Element> = elements
+            .iter()
+            .filter(|e| e.tip.as_deref() == Some("L2 reached"))
+            .collect();
+        assert!(
+            inside.iter().filter(|e| e.tag == "polyline").count() >= 10,
+            "dotted: {out}"
+        );
+        assert!(inside.iter().any(|e| e.tag == "text" && e.text == "L2"));
+        assert!(!out.contains("L3"), "{out}");
     }
 
     /// A mark's look-alike in a label stays text; the tooltips' groups are balanced.

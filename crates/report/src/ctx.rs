@@ -5,7 +5,7 @@
 use crate::results::{Results, ScalingPoint, Skipped, Timing};
 use crate::rounds;
 use anyhow::Result;
-use raybench_core::{Mode, RaySet, RenderSettings, Scene};
+use raybench_core::{Mode, NO_HIT, RaySet, RenderSettings, Scene};
 use raybench_registry::interference::Interference;
 use raybench_registry::measure::{Measured, RayBatch, measure};
 use raybench_registry::{Backend, TimedRenderer};
@@ -382,6 +382,10 @@ impl Measurement {
     ) -> ScalingPoint {
         let rays = self.warm.rays.max(1);
         ScalingPoint {
+            hit_fraction: (!self.warm.ids.is_empty()).then(|| {
+                let hits = self.warm.ids.iter().filter(|&&id| id != NO_HIT).count();
+                hits as f64 / self.warm.ids.len() as f64
+            }),
             shard: 0,
             experiment: experiment.into(),
             series,

@@ -1,6 +1,6 @@
 //! The machine description at the top of every report.
 
-use crate::results::Machine;
+use crate::results::{Caches, Machine};
 use raybench_registry::Roles;
 
 /// Describes this machine; `threads` is the worker count used for rendering.
@@ -18,7 +18,66 @@ pub fn describe(threads: usize) -> Machine {
         build: raybench_registry::BUILD.to_string(),
         frequency: frequency(),
         smt: smt(),
+        caches: caches_in(std::path::Path::new(CACHE_DIR)),
     }
+}
+
+/// Where Linux describes CPU 0's caches: one `index*` folder per cache, with its `level`,
+/// `type` and `size`.
+const CACHE_DIR: &str = "/sys/devices/system/cpu/cpu0/cache";
+
+/// A sysfs cache size (`48K`, `2048K`, `32M`, or plain bytes) in bytes.
+fn cache_bytes(size: &str) -> Option<u64> {
+    let size = size.trim();
+    let (digits, unit) = match size.char_indices().find(|(_, c)| !c.is_ascii_digit()) {
+        Some((i, _)) => size.split_at(i),
+        None => (size, ""),
+    };
+    let scale = match unit.trim() {
+        "" => 1,
+        "K" | "KB" | "KiB" => 1 << 10,
+        "M" | "MB" | "MiB" => 1 << 20,
+        "G" | "GB" | "GiB" => 1 << 30,
+        _ => return None,
+    };
+    digits.parse::<u64>().ok()?.checked_mul(scale)
+}
+
+/// The data caches described under `dir` (the layout of [`CACHE_DIR`]): per level 1 to 3,
+/// the data or unified cache's size (instruction caches are left out); `None` when no level
+/// is known.
+fn caches_in(dir: &std::path::Path) -> Option<Caches> {
+    let mut caches = Caches::default();
+    let mut entries: Vec<std::path::PathBuf> = std::fs::read_dir(dir)
+        .ok()?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.starts_with("index"))
+        })
+        .collect();
+    entries.sort();
+    for index in entries {
+        let read = |file: &str| sysfs(&index.join(file).to_string_lossy());
+        let (Some(level), Some(kind), Some(size)) = (read("level"), read("type"), read("size"))
+        else {
+            continue;
+        };
+        if kind == "Instruction" {
+            continue;
+        }
+        let slot = match level.as_str() {
+            "1" => &mut caches.l1d,
+            "2" => &mut caches.l2,
+            "3" => &mut caches.l3,
+            _ => continue,
+        };
+        if slot.is_none() {
+            *slot = cache_bytes(&size);
+        }
+    }
+    (caches != Caches::default()).then_some(caches)
 }
 
 /// The first line of `/proc/cpuinfo` starting with `key`, its value trimmed.
@@ -225,6 +284,52 @@ mod tests {
         assert_eq!(civil_from_days(19_723), (2024, 1, 1));
         assert_eq!(civil_from_days(20_415), (2025, 11, 23));
         assert_eq!(civil_from_days(11_016), (2000, 2, 29));
+    }
+
+    /// Sizes in sysfs's forms; anything else is unknown.
+    #[test]
+    fn cache_sizes_parse() {
+        assert_eq!(cache_bytes("48K"), Some(48 * 1024));
+        assert_eq!(cache_bytes("2048K\n"), Some(2 << 20));
+        assert_eq!(cache_bytes("32M"), Some(32 << 20));
+        assert_eq!(cache_bytes("512"), Some(512));
+        assert_eq!(cache_bytes("1G"), Some(1 << 30));
+        assert_eq!(cache_bytes("12X"), None);
+        assert_eq!(cache_bytes(""), None);
+    }
+
+    /// A fake sysfs folder: the data and unified caches by level, the instruction cache and
+    /// a fourth level left out, a folder without its files skipped; none at all is `None`.
+    #[test]
+    fn caches_are_read_from_sysfs() {
+        let dir = std::env::temp_dir().join(format!("raybench-caches-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let index = |i: u32, level: &str, kind: &str, size: &str| {
+            let d = dir.join(format!("index{i}"));
+            std::fs::create_dir_all(&d).unwrap();
+            for (file, text) in [("level", level), ("type", kind), ("size", size)] {
+                std::fs::write(d.join(file), format!("{text}\n")).unwrap();
+            }
+        };
+        std::fs::create_dir_all(&dir).unwrap();
+        assert_eq!(caches_in(&dir), None);
+        index(0, "1", "Data", "48K");
+        index(1, "1", "Instruction", "64K");
+        index(2, "2", "Unified", "2048K");
+        index(3, "3", "Unified", "491520K");
+        index(4, "4", "Unified", "1G");
+        std::fs::create_dir_all(dir.join("index5")).unwrap();
+        std::fs::create_dir_all(dir.join("power")).unwrap();
+        assert_eq!(
+            caches_in(&dir),
+            Some(Caches {
+                l1d: Some(48 << 10),
+                l2: Some(2 << 20),
+                l3: Some(480 << 20),
+            })
+        );
+        assert_eq!(caches_in(&dir.join("missing")), None);
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -156,7 +156,10 @@ pub fn report(results: &Results, charts: &Charts) -> String {
             m.cores,
             m.threads,
             if sh.pinned { ", pinned to cores" } else { "" },
-            m.isa,
+            m.caches.as_ref().map_or_else(
+                || m.isa.clone(),
+                |c| format!("{}; caches {}", m.isa, c.describe())
+            ),
             m.gpu,
             m.os,
             m.version,
@@ -458,6 +461,7 @@ mod tests {
     fn the_scaling_table_gives_each_series_once_with_both_slopes() {
         let point = |backend: &str, x: f64, seconds: f64, tests: Option<f64>| {
             crate::results::ScalingPoint {
+                hit_fraction: None,
                 shard: 0,
                 experiment: "pixels".into(),
                 series: "s".into(),

@@ -31,6 +31,50 @@ pub struct Results {
     /// before it was added, and when it did not run: read as empty.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub motion: Vec<MotionFrame>,
+    /// The frame pipeline's fixed cost per camera ray, measured on a scene without
+    /// primitives, per backend. Absent from files written before it was added, and when the
+    /// matrix did not run ray casting's camera rays: read as empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub empty_scene: Vec<EmptyScene>,
+}
+
+/// One backend on a scene without primitives (`report/experiments/empty_scene.rs`): every
+/// camera ray misses, so the frame's time is the pipeline's fixed cost (ray generation,
+/// shading a miss, the image) and the batch's the traversal's fixed cost per ray.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct EmptyScene {
+    /// Index into [`Results::shards`].
+    pub shard: usize,
+    /// Backend name.
+    pub backend: String,
+    /// Worker threads the frames and batches ran on (the matrix's).
+    pub threads: usize,
+    /// Image width (camera rays per row).
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Camera rays per frame (and per batch).
+    pub rays: u64,
+    /// The whole frame's timed repetitions (ray casting, camera rays).
+    pub frame: Timing,
+    /// The same camera rays made beforehand and traced as a batch; `None` where it was not
+    /// measured.
+    pub trace: Option<Timing>,
+}
+
+impl EmptyScene {
+    /// Nanoseconds per camera ray of the whole frame, over its median.
+    #[must_use]
+    pub fn frame_ns_per_ray(&self) -> f64 {
+        self.frame.median / self.rays.max(1) as f64 * 1e9
+    }
+
+    /// Nanoseconds per camera ray of the batch trace, over its median.
+    #[must_use]
+    pub fn trace_ns_per_ray(&self) -> Option<f64> {
+        let rays = self.rays.max(1) as f64;
+        self.trace.as_ref().map(|t| t.median / rays * 1e9)
+    }
 }
 
 /// One frame of a moving scene in the `motion` experiment, for one backend: the update
@@ -217,6 +261,52 @@ pub struct Machine {
     /// many logical CPUs share a core; empty in files written before it was recorded.
     #[serde(default)]
     pub smt: String,
+    /// The data caches of CPU 0 as the OS reports them; `null` where it does not tell and
+    /// in files written before they were recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub caches: Option<Caches>,
+}
+
+/// The sizes of a CPU's data caches in bytes (a level's data or unified cache); `None` for
+/// a level the OS does not report.
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq, Eq)]
+pub struct Caches {
+    /// The level-1 data cache.
+    pub l1d: Option<u64>,
+    /// The level-2 cache.
+    pub l2: Option<u64>,
+    /// The level-3 cache (shared by several cores on most CPUs).
+    pub l3: Option<u64>,
+}
+
+impl Caches {
+    /// Each known level with its label (`L1d`, `L2`, `L3`) and size, smallest level first.
+    #[must_use]
+    pub fn levels(&self) -> Vec<(&'static str, u64)> {
+        [("L1d", self.l1d), ("L2", self.l2), ("L3", self.l3)]
+            .into_iter()
+            .filter_map(|(name, size)| Some((name, size?)))
+            .collect()
+    }
+
+    /// The known levels as text: `L1d 48 KiB, L2 2 MiB, L3 480 MiB` (one decimal where the
+    /// size is not a whole number of the unit).
+    #[must_use]
+    pub fn describe(&self) -> String {
+        self.levels()
+            .into_iter()
+            .map(|(name, size)| {
+                let (v, unit) = if size >= 1 << 20 {
+                    (size as f64 / f64::from(1 << 20), "MiB")
+                } else {
+                    (size as f64 / 1024.0, "KiB")
+                };
+                let v = format!("{v:.1}");
+                format!("{name} {} {unit}", v.trim_end_matches(".0"))
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
 }
 
 /// The timed repetitions of one workload: their median with its confidence interval, the
@@ -874,6 +964,10 @@ pub struct ScalingPoint {
     /// flattened scene's primitive count).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stored_primitives: Option<u64>,
+    /// The share of the point's camera rays that hit (the warm-up's answers); absent in
+    /// older files and for points without rays.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hit_fraction: Option<f64>,
 }
 
 impl ScalingPoint {
@@ -1176,6 +1270,11 @@ impl Results {
             m.shard += offset;
             m
         }));
+        self.empty_scene
+            .extend(other.empty_scene.into_iter().map(|mut e| {
+                e.shard += offset;
+                e
+            }));
         self.fit();
     }
 }
@@ -1212,6 +1311,7 @@ mod tests {
             let mut r = Results::default();
             for (x, y) in points {
                 r.scaling.push(ScalingPoint {
+                    hit_fraction: None,
                     shard: 0,
                     experiment: "primitives".into(),
                     series: "soup".into(),
@@ -1285,6 +1385,7 @@ mod tests {
         let mut r = Results::default();
         for (x, s) in [(1.0, 0.5), (4.0, 2.0)] {
             r.scaling.push(ScalingPoint {
+                hit_fraction: None,
                 shard: 0,
                 experiment: "spp".into(),
                 series: "cornell-box".into(),

@@ -156,7 +156,13 @@ pub(crate) fn report(cmd: &ReportCmd, assets: &Path) -> Result<ExitCode> {
         pin: cmd.pin,
     };
     let results = raybench_report::run(&opts)?;
-    if results.runs.is_empty() && results.scaling.is_empty() {
+    // The empty scene's fixed cost alone is a shard's whole part of a sharded plan, but no
+    // report on its own.
+    let sharded = results.shards.first().is_some_and(|s| s.count > 1);
+    if results.runs.is_empty()
+        && results.scaling.is_empty()
+        && (results.empty_scene.is_empty() || !sharded)
+    {
         let why: Vec<String> = results
             .skipped
             .iter()

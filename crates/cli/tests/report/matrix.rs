@@ -123,6 +123,28 @@ fn report_writes_markdown_json_images_and_charts() {
     );
     assert!(md.starts_with("# raybench report"));
     assert!(md.contains("## Summary") && md.contains("### cornell-box"));
+    // The empty scene: every backend's frame and batch of 32 x 32 camera rays that all
+    // miss, on the run's worker threads, and its table after the summary.
+    let empty = r["empty_scene"].as_array().unwrap();
+    let names: Vec<&str> = empty
+        .iter()
+        .map(|e| e["backend"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["naive", "bvh", "packet"]);
+    for e in empty {
+        assert_eq!(
+            (e["width"].as_u64(), e["rays"].as_u64()),
+            (Some(32), Some(1024))
+        );
+        assert_eq!(e["threads"], machine["threads"], "{e}");
+        assert!(e["frame"]["median"].as_f64().unwrap() > 0.0, "{e}");
+        assert!(e["trace"]["median"].as_f64().unwrap() > 0.0, "{e}");
+    }
+    assert!(
+        md.contains("The pipeline's fixed cost on an empty scene (no primitives: all 32 x 32 camera rays miss)")
+            && md.contains("| backend | threads | frame ns/ray [interval] |"),
+        "{md}"
+    );
     assert!(md.contains("## Structure quality"), "{md}");
     assert!(md.contains("| cornell-box | packet | "), "{md}");
     assert!(

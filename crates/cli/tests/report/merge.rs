@@ -99,18 +99,19 @@ fn merge_checks_the_shards_form_one_plan() {
         "{skipped:?}"
     );
     assert!(markdown(partial).contains("shard `2/2` (missing)"));
-    // Two scenes make two units: a third shard would hold none.
+    // Two scenes and the empty scene's fixed cost make three units: a fourth shard would
+    // hold none.
     let out = raybench(&[
         "report",
         "--scenes",
         "spheres,cornell-box",
         "--no-scaling",
         "--shard",
-        "3/3",
+        "4/4",
         "--out",
         &d(merged),
     ]);
-    assert_clean_error(&out, "shard 3 holds none; split it into at most 2 shards");
+    assert_clean_error(&out, "shard 4 holds none; split it into at most 3 shards");
     for d in &dirs {
         let _ = std::fs::remove_dir_all(d);
     }

@@ -98,7 +98,10 @@ pub(super) struct Layout {
 pub(super) fn legend_entries(chart: &Chart) -> Vec<(String, Key)> {
     let mut out = Vec::new();
     match &chart.plot {
-        Plot::LogLog(series) | Plot::Scatter(series) | Plot::Lines(series) => {
+        Plot::LogLog(series)
+        | Plot::Marked(series, _)
+        | Plot::Scatter(series)
+        | Plot::Lines(series) => {
             let labels: Vec<&str> = series.iter().map(|s| s.label.as_str()).collect();
             let lines = !matches!(chart.plot, Plot::Scatter(_));
             for (s, st) in series.iter().zip(styles(&labels)) {

@@ -6,7 +6,7 @@
 use super::layout::{Key, LABEL_SIZE, LEGEND_ROW, LEGEND_SIZE, Layout, TICK_SIZE, TITLE_SIZE};
 use super::ticks::{Axis, value};
 use super::tooltips::{Tips, plain};
-use super::{Bar, Bars, Chart, Marker, Plot, Series, Style, styles};
+use super::{Bar, Bars, Chart, Marker, Plot, Series, Style, XMark, styles};
 use plotters::coord::Shift;
 use plotters::coord::cartesian::Cartesian2d;
 use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
@@ -374,6 +374,40 @@ impl Canvas<'_, '_, '_> {
         Ok(())
     }
 
+    /// Each mark inside the `x` axis's range a dotted grey line across the plot, its label
+    /// at the top right of the line and its title the tooltip; drawn before the series, so
+    /// that they lie on top.
+    fn marks(&mut self, marks: &[XMark], x: &Axis) -> Drawn {
+        let y = self.y;
+        let inside = |m: &&XMark| x.shows(m.x) && (x.lo..=x.hi).contains(&x.at(m.x));
+        for m in marks.iter().filter(inside) {
+            let u = x.at(m.x);
+            let top = self.plot.backend_coord(&(u, y.hi));
+            let bottom = self.plot.backend_coord(&(u, y.lo));
+            let root = self.root;
+            tip(root, self.tips, m.title.clone(), || {
+                let mut from = top.1;
+                while from < bottom.1 {
+                    let to = (from + 3).min(bottom.1);
+                    root.draw(&PathElement::new(
+                        vec![(top.0, from), (top.0, to)],
+                        GREY.stroke_width(1),
+                    ))
+                    .map_err(failed)?;
+                    from += 6;
+                }
+                text(
+                    root,
+                    &m.label,
+                    (top.0 + 3, top.1 + 3),
+                    &font(TICK_SIZE),
+                    Pos::new(HPos::Left, VPos::Top),
+                )
+            })?;
+        }
+        Ok(())
+    }
+
     /// One group of bars per name over a plot `width` pixels wide, a hatched stub with an
     /// `×` where a series did not run; the names written `upright` below their groups when
     /// too wide for them.
@@ -488,7 +522,7 @@ impl Canvas<'_, '_, '_> {
 pub(super) fn axes(chart: &Chart) -> (Option<Axis>, Axis) {
     use super::ticks::{linear_axis, log_axis};
     match &chart.plot {
-        Plot::LogLog(series) | Plot::Scatter(series) => {
+        Plot::LogLog(series) | Plot::Marked(series, _) | Plot::Scatter(series) => {
             let fits = |s: &Series, pick: fn((f64, f64)) -> f64| -> Vec<f64> {
                 match (s.fit, x_range(s)) {
                     (Some(f), Some((a, b))) => vec![pick((a, f.at(a))), pick((b, f.at(b)))],
@@ -648,6 +682,10 @@ pub(super) fn draw(
     };
     match (&chart.plot, x_axis) {
         (Plot::LogLog(series) | Plot::Scatter(series) | Plot::Lines(series), Some(x)) => {
+            canvas.series(series, x)?;
+        }
+        (Plot::Marked(series, marks), Some(x)) => {
+            canvas.marks(marks, x)?;
             canvas.series(series, x)?;
         }
         (Plot::Categories(names, bars), _) => canvas.bars(names, bars, p.w, lay.upright)?,

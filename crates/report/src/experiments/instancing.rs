@@ -103,6 +103,7 @@ impl Instancing {
             progress.begin(format!("{NAME} {series} {}: trace", b.name));
             let m = ctx.measure(p.renderer.as_ref(), &w, None)?;
             results.scaling.push(ScalingPoint {
+                hit_fraction: None,
                 build_seconds: Some(p.build),
                 memory_bytes: Some(memory),
                 stored_primitives: Some(stored),
@@ -397,6 +398,7 @@ mod tests {
         let mut r = Results::default();
         let point =
             |series: &str, backend: &str, stored: u64, memory: u64, seconds: f64| ScalingPoint {
+                hit_fraction: None,
                 shard: 0,
                 experiment: NAME.into(),
                 series: series.into(),

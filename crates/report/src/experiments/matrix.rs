@@ -88,18 +88,29 @@ impl Experiment for Matrix {
         false
     }
 
-    /// The scenes named by `--scenes`, else the built-in scenes of the chosen matrix.
+    /// The scenes named by `--scenes`, else the built-in scenes of the chosen matrix; then
+    /// the empty scene ([`super::empty_scene::UNIT`]) where camera rays are cast.
     fn units(&self, ctx: &Ctx) -> Vec<String> {
-        match &ctx.opts.scenes {
+        let mut units: Vec<String> = match &ctx.opts.scenes {
             Some(s) => s.iter().map(|s| s.trim().to_string()).collect(),
             None => crate::ctx::matrix_scenes(ctx.opts.quick)
                 .into_iter()
                 .map(String::from)
                 .collect(),
+        };
+        if super::empty_scene::wanted(ctx) {
+            units.push(super::empty_scene::UNIT.into());
         }
+        units
     }
 
     fn plan(&self, ctx: &Ctx, unit: &str, results: &mut Results) -> Result<Option<Planned>> {
+        if unit == super::empty_scene::UNIT {
+            return Ok(Some(Planned {
+                steps: ctx.chosen.len(),
+                scene: None,
+            }));
+        }
         Ok(match ctx.load(unit)? {
             Ok(scene) => Some(Planned {
                 steps: workloads(ctx, &scene).0.len() * ctx.chosen.len(),
@@ -125,6 +136,8 @@ impl Experiment for Matrix {
                     why,
                 );
             }
+        } else {
+            super::empty_scene::run(ctx, progress, out)?;
         }
         Ok(())
     }
@@ -312,6 +325,7 @@ impl Experiment for Matrix {
             }
         }
 
+        super::empty_scene::write(results, s);
         super::quality::write(results, s);
 
         // Phases of backends on another device (the GPU).

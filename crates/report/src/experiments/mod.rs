@@ -7,6 +7,7 @@
 //! run, charts and text); [`Experiment`] then comes with it.
 
 mod bezier;
+mod empty_scene;
 mod heightfield;
 mod instancing;
 pub(crate) mod matrix;

@@ -224,6 +224,7 @@ impl Experiment for Presets {
                     let series = format!("{spec} {}", w.rays.name());
                     let x = f64::from(ctx.size) * f64::from(ctx.size);
                     results.scaling.push(ScalingPoint {
+                        hit_fraction: None,
                         build_seconds: Some(build),
                         memory_bytes: Some(memory),
                         ..m.point(r.as_ref(), NAME, series, name, x)
