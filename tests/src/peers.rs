@@ -41,15 +41,13 @@ pub const MESHES: [(&str, &str); 6] = [
     ("sphere", "icosphere:6"),
     ("soup", "soup:100000"),
     ("terrain", "terrain:708"),
-    ("sponza", "sponza"),
+    ("dabrovic-sponza", "dabrovic-sponza"),
     ("bunny", "bunny"),
     ("bunny-field", "flat:bunny-field"),
 ];
 
-/// The prefix of a mesh spec that asks for the scene flattened
-/// ([`raybench_scene::flatten_within_budget`]: every instance's triangles carried to world
-/// space and stored flat): `flat:bunny-field`.
-pub const FLAT_PREFIX: &str = "flat:";
+/// The prefix of a mesh spec that asks for the scene flattened (the scene loader's).
+pub use raybench_scene::FLAT_PREFIX;
 
 /// The reference every contestant's answers are compared with, and whose closest hits end
 /// the any-hit rays.
@@ -115,7 +113,7 @@ options:
                         shadow, ao and diffuse start from the primary rays' hits)
   --ao-rays N           ambient-occlusion rays per primary hit (default 4)
   --rays-file FILE      replay a ray file (raybench rays export) instead of the sets
-  --meshes A,B          sphere, soup, terrain, sponza, bunny, bunny-field (default: all),
+  --meshes A,B          sphere, soup, terrain, dabrovic-sponza, bunny, bunny-field (default: all),
                         or scene specs; `flat:SCENE` flattens an instanced scene
   --contestants A,B     only these (see --list); `bvh` is always built as the reference
   --repeat N            timed runs per figure and builds, best kept (default 3)
@@ -359,13 +357,7 @@ pub fn ray_set(
 /// # Errors
 /// The loader's or the flattening's error.
 pub fn load_mesh(spec: &str) -> Result<Scene, raybench_scene::LoadError> {
-    let assets = raybench_scene::assets_dir(None);
-    match spec.strip_prefix(FLAT_PREFIX) {
-        Some(inner) => {
-            raybench_scene::flatten_within_budget(&raybench_scene::load(inner, &assets)?)
-        }
-        None => raybench_scene::load(spec, &assets),
-    }
+    raybench_scene::load(spec, &raybench_scene::assets_dir(None))
 }
 
 /// `rays` ending at [`SHADOW_FRACTION`] of `closest`'s `t` (unchanged where it is `None`).

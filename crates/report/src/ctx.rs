@@ -114,11 +114,20 @@ impl Workload {
     }
 }
 
+/// The scenes the full matrix adds to the built-in ones, flattened: a flat scene of several
+/// million triangles made from the shared meshes (`bunny-field`'s 12.6 million), whose tree
+/// no cache holds, beside the instanced form of the same scene.
+pub const FLAT_SCENES: [&str; 1] = ["flat:bunny-field"];
+
 /// The built-in scenes of the quick matrix (`--quick`) or the full one, in listing order
-/// (each scene's `[benchmark]` table says which).
+/// (each scene's `[benchmark]` table says which); the full one ends with [`FLAT_SCENES`].
 #[must_use]
 pub fn matrix_scenes(quick: bool) -> Vec<&'static str> {
-    raybench_scene::matrix(quick).map(|b| b.name).collect()
+    let mut scenes: Vec<&'static str> = raybench_scene::matrix(quick).map(|b| b.name).collect();
+    if !quick {
+        scenes.extend(FLAT_SCENES);
+    }
+    scenes
 }
 
 /// The cameras a workload is measured from, each with its explicit rays (`None` for a
@@ -404,6 +413,12 @@ impl Measurement {
             memory_bytes: None,
             difference: None,
             stored_primitives: None,
+            visits_per_ray: self
+                .warm
+                .counters
+                .filter(|c| r.counts_tests() && c.node_visits > 0)
+                .map(|c| c.node_visits as f64 / rays as f64),
+            quality: None,
         }
     }
 

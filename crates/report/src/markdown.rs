@@ -476,6 +476,8 @@ mod tests {
                 memory_bytes: None,
                 difference: None,
                 stored_primitives: None,
+                visits_per_ray: None,
+                quality: None,
             }
         };
         // a: time 1, 4, 16 over x 1, 2, 4: slope 2; tests 3, 3, 3: slope 0. b: time 2, 2

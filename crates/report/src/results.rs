@@ -698,6 +698,14 @@ pub enum Quality {
         references: u64,
         /// Structure bytes per bounded primitive.
         bytes_per_primitive: f64,
+        /// Mean leaves entered per ray up to its closest hit
+        /// ([`raybench_core::TreeView::leaf_counts`]), where rays were given (experiment
+        /// `presets`); absent elsewhere and in older files.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        leaves_per_ray: Option<f64>,
+        /// Their standard deviation over the rays: the leaf-count variability.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        leaf_count_std_dev: Option<f64>,
     },
     /// A uniform or two-level grid.
     Grid {
@@ -855,6 +863,8 @@ impl From<&raybench_core::StructureQuality> for Quality {
                 mean_leaf_depth: t.mean_leaf_depth,
                 references: t.references,
                 bytes_per_primitive: t.bytes_per_primitive,
+                leaves_per_ray: t.leaf_counts.map(|c| c.mean),
+                leaf_count_std_dev: t.leaf_counts.map(|c| c.std_dev),
             },
             Q::Grid(g) => Self::Grid {
                 cells: g.cells,
@@ -964,6 +974,14 @@ pub struct ScalingPoint {
     /// flattened scene's primitive count).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stored_primitives: Option<u64>,
+    /// Node or cell visits per ray (absent where the backend does not count them and in
+    /// older files).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub visits_per_ray: Option<f64>,
+    /// The structure's quality figures (experiment `presets`: each preset's tree, for the
+    /// fixed-kernel analysis); absent elsewhere and in older files.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub quality: Option<Quality>,
     /// The share of the point's camera rays that hit (the warm-up's answers); absent in
     /// older files and for points without rays.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -1326,6 +1344,8 @@ mod tests {
                     memory_bytes: None,
                     difference: None,
                     stored_primitives: None,
+                    visits_per_ray: None,
+                    quality: None,
                 });
             }
             r.fit();
@@ -1400,6 +1420,8 @@ mod tests {
                 memory_bytes: None,
                 difference: None,
                 stored_primitives: None,
+                visits_per_ray: None,
+                quality: None,
             });
         }
         r.fits.push(f);

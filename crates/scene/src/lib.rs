@@ -109,13 +109,26 @@ pub fn normalize_lexically(path: &Path) -> PathBuf {
     out
 }
 
+/// The prefix of a scene spec that asks for the scene flattened ([`flatten_within_budget`]:
+/// every instance's primitives carried to world space and stored flat): `flat:bunny-field`,
+/// a scene of 12.6 million triangles stored flat.
+pub const FLAT_PREFIX: &str = "flat:";
+
 /// Loads the scene named by `spec`: an existing file path, a built-in scene name or a
-/// generator spec (see the crate documentation), with mesh files looked up in `assets`.
+/// generator spec (see the crate documentation), with mesh files looked up in `assets`;
+/// any of these behind [`FLAT_PREFIX`] flattened, and named by the whole spec
+/// (`flat:bunny-field`), so that its runs are told apart from the instanced scene's.
 ///
 /// # Errors
 /// [`LoadError::UnknownScene`] when `spec` is none of these; [`LoadError::MissingAsset`]
-/// when a file the scene needs is absent; otherwise what loading reports.
+/// when a file the scene needs is absent; [`LoadError::OverBudget`] when the flattened form
+/// would not fit the memory budget; otherwise what loading reports.
 pub fn load(spec: &str, assets: &Path) -> Result<Scene, LoadError> {
+    if let Some(inner) = spec.strip_prefix(FLAT_PREFIX) {
+        let mut flat = flatten_within_budget(&load(inner, assets)?)?;
+        flat.name = spec.to_string();
+        return Ok(flat);
+    }
     let path = Path::new(spec);
     if path.is_file() {
         return load_file(path, assets);
@@ -165,6 +178,25 @@ pub fn load_file(path: &Path, assets: &Path) -> Result<Scene, LoadError> {
 mod tests {
     use super::*;
     use raybench_core::Vec3;
+
+    /// `flat:NAME` is the scene flattened, named by the whole spec; a flat scene flattened
+    /// again is the same; a bad inner spec is the inner spec's error.
+    #[test]
+    fn the_flat_prefix_flattens_and_names_the_scene() {
+        let assets = Path::new(".");
+        let instanced = load("instance-grid", assets).unwrap();
+        assert!(instanced.geometry.has_instances());
+        let flat = load("flat:instance-grid", assets).unwrap();
+        assert_eq!(flat.name, "flat:instance-grid");
+        assert!(!flat.geometry.has_instances());
+        assert_eq!(flat.geometry.len(), instanced.geometry.total_len());
+        assert_eq!(flat.geometry.len(), 49_649);
+        assert_eq!(load("flat:soup:100", assets).unwrap().geometry.len(), 100);
+        assert!(matches!(
+            load("flat:nothing-here", assets),
+            Err(LoadError::UnknownScene(s)) if s == "nothing-here"
+        ));
+    }
 
     /// A scene path that is a symbolic link loop says so (it was "file not found"); a
     /// missing one is not found.

@@ -104,15 +104,29 @@ fn the_presets_experiment_runs_and_is_written() {
         return;
     }
     let dir = tmp_dir("presets");
-    let r = quick_experiment(&dir, "bvh:fast,bvh:quality", "presets");
+    let r = quick_experiment(
+        &dir,
+        "bvh:fast,bvh:quality,bvh:ploc_fastest_build,bvh:ploc_medium_build",
+        "presets",
+    );
     let points = r["scaling"].as_array().unwrap();
-    // --quick: the bunny alone; two presets, two ray sets.
-    assert_eq!(points.len(), 4, "{points:?}");
+    // --quick: the bunny alone; four presets (two builders under bvh's kernel), two ray sets.
+    assert_eq!(points.len(), 8, "{points:?}");
     for p in points {
         assert_eq!(p["experiment"], "presets");
         assert!(p["build_seconds"].as_f64().unwrap() > 0.0, "{p}");
         assert!(p["memory_bytes"].as_u64().unwrap() > 0, "{p}");
         assert_eq!(p["rays"], 256);
+        // The tree's figures for the fixed-kernel analysis, leaf counts over these rays.
+        let q = &p["quality"];
+        assert_eq!(q["kind"], "tree", "{p}");
+        assert!(q["sah"].as_f64().unwrap() > 1.0, "{p}");
+        let (mean, sd) = (
+            q["leaves_per_ray"].as_f64().unwrap(),
+            q["leaf_count_std_dev"].as_f64().unwrap(),
+        );
+        assert!(mean > 0.0 && sd >= 0.0, "{p}");
+        assert!(p["visits_per_ray"].as_f64().unwrap() > 0.0, "{p}");
     }
     for (series, backend) in [
         ("bunny primary", "bvh:fast"),
@@ -134,6 +148,26 @@ fn the_presets_experiment_runs_and_is_written() {
     );
     assert!(md.contains("| bunny | bvh:fast |"), "{md}");
     assert!(md.contains("| bunny | bvh | "), "{md}");
+    // The four trees under one kernel, correlated with an interval (n = 4).
+    assert!(
+        md.contains("## Tree quality against trace time, kernel held fixed"),
+        "{md}"
+    );
+    for set in ["primary", "incoherent"] {
+        let row = md
+            .lines()
+            .find(|l| l.starts_with(&format!("| bunny | {set} | bvh | 2.0 | 4 | ")))
+            .unwrap_or_else(|| panic!("{set}: {md}"));
+        assert!(row.contains(" ["), "an interval: {row}");
+        assert!(
+            md.contains(&format!("(charts/fixed-kernel-sah-bunny-{set}.svg)")),
+            "{md}"
+        );
+    }
+    assert!(
+        md.contains("| bunny | primary | bvh:ploc_medium_build | "),
+        "{md}"
+    );
     // Both presets in bvh's colour, told apart by their markers.
     for stem in ["presets-bunny-primary", "presets-bunny-time-to-image"] {
         assert!(md.contains(&format!("(charts/{stem}.svg)")), "{md}");

@@ -413,6 +413,8 @@ mod tests {
                 memory_bytes: Some(memory),
                 difference: None,
                 stored_primitives: Some(stored),
+                visits_per_ray: None,
+                quality: None,
             };
         r.scaling
             .push(point("small instanced", "b", 100, 10_000, 0.002));

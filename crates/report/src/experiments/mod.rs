@@ -8,6 +8,7 @@
 
 mod bezier;
 mod empty_scene;
+mod fixed_kernel;
 mod heightfield;
 mod instancing;
 pub(crate) mod matrix;

@@ -15,14 +15,15 @@ use crate::charts::Series;
 use crate::ctx::{Ctx, Workload, memory_bytes};
 use crate::fmt::file_safe;
 use crate::fmt::{bytes, opt, section};
-use crate::results::{Results, ScalingPoint};
+use crate::results::{Quality, Results, ScalingPoint};
 use anyhow::Result;
-use raybench_core::{Mode, RaySet};
-use raybench_registry::measure::{explicit_rays, median, prepare};
+use raybench_core::{Hit, Mode, QualityParams, Ray, RaySet};
+use raybench_registry::measure::{explicit_rays, median, prepare, primary_rays};
 use raybench_registry::presets::{PRESETS, Preset};
 use raybench_registry::progress::Progress;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
+use std::sync::Arc;
 
 /// Experiment `presets`.
 pub(super) struct Presets;
@@ -116,6 +117,22 @@ fn scenes_in(results: &Results) -> Vec<String> {
     scenes
 }
 
+/// `rays` each clipped at its closest hit in `hits` (a miss keeps its own end): the
+/// segments whose leaf counts the fixed-kernel analysis reads. Empty when the counts do not
+/// match (a backend that does not trace rays one by one answers none).
+fn segments(rays: &[Ray], hits: &[Option<Hit>]) -> Arc<[Ray]> {
+    if rays.len() != hits.len() {
+        return Arc::from(Vec::new());
+    }
+    rays.iter()
+        .zip(hits)
+        .map(|(r, h)| Ray {
+            t_max: h.map_or(r.t_max, |h| h.t.min(r.t_max)),
+            ..*r
+        })
+        .collect()
+}
+
 /// Whether two medians' intervals overlap (both recorded): then neither trace is shown
 /// faster, and a break-even computed from their difference would be noise.
 fn overlap(a: Option<[f64; 2]>, b: Option<[f64; 2]>) -> bool {
@@ -193,6 +210,7 @@ impl Experiment for Presets {
                 &incoherent.settings(),
                 &raybench_core::ray_sets::DerivedParams::default(),
             )?;
+            let camera = primary_rays(&scene, &primary.settings())?;
             for p in &presets {
                 let name = p.entry.name;
                 progress.begin(format!("presets {spec} {name}: build"));
@@ -221,12 +239,25 @@ impl Experiment for Presets {
                 progress.begin(format!("presets {spec} {name}: trace"));
                 for (w, explicit) in [(primary, None), (incoherent, rays.as_ref())] {
                     let m = ctx.measure(r.as_ref(), &w, explicit)?;
+                    // The tree's figures for the analysis with the kernel held fixed
+                    // (`fixed_kernel.rs`), its leaf counts over these rays clipped at the
+                    // hits this (exact) backend finds for them (untimed).
+                    let traced = explicit.map_or(&camera, |b| &b.rays);
+                    let hits = r.trace_rays(traced, false).map(|h| h.0).unwrap_or_default();
+                    let quality = r
+                        .quality(&QualityParams {
+                            rays: segments(traced, &hits),
+                            ..QualityParams::default()
+                        })
+                        .as_ref()
+                        .map(Quality::from);
                     let series = format!("{spec} {}", w.rays.name());
                     let x = f64::from(ctx.size) * f64::from(ctx.size);
                     results.scaling.push(ScalingPoint {
                         hit_fraction: None,
                         build_seconds: Some(build),
                         memory_bytes: Some(memory),
+                        quality,
                         ..m.point(r.as_ref(), NAME, series, name, x)
                     });
                 }
@@ -297,6 +328,7 @@ impl Experiment for Presets {
                 });
             }
         }
+        out.extend(super::fixed_kernel::charts(results));
         out
     }
 
@@ -371,6 +403,7 @@ impl Experiment for Presets {
             }
         }
         let _ = writeln!(s);
+        super::fixed_kernel::write(results, s);
     }
 }
 

@@ -307,6 +307,8 @@ mod tests {
             mean_leaf_depth: 2.0,
             references: 2,
             bytes_per_primitive: 32.0,
+            leaves_per_ray: None,
+            leaf_count_std_dev: None,
         }
     }
 
