@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The GPU measurement on the device (an NVIDIA H200 lent for a few minutes; see docs/gpu.md,
 # "GPU"): the BVH2 kernels (`wgpu`) against the CWBVH kernels (`wgpu-cwbvh`) with
-# `raybench compare` on bunny, sponza, bunny-field (12.6 million triangles, instanced) and
+# `raybench compare` on bunny, dabrovic-sponza, bunny-field (12.6 million triangles, instanced) and
 # terrain:708 (primary, incoherent and shadow rays, path tracing at 1 spp), then the GPU
 # criterion suite on the same scenes with short measurement times. A run that fails or
 # outlasts its time is recorded with its error and the others go on; the whole run ends
@@ -103,7 +103,7 @@ case "$adapter" in
         ;;
 esac
 
-scenes=(bunny sponza bunny-field terrain:708)
+scenes=(bunny dabrovic-sponza bunny-field terrain:708)
 repeat=3
 if [ "$quick" = 1 ]; then
     scenes=(bunny terrain:708)

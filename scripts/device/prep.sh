@@ -44,7 +44,7 @@ fi
 strip -o "$dir/bin/raybench" "$raybench_bin"
 strip -o "$dir/bin/gpu-bench" "$bench_bin"
 
-# The meshes of bunny, sponza, bunny-field (bunnies and teapots around Sponza) and the
+# The meshes of bunny, dabrovic-sponza, bunny-field (bunnies and teapots around Sponza) and the
 # bench's quick scenes (terrain and spheres are generated).
 for scene in bunny sponza-dabrovic teapot cornell-box; do
     if [ ! -d "$assets/$scene" ]; then

@@ -16,7 +16,7 @@
 //! the batch entry point.
 //!
 //! Scenes: the report's quick matrix (`raybench_report::matrix_scenes(true)`: spheres, whitted,
-//! cornell-box, bunny, sponza; the meshes come from the assets directory, and a scene whose
+//! cornell-box, bunny, dabrovic-sponza; the meshes come from the assets directory, and a scene whose
 //! files are missing is skipped with a message) and the generators `terrain:708` (about a
 //! million triangles) and `soup:100000` (where a uniform grid should be close to a BVH).
 //!

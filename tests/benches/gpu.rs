@@ -3,7 +3,7 @@
 //! the adapter wgpu selects (`WGPU_BACKEND`, `WGPU_ADAPTER_NAME`; without a GPU, Mesa's
 //! lavapipe, which runs at about one CPU thread's speed).
 //!
-//! Benchmarks, per scene (bunny, sponza and `terrain:708`, the scenes docs/gpu.md's GPU
+//! Benchmarks, per scene (bunny, dabrovic-sponza and `terrain:708`, the scenes docs/gpu.md's GPU
 //! figures are quoted for, then the report's other quick scenes; `RAYBENCH_GPU_SCENES`, a
 //! comma-separated list, replaces them) and backend:
 //!
@@ -43,7 +43,13 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 /// Scenes of docs/gpu.md's figures first.
-const SCENES: &[&str] = &["bunny", "sponza", "terrain:708", "cornell-box", "spheres"];
+const SCENES: &[&str] = &[
+    "bunny",
+    "dabrovic-sponza",
+    "terrain:708",
+    "cornell-box",
+    "spheres",
+];
 
 fn size() -> u32 {
     std::env::var("RAYBENCH_GPU_SIZE")

@@ -9,7 +9,7 @@
 
 /// A test per built-in scene, each calling `$check(name)`, in a module `builtin` of the
 /// module that invokes it (so the harness spreads the scenes over its threads, and a filter
-/// such as `equivalence::builtin::sponza` runs one); and
+/// such as `equivalence::builtin::dabrovic_sponza` runs one); and
 /// `builtin::every_builtin_scene_has_a_test`, which compares the list with
 /// `raybench_scene::BUILTIN_SCENES` (found from `bench-scenes/`), so a new scene file fails
 /// until it is listed here. `$check` is a path as seen from the invoking module.
@@ -29,7 +29,7 @@ macro_rules! builtin_scene_tests {
             quadrics => "quadrics",
             sdf => "sdf",
             spheres => "spheres",
-            sponza => "sponza",
+            dabrovic_sponza => "dabrovic-sponza",
             suzanne => "suzanne",
             teapot_bezier => "teapot-bezier",
             teapot_stadium => "teapot-stadium",

@@ -33,7 +33,7 @@ count_tests! {
     suzanne => "suzanne", 968;
     bunny_lowres => "bunny-lowres", 3674;
     teapot => "teapot", 6320;
-    sponza => "sponza", 66454;
+    dabrovic_sponza => "dabrovic-sponza", 66454;
     bunny => "bunny", 69451;
 }
 

@@ -32,7 +32,7 @@ fn defaults_are_the_peers_workload() {
             ("sphere", "icosphere:6"),
             ("soup", "soup:100000"),
             ("terrain", "terrain:708"),
-            ("sponza", "sponza"),
+            ("dabrovic-sponza", "dabrovic-sponza"),
             ("bunny", "bunny"),
             ("bunny-field", "flat:bunny-field")
         ]

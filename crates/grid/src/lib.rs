@@ -59,7 +59,7 @@ pub const FAR_ORIGIN: f32 = 8.0;
 /// (`Accel::for_instances`): an instance's rays start in its mesh's space as many of the
 /// mesh's sizes away as the camera is (7 to 30 on `bunny-field`). Its padding floor,
 /// `2^-12` of the grid's size (a sixty-fourth of a cell at 64 cells per axis), would cost a
-/// scene's grid up to 11 % more tests per ray (sponza), so only those meshes pay it.
+/// scene's grid up to 11 % more tests per ray (dabrovic-sponza), so only those meshes pay it.
 pub const INSTANCE_FAR_ORIGIN: f32 = 128.0;
 
 /// The insertion padding's floor relative to the grid's size for rays from up to

@@ -30,7 +30,7 @@
 //!       } ]
 //!     } ]
 //!   } ],
-//!   "skipped_meshes": [ { "name": "sponza", "reason": "missing asset ..." } ]
+//!   "skipped_meshes": [ { "name": "dabrovic-sponza", "reason": "missing asset ..." } ]
 //! }
 //! ```
 

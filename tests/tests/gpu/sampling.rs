@@ -101,7 +101,7 @@ fn derived_ray_sets_agree_with_the_cpu() {
     if !available() {
         return;
     }
-    for scene in ["cornell-box", "sponza"] {
+    for scene in ["cornell-box", "dabrovic-sponza"] {
         let Some(s) = load_or_skip(scene) else {
             continue;
         };
