@@ -229,13 +229,16 @@ fn long_work_shows_progress_on_a_terminal_only() {
         "primary", "--size", "16", "--repeat", "1", "--min-sample", "0", "--no-scaling",
         "--out", report_dir.to_str().unwrap(),
     ];
+    // Two steps: the scene, then the empty scene that measures the pipeline's fixed cost.
     let stderr = run(&report, None);
     assert!(
-        stderr.lines().any(|l| l.starts_with("1/1  0m")) && !stderr.contains("[#"),
+        stderr.lines().any(|l| l.starts_with("1/2  0m"))
+            && stderr.lines().any(|l| l.starts_with("2/2  0m"))
+            && !stderr.contains("[#"),
         "{stderr}"
     );
     let stderr = run(&report, Some("never"));
-    assert!(!stderr.lines().any(|l| l.starts_with("1/1")), "{stderr}");
+    assert!(!stderr.lines().any(|l| l.starts_with("1/2")), "{stderr}");
     let stderr = run(&report, Some("sometimes"));
     assert_eq!(
         stderr
