@@ -146,6 +146,11 @@ mod tests {
         let t = Bvh::build_ploc(g, BvhBuildParams::fastest_build());
         t.validate().unwrap();
         assert!(t.depth() <= crate::build::MAX_DEPTH);
+        // The preset makes leaves of one primitive: a larger leaf is a collapsed subtree.
+        assert!(
+            t.nodes().iter().any(|n| n.count > 1),
+            "the depth limit was not reached"
+        );
     }
 
     #[test]
