@@ -148,3 +148,61 @@ fn a_million_tiny_spheres_in_a_corner_and_a_plane() {
     }));
     check("million spheres in a corner", &scene, &rays);
 }
+
+/// Rays starting beyond every structure's far-origin bound, as shadow and bounce rays from
+/// far out on a ground plane do: every backend against naive, and the grids' and the obvhs
+/// adapter's exact fallback tests only the plane for the rays that miss the mesh's box
+/// (before, it tested all of the mesh's triangles for each of them).
+#[test]
+fn rays_from_beyond_the_far_origin_bounds_test_only_what_they_can_hit() {
+    let mut b = SceneBuilder::new("far ground");
+    b.add_plane(Vec3::new(0.0, -1.0, 0.0), Vec3::Y, 0).unwrap();
+    let soup = raybench_scene::load("soup:2000", std::path::Path::new(".")).unwrap();
+    for shape in soup.geometry.shapes() {
+        if let raybench_core::Shape::Triangle(t) = shape {
+            let mesh = TriangleMesh {
+                positions: t.v.to_vec(),
+                indices: vec![[0, 1, 2]],
+            };
+            b.add_mesh("t", &mesh, 0).unwrap();
+        }
+    }
+    let scene = Arc::new(b.build());
+    let size = scene.geometry.bounds().extent().max_element();
+    // Origins on the ground from 200 to 20,000 scene sizes out (beyond the grids' 8 and
+    // 128 and obvhs's 128): half of the rays head up and away (missing the mesh's box), a
+    // quarter back at the scene's centre, a quarter down through the ground.
+    let mut away = Vec::new();
+    let mut rays = Vec::new();
+    for k in 0..400 {
+        let a = k as f32 * 2.399_963;
+        let reach = size * [200.0, 2_000.0, 20_000.0][k % 3];
+        let origin = Vec3::new(a.cos() * reach, -1.0 + 1e-3, a.sin() * reach);
+        let ray = match k % 4 {
+            0 | 1 => Ray::new(origin, Vec3::new(a.cos(), 1.0, a.sin())),
+            2 => Ray::new(origin, -origin),
+            _ => Ray::new(origin, Vec3::new(0.1, -1.0, 0.2)),
+        };
+        if k % 4 < 2 {
+            away.push(ray);
+        }
+        rays.push(ray);
+    }
+    check("far ground", &scene, &rays);
+    let per_ray = |tests: u64| tests as f64 / away.len() as f64;
+    let mut grid_tests = raybench_core::RayCounters::default();
+    let mut two_level_tests = raybench_core::RayCounters::default();
+    let mut obvhs_tests = raybench_core::RayCounters::default();
+    let grid = Grid::build(Arc::clone(&scene.geometry));
+    let two_level = raybench_grid::TwoLevelGrid::build(Arc::clone(&scene.geometry));
+    let obvhs = raybench_bvh::ObvhsAccel::build(Arc::clone(&scene.geometry));
+    for ray in &away {
+        assert!(grid.intersect(ray, &mut grid_tests).is_none());
+        assert!(!two_level.occluded(ray, &mut two_level_tests));
+        assert!(obvhs.intersect(ray, &mut obvhs_tests).is_none());
+        assert!(!obvhs.occluded(ray, &mut obvhs_tests));
+    }
+    assert_eq!(per_ray(grid_tests.prim_tests), 1.0, "grid");
+    assert_eq!(per_ray(two_level_tests.prim_tests), 1.0, "grid2");
+    assert_eq!(per_ray(obvhs_tests.prim_tests), 2.0, "obvhs");
+}

@@ -29,8 +29,10 @@
 //! [`cull_bound`] of the best `t` (scaled), so obvhs's own early exit gets the contract's
 //! slack. Rays that are not valid, and rays starting more than [`FAR_ORIGIN`] scene sizes
 //! from the scene (where obvhs's rounding outgrows the padding: an origin at `-1e30` missed
-//! a hit, found by `tests/tests/adversarial.rs`), skip obvhs and test every primitive, as
-//! naive does.
+//! a hit, found by `tests/tests/adversarial.rs`), skip obvhs for the exact fallback
+//! (`Geometry::closest_unplaced`): the unbounded primitives alone when the ray misses the
+//! bounded primitives' box, as shadow and bounce rays from far out on a ground plane do,
+//! otherwise every primitive, as naive does.
 //!
 //! Remaining limitation (documented in docs/strategies.md): a hit whose padded box the ray leaves
 //! within about `1.5e-9` of the scene's size from its origin can be missed; the padding
@@ -250,7 +252,7 @@ impl Accel for ObvhsAccel {
 
     fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
         if !ray.is_valid() || self.too_far(ray) {
-            return self.geometry.closest_brute_force(ray, counters);
+            return self.geometry.closest_unplaced(ray, counters);
         }
         traverse::closest(&self.geometry, ray, counters, |q| {
             if self.bvh.nodes.is_empty() {
@@ -274,7 +276,7 @@ impl Accel for ObvhsAccel {
 
     fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
         if !ray.is_valid() || self.too_far(ray) {
-            return self.geometry.occluded_brute_force(ray, counters);
+            return self.geometry.occluded_unplaced(ray, counters);
         }
         traverse::occluded(&self.geometry, ray, counters, |q| {
             if self.bvh.nodes.is_empty() {

@@ -586,6 +586,41 @@ impl Geometry {
         false
     }
 
+    /// Whether `ray` (valid) misses the box of every bounded primitive, by the slab test
+    /// [`Aabb::intersect`] that the tree backends trust at any distance: then only the
+    /// unbounded primitives can be hit.
+    #[inline]
+    fn misses_bounded(&self, ray: &Ray) -> bool {
+        ray.is_valid() && self.bounds.intersect(ray, ray.t_max).is_none()
+    }
+
+    /// The exact closest hit of a ray that a structure cannot place (an origin too far for
+    /// its arithmetic, or an invalid ray): the unbounded primitives alone when the ray
+    /// misses the bounded primitives' box, as most rays from far out on a ground plane do;
+    /// otherwise [`Geometry::closest_brute_force`].
+    #[must_use]
+    pub fn closest_unplaced<C: crate::Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
+        if !self.misses_bounded(ray) {
+            return self.closest_brute_force(ray, counters);
+        }
+        let mut best = None;
+        counters.add_tests(self.closest_unbounded(ray, &mut best));
+        self.complete(ray, best)
+    }
+
+    /// [`Geometry::closest_unplaced`] for any hit: the unbounded primitives alone when the
+    /// ray misses the bounded primitives' box, otherwise
+    /// [`Geometry::occluded_brute_force`].
+    #[must_use]
+    pub fn occluded_unplaced<C: crate::Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
+        if !self.misses_bounded(ray) {
+            return self.occluded_brute_force(ray, counters);
+        }
+        let (hit, tests) = self.occluded_unbounded(ray);
+        counters.add_tests(tests);
+        hit
+    }
+
     /// Turns the winner of [`Geometry::test_closest`] into a full [`Hit`] (flat ids only:
     /// instanced ones go through [`Geometry::complete_global`]).
     #[inline]

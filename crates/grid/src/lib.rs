@@ -21,7 +21,10 @@
 //!   to the grid, stay within the padding for rays starting less than [`FAR_ORIGIN`] grid
 //!   sizes away ([`INSTANCE_FAR_ORIGIN`] for instanced meshes). Rays starting farther away
 //!   (a camera 10 km from a 1 mm scene) cannot be located in the grid to f32 precision:
-//!   they test every bounded primitive instead, which keeps the result exact.
+//!   they skip the grid and stay exact: a ray that misses the box of the bounded
+//!   primitives (the slab test the tree backends trust at any distance) tests only the
+//!   unbounded ones, any other every primitive
+//!   (`raybench_geometry::Geometry::closest_unplaced`).
 //! - **Traversal**: enter from outside (conservative slab test) or start inside; one
 //!   comparison per axis per step; zero direction components never step; crossing
 //!   distances recomputed from cell boundaries (no drift). The walk stops only when the
@@ -49,7 +52,7 @@ pub use two_level::{TwoLevelGrid, TwoLevelParams};
 pub const MAILBOX: usize = 8;
 
 /// Rays whose origin lies farther than this many grid sizes from the grid's centre skip
-/// the DDA and test every bounded primitive (see the crate documentation): the default
+/// the DDA for the exact fallback (see the crate documentation): the default
 /// [`GridParams::far_origin`]. The DDA's positions are off by up to about 16 ulps of the
 /// origin's distance to the grid, so the insertion padding's floor is `far_origin * 16 *
 /// 2^-23` of the grid's size ([`pad_of_size`]): `2^-16` here.

@@ -14,7 +14,8 @@ pub struct GridParams {
     /// the bunny 1.08x; builds take 5x to 9x longer (Sponza 47 ms instead of 5.5 ms).
     pub clip_triangles: bool,
     /// Rays whose origin lies farther than this many grid sizes from the grid's centre
-    /// test every primitive instead of walking the grid; the insertion padding's floor
+    /// skip the grid for the exact fallback (the unbounded primitives alone when the ray
+    /// misses the grid's primitives' box, otherwise every one); the insertion padding's floor
     /// grows with it (`far_origin * 16 * 2^-23` of the grid's size, [`crate::FAR_ORIGIN`]).
     /// [`crate::FAR_ORIGIN`] for a scene; [`crate::INSTANCE_FAR_ORIGIN`] for the meshes
     /// instances place (`Accel::for_instances`).

@@ -131,14 +131,14 @@ impl Accel for Grid {
 
     fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
         if !self.dda_is_exact_for(ray) {
-            return self.geometry.closest_brute_force(ray, counters);
+            return self.geometry.closest_unplaced(ray, counters);
         }
         traverse::closest(&self.geometry, ray, counters, |q| self.walk_closest(q))
     }
 
     fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
         if !self.dda_is_exact_for(ray) {
-            return self.geometry.occluded_brute_force(ray, counters);
+            return self.geometry.occluded_unplaced(ray, counters);
         }
         traverse::occluded(&self.geometry, ray, counters, |q| self.walk_any(q))
     }

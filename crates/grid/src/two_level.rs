@@ -145,7 +145,7 @@ impl Accel for TwoLevelGrid {
     fn intersect<C: Counters>(&self, ray: &Ray, counters: &mut C) -> Option<Hit> {
         let g = &*self.top.geometry;
         if !self.top.dda_is_exact_for(ray) {
-            return g.closest_brute_force(ray, counters);
+            return g.closest_unplaced(ray, counters);
         }
         traverse::closest(g, ray, counters, |q| {
             let mut mailbox = Mailbox::new();
@@ -168,7 +168,7 @@ impl Accel for TwoLevelGrid {
     fn occluded<C: Counters>(&self, ray: &Ray, counters: &mut C) -> bool {
         let g = &*self.top.geometry;
         if !self.top.dda_is_exact_for(ray) {
-            return g.occluded_brute_force(ray, counters);
+            return g.occluded_unplaced(ray, counters);
         }
         traverse::occluded(g, ray, counters, |q| {
             let mut hit = false;

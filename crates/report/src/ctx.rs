@@ -114,15 +114,20 @@ impl Workload {
     }
 }
 
+/// The scenes the full matrix adds to the built-in ones, flattened: a flat scene of several
+/// million triangles made from the shared meshes (`bunny-field`'s 12.6 million), whose tree
+/// no cache holds, beside the instanced form of the same scene.
+pub const FLAT_SCENES: [&str; 1] = ["flat:bunny-field"];
+
 /// The built-in scenes of the quick matrix (`--quick`) or the full one, in listing order
-/// (each scene's `[benchmark]` table says which). A flat scene of millions of triangles
-/// (`flat:bunny-field`) is named with `--scenes`: it is not in the full matrix, where the
-/// shadow rays that `grid` and `obvhs` hand to their brute-force fallback (rays their
-/// structure cannot answer exactly) test all 12.6 million triangles each, longer than the
-/// rest of the run.
+/// (each scene's `[benchmark]` table says which); the full one ends with [`FLAT_SCENES`].
 #[must_use]
 pub fn matrix_scenes(quick: bool) -> Vec<&'static str> {
-    raybench_scene::matrix(quick).map(|b| b.name).collect()
+    let mut scenes: Vec<&'static str> = raybench_scene::matrix(quick).map(|b| b.name).collect();
+    if !quick {
+        scenes.extend(FLAT_SCENES);
+    }
+    scenes
 }
 
 /// The cameras a workload is measured from, each with its explicit rays (`None` for a
