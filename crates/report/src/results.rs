@@ -1059,6 +1059,39 @@ pub enum Favoured {
 /// Anderson's rule of thumb: below 2, the models are about equally supported).
 pub const AIC_MARGIN: f64 = 2.0;
 
+/// The largest spread (percentage points) of a series' hit fractions still called constant.
+pub const CONSTANT_HITS_PP: f64 = 1.0;
+
+/// The hit fraction (0 to 1) at each `x` of a scaling series, ascending in `x`
+/// ([`Results::hit_fractions`]). A series whose hit fraction changes with `x` confounds its
+/// fit: a ray that hits costs more than one that misses.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct HitFractions(pub Vec<(f64, f64)>);
+
+impl HitFractions {
+    /// The spread (largest minus smallest fraction) in percentage points; 0 with no points.
+    #[must_use]
+    pub fn spread_pp(&self) -> f64 {
+        let (lo, hi) = self.range().unwrap_or((0.0, 0.0));
+        (hi - lo) * 100.0
+    }
+
+    /// The smallest and largest fraction, or `None` with no points.
+    #[must_use]
+    pub fn range(&self) -> Option<(f64, f64)> {
+        let mut it = self.0.iter().map(|&(_, h)| h);
+        let first = it.next()?;
+        Some(it.fold((first, first), |(lo, hi), h| (lo.min(h), hi.max(h))))
+    }
+
+    /// Whether the fraction stays within [`CONSTANT_HITS_PP`] over the series; `None` with
+    /// fewer than two points, where constancy means nothing.
+    #[must_use]
+    pub fn constant(&self) -> Option<bool> {
+        (self.0.len() >= 2).then(|| self.spread_pp() <= CONSTANT_HITS_PP)
+    }
+}
+
 impl Fit {
     /// Which model the points favour, where they were compared.
     #[must_use]
@@ -1201,6 +1234,23 @@ impl Results {
                 && f.backend == backend
                 && f.quantity == quantity
         })
+    }
+
+    /// The hit fraction at each `x` of one series of a scaling experiment, ascending in `x`:
+    /// the first point of each `x` that recorded one (every exact backend shares the
+    /// answers); empty where no point did (files written before they were).
+    #[must_use]
+    pub fn hit_fractions(&self, experiment: &str, series: &str) -> HitFractions {
+        let mut points: Vec<(f64, f64)> = self
+            .scaling
+            .iter()
+            .filter(|p| p.experiment == experiment && p.series == series)
+            .filter_map(|p| Some((p.x, p.hit_fraction?)))
+            .collect();
+        // Stable: the first point of each `x` stays first, and `dedup_by` keeps it.
+        points.sort_by(|a, b| a.0.total_cmp(&b.0));
+        points.dedup_by(|b, a| a.0 == b.0);
+        HitFractions(points)
     }
 
     /// The slope of `quantity` for one series and backend.

@@ -5,7 +5,9 @@
 //! the scaling slopes compare with the theory the report states.
 
 use crate::fmt::noisy_mark;
-use crate::results::{AIC_MARGIN, Favoured, Fit, NOISY_HALF_WIDTH, Noise, Results, Run, Timing};
+use crate::results::{
+    AIC_MARGIN, CONSTANT_HITS_PP, Favoured, Fit, NOISY_HALF_WIDTH, Noise, Results, Run, Timing,
+};
 use crate::stats::{self, Fastest};
 use raybench_registry::Roles;
 use std::collections::BTreeMap;
@@ -489,14 +491,41 @@ fn diagnosis(results: &Results, f: &Fit, low: bool) -> String {
         // grows at all): a flat or slower test count leaves the time per test to blame.
         (Some(t), false) if t > 0.05 && t >= 0.75 * f.slope => format!(
             "tests per ray grow too (M^{t:.2}): each ray does more work as M grows (the \
-             scenes' depth complexity or hit rate change with M, or the structure is worse \
-             at large M)"
+             scenes' depth complexity changes with M, or the structure is worse at large M)"
         ),
         (Some(t), false) => format!(
             "tests per ray scale as M^{t:.2}, slower than the time: the time per test grows, \
              so the structure or the primitives outgrow the caches"
         ),
     }
+}
+
+/// What the series' hit fraction says of a fit ([`Results::hit_fractions`]): whether it
+/// stays constant (so the hit rate is not what moves the time) or changes with `x` (which
+/// confounds the fit); `None` where fewer than two points recorded it.
+fn hit_clause(results: &Results, f: &Fit) -> Option<(bool, String)> {
+    let hits = results.hit_fractions(&f.experiment, &f.series);
+    let (lo, hi) = hits.range()?;
+    Some(if hits.constant()? {
+        (
+            true,
+            format!(
+                "the hit fraction stays within {:.1} percentage points over the series, so \
+                 the hit rate is not the cause",
+                hits.spread_pp()
+            ),
+        )
+    } else {
+        (
+            false,
+            format!(
+                "the hit fraction moves between {:.1}% and {:.1}% over the series, which \
+                 confounds the fit (a ray that hits costs more than one that misses)",
+                lo * 100.0,
+                hi * 100.0
+            ),
+        )
+    })
 }
 
 /// The scaling fits of render time against the theory.
@@ -511,6 +540,9 @@ fn slopes(results: &Results, s: &mut String) {
     }
     let mut agree = 0;
     let mut judged = 0;
+    // Fits on series whose hit fraction stayed constant: judged, and agreeing.
+    let (mut constant_agree, mut constant_judged) = (0, 0);
+    let mut confounded = 0;
     let mut off = Vec::new();
     for f in &fits {
         let Some(t) = theory(&f.experiment, &f.backend) else {
@@ -532,12 +564,21 @@ fn slopes(results: &Results, s: &mut String) {
                 f.slope, t.range.0, t.range.1
             )),
         };
+        let hits = hit_clause(results, f);
+        if let Some((true, _)) = hits {
+            constant_judged += 1;
+            constant_agree += usize::from(verdict.is_ok());
+        }
         match verdict {
             Ok(()) => agree += 1,
             Err(what) => {
                 let why = diagnosis(results, f, f.slope < t.range.0);
+                let hits = hits.map_or(String::new(), |(constant, clause)| {
+                    confounded += usize::from(!constant);
+                    format!("; {clause}")
+                });
                 off.push(format!(
-                    "- `{}` on {} `{}`: theory {}; {what}; likely: {why}.",
+                    "- `{}` on {} `{}`: theory {}; {what}; likely: {why}{hits}.",
                     f.backend, f.experiment, f.series, t.claim
                 ));
             }
@@ -550,11 +591,21 @@ fn slopes(results: &Results, s: &mut String) {
          whether the points favour a logarithm over a power law by the Akaike criterion on \
          relative residuals, by more than {AIC_MARGIN} either way, or with two points by a \
          slope of -0.15 to 0.25; a grid a power law of slope 0.2 to 0.5, about M^(1/3); every \
-         backend linear in pixels and samples, slope 0.8 to 1.2){}\n",
-        if off.is_empty() {
-            ".".to_string()
+         backend linear in pixels and samples, slope 0.8 to 1.2).{}{}\n",
+        if constant_judged > 0 || confounded > 0 {
+            format!(
+                " On the series whose hit fraction stays within {CONSTANT_HITS_PP} percentage \
+                 point, {constant_agree} of {constant_judged} agree; {confounded} of the {} \
+                 disagreements are on series whose hit fraction changes, which confounds them.",
+                off.len()
+            )
         } else {
-            format!("; these disagree:\n\n{}", off.join("\n"))
+            String::new()
+        },
+        if off.is_empty() {
+            String::new()
+        } else {
+            format!(" These disagree:\n\n{}", off.join("\n"))
         }
     );
 }
@@ -917,6 +968,89 @@ pub(crate) mod tests {
             per_decade: None,
             delta_aic: None,
         }
+    }
+
+    /// A point of `primitives` with its hit fraction (read from JSON, so that fields added
+    /// later with defaults need no change here).
+    fn hit_point(series: &str, backend: &str, x: f64, hits: f64) -> crate::results::ScalingPoint {
+        serde_json::from_value(serde_json::json!({
+            "shard": 0,
+            "experiment": "primitives",
+            "series": series,
+            "backend": backend,
+            "x": x,
+            "seconds": 1e-3,
+            "rays": 4096,
+            "hit_fraction": hits,
+        }))
+        .unwrap()
+    }
+
+    /// A disagreement says whether its series' hit fraction moved (confounding it) or
+    /// stayed put (ruling the hit rate out), and the summary counts both.
+    #[test]
+    fn disagreements_say_whether_the_hit_fraction_moved() {
+        let (baseline, _) = names();
+        let power_law = |series: &str| Fit {
+            series: series.into(),
+            delta_aic: Some(-9.0),
+            ..fit("primitives", baseline, 0.3)
+        };
+        let mut results = Results {
+            fits: vec![
+                power_law("soup"),
+                power_law("icosphere"),
+                Fit {
+                    series: "spheres".into(),
+                    delta_aic: Some(5.0),
+                    ..fit("primitives", baseline, 0.1)
+                },
+                // No hit fractions recorded: no clause, counted in neither group.
+                power_law("old"),
+            ],
+            ..Results::default()
+        };
+        for (series, hits) in [
+            ("soup", [0.20, 0.41, 0.55]),
+            ("icosphere", [0.300, 0.303, 0.304]),
+            ("spheres", [0.500, 0.502, 0.501]),
+        ] {
+            for (i, h) in hits.into_iter().enumerate() {
+                let x = 10f64.powi(i as i32 + 3);
+                results.scaling.push(hit_point(series, baseline, x, h));
+                // A later point of the same `x` is not read.
+                results.scaling.push(hit_point(series, baseline, x, 0.99));
+            }
+        }
+        let s = section(slopes, &results);
+        assert!(s.contains("1 of 4 fits of render time agree"), "{s}");
+        assert!(
+            s.contains(
+                "On the series whose hit fraction stays within 1 percentage point, 1 of 2 \
+                 agree; 1 of the 3 disagreements are on series whose hit fraction changes, \
+                 which confounds them. These disagree:"
+            ),
+            "{s}"
+        );
+        assert!(
+            s.contains(
+                "`soup`: theory logarithmic in M; the points favour a power law (M^0.30) over \
+                 a logarithm (Akaike criterion 9.0 lower); likely: the rays' work or memory \
+                 traffic grows faster than the theory's (tests per ray not counted, so which \
+                 is not known); the hit fraction moves between 20.0% and 55.0% over the \
+                 series, which confounds the fit"
+            ),
+            "{s}"
+        );
+        assert!(
+            s.contains(
+                "the hit fraction stays within 0.4 percentage points over the series, so the \
+                 hit rate is not the cause."
+            ),
+            "{s}"
+        );
+        let old = s.lines().find(|l| l.contains("`old`")).unwrap();
+        assert!(!old.contains("hit fraction"), "{old}");
     }
 
     #[test]

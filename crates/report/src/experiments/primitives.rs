@@ -9,7 +9,7 @@ use super::{
 };
 use crate::charts::{Series, XMark};
 use crate::fmt::section;
-use crate::results::{Caches, Results, ScalingPoint};
+use crate::results::{CONSTANT_HITS_PP, Caches, HitFractions, Results, ScalingPoint};
 use raybench_core::Mode;
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
@@ -29,10 +29,6 @@ const ABOUT: About = About {
 
 /// The subdivision levels of the `icosphere` series: 20 4^L triangles, 1,280 to 1,310,720.
 const ICOSPHERE_LEVELS: std::ops::RangeInclusive<u32> = 3..=8;
-
-/// The largest spread (percentage points) of a series' hit fractions still called
-/// constant.
-const CONSTANT_HITS_PP: f64 = 1.0;
 
 impl Scaling for Primitives {
     type State = ();
@@ -160,33 +156,17 @@ impl Scaling for Primitives {
     }
 }
 
-/// Each series' hit fraction per `M` (the first point of each `M` that has one: every exact
-/// backend shares the answers) and its spread, in percentage points.
-fn hits_of(results: &Results) -> Vec<(String, Vec<(f64, f64)>)> {
+/// Each series' hit fraction per `M` ([`Results::hit_fractions`]), the series without
+/// any left out.
+fn hits_of(results: &Results) -> Vec<(String, HitFractions)> {
     series_of(results, ABOUT.name)
         .into_keys()
         .map(|series| {
-            let mut by_m: BTreeMap<u64, f64> = BTreeMap::new();
-            for p in points_of(results, ABOUT.name, &series) {
-                if let Some(h) = p.hit_fraction {
-                    by_m.entry(p.x as u64).or_insert(h);
-                }
-            }
-            let hits = by_m.into_iter().map(|(m, h)| (m as f64, h)).collect();
+            let hits = results.hit_fractions(ABOUT.name, &series);
             (series, hits)
         })
-        .filter(|(_, hits): &(String, Vec<(f64, f64)>)| !hits.is_empty())
+        .filter(|(_, hits)| !hits.0.is_empty())
         .collect()
-}
-
-/// The spread of `hits` (largest minus smallest fraction) in percentage points.
-fn spread_pp(hits: &[(f64, f64)]) -> f64 {
-    let (lo, hi) = hits
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &(_, h)| {
-            (lo.min(h), hi.max(h))
-        });
-    (hi - lo) * 100.0
 }
 
 /// The section with the hit fractions (where the points recorded them: files written
@@ -222,16 +202,15 @@ fn write_hits(results: &Results, s: &mut String) {
     }
     for (series, points) in &hits {
         let cells: Vec<String> = points
+            .0
             .iter()
             .map(|(m, h)| format!("{}: {:.1}%", m, h * 100.0))
             .collect();
-        let spread = spread_pp(points);
-        let constant = if points.len() < 2 {
-            "-"
-        } else if spread <= CONSTANT_HITS_PP {
-            "yes"
-        } else {
-            "**no**"
+        let spread = points.spread_pp();
+        let constant = match points.constant() {
+            None => "-",
+            Some(true) => "yes",
+            Some(false) => "**no**",
         };
         let _ = writeln!(
             s,
