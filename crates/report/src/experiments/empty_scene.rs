@@ -3,7 +3,7 @@
 //! the same camera rays traced as a batch, where every ray misses (`results.json`'s
 //! `empty_scene`), and the table of the matrix's summary that shows it.
 
-use crate::ctx::{Ctx, Workload, skip};
+use crate::ctx::{Ctx, skip};
 use crate::fmt::{noisy_mark, repetitions};
 use crate::results::{EmptyScene, Results};
 use anyhow::Result;
@@ -38,14 +38,7 @@ pub(crate) fn wanted(ctx: &Ctx) -> bool {
 /// A render that fails.
 pub(crate) fn run(ctx: &Ctx, progress: &Progress, out: &mut Results) -> Result<()> {
     let scene = Arc::new(SceneBuilder::new("empty").build());
-    let w = Workload {
-        mode: Mode::Cast,
-        rays: RaySet::Primary,
-        width: ctx.size,
-        height: ctx.size,
-        spp: 1,
-        replay: false,
-    };
+    let w = super::square(ctx.size, 1, Mode::Cast);
     let mut prepared: Vec<(&str, Prepared)> = Vec::new();
     for b in ctx.chosen {
         progress.begin(format!("{UNIT} {}: build", b.name));

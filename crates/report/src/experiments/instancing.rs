@@ -15,11 +15,11 @@
 
 use super::{Chart, Experiment, Planned, Plot, planned, scene_for, skip};
 use crate::charts::{Bar, Bars};
-use crate::ctx::{Ctx, Workload, memory_bytes};
+use crate::ctx::{Ctx, memory_bytes};
 use crate::fmt::{bytes, section};
 use crate::results::{Results, ScalingPoint};
 use anyhow::Result;
-use raybench_core::{Mode, RaySet, Scene};
+use raybench_core::{Mode, Scene};
 use raybench_registry::measure::prepare;
 use raybench_registry::progress::Progress;
 use raybench_registry::{Backend, Roles};
@@ -80,14 +80,7 @@ impl Instancing {
     ) -> Result<Vec<String>> {
         let g = &scene.geometry;
         let stored = g.len() as u64 + g.meshes().iter().map(|m| m.len() as u64).sum::<u64>();
-        let w = Workload {
-            mode: Mode::Cast,
-            rays: RaySet::Primary,
-            width: ctx.size,
-            height: ctx.size,
-            spp: 1,
-            replay: false,
-        };
+        let w = super::square(ctx.size, 1, Mode::Cast);
         let mut why = Vec::new();
         for b in Self::backends(ctx) {
             progress.begin(format!("{NAME} {series} {}: build", b.name));

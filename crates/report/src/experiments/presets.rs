@@ -192,14 +192,7 @@ impl Experiment for Presets {
                     continue;
                 }
             };
-            let primary = Workload {
-                mode: Mode::Cast,
-                rays: RaySet::Primary,
-                width: ctx.size,
-                height: ctx.size,
-                spp: 1,
-                replay: false,
-            };
+            let primary = super::square(ctx.size, 1, Mode::Cast);
             let incoherent = Workload {
                 rays: RaySet::Incoherent,
                 ..primary
