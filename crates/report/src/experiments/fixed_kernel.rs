@@ -3,7 +3,10 @@
 //! them: the trees of experiment `presets` grouped by the kernel that traces them (the part
 //! of `BACKEND:PRESET` before the `:`: `bvh` traces its binned-SAH trees and obvhs's PLOC
 //! topologies, `obvhs` its CWBVH presets, `packet` its BVH8s), and per scene and ray set the
-//! correlation of each figure with the measured trace time across that kernel's trees.
+//! correlation of each figure with the measured trace time across that kernel's trees. A
+//! grid's resolutions (`grid:*`) form sweeps of their own, read by their cell count and
+//! measured work (cells visited plus primitive tests per ray), since the SAH and EPO
+//! describe trees.
 //!
 //! Figures: the SAH cost (`C_t` per interior node, which the kernel visits as one node of
 //! the arity stated beside it, `C_i` per primitive test), the EPO where it was measured
@@ -38,13 +41,35 @@ struct Tree {
     leaves: Option<(f64, f64)>,
 }
 
-/// A kernel's sweep on one scene and ray set.
+/// One resolution of a grid kernel's sweep: its preset, cells and references per
+/// primitive, the trace time's median and interval, and the kernel's cell visits and
+/// primitive tests per ray. The SAH and EPO describe trees; a grid is read by its work.
 #[derive(Clone, Debug, PartialEq)]
-struct Sweep {
+struct Resolution {
+    preset: String,
+    cells: u64,
+    references_per_primitive: f64,
+    seconds: f64,
+    interval: Option<[f64; 2]>,
+    visits: Option<f64>,
+    tests: Option<f64>,
+}
+
+impl Resolution {
+    /// Cell visits plus primitive tests per ray, where both were counted.
+    fn work(&self) -> Option<f64> {
+        Some(self.visits? + self.tests?)
+    }
+}
+
+/// A kernel's sweep on one scene and ray set: its trees ([`Tree`]) or its grid resolutions
+/// ([`Resolution`]).
+#[derive(Clone, Debug, PartialEq)]
+struct Sweep<T = Tree> {
     scene: String,
     set: String,
     kernel: String,
-    trees: Vec<Tree>,
+    trees: Vec<T>,
 }
 
 /// The tree of a point of experiment `presets`, when it has tree figures.
@@ -81,15 +106,44 @@ fn tree_of(p: &ScalingPoint) -> Option<Tree> {
     })
 }
 
+/// The grid resolution of a point of experiment `presets`, when it has grid figures.
+fn resolution_of(p: &ScalingPoint) -> Option<Resolution> {
+    let Some(Quality::Grid {
+        cells,
+        references,
+        primitives,
+        ..
+    }) = p.quality
+    else {
+        return None;
+    };
+    Some(Resolution {
+        preset: p.backend.clone(),
+        cells,
+        references_per_primitive: references as f64 / primitives.max(1) as f64,
+        seconds: p.seconds,
+        interval: p.timing.as_ref().and_then(|t| t.interval),
+        visits: p.visits_per_ray,
+        tests: p.tests_per_ray,
+    })
+}
+
 /// Every kernel's sweep with at least two trees, in the order the points ran.
 fn sweeps(results: &Results) -> Vec<Sweep> {
-    let mut out: Vec<Sweep> = Vec::new();
+    sweeps_of(results, tree_of)
+}
+
+/// Every kernel's sweep with at least two members that `member` reads from the points of
+/// experiment `presets` (the part of the preset's name before the `:` is the kernel), in
+/// the order the points ran.
+fn sweeps_of<T>(results: &Results, member: fn(&ScalingPoint) -> Option<T>) -> Vec<Sweep<T>> {
+    let mut out: Vec<Sweep<T>> = Vec::new();
     for p in results
         .scaling
         .iter()
         .filter(|p| p.experiment == EXPERIMENT)
     {
-        let (Some(tree), Some((scene, set))) = (tree_of(p), p.series.rsplit_once(' ')) else {
+        let (Some(tree), Some((scene, set))) = (member(p), p.series.rsplit_once(' ')) else {
             continue;
         };
         let kernel = p.backend.split(':').next().unwrap_or_default();
@@ -216,12 +270,13 @@ const INTRO: &str = "The quality figures against the measured trace time with th
     opens at least those), with their mean beside it in the trees' table. Work: r of the SAH \
     with the kernel's measured node visits plus primitive tests per ray, which the SAH models. \
     With a few trees per kernel the intervals are wide: read a correlation only where its \
-    interval excludes 0.";
+    interval excludes 0. The grid's resolutions follow the trees, read by their work.";
 
-/// Writes the section (nothing without a sweep of two trees or more).
+/// Writes the section (nothing without a sweep of two trees or two grid resolutions).
 pub(super) fn write(results: &Results, s: &mut String) {
     let all = sweeps(results);
-    if all.is_empty() {
+    let grids = sweeps_of(results, resolution_of);
+    if all.is_empty() && grids.is_empty() {
         return;
     }
     crate::fmt::section(
@@ -229,12 +284,20 @@ pub(super) fn write(results: &Results, s: &mut String) {
         "Tree quality against trace time, kernel held fixed",
         INTRO,
     );
+    if !all.is_empty() {
+        write_trees(&all, s);
+    }
+    write_grids(&grids, s);
+}
+
+/// The trees' correlations and each kernel's trees.
+fn write_trees(all: &[Sweep], s: &mut String) {
     let _ = writeln!(
         s,
         "| scene | rays | kernel | arity | trees | r(SAH, time) | r(EPO, time) | a | r(SAH+EPO, time) | r(LCV, time) | r(SAH, work) |"
     );
     let _ = writeln!(s, "|---|---|---|---:|---:|---|---|---:|---|---|---|");
-    for sw in &all {
+    for sw in all {
         let n = sw.trees.len();
         let sah: Vec<(f64, f64)> = sw.trees.iter().map(|t| (t.sah, t.seconds)).collect();
         let epo: Vec<(f64, f64)> = sw
@@ -282,7 +345,7 @@ pub(super) fn write(results: &Results, s: &mut String) {
         "| scene | rays | preset | SAH | EPO | leaves/ray | LCV | trace s | work/ray |"
     );
     let _ = writeln!(s, "|---|---|---|---:|---:|---:|---:|---|---:|");
-    for sw in &all {
+    for sw in all {
         let mut trees = sw.trees.clone();
         trees.sort_by(|a, b| a.sah.total_cmp(&b.sah));
         for t in trees {
@@ -300,6 +363,76 @@ pub(super) fn write(results: &Results, s: &mut String) {
                 t.interval
                     .map_or(String::new(), |[lo, hi]| format!(" [{lo:.5}, {hi:.5}]")),
                 t.work.map_or("-".into(), |w| format!("{w:.1}")),
+            );
+        }
+    }
+    let _ = writeln!(s);
+}
+
+/// The grid's kernel over its resolutions: r of the trace time with the cell count and
+/// with the measured work, and each resolution's figures (nothing without a sweep).
+fn write_grids(grids: &[Sweep<Resolution>], s: &mut String) {
+    if grids.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "The grid's kernel held fixed over its resolutions (the `grid:*` presets). The SAH \
+         and EPO describe trees, so a grid is read by its cell count and by its measured work \
+         per ray, cells visited plus primitive tests (what a grid's cost model counts): r of \
+         each with the median trace time, with its 95 % interval (4 resolutions or more).\n"
+    );
+    let _ = writeln!(
+        s,
+        "| scene | rays | kernel | resolutions | r(cells, time) | r(work, time) |"
+    );
+    let _ = writeln!(s, "|---|---|---|---:|---|---|");
+    for g in grids {
+        let n = g.trees.len();
+        let cells: Vec<(f64, f64)> = g
+            .trees
+            .iter()
+            .map(|r| (r.cells as f64, r.seconds))
+            .collect();
+        let work: Vec<(f64, f64)> = g
+            .trees
+            .iter()
+            .filter_map(|r| Some((r.work()?, r.seconds)))
+            .collect();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {n} | {} | {} |",
+            g.scene,
+            g.set,
+            g.kernel,
+            describe(pearson(&cells), n),
+            describe(pearson(&work), work.len()),
+        );
+    }
+    let _ = writeln!(s);
+    let _ = writeln!(
+        s,
+        "| scene | rays | preset | cells | refs/prim | cells visited/ray | tests/ray | trace s |"
+    );
+    let _ = writeln!(s, "|---|---|---|---:|---:|---:|---:|---|");
+    let opt = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.1}"));
+    for g in grids {
+        let mut resolutions = g.trees.clone();
+        resolutions.sort_by_key(|r| r.cells);
+        for r in resolutions {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {} | {:.2} | {} | {} | {:.5}{} |",
+                g.scene,
+                g.set,
+                r.preset,
+                r.cells,
+                r.references_per_primitive,
+                opt(r.visits),
+                opt(r.tests),
+                r.seconds,
+                r.interval
+                    .map_or(String::new(), |[lo, hi]| format!(" [{lo:.5}, {hi:.5}]")),
             );
         }
     }
@@ -366,6 +499,73 @@ mod tests {
             tree(3.0, None, 3.0),
         ];
         assert_eq!(best_combination(&none), None);
+    }
+
+    /// A grid's resolutions form their own sweep, read by cells and measured work; the
+    /// trees' table leaves them out.
+    #[test]
+    fn grid_resolutions_are_read_by_cells_and_work() {
+        let point = |preset: &str, cells: u64, visits: f64, seconds: f64| ScalingPoint {
+            hit_fraction: None,
+            shard: 0,
+            experiment: EXPERIMENT.into(),
+            series: "bunny incoherent".into(),
+            backend: preset.into(),
+            x: 1.0,
+            seconds,
+            timing: None,
+            rays: 1,
+            tests_per_ray: Some(10.0),
+            load_seconds: None,
+            build_seconds: Some(0.1),
+            memory_bytes: None,
+            difference: None,
+            stored_primitives: None,
+            visits_per_ray: Some(visits),
+            quality: Some(Quality::Grid {
+                cells,
+                non_empty_cells: cells / 2,
+                references: 300,
+                primitives: 100,
+                max_list: 9,
+                list_lengths: [0; 7],
+                bytes_per_primitive: 20.0,
+            }),
+        };
+        // Time exactly linear in the work (visits + 10 tests) and falling with the cells.
+        let results = Results {
+            scaling: vec![
+                point("grid:fine", 8000, 40.0, 0.5),
+                point("grid:coarse", 1000, 10.0, 0.2),
+                point("grid:medium", 4000, 20.0, 0.3),
+                point("grid:fast_build", 2000, 30.0, 0.4),
+            ],
+            ..Results::default()
+        };
+        assert!(sweeps(&results).is_empty(), "a grid is no tree");
+        let grids = sweeps_of(&results, resolution_of);
+        assert_eq!(grids.len(), 1);
+        assert_eq!(grids[0].trees[1].references_per_primitive, 3.0);
+        assert_eq!(grids[0].trees[1].work(), Some(20.0));
+        let mut text = String::new();
+        write(&results, &mut text);
+        assert!(!text.contains("r(SAH, time)"), "no tree sweep: {text}");
+        let r_cells =
+            pearson(&[(8000.0, 0.5), (1000.0, 0.2), (4000.0, 0.3), (2000.0, 0.4)]).unwrap();
+        let [lo, hi] = fisher_interval(r_cells, 4).unwrap();
+        assert!(
+            text.contains(&format!(
+                "| bunny | incoherent | grid | 4 | {r_cells:.2} [{lo:.2}, {hi:.2}] | 1.00 ["
+            )),
+            "{text}"
+        );
+        // The resolutions listed by cell count.
+        let coarse = text.find("| grid:coarse | 1000 | 3.00 | 10.0 | 10.0 | 0.20000 |");
+        let fine = text.find("| grid:fine | 8000 | 3.00 | 40.0 | 10.0 | 0.50000 |");
+        assert!(
+            coarse.is_some() && fine.is_some() && coarse < fine,
+            "{text}"
+        );
     }
 
     #[test]
