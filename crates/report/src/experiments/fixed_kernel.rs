@@ -106,6 +106,13 @@ fn tree_of(p: &ScalingPoint) -> Option<Tree> {
     })
 }
 
+impl<T> Sweep<T> {
+    /// The first cells of its table rows: `| scene | rays | kernel |`.
+    fn row_start(&self) -> String {
+        format!("| {} | {} | {} |", self.scene, self.set, self.kernel)
+    }
+}
+
 /// The grid resolution of a point of experiment `presets`, when it has grid figures.
 fn resolution_of(p: &ScalingPoint) -> Option<Resolution> {
     let Some(Quality::Grid {
@@ -210,6 +217,29 @@ fn best_combination(trees: &[Tree]) -> Option<(f64, f64)> {
         }
     }
     best
+}
+
+/// One table row per member of each sweep, sorted by `order`: the scene and ray set, then
+/// `cells` of the member.
+fn member_rows<T: Clone>(
+    sweeps: &[Sweep<T>],
+    order: impl Fn(&T, &T) -> std::cmp::Ordering,
+    cells: impl Fn(&T) -> String,
+    s: &mut String,
+) {
+    for sw in sweeps {
+        let mut members = sw.trees.clone();
+        members.sort_by(&order);
+        for m in &members {
+            let _ = writeln!(s, "| {} | {} | {} |", sw.scene, sw.set, cells(m));
+        }
+    }
+}
+
+/// A trace time cell: `0.08524 [0.08324, 0.08836]` (median [interval]).
+fn time_cell(seconds: f64, interval: Option<[f64; 2]>) -> String {
+    let interval = interval.map_or(String::new(), |[lo, hi]| format!(" [{lo:.5}, {hi:.5}]"));
+    format!("{seconds:.5}{interval}")
 }
 
 /// `0.91 [0.62, 0.98]`; `-` without a correlation, no interval below 4 pairs.
@@ -319,10 +349,8 @@ fn write_trees(all: &[Sweep], s: &mut String) {
         let arity = sw.trees.iter().map(|t| t.arity).sum::<f64>() / n as f64;
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {arity:.1} | {n} | {} | {} | {} | {} | {} | {} |",
-            sw.scene,
-            sw.set,
-            sw.kernel,
+            "{} {arity:.1} | {n} | {} | {} | {} | {} | {} | {} |",
+            sw.row_start(),
             describe(pearson(&sah), n),
             if epo.is_empty() {
                 "not measured".into()
@@ -345,27 +373,23 @@ fn write_trees(all: &[Sweep], s: &mut String) {
         "| scene | rays | preset | SAH | EPO | leaves/ray | LCV | trace s | work/ray |"
     );
     let _ = writeln!(s, "|---|---|---|---:|---:|---:|---:|---|---:|");
-    for sw in all {
-        let mut trees = sw.trees.clone();
-        trees.sort_by(|a, b| a.sah.total_cmp(&b.sah));
-        for t in trees {
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} | {:.2} | {} | {} | {} | {:.5}{} | {} |",
-                sw.scene,
-                sw.set,
+    member_rows(
+        all,
+        |a, b| a.sah.total_cmp(&b.sah),
+        |t| {
+            format!(
+                "{} | {:.2} | {} | {} | {} | {} | {}",
                 t.preset,
                 t.sah,
                 t.epo.map_or("not measured".into(), |e| format!("{e:.2}")),
                 t.leaves.map_or("-".into(), |l| format!("{:.2}", l.0)),
                 t.leaves.map_or("-".into(), |l| format!("{:.2}", l.1)),
-                t.seconds,
-                t.interval
-                    .map_or(String::new(), |[lo, hi]| format!(" [{lo:.5}, {hi:.5}]")),
+                time_cell(t.seconds, t.interval),
                 t.work.map_or("-".into(), |w| format!("{w:.1}")),
-            );
-        }
-    }
+            )
+        },
+        s,
+    );
     let _ = writeln!(s);
 }
 
@@ -401,10 +425,8 @@ fn write_grids(grids: &[Sweep<Resolution>], s: &mut String) {
             .collect();
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {n} | {} | {} |",
-            g.scene,
-            g.set,
-            g.kernel,
+            "{} {n} | {} | {} |",
+            g.row_start(),
             describe(pearson(&cells), n),
             describe(pearson(&work), work.len()),
         );
@@ -416,26 +438,22 @@ fn write_grids(grids: &[Sweep<Resolution>], s: &mut String) {
     );
     let _ = writeln!(s, "|---|---|---|---:|---:|---:|---:|---|");
     let opt = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.1}"));
-    for g in grids {
-        let mut resolutions = g.trees.clone();
-        resolutions.sort_by_key(|r| r.cells);
-        for r in resolutions {
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} | {} | {:.2} | {} | {} | {:.5}{} |",
-                g.scene,
-                g.set,
+    member_rows(
+        grids,
+        |a, b| a.cells.cmp(&b.cells),
+        |r| {
+            format!(
+                "{} | {} | {:.2} | {} | {} | {}",
                 r.preset,
                 r.cells,
                 r.references_per_primitive,
                 opt(r.visits),
                 opt(r.tests),
-                r.seconds,
-                r.interval
-                    .map_or(String::new(), |[lo, hi]| format!(" [{lo:.5}, {hi:.5}]")),
-            );
-        }
-    }
+                time_cell(r.seconds, r.interval),
+            )
+        },
+        s,
+    );
     let _ = writeln!(s);
 }
 
