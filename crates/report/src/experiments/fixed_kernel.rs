@@ -69,7 +69,7 @@ struct Sweep<T = Tree> {
     scene: String,
     set: String,
     kernel: String,
-    trees: Vec<T>,
+    members: Vec<T>,
 }
 
 /// The tree of a point of experiment `presets`, when it has tree figures.
@@ -150,7 +150,7 @@ fn sweeps_of<T>(results: &Results, member: fn(&ScalingPoint) -> Option<T>) -> Ve
         .iter()
         .filter(|p| p.experiment == EXPERIMENT)
     {
-        let (Some(tree), Some((scene, set))) = (member(p), p.series.rsplit_once(' ')) else {
+        let (Some(found), Some((scene, set))) = (member(p), p.series.rsplit_once(' ')) else {
             continue;
         };
         let kernel = p.backend.split(':').next().unwrap_or_default();
@@ -158,16 +158,16 @@ fn sweeps_of<T>(results: &Results, member: fn(&ScalingPoint) -> Option<T>) -> Ve
             .iter_mut()
             .find(|s| s.scene == scene && s.set == set && s.kernel == kernel)
         {
-            Some(s) => s.trees.push(tree),
+            Some(s) => s.members.push(found),
             None => out.push(Sweep {
                 scene: scene.into(),
                 set: set.into(),
                 kernel: kernel.into(),
-                trees: vec![tree],
+                members: vec![found],
             }),
         }
     }
-    out.retain(|s| s.trees.len() >= 2);
+    out.retain(|s| s.members.len() >= 2);
     out
 }
 
@@ -228,7 +228,7 @@ fn member_rows<T: Clone>(
     s: &mut String,
 ) {
     for sw in sweeps {
-        let mut members = sw.trees.clone();
+        let mut members = sw.members.clone();
         members.sort_by(&order);
         for m in &members {
             let _ = writeln!(s, "| {} | {} | {} |", sw.scene, sw.set, cells(m));
@@ -273,7 +273,7 @@ pub(super) fn charts(results: &Results) -> Vec<Chart> {
                     .filter(|s| s.scene == scene && s.set == set)
                     .map(|s| Series {
                         label: format!("{} kernel", s.kernel),
-                        points: s.trees.iter().map(|t| (t.sah, t.seconds)).collect(),
+                        points: s.members.iter().map(|t| (t.sah, t.seconds)).collect(),
                         fit: None,
                     })
                     .collect(),
@@ -328,25 +328,25 @@ fn write_trees(all: &[Sweep], s: &mut String) {
     );
     let _ = writeln!(s, "|---|---|---|---:|---:|---|---|---:|---|---|---|");
     for sw in all {
-        let n = sw.trees.len();
-        let sah: Vec<(f64, f64)> = sw.trees.iter().map(|t| (t.sah, t.seconds)).collect();
+        let n = sw.members.len();
+        let sah: Vec<(f64, f64)> = sw.members.iter().map(|t| (t.sah, t.seconds)).collect();
         let epo: Vec<(f64, f64)> = sw
-            .trees
+            .members
             .iter()
             .filter_map(|t| Some((t.epo?, t.seconds)))
             .collect();
         let work: Vec<(f64, f64)> = sw
-            .trees
+            .members
             .iter()
             .filter_map(|t| Some((t.sah, t.work?)))
             .collect();
         let lcv: Vec<(f64, f64)> = sw
-            .trees
+            .members
             .iter()
             .filter_map(|t| Some((t.leaves?.1, t.seconds)))
             .collect();
-        let combined = best_combination(&sw.trees);
-        let arity = sw.trees.iter().map(|t| t.arity).sum::<f64>() / n as f64;
+        let combined = best_combination(&sw.members);
+        let arity = sw.members.iter().map(|t| t.arity).sum::<f64>() / n as f64;
         let _ = writeln!(
             s,
             "{} {arity:.1} | {n} | {} | {} | {} | {} | {} | {} |",
@@ -412,14 +412,14 @@ fn write_grids(grids: &[Sweep<Resolution>], s: &mut String) {
     );
     let _ = writeln!(s, "|---|---|---|---:|---|---|");
     for g in grids {
-        let n = g.trees.len();
+        let n = g.members.len();
         let cells: Vec<(f64, f64)> = g
-            .trees
+            .members
             .iter()
             .map(|r| (r.cells as f64, r.seconds))
             .collect();
         let work: Vec<(f64, f64)> = g
-            .trees
+            .members
             .iter()
             .filter_map(|r| Some((r.work()?, r.seconds)))
             .collect();
@@ -563,8 +563,8 @@ mod tests {
         assert!(sweeps(&results).is_empty(), "a grid is no tree");
         let grids = sweeps_of(&results, resolution_of);
         assert_eq!(grids.len(), 1);
-        assert_eq!(grids[0].trees[1].references_per_primitive, 3.0);
-        assert_eq!(grids[0].trees[1].work(), Some(20.0));
+        assert_eq!(grids[0].members[1].references_per_primitive, 3.0);
+        assert_eq!(grids[0].members[1].work(), Some(20.0));
         let mut text = String::new();
         write(&results, &mut text);
         assert!(!text.contains("r(SAH, time)"), "no tree sweep: {text}");
@@ -639,12 +639,12 @@ mod tests {
         assert_eq!((s.scene.as_str(), s.set.as_str()), ("soup:100", "primary"));
         // The kernel is the part of the preset's name before the `:`.
         assert_eq!(format!("{}:fast", s.kernel), "bvh:fast");
-        assert_eq!(s.trees.len(), 2);
+        assert_eq!(s.members.len(), 2);
         // 3 interior nodes over 6 children: binary.
-        assert_eq!(s.trees[0].arity, 2.0);
-        assert_eq!(s.trees[0].epo, None, "no samples: not measured");
-        assert_eq!(s.trees[0].work, Some(5.0));
-        assert_eq!(s.trees[0].leaves, Some((2.0, 0.12)));
+        assert_eq!(s.members[0].arity, 2.0);
+        assert_eq!(s.members[0].epo, None, "no samples: not measured");
+        assert_eq!(s.members[0].work, Some(5.0));
+        assert_eq!(s.members[0].leaves, Some((2.0, 0.12)));
         let mut text = String::new();
         write(&results, &mut text);
         assert!(
