@@ -256,3 +256,59 @@ fn the_check_finds_what_it_looks_for() {
     assert!(allowed("crates/bvh/src/lib.rs", &backends).is_some());
     assert!(allowed("crates/report/src/lib.rs", &backends).is_none());
 }
+
+/// The lines of `text` that declare a table of [`TABLES`] as a `const` rather than a
+/// `static`.
+fn const_tables(text: &str) -> Vec<usize> {
+    text.lines()
+        .enumerate()
+        .filter(|(_, line)| {
+            let line = line.trim_start();
+            let line = line.strip_prefix("pub ").unwrap_or(line);
+            line.strip_prefix("const ")
+                .is_some_and(|rest| TABLES.iter().any(|t| rest.contains(&format!(": &[{t}]"))))
+        })
+        .map(|(i, _)| i + 1)
+        .collect()
+}
+
+/// The registry's tables whose entries point to code (each backend's `make`).
+const TABLES: &[&str] = &["Backend", "Preset"];
+
+/// The registry's tables of backends and presets are statics: a `const` is evaluated again
+/// in every crate that uses it, which compiles every backend's renderer again there (the
+/// command line, the report and the tests: about half of the test build).
+#[test]
+fn the_registry_tables_are_statics() {
+    let dir = root().join("crates/registry/src");
+    let mut files = Vec::new();
+    rust_files(&dir, &mut files);
+    let mut problems = Vec::new();
+    let mut statics = 0;
+    for file in &files {
+        let text = std::fs::read_to_string(file).expect("a readable source file");
+        statics += TABLES
+            .iter()
+            .filter(|t| text.contains(&format!("pub static {}S: &[{t}]", t.to_uppercase())))
+            .count();
+        for line in const_tables(&text) {
+            problems.push(format!("{}:{line}", file.display()));
+        }
+    }
+    assert!(
+        problems.is_empty(),
+        "make these statics:\n{}",
+        problems.join("\n")
+    );
+    assert_eq!(
+        statics,
+        TABLES.len(),
+        "BACKENDS and PRESETS are no longer found"
+    );
+    // The check sees a planted constant table.
+    assert_eq!(
+        const_tables("x\npub const BACKENDS: &[Backend] = &[\n"),
+        [2]
+    );
+    assert!(const_tables("pub static PRESETS: &[Preset] = &[\n").is_empty());
+}

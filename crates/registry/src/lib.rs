@@ -264,7 +264,12 @@ const GRID2: &str = "two-level grid: crowded cells hold their own grid";
 const PACKET: &str = "SIMD over a BVH8 collapsed by SAH, leaves of 4-triangle blocks: 16-ray packets for coherent rays, interleaved single rays otherwise (AVX2, SSE4.1 or portable, picked at run time; RAYBENCH_ISA overrides)";
 
 /// Every backend, the oracle (naive) first.
-pub const BACKENDS: &[Backend] = &[
+///
+/// A `static`, not a `const`: a constant is evaluated again in every crate that uses it, and
+/// the `make` functions it points to (each backend's renderer, every integrator over its
+/// structure) would be compiled again in each of them (the command line, the report, the
+/// tests): about half of the workspace's test build. A static is compiled here once.
+pub static BACKENDS: &[Backend] = &[
     Backend {
         name: "naive",
         description: NAIVE,

@@ -96,7 +96,8 @@ macro_rules! embree_preset {
 
 /// Every preset, grouped by backend in registry order, each backend's fastest build
 /// first (for `bvh`: its binned builds, then its PLOC topologies, each group fastest first).
-pub const PRESETS: &[Preset] = &[
+/// A `static` for the reason [`crate::BACKENDS`] is one.
+pub static PRESETS: &[Preset] = &[
     preset!(
         "bvh",
         "fast",
