@@ -9,7 +9,7 @@ use raybench_core::{
 use raybench_naive::NaiveAccel;
 use raybench_packet::{Isa, PacketAccel, PacketParams};
 use raybench_scene::generators;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 fn geometries() -> Vec<(&'static str, Arc<Geometry>)> {
     let tris =
@@ -96,17 +96,69 @@ fn check_isa(isa: Isa, packets: bool) {
     });
 }
 
+/// One ray set of a geometry with naive's answers: closest hits, then the shadow probes
+/// built from them and their any hits.
+struct OracleSet {
+    name: &'static str,
+    rays: Vec<Ray>,
+    closest: Vec<Option<Hit>>,
+    shadow: Vec<Ray>,
+    occluded: Vec<bool>,
+}
+
+/// Naive's answers on every ray set of every geometry of [`geometries`], computed once per
+/// test binary: every instruction set and tree is checked against the same ones, and naive
+/// is most of a check's time.
+fn oracles() -> &'static [(&'static str, Arc<Geometry>, Vec<OracleSet>)] {
+    type Oracles = Vec<(&'static str, Arc<Geometry>, Vec<OracleSet>)>;
+    static ORACLES: OnceLock<Oracles> = OnceLock::new();
+    ORACLES.get_or_init(|| {
+        geometries()
+            .into_iter()
+            .map(|(name, g)| {
+                let naive = NaiveAccel::build(Arc::clone(&g));
+                let sets = ray_sets(&g)
+                    .into_iter()
+                    .map(|(name, rays)| {
+                        let closest: Vec<Option<Hit>> = rays
+                            .iter()
+                            .map(|r| naive.intersect(r, &mut NoCounters))
+                            .collect();
+                        // Shadow rays up to 90% of naive's closest hit, then the rays
+                        // themselves.
+                        let shadow = ray_sets::shadow_probes(&rays, &closest);
+                        let occluded = shadow
+                            .iter()
+                            .map(|r| naive.occluded(r, &mut NoCounters))
+                            .collect();
+                        OracleSet {
+                            name,
+                            rays,
+                            closest,
+                            shadow,
+                            occluded,
+                        }
+                    })
+                    .collect();
+                (name, g, sets)
+            })
+            .collect()
+    })
+}
+
 fn check(params: PacketParams) {
     let (isa, packets) = (params.isa, params.packets);
-    for (name, g) in geometries() {
-        let naive = NaiveAccel::build(Arc::clone(&g));
-        let accel = PacketAccel::build_with(Arc::clone(&g), params);
+    for (name, g, sets) in oracles() {
+        let accel = PacketAccel::build_with(Arc::clone(g), params);
         assert_eq!(accel.params().isa, isa);
-        for (set, rays) in ray_sets(&g) {
-            let want: Vec<Option<Hit>> = rays
-                .iter()
-                .map(|r| naive.intersect(r, &mut NoCounters))
-                .collect();
+        for OracleSet {
+            name: set,
+            rays,
+            closest: want,
+            shadow,
+            occluded: want_occluded,
+        } in sets
+        {
             let mut got = vec![None; rays.len()];
             // Odd batch lengths leave partial packets at the end.
             for (r, h) in rays.chunks(203).zip(got.chunks_mut(203)) {
@@ -123,17 +175,11 @@ fn check(params: PacketParams) {
                     "{isa} single {name}/{set} ray {i}: naive {w:?}, packet {one:?}"
                 );
             }
-            // Shadow rays up to 90% of naive's closest hit, then the rays themselves.
-            let shadow = ray_sets::shadow_probes(&rays, &want);
-            let want: Vec<bool> = shadow
-                .iter()
-                .map(|r| naive.occluded(r, &mut NoCounters))
-                .collect();
             let mut got = vec![false; shadow.len()];
             for (r, o) in shadow.chunks(203).zip(got.chunks_mut(203)) {
                 accel.occluded_batch(r, o, &mut NoCounters);
             }
-            for (i, (w, o)) in want.iter().zip(&got).enumerate() {
+            for (i, (w, o)) in want_occluded.iter().zip(&got).enumerate() {
                 assert_eq!(w, o, "{isa} packets={packets} {name}/{set} shadow ray {i}");
                 assert_eq!(
                     *w,

@@ -12,7 +12,7 @@ use raybench_core::{
 use raybench_naive::NaiveAccel;
 use raybench_peers::BvhCrateAccel;
 use raybench_scene::generators;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 /// Smallest fraction of rays of a set on which a peer must hit what naive hits.
 const MIN_AGREEMENT: f64 = 0.999;
@@ -96,21 +96,91 @@ fn batch_occluded<A: Accel>(accel: &A, rays: &[Ray]) -> Vec<bool> {
 /// (batch and single) agree on at least [`MIN_AGREEMENT`] of each set's rays with `t` within
 /// `rel_t` relative where the ids agree, any-hit results likewise, and rays that can hit
 /// nothing miss.
+/// One ray set of a geometry with naive's answers: closest hits, then the shadow probes
+/// built from them and their any hits.
+struct OracleSet {
+    name: &'static str,
+    rays: Vec<Ray>,
+    closest: Vec<Option<Hit>>,
+    shadow: Vec<Ray>,
+    occluded: Vec<bool>,
+}
+
+/// A geometry and naive's answers on its ray sets.
+struct Oracle {
+    name: &'static str,
+    geometry: Arc<Geometry>,
+    sets: Vec<OracleSet>,
+}
+
+/// Naive's answers on every ray set of `geometries`.
+fn oracles(geometries: Vec<(&'static str, Arc<Geometry>)>) -> Vec<Oracle> {
+    geometries
+        .into_iter()
+        .map(|(name, geometry)| {
+            let naive = NaiveAccel::build(Arc::clone(&geometry));
+            let sets = ray_sets(&geometry)
+                .into_iter()
+                .map(|(name, rays)| {
+                    let closest: Vec<Option<Hit>> = rays
+                        .iter()
+                        .map(|r| naive.intersect(r, &mut NoCounters))
+                        .collect();
+                    // Shadow rays up to 90% of naive's closest hit, then the rays themselves.
+                    let shadow = ray_sets::shadow_probes(&rays, &closest);
+                    let occluded = shadow
+                        .iter()
+                        .map(|r| naive.occluded(r, &mut NoCounters))
+                        .collect();
+                    OracleSet {
+                        name,
+                        rays,
+                        closest,
+                        shadow,
+                        occluded,
+                    }
+                })
+                .collect();
+            Oracle {
+                name,
+                geometry,
+                sets,
+            }
+        })
+        .collect()
+}
+
+/// Naive's answers on [`geometries`], computed once per test binary: they are most of each
+/// peer's test time, and every peer is checked against the same ones.
+fn flat_oracles() -> &'static [Oracle] {
+    static ORACLES: OnceLock<Vec<Oracle>> = OnceLock::new();
+    ORACLES.get_or_init(|| oracles(geometries()))
+}
+
+/// Naive's answers on [`instanced`], computed once per test binary.
+fn instanced_oracles() -> &'static [Oracle] {
+    static ORACLES: OnceLock<Vec<Oracle>> = OnceLock::new();
+    ORACLES.get_or_init(|| oracles(instanced()))
+}
+
 fn check_against_naive<A: Accel>(
     name: &str,
-    geometries: Vec<(&'static str, Arc<Geometry>)>,
+    oracles: &[Oracle],
     build: impl Fn(Arc<Geometry>) -> A,
     rel_t: f32,
 ) {
-    for (gname, g) in geometries {
-        let naive = NaiveAccel::build(Arc::clone(&g));
-        let accel = build(Arc::clone(&g));
-        for (set, rays) in ray_sets(&g) {
-            let want: Vec<Option<Hit>> = rays
-                .iter()
-                .map(|r| naive.intersect(r, &mut NoCounters))
-                .collect();
-            let got = batch(&accel, &rays);
+    for oracle in oracles {
+        let gname = oracle.name;
+        let accel = build(Arc::clone(&oracle.geometry));
+        for OracleSet {
+            name: set,
+            rays,
+            closest: want,
+            shadow,
+            occluded,
+        } in &oracle.sets
+        {
+            let got = batch(&accel, rays);
             let single: Vec<Option<Hit>> = rays
                 .iter()
                 .map(|r| accel.intersect(r, &mut NoCounters))
@@ -146,19 +216,13 @@ fn check_against_naive<A: Accel>(
                     rays.len()
                 );
             }
-            // Shadow rays up to 90% of naive's closest hit, then the rays themselves.
-            let shadow = ray_sets::shadow_probes(&rays, &want);
-            let want: Vec<bool> = shadow
-                .iter()
-                .map(|r| naive.occluded(r, &mut NoCounters))
-                .collect();
-            let got = batch_occluded(&accel, &shadow);
+            let got = batch_occluded(&accel, shadow);
             let single: Vec<bool> = shadow
                 .iter()
                 .map(|r| accel.occluded(r, &mut NoCounters))
                 .collect();
             for (mode, got) in [("batch", &got), ("single", &single)] {
-                let same = want.iter().zip(got).filter(|(w, o)| w == o).count();
+                let same = occluded.iter().zip(got).filter(|(w, o)| w == o).count();
                 let agree = same as f64 / shadow.len().max(1) as f64;
                 assert!(
                     agree >= MIN_AGREEMENT,
@@ -178,14 +242,14 @@ fn check_against_naive<A: Accel>(
 #[test]
 fn bvh_crate_matches_naive_except_ties() {
     // Same primitive routine as naive: where the ids agree, `t` is bit-identical.
-    check_against_naive("bvh-crate", geometries(), BvhCrateAccel::build, 0.0);
+    check_against_naive("bvh-crate", flat_oracles(), BvhCrateAccel::build, 0.0);
 }
 
 #[test]
 fn bvh_crate_two_level_matches_naive_except_ties() {
     check_against_naive(
         "bvh-crate two-level",
-        instanced(),
+        instanced_oracles(),
         TwoLevel::<BvhCrateAccel>::build,
         0.0,
     );
@@ -279,14 +343,14 @@ mod embree {
 
     #[test]
     fn embree_single_rays_agree_with_naive() {
-        check_against_naive("embree", geometries(), EmbreeAccel::build, REL_T);
+        check_against_naive("embree", flat_oracles(), EmbreeAccel::build, REL_T);
     }
 
     #[test]
     fn embree_two_level_agrees_with_naive() {
         check_against_naive(
             "embree two-level",
-            instanced(),
+            instanced_oracles(),
             TwoLevel::<EmbreeAccel>::build,
             REL_T,
         );
@@ -296,7 +360,7 @@ mod embree {
     fn embree_packets_of_16_agree_with_naive() {
         check_against_naive(
             "embree-packet",
-            geometries(),
+            flat_oracles(),
             EmbreePacketAccel::build,
             REL_T,
         );
@@ -308,7 +372,7 @@ mod embree {
     fn embree_packets_of_8_agree_with_naive() {
         check_against_naive(
             "embree-packet (8)",
-            geometries(),
+            flat_oracles(),
             |g| EmbreePacketAccel::build_with_width(g, 8),
             REL_T,
         );
