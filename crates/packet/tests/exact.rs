@@ -11,6 +11,11 @@ use raybench_packet::{Isa, PacketAccel, PacketParams};
 use raybench_scene::generators;
 use std::sync::{Arc, OnceLock};
 
+#[path = "../../naive/tests/oracle/mod.rs"]
+mod oracle;
+
+use oracle::{Oracle, OracleSet};
+
 fn geometries() -> Vec<(&'static str, Arc<Geometry>)> {
     let tris =
         |m: raybench_core::TriangleMesh| m.triangles().map(Shape::Triangle).collect::<Vec<_>>();
@@ -96,60 +101,22 @@ fn check_isa(isa: Isa, packets: bool) {
     });
 }
 
-/// One ray set of a geometry with naive's answers: closest hits, then the shadow probes
-/// built from them and their any hits.
-struct OracleSet {
-    name: &'static str,
-    rays: Vec<Ray>,
-    closest: Vec<Option<Hit>>,
-    shadow: Vec<Ray>,
-    occluded: Vec<bool>,
-}
-
 /// Naive's answers on every ray set of every geometry of [`geometries`], computed once per
-/// test binary: every instruction set and tree is checked against the same ones, and naive
-/// is most of a check's time.
-fn oracles() -> &'static [(&'static str, Arc<Geometry>, Vec<OracleSet>)] {
-    type Oracles = Vec<(&'static str, Arc<Geometry>, Vec<OracleSet>)>;
-    static ORACLES: OnceLock<Oracles> = OnceLock::new();
-    ORACLES.get_or_init(|| {
-        geometries()
-            .into_iter()
-            .map(|(name, g)| {
-                let naive = NaiveAccel::build(Arc::clone(&g));
-                let sets = ray_sets(&g)
-                    .into_iter()
-                    .map(|(name, rays)| {
-                        let closest: Vec<Option<Hit>> = rays
-                            .iter()
-                            .map(|r| naive.intersect(r, &mut NoCounters))
-                            .collect();
-                        // Shadow rays up to 90% of naive's closest hit, then the rays
-                        // themselves.
-                        let shadow = ray_sets::shadow_probes(&rays, &closest);
-                        let occluded = shadow
-                            .iter()
-                            .map(|r| naive.occluded(r, &mut NoCounters))
-                            .collect();
-                        OracleSet {
-                            name,
-                            rays,
-                            closest,
-                            shadow,
-                            occluded,
-                        }
-                    })
-                    .collect();
-                (name, g, sets)
-            })
-            .collect()
-    })
+/// test binary: every instruction set and tree is checked against the same ones.
+fn oracles() -> &'static [Oracle] {
+    static ORACLES: OnceLock<Vec<Oracle>> = OnceLock::new();
+    ORACLES.get_or_init(|| oracle::oracles(geometries(), ray_sets))
 }
 
 fn check(params: PacketParams) {
     let (isa, packets) = (params.isa, params.packets);
-    for (name, g, sets) in oracles() {
-        let accel = PacketAccel::build_with(Arc::clone(g), params);
+    for Oracle {
+        name,
+        geometry,
+        sets,
+    } in oracles()
+    {
+        let accel = PacketAccel::build_with(Arc::clone(geometry), params);
         assert_eq!(accel.params().isa, isa);
         for OracleSet {
             name: set,

@@ -9,10 +9,14 @@ use raybench_core::{
     Aabb, Accel, Affine3A, Camera, Geometry, Hit, Instance, NoCounters, Ray, SceneBuilder, Shape,
     Sphere, TwoLevel, Vec3, ray_sets,
 };
-use raybench_naive::NaiveAccel;
 use raybench_peers::BvhCrateAccel;
 use raybench_scene::generators;
 use std::sync::{Arc, OnceLock};
+
+#[path = "../../naive/tests/oracle/mod.rs"]
+mod oracle;
+
+use oracle::{Oracle, OracleSet, oracles};
 
 /// Smallest fraction of rays of a set on which a peer must hit what naive hits.
 const MIN_AGREEMENT: f64 = 0.999;
@@ -92,77 +96,23 @@ fn batch_occluded<A: Accel>(accel: &A, rays: &[Ray]) -> Vec<bool> {
     out
 }
 
-/// Checks `build`'s accelerator against naive on every geometry of `geometries` and ray set: closest hits
-/// (batch and single) agree on at least [`MIN_AGREEMENT`] of each set's rays with `t` within
-/// `rel_t` relative where the ids agree, any-hit results likewise, and rays that can hit
-/// nothing miss.
-/// One ray set of a geometry with naive's answers: closest hits, then the shadow probes
-/// built from them and their any hits.
-struct OracleSet {
-    name: &'static str,
-    rays: Vec<Ray>,
-    closest: Vec<Option<Hit>>,
-    shadow: Vec<Ray>,
-    occluded: Vec<bool>,
-}
-
-/// A geometry and naive's answers on its ray sets.
-struct Oracle {
-    name: &'static str,
-    geometry: Arc<Geometry>,
-    sets: Vec<OracleSet>,
-}
-
-/// Naive's answers on every ray set of `geometries`.
-fn oracles(geometries: Vec<(&'static str, Arc<Geometry>)>) -> Vec<Oracle> {
-    geometries
-        .into_iter()
-        .map(|(name, geometry)| {
-            let naive = NaiveAccel::build(Arc::clone(&geometry));
-            let sets = ray_sets(&geometry)
-                .into_iter()
-                .map(|(name, rays)| {
-                    let closest: Vec<Option<Hit>> = rays
-                        .iter()
-                        .map(|r| naive.intersect(r, &mut NoCounters))
-                        .collect();
-                    // Shadow rays up to 90% of naive's closest hit, then the rays themselves.
-                    let shadow = ray_sets::shadow_probes(&rays, &closest);
-                    let occluded = shadow
-                        .iter()
-                        .map(|r| naive.occluded(r, &mut NoCounters))
-                        .collect();
-                    OracleSet {
-                        name,
-                        rays,
-                        closest,
-                        shadow,
-                        occluded,
-                    }
-                })
-                .collect();
-            Oracle {
-                name,
-                geometry,
-                sets,
-            }
-        })
-        .collect()
-}
-
 /// Naive's answers on [`geometries`], computed once per test binary: they are most of each
 /// peer's test time, and every peer is checked against the same ones.
 fn flat_oracles() -> &'static [Oracle] {
     static ORACLES: OnceLock<Vec<Oracle>> = OnceLock::new();
-    ORACLES.get_or_init(|| oracles(geometries()))
+    ORACLES.get_or_init(|| oracles(geometries(), ray_sets))
 }
 
 /// Naive's answers on [`instanced`], computed once per test binary.
 fn instanced_oracles() -> &'static [Oracle] {
     static ORACLES: OnceLock<Vec<Oracle>> = OnceLock::new();
-    ORACLES.get_or_init(|| oracles(instanced()))
+    ORACLES.get_or_init(|| oracles(instanced(), ray_sets))
 }
 
+/// Checks `build`'s accelerator against naive's answers on every geometry of `oracles` and
+/// ray set: closest hits (batch and single) agree on at least [`MIN_AGREEMENT`] of each
+/// set's rays with `t` within `rel_t` relative where the ids agree, any-hit results
+/// likewise, and rays that can hit nothing miss.
 fn check_against_naive<A: Accel>(
     name: &str,
     oracles: &[Oracle],
