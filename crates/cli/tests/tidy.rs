@@ -38,6 +38,10 @@ const ALLOWED: &[(&str, &str)] = &[
         "the registry's timed view of its two renderer kinds (the CPU's and the GPU's)",
     ),
     (
+        "crates/registry/tests/",
+        "the registry's own tests: its names, presets and timed renderers are their subject",
+    ),
+    (
         "crates/render/src/lib.rs",
         "CpuRenderer's unit tests need one Accel below the registry: naive (a dev-dependency)",
     ),

@@ -90,17 +90,3 @@ pub fn describe(timings: &Timings) -> String {
         .collect::<Vec<_>>()
         .join(", ")
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn frame_names() {
-        let p = Path::new("out/moving.png");
-        assert_eq!(numbered(p, 0, 1), p);
-        assert_eq!(numbered(p, 3, 16), Path::new("out/moving-0003.png"));
-        assert_eq!(numbered(p, 7, 20_000), Path::new("out/moving-00007.png"));
-        assert_eq!(numbered(Path::new("a"), 2, 3), Path::new("a-0002"));
-    }
-}

@@ -104,13 +104,13 @@ pub fn load_average() -> Option<[f64; 3]> {
 pub struct MachineUse {
     /// Clock ticks of every CPU busy (user, nice, system, interrupts) or taken by the
     /// hypervisor (steal), since boot.
-    busy: u64,
+    pub busy: u64,
     /// Of those, stolen by the hypervisor.
-    steal: u64,
+    pub steal: u64,
     /// Every CPU's ticks, idle included.
-    total: u64,
+    pub total: u64,
     /// This process's user and system ticks, its threads included.
-    own: u64,
+    pub own: u64,
 }
 
 /// The share of the machine's CPU time, between two [`MachineUse`] readings, that other
@@ -167,64 +167,5 @@ impl MachineUse {
             share: busy.saturating_sub(own) as f64 / total,
             steal: self.steal.saturating_sub(earlier.steal) as f64 / total,
         })
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn shares_and_the_threshold() {
-        let quiet = Interference {
-            cpu_seconds: 1.0,
-            wait_seconds: 0.01,
-        };
-        let hogged = Interference {
-            cpu_seconds: 1.0,
-            wait_seconds: 0.5,
-        };
-        // A millisecond's repetition whose threads waited 0.3 ms to wake: a large share,
-        // but no other process's time slice.
-        let woken = Interference {
-            cpu_seconds: 0.001,
-            wait_seconds: 0.0003,
-        };
-        assert!(!quiet.contended() && hogged.contended() && !woken.contended());
-        assert!((hogged.wait_share() - 1.0 / 3.0).abs() < 1e-12);
-        assert_eq!(Interference::default().wait_share(), 0.0);
-    }
-
-    #[test]
-    fn a_busy_call_is_seen_by_the_scheduler() {
-        // About 50 ms of work the optimiser cannot fold: several scheduler ticks.
-        let start = std::time::Instant::now();
-        let (_, i) = during(|| {
-            let mut a = 0u64;
-            while start.elapsed().as_secs_f64() < 0.05 {
-                a = std::hint::black_box(a.wrapping_mul(31) ^ 7);
-            }
-            a
-        });
-        if std::path::Path::new("/proc/self/task").is_dir() {
-            let i = i.expect("schedstat on Linux");
-            assert!(i.cpu_seconds > 0.0 && i.wait_seconds >= 0.0, "{i:?}");
-        }
-        let load = load_average();
-        assert!(load.is_none_or(|l| l.iter().all(|x| *x >= 0.0)));
-        if let Some(before) = MachineUse::now() {
-            let mut a = 0u64;
-            for i in 0..50_000_000u64 {
-                a = std::hint::black_box(a.wrapping_add(i));
-            }
-            let after = MachineUse::now().expect("readable twice");
-            assert!(after.own >= before.own && after.total >= before.total);
-            if let Some(o) = after.others_since(&before) {
-                assert!(
-                    (0.0..=1.0).contains(&o.share) && o.steal <= o.share + 1e-12,
-                    "{o:?}"
-                );
-            }
-        }
     }
 }

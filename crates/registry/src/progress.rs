@@ -78,17 +78,33 @@ struct State {
 impl State {
     /// The live line now, or `None` while no step has run for `delay`.
     fn line(&self, now: Instant, delay: Duration) -> Option<String> {
-        let (what, since) = self.current.as_ref()?;
-        let step = now.duration_since(*since);
-        (step >= delay).then(|| {
-            status_line(
-                self.done,
-                self.total,
-                now.duration_since(self.start).as_secs_f64(),
-                what,
-            )
-        })
+        let current = self
+            .current
+            .as_ref()
+            .map(|(what, since)| (what.as_str(), now.duration_since(*since)));
+        live_line(
+            self.done,
+            self.total,
+            now.duration_since(self.start),
+            current,
+            delay,
+        )
     }
+}
+
+/// The live line after `elapsed`, with `done` of `total` steps done and `current` (what
+/// runs now, and for how long) running: `None` between steps and while the step has run for
+/// less than `delay` (short steps show nothing), else [`status_line`].
+#[must_use]
+pub fn live_line(
+    done: usize,
+    total: usize,
+    elapsed: Duration,
+    current: Option<(&str, Duration)>,
+    delay: Duration,
+) -> Option<String> {
+    let (what, step) = current?;
+    (step >= delay).then(|| status_line(done, total, elapsed.as_secs_f64(), what))
 }
 
 /// `[######..................] 3/12  0m41s elapsed, ~2m03s left  what`; the time left is
@@ -262,53 +278,5 @@ fn clear(s: &mut State) {
         let mut err = std::io::stderr().lock();
         let _ = write!(err, "\r\x1b[K");
         let _ = err.flush();
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn status_lines() {
-        assert_eq!(
-            status_line(0, 4, 3.2, "render spheres"),
-            "[........................] 0/4  0m03s elapsed  render spheres"
-        );
-        assert_eq!(
-            status_line(1, 4, 30.0, "x"),
-            "[######..................] 1/4  0m30s elapsed, ~1m30s left  x"
-        );
-        assert_eq!(clock(125.4), "2m05s");
-        assert_eq!(
-            record_line(3, 12, 41.0, "bvh: spheres"),
-            "3/12  0m41s  bvh: spheres"
-        );
-        // An empty plan draws an empty bar, never a division by zero.
-        assert!(status_line(0, 0, 0.0, "").starts_with("[........................] 0/0"));
-    }
-
-    #[test]
-    fn the_live_line_waits_for_the_delay() {
-        let t0 = Instant::now();
-        let mut s = State {
-            total: 2,
-            done: 0,
-            start: t0,
-            current: None,
-            drawn: false,
-        };
-        assert_eq!(s.line(t0 + DELAY, DELAY), None, "no step runs");
-        s.current = Some(("bvh: warm-up".into(), t0));
-        assert_eq!(
-            s.line(t0 + DELAY / 2, DELAY),
-            None,
-            "a short step shows nothing"
-        );
-        let line = s.line(t0 + DELAY, DELAY).expect("a long step shows a line");
-        assert!(
-            line.ends_with("bvh: warm-up") && line.contains("0/2"),
-            "{line}"
-        );
     }
 }
