@@ -1208,15 +1208,32 @@ fn out_index(p: Pixel) -> u32 {
     return (p.y - params.band_y0) * params.width + p.x;
 }
 
-// The pixel's centre ray, traced once per frame (the id and t buffers).
-fn centre(p: Pixel) -> Hit {
-    let r = camera_ray(f32(p.x) + 0.5, f32(p.y) + 0.5);
-    let h = closest(r);
-    n_rays += 1u;
+// The pixel's centre ray, traced once per frame (the id and t buffers), in the dispatch of
+// sample 0.
+fn centre_ray(p: Pixel) -> Ray {
+    return camera_ray(f32(p.x) + 0.5, f32(p.y) + 0.5);
+}
+
+// Records the centre ray's hit `h` in the id and t buffers.
+fn record_centre(p: Pixel, h: Hit) {
     let o = out_index(p);
     out[o].id = h.id;
     out[o].v.w = select(h.t, params.inf, h.id == NO_HIT);
-    return h;
+}
+
+// How many rays a pixel traces before its samples in this dispatch: 1 for the centre ray
+// when it is not sample 0's own camera ray (`in_sample` false), else 0. The kernels trace
+// it in the same loop as their samples: shader compilers inline `closest` and `occluded` at
+// every call site (Mesa's always), so each kernel calls each once, which keeps its compile
+// time (seconds per pipeline on lavapipe) to one copy of each traversal.
+fn centre_rays(in_sample: bool) -> u32 {
+    return select(0u, 1u, params.s0 == 0u && !in_sample);
+}
+
+// The sample that pass `j` of a pixel's loop traces, after `first` passes for the centre
+// ray (never read for those).
+fn sample_of(j: u32, first: u32) -> u32 {
+    return params.s0 + max(j, first) - first;
 }
 
 // Adds this dispatch's colour to the pixel's sum and flushes the counters.
@@ -1311,23 +1328,28 @@ fn cast_pixel(i: u32, mode: u32) {
     if !p.ok {
         return;
     }
+    let pixel = p.y * params.width + p.x;
+    // With one sample the centre ray is that sample; else it is traced for its id and t
+    // only, and the jittered samples give the colour (ids and t stay the centre ray's).
+    let jittered = params.spp > 1u;
+    let first = centre_rays(!jittered);
     var color = vec3<f32>(0.0);
-    if params.s0 == 0u {
-        let h = centre(p);
-        if params.spp == 1u {
-            color = shade_camera_ray(camera_ray(f32(p.x) + 0.5, f32(p.y) + 0.5), h, mode);
-        }
-    }
-    if params.spp > 1u {
-        // Jittered samples for colour; ids and t stay those of the centre ray.
-        let pixel = p.y * params.width + p.x;
-        for (var s = params.s0; s < params.s1; s++) {
+    for (var j = 0u; j < first + params.s1 - params.s0; j++) {
+        let s = sample_of(j, first);
+        var r = centre_ray(p);
+        if jittered && j >= first {
             var rng = Sampler(pixel, s, 0u);
             let jx = next_f32(&rng);
             let jy = next_f32(&rng);
-            let r = camera_ray(f32(p.x) + jx, f32(p.y) + jy);
-            color += shade_camera_ray(r, closest(r), mode);
-            n_rays += 1u;
+            r = camera_ray(f32(p.x) + jx, f32(p.y) + jy);
+        }
+        let h = closest(r);
+        n_rays += 1u;
+        if j < first || (!jittered && s == 0u) {
+            record_centre(p, h);
+        }
+        if j >= first {
+            color += shade_camera_ray(r, h, mode);
         }
     }
     finish_pixel(p, color);
@@ -1358,34 +1380,34 @@ fn whitted_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
     let sample_weight = vec3<f32>(1.0 / f32(params.spp));
     let cut = 1e-4 * sample_weight.x;
     var color = vec3<f32>(0.0);
-    var centre_hit: Hit;
-    if params.s0 == 0u {
-        centre_hit = centre(p);
-    }
+    // With one sample the centre ray is that sample's camera ray; else a pass of its own,
+    // for its id and t only.
+    let jittered = params.spp > 1u;
+    let first = centre_rays(!jittered);
     var stack: array<Segment, WHITTED_STACK>;
-    for (var s = params.s0; s < params.s1; s++) {
-        var first: Ray;
-        if params.spp == 1u {
-            first = camera_ray(f32(p.x) + 0.5, f32(p.y) + 0.5);
-        } else {
+    for (var j = 0u; j < first + params.s1 - params.s0; j++) {
+        let s = sample_of(j, first);
+        var camera = centre_ray(p);
+        if jittered && j >= first {
             var rng = Sampler(pixel, s, 0u);
             let jx = next_f32(&rng);
             let jy = next_f32(&rng);
-            first = camera_ray(f32(p.x) + jx, f32(p.y) + jy);
+            camera = camera_ray(f32(p.x) + jx, f32(p.y) + jy);
         }
-        stack[0] = Segment(first.o, 0u, first.d, sample_weight);
+        let is_centre = j < first || (!jittered && s == 0u);
+        stack[0] = Segment(camera.o, 0u, camera.d, sample_weight);
         var sp = 1u;
         while sp > 0u {
             sp -= 1u;
             let seg = stack[sp];
             let r = ray_new(seg.o, seg.d);
-            var h: Hit;
-            if seg.depth == 0u && params.spp == 1u {
-                // One sample: the centre ray, already traced.
-                h = centre_hit;
-            } else {
-                h = closest(r);
-                n_rays += 1u;
+            let h = closest(r);
+            n_rays += 1u;
+            if seg.depth == 0u && is_centre {
+                record_centre(p, h);
+                if j < first {
+                    continue;
+                }
             }
             if h.id == NO_HIT {
                 color += seg.weight * background_along(r.d);
@@ -1404,8 +1426,8 @@ fn whitted_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
             if m.kind == MAT_DIFFUSE {
                 let albedo = sf.albedo;
                 color += seg.weight * albedo * AMBIENT;
-                for (var j = 0u; j < whitted_light_count(); j++) {
-                    let l = whitted_light(j, at, nf, ns);
+                for (var k = 0u; k < whitted_light_count(); k++) {
+                    let l = whitted_light(k, at, nf, ns);
                     if !l.ok {
                         continue;
                     }
@@ -1483,20 +1505,26 @@ fn path_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
     let pixel = p.y * params.width + p.x;
     let sample_weight = vec3<f32>(1.0 / f32(params.spp));
     var color = vec3<f32>(0.0);
-    if params.s0 == 0u {
-        _ = centre(p);
-    }
-    for (var s = params.s0; s < params.s1; s++) {
-        var rng = Sampler(pixel, s, 0u);
+    // Every sample is jittered: the centre ray is a pass of its own, for its id and t only.
+    let first = centre_rays(false);
+    for (var j = 0u; j < first + params.s1 - params.s0; j++) {
+        var rng = Sampler(pixel, sample_of(j, first), 0u);
         let jx = next_f32(&rng);
         let jy = next_f32(&rng);
         var r = camera_ray(f32(p.x) + jx, f32(p.y) + jy);
+        if j < first {
+            r = centre_ray(p);
+        }
         var weight = sample_weight;
         var specular = true;
         var pdf_bsdf = 0.0;
         for (var depth = 0u; depth <= params.max_depth; depth++) {
             let h = closest(r);
             n_rays += 1u;
+            if j < first {
+                record_centre(p, h);
+                break;
+            }
             // What the ray found counts fully unless a light sample at the previous
             // (diffuse) vertex could have found it too.
             let weighted = params.mis != 0u && !specular;
@@ -1541,30 +1569,34 @@ fn path_kernel(@builtin(global_invocation_id) gid: vec3<u32>) {
             if m.kind == MAT_DIFFUSE {
                 let albedo = sf.albedo;
                 let brdf = albedo * INV_PI;
-                for (var j = 0u; j < params.light_count; j++) {
-                    let l = light_ray(j, at, nf, ns);
-                    if l.ok {
-                        n_rays += 1u;
-                        if !occluded(l.ray) {
-                            color += weight * brdf * l.irradiance;
-                        }
-                    }
-                }
-                if params.mis != 0u {
-                    let origin = offset_ray_origin(at, nf);
-                    let ls = sample_light(origin, u_light, u_point0, u_point1);
-                    // The shading normal's cosine; a light below the geometric surface does
-                    // not light it.
-                    let cos_x = dot(ns, ls.wi);
-                    if ls.ok && cos_x > 0.0 && dot(nf, ls.wi) > 0.0 && ls.pdf > 0.0 && is_finite(ls.pdf) {
+                // One shadow ray per point light, then, with MIS, one to a sampled point of
+                // the lights; one loop, so that the kernel calls `occluded` once.
+                let shadow_rays = params.light_count + select(0u, 1u, params.mis != 0u);
+                for (var l = 0u; l < shadow_rays; l++) {
+                    var shadow: Ray;
+                    var value: vec3<f32>;
+                    var ok: bool;
+                    if l < params.light_count {
+                        let ray = light_ray(l, at, nf, ns);
+                        shadow = ray.ray;
+                        value = weight * brdf * ray.irradiance;
+                        ok = ray.ok;
+                    } else {
+                        let origin = offset_ray_origin(at, nf);
+                        let ls = sample_light(origin, u_light, u_point0, u_point1);
+                        // The shading normal's cosine; a light below the geometric surface
+                        // does not light it.
+                        let cos_x = dot(ns, ls.wi);
+                        ok = ls.ok && cos_x > 0.0 && dot(nf, ls.wi) > 0.0 && ls.pdf > 0.0 && is_finite(ls.pdf);
                         let w = power_heuristic(ls.pdf, cos_x * INV_PI);
-                        let value = weight * brdf * ls.radiance * (cos_x * w / ls.pdf);
-                        var shadow: Ray;
+                        value = weight * brdf * ls.radiance * (cos_x * w / ls.pdf);
                         if is_finite(ls.dist) {
                             shadow = make_ray(origin, ls.wi * ls.dist, 0.0, SHADOW_SHORTEN);
                         } else {
                             shadow = ray_new(origin, ls.wi);
                         }
+                    }
+                    if ok {
                         n_rays += 1u;
                         if !occluded(shadow) {
                             color += value;
