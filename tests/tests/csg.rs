@@ -155,7 +155,7 @@ fn white_furnace_with_csg_solids() {
             { type = "cone", base = [1.2, 0.0, 0.5], radius = 0.5, height = 1.0 },
         ] }"#)
     .replace("kind = \"csg\"", "kind = \"csg\"\nmaterial = \"white\"");
-    // Issue 10: a tilted torus, a squashed ellipsoid and a paraboloid, placed by transforms.
+    // Placed quadrics: a tilted torus, a squashed ellipsoid and a paraboloid, placed by transforms.
     text += "[[object]]\nkind = \"torus\"\ncenter = [0, 0, 0]\nmajor_radius = 0.5\n\
              minor_radius = 0.2\nmaterial = \"white\"\n\
              transform = { rotate = [60, 0, 20], translate = [-1.2, 1.0, 0.5] }\n\

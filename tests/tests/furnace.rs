@@ -1,4 +1,4 @@
-//! The path tracer against an analytic reference (issue 20): the Cornell box's own geometry
+//! The path tracer against an analytic reference: the Cornell box's own geometry
 //! as a furnace (`scripts/cornell-furnace.toml`: every surface albedo 0.5 and emission 0.5,
 //! the background 1.0, so the exact radiance is 1.0 on every pixel), path traced with
 //! `--max-depth 64` (next-event estimation with MIS towards every triangle), written as

@@ -1,4 +1,4 @@
-//! Instanced scenes (issue 23): every exact CPU backend against the naive oracle on scenes
+//! Instanced scenes: every exact CPU backend against the naive oracle on scenes
 //! of instances (mirrored, scaled, rotated, coincident, beside flat primitives, meshes of
 //! triangles and spheres), bit-identical ids and `t` for closest hits and the same any-hit
 //! answers, naive counting `rays x total` tests (`raybench_tests::check`); instanced scenes

@@ -1,4 +1,4 @@
-//! Moving scenes (issue 23): on every frame of the built-in `moving` scene (a twisting mesh,
+//! Moving scenes: on every frame of the built-in `moving` scene (a twisting mesh,
 //! instances moved by keys, spin, orbit and bob, a twisting instanced mesh) and of a flat
 //! twisting scene, every exact backend, brought from frame to frame by
 //! `Renderer::update` (refit where it can, and rebuild), returns the naive oracle's ids and

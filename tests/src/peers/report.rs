@@ -200,7 +200,7 @@ pub enum Query {
 /// The Embree contestants a query's throughput is compared with, with their column
 /// headings: primary closest hits against the 16-wide packets, the closest hits of every
 /// other set (incoherent, diffuse, a ray file's) against single rays in both modes, any
-/// hits against `rtcOccluded1` in robust mode (the targets of issue 17). `set` is a ray
+/// hits against `rtcOccluded1` in robust mode (the any-hit targets). `set` is a ray
 /// set's name.
 #[must_use]
 pub fn references(set: &str, query: Query) -> &'static [(&'static str, &'static str)] {

@@ -789,7 +789,7 @@ mod tests {
         assert!((n - expect).length() < 1e-6, "{n}");
     }
 
-    /// Issue 18: negative colours, a sphere too small for f32, all-degenerate meshes.
+    /// Bad values: negative colours, a sphere too small for f32, all-degenerate meshes.
     #[test]
     fn silent_garbage_is_refused_or_warned() {
         let mut b = SceneBuilder::new("t");
