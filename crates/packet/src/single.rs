@@ -173,9 +173,14 @@ pub(crate) fn leaf_occluded<L: Lanes>(
     ray: &Ray,
     splat: &SplatRay<L>,
 ) -> bool {
-    layout.blocks[leaf.first..leaf.first + leaf.blocks]
-        .iter()
-        .any(|block| block_occluded(g, block, leaf.mixed, ray, splat))
+    // Loops, not `Iterator::any`: its closure was compiled as a function of its own,
+    // without the caller's target features (plain SSE code in the AVX2 kernel).
+    for block in &layout.blocks[leaf.first..leaf.first + leaf.blocks] {
+        if block_occluded(g, block, leaf.mixed, ray, splat) {
+            return true;
+        }
+    }
+    false
 }
 
 /// Whether a primitive of `block` blocks `ray` (its triangles in one SIMD test, the lanes
@@ -196,7 +201,12 @@ pub(crate) fn block_occluded<L: Lanes>(
     if mixed {
         scalar |= scalar_lanes(g, block);
     }
-    BitIter(scalar).any(|lane| g.shape(block.id[lane]).intersect(ray).is_some())
+    for lane in BitIter(scalar) {
+        if g.shape(block.id[lane]).intersect(ray).is_some() {
+            return true;
+        }
+    }
+    false
 }
 
 /// Primitives in a leaf, for counting tests.

@@ -27,11 +27,17 @@ pub(crate) struct TriLanes<L: Lanes> {
     pub det: L::V,
 }
 
-/// One ray, splatted across the lanes, for testing `W` triangles at once.
+/// One ray, splatted across the lanes, for testing `W` triangles at once. The axes are
+/// stored already permuted (`origin[i]` is the origin's coordinate on axis `k[i]`), so a
+/// block's coordinates are loaded from memory in the ray's order: indexing an array of
+/// registers by a run-time axis made the compiler store the three differences to the stack
+/// and load them back, on every vertex.
 #[derive(Clone, Copy)]
 pub(crate) struct SplatRay<L: Lanes> {
+    /// The origin's coordinates on axes `k[0]`, `k[1]`, `k[2]`.
     pub origin: [L::V; 3],
     pub shear: [L::V; 3],
+    /// The permutation `kx, ky, kz`.
     pub k: [usize; 3],
     pub t_min: L::V,
 }
@@ -39,22 +45,20 @@ pub(crate) struct SplatRay<L: Lanes> {
 impl<L: Lanes> SplatRay<L> {
     #[inline(always)]
     pub fn new(ray: &raybench_geometry::Ray) -> Self {
+        let k = [
+            usize::from(ray.kx) % 3,
+            usize::from(ray.ky) % 3,
+            usize::from(ray.kz) % 3,
+        ];
+        let o = ray.origin.to_array();
         Self {
-            origin: [
-                L::splat(ray.origin.x),
-                L::splat(ray.origin.y),
-                L::splat(ray.origin.z),
-            ],
+            origin: [L::splat(o[k[0]]), L::splat(o[k[1]]), L::splat(o[k[2]])],
             shear: [
                 L::splat(ray.shear.x),
                 L::splat(ray.shear.y),
                 L::splat(ray.shear.z),
             ],
-            k: [
-                usize::from(ray.kx) % 3,
-                usize::from(ray.ky) % 3,
-                usize::from(ray.kz) % 3,
-            ],
+            k,
             t_min: L::splat(ray.t_min),
         }
     }
@@ -188,16 +192,11 @@ pub(crate) fn ray_vs_block<L: Lanes>(
     let [sx, sy, sz] = ray.shear;
     for vertex in 0..3 {
         let coord = &block.v[3 * vertex..3 * vertex + 3];
-        let v = [
-            L::sub(L::load(&coord[0]), ray.origin[0]),
-            L::sub(L::load(&coord[1]), ray.origin[1]),
-            L::sub(L::load(&coord[2]), ray.origin[2]),
-        ];
-        p[vertex] = [
-            L::sub(v[kx], L::mul(sx, v[kz])),
-            L::sub(v[ky], L::mul(sy, v[kz])),
-        ];
-        z[vertex] = L::mul(sz, v[kz]);
+        let x = L::sub(L::load(&coord[kx]), ray.origin[0]);
+        let y = L::sub(L::load(&coord[ky]), ray.origin[1]);
+        let vz = L::sub(L::load(&coord[kz]), ray.origin[2]);
+        p[vertex] = [L::sub(x, L::mul(sx, vz)), L::sub(y, L::mul(sy, vz))];
+        z[vertex] = L::mul(sz, vz);
     }
     finish::<L>(p, z, ray.t_min, L::splat(t_max), valid)
 }
