@@ -15,8 +15,9 @@
 //!   leaves test one triangle against all lanes.
 //! - **Single rays** (`intersect`, `occluded`, and batches whose rays share no octant): one
 //!   SIMD test of eight children, nearest first, children prefetched, one SIMD test per
-//!   block of four triangles; a batch's incoherent rays go four at a time, interleaved step
-//!   by step so that their memory waits overlap (`stream.rs`).
+//!   block of four triangles; a batch's incoherent rays go two at a time (four when the
+//!   BVH8 exceeds the last-level cache), interleaved step by step so that their memory
+//!   waits overlap (`stream.rs`, [`Interleave`]).
 //! - **Instruction sets chosen at run time** ([`Isa::detect`]): AVX2, else SSE4.1, else
 //!   portable code (four plain `f32` lanes, the fallback on any target). The same generic
 //!   kernels are instantiated once per instruction set inside a `#[target_feature]`
@@ -159,6 +160,23 @@ pub struct PacketParams {
     pub packets: bool,
     /// The BVH2 the BVH8 is collapsed from.
     pub bvh: BvhParams,
+    /// How many incoherent rays a batch keeps in flight.
+    pub interleave: Interleave,
+}
+
+/// How many of a batch's incoherent rays (those not traced as packets) are in flight at
+/// once, advanced one traversal step each in turn so that their memory waits overlap. Any
+/// choice gives the same hits; only the speed differs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Interleave {
+    /// Two when the BVH8 fits the last-level cache, four when it does not (the faster of
+    /// the two on each side of that line, by the peer benchmark).
+    #[default]
+    Auto,
+    /// Two rays.
+    Two,
+    /// Four rays.
+    Four,
 }
 
 impl Default for PacketParams {
@@ -167,6 +185,7 @@ impl Default for PacketParams {
             isa: Isa::detect(),
             packets: true,
             bvh: BvhParams::default(),
+            interleave: Interleave::Auto,
         }
     }
 }
@@ -177,6 +196,8 @@ pub struct PacketAccel {
     geometry: Arc<Geometry>,
     layout: Layout,
     params: PacketParams,
+    /// Incoherent rays in flight at once ([`stream::NARROW`] or [`stream::WIDE`]).
+    streams: usize,
 }
 
 impl PacketAccel {
@@ -189,10 +210,16 @@ impl PacketAccel {
         }
         let bvh = Bvh::build_with(Arc::clone(&geometry), params.bvh);
         let layout = Layout::new(&bvh, &geometry);
+        let streams = match params.interleave {
+            Interleave::Auto => stream::width(layout.memory_bytes()),
+            Interleave::Two => stream::NARROW,
+            Interleave::Four => stream::WIDE,
+        };
         Self {
             geometry,
             layout,
             params,
+            streams,
         }
     }
 
@@ -249,17 +276,25 @@ fn batch_closest<L: Lanes, C: Counters>(
         }
     }
     if !pending.is_empty() {
-        // Four stacks (15 KB) to zero: only for batches with incoherent rays.
-        let mut stacks = [[(0, 0.0); single::STACK]; stream::STREAMS];
-        stream::closest::<L, C>(
-            &accel.layout,
-            g,
-            rays,
-            &pending,
-            &mut best,
-            &mut stacks,
-            counters,
-        );
+        if accel.streams == stream::WIDE {
+            stream::closest::<L, C, { stream::WIDE }>(
+                &accel.layout,
+                g,
+                rays,
+                &pending,
+                &mut best,
+                counters,
+            );
+        } else {
+            stream::closest::<L, C, { stream::NARROW }>(
+                &accel.layout,
+                g,
+                rays,
+                &pending,
+                &mut best,
+                counters,
+            );
+        }
     }
     for ((ray, b), hit) in rays.iter().zip(best).zip(hits) {
         *hit = g.complete(ray, b);
@@ -310,16 +345,25 @@ fn batch_occluded<L: Lanes, C: Counters>(
         }
     }
     if !pending.is_empty() {
-        let mut stacks = [[(0, 0.0); single::STACK]; stream::STREAMS];
-        stream::occluded::<L, C>(
-            &accel.layout,
-            g,
-            rays,
-            &pending,
-            occluded,
-            &mut stacks,
-            counters,
-        );
+        if accel.streams == stream::WIDE {
+            stream::occluded::<L, C, { stream::WIDE }>(
+                &accel.layout,
+                g,
+                rays,
+                &pending,
+                occluded,
+                counters,
+            );
+        } else {
+            stream::occluded::<L, C, { stream::NARROW }>(
+                &accel.layout,
+                g,
+                rays,
+                &pending,
+                occluded,
+                counters,
+            );
+        }
     }
 }
 
@@ -468,6 +512,7 @@ impl Accel for PacketAccel {
                 ("triangles per leaf x100", self.layout.leaf_prims_x100()),
                 ("lanes", self.params.isa.lanes() as u64),
                 ("packet rays", self.packet_size() as u64),
+                ("interleaved rays", self.streams as u64),
             ],
         }
     }

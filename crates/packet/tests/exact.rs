@@ -7,7 +7,7 @@ use raybench_core::{
     Accel, Camera, Geometry, Hit, NoCounters, Plane, Ray, Shape, Sphere, Vec3, ray_sets,
 };
 use raybench_naive::NaiveAccel;
-use raybench_packet::{Isa, PacketAccel, PacketParams};
+use raybench_packet::{Interleave, Isa, PacketAccel, PacketParams};
 use raybench_scene::generators;
 use std::sync::{Arc, OnceLock};
 
@@ -180,6 +180,21 @@ fn avx2_matches_naive() {
         check_isa(Isa::Avx2, false);
     } else {
         eprintln!("SKIPPED: this CPU has no AVX2");
+    }
+}
+
+/// Every ray alone, two and four in flight (the test meshes fit any cache, so `Auto` alone
+/// would never take the wide path).
+#[test]
+fn every_interleave_matches_naive() {
+    let isa = Isa::detect();
+    for interleave in [Interleave::Two, Interleave::Four] {
+        check(PacketParams {
+            isa,
+            packets: false,
+            interleave,
+            ..PacketParams::default()
+        });
     }
 }
 
