@@ -12,7 +12,7 @@
 //! The overlap has a price: the rays' state no longer fits the registers and their branches
 //! interleave. Measured with the peer benchmark on a 2-vCPU Intel Xeon (2026-12-05, against
 //! Embree's single rays in the same run), two rays in flight beat four on every mesh whose
-//! BVH8 fits the last-level cache (the six meshes up to the million-triangle terrain:
+//! BVH8 fits the last-level cache (the five meshes up to the million-triangle terrain:
 //! geometric mean 1.07x over the incoherent, shadow, ao and diffuse sets, up to 1.35x on
 //! Sponza's ao rays), while four beat two by up to 20% on a 12.6-million-triangle scene
 //! whose 820 MB do not fit it (480 MB there). [`width`] chooses by that rule.
