@@ -141,7 +141,7 @@ struct Item {
 /// below 2^23 read as floats in [1, 2). Stored as they are, they read as subnormal floats,
 /// and the packed arithmetic that computes centroids, which runs in all four lanes, then
 /// took a microcode assist per operation on Intel processors (about half of the build's
-/// time on a Xeon; AMD's handle subnormals in hardware).
+/// time on a Xeon).
 const ID_BITS: u32 = 0x3f80_0000;
 
 impl Item {
