@@ -13,10 +13,12 @@
 //! eight) filled 43-47% of the slots on the PEERS.md meshes with leaves of one or two
 //! triangles; this one decides leaves and node widths by cost.
 //! The program runs bottom up over the BVH2's depth-first array, the two children of a large
-//! subtree in parallel; the wide nodes and blocks are then written depth first, the slots of
-//! a wide node over many primitives each into a layout of its own in parallel, appended in
-//! slot order with their indices moved up. Both give the serial result bit for bit, on any
-//! number of threads.
+//! subtree in parallel, and also counts the wide nodes and blocks each subtree will take. The
+//! arrays are then allocated at their final size and written depth first; the slots of a
+//! wide node over many primitives are written in parallel, each into the range its counts
+//! mark out, so that every element is written in place once (copying parts into their
+//! parents instead wrote a large mesh's layout three or four times). Both give the serial
+//! result bit for bit, on any number of threads.
 //!
 //! **A leaf** is one or more [`TriBlock`]s: four triangles' nine coordinates each as four
 //! lanes, then their primitive ids (160 bytes, Embree's `Triangle4` idea), so a leaf is one
@@ -186,6 +188,24 @@ struct Plan {
     /// First leaf-order position and number of primitives below.
     first: u32,
     count: u32,
+    /// What the node takes in the layout as a child slot's target (see [`child_size`]).
+    size: Size,
+}
+
+/// The wide nodes and blocks a part of the layout takes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Size {
+    wide: usize,
+    blocks: usize,
+}
+
+impl Size {
+    fn add(self, other: Self) -> Self {
+        Self {
+            wide: self.wide + other.wide,
+            blocks: self.blocks + other.blocks,
+        }
+    }
 }
 
 impl Layout {
@@ -200,60 +220,33 @@ impl Layout {
             return layout;
         }
         let plans = plan(nodes);
+        let size = wide_size(nodes, &plans, 0, 0);
+        assert!(
+            size.blocks <= FIRST_MASK as usize + 1,
+            "more than 2^27 leaf blocks"
+        );
+        // Every element is written once more below; filling them here, in parallel, faults
+        // the pages in on every thread.
+        layout
+            .wide
+            .par_extend(rayon::iter::repeat_n(WideNode::EMPTY, size.wide));
+        layout
+            .blocks
+            .par_extend(rayon::iter::repeat_n(TriBlock::EMPTY, size.blocks));
         let builder = Builder {
             nodes,
             plans: &plans,
             ids: bvh.prim_ids(),
             geometry,
         };
-        layout.reserve(plans[0].count as usize);
-        builder.wide_node(0, &mut layout);
-        layout.wide.shrink_to_fit();
-        layout.blocks.shrink_to_fit();
+        let mut out = Out::new(&mut layout.wide, 0, &mut layout.blocks, 0);
+        builder.wide_node(0, &mut out);
+        out.assert_full();
+        let counts = out.counts;
+        layout.leaves = counts.leaves;
+        layout.slots = counts.slots;
+        layout.leaf_prims = counts.leaf_prims;
         layout
-    }
-
-    /// Reserves room for the layout of a subtree over `prims` primitives: at most one block
-    /// and one wide node per primitive (each block holds one or more, and each wide node
-    /// stands for a distinct interior node of the BVH2, or a leaf of more than eight blocks).
-    /// Growing the arrays instead copied them and faulted their pages in twice: a fifth of
-    /// a large mesh's collapse. What is reserved and never written is never touched, and
-    /// [`Layout::new`] gives it back.
-    fn reserve(&mut self, prims: usize) {
-        self.wide.reserve(prims);
-        self.blocks.reserve(prims);
-    }
-
-    /// Appends `part`, a layout of its own whose child reference `child` (a wide node, or a
-    /// leaf) roots it, and returns that reference as it reads here: `part`'s wide node
-    /// indices and block indices move up by what this layout holds.
-    fn append(&mut self, part: Self, child: u32) -> u32 {
-        let wide = self.wide.len() as u32;
-        let blocks = self.blocks.len() as u32;
-        assert!(
-            self.blocks.len() + part.blocks.len() <= FIRST_MASK as usize + 1,
-            "more than 2^27 leaf blocks"
-        );
-        let relocate = |c: u32| {
-            if c == EMPTY_CHILD {
-                c
-            } else if c & LEAF_BIT != 0 {
-                let mut leaf = LeafRef::decode(c);
-                leaf.first += blocks as usize;
-                leaf.encode()
-            } else {
-                c + wide
-            }
-        };
-        self.wide.extend(part.wide.iter().map(|node| WideNode {
-            child: node.child.map(relocate),
-            ..*node
-        }));
-        self.blocks.extend_from_slice(&part.blocks);
-        self.leaves += part.leaves;
-        self.slots += part.slots;
-        self.leaf_prims += part.leaf_prims;
-        relocate(child)
     }
 
     /// Percentage of the wide nodes' child slots that are occupied.
@@ -325,6 +318,10 @@ impl Plan {
         expand: 0,
         first: 0,
         count: 0,
+        size: Size {
+            wide: 0,
+            blocks: 0,
+        },
     };
 }
 
@@ -356,6 +353,7 @@ fn plan_subtree(nodes: &[Node], root: usize, plans: &mut [Plan]) {
                 let right = node.first_or_right as usize - root;
                 plan_node(node, &plans[i + 1], &plans[right])
             };
+            plans[i].size = child_size(nodes, plans, root, root + i);
         }
         return;
     }
@@ -367,6 +365,7 @@ fn plan_subtree(nodes: &[Node], root: usize, plans: &mut [Plan]) {
         || plan_subtree(nodes, root + right, r),
     );
     head[0] = plan_node(node, &l[0], &r[0]);
+    plans[0].size = child_size(nodes, plans, root, root);
 }
 
 /// The plan of `node` from its children's (`l` and `r`, unused for a leaf).
@@ -380,6 +379,7 @@ fn plan_node(node: &Node, l: &Plan, r: &Plan) -> Plan {
             expand: 0,
             first: node.first_or_right,
             count: node.count,
+            size: Size::default(),
         };
     }
     let count = l.count + r.count;
@@ -405,6 +405,7 @@ fn plan_node(node: &Node, l: &Plan, r: &Plan) -> Plan {
         expand: dist[WIDE].1,
         first: l.first,
         count,
+        size: Size::default(),
     };
     // `<=`: between equal costs, the leaf (fewer nodes to visit).
     if as_leaf <= as_node {
@@ -422,14 +423,6 @@ fn plan_node(node: &Node, l: &Plan, r: &Plan) -> Plan {
         }
     }
     p
-}
-
-/// Writes the wide nodes and blocks the plan describes.
-struct Builder<'a> {
-    nodes: &'a [Node],
-    plans: &'a [Plan],
-    ids: &'a [u32],
-    geometry: &'a Geometry,
 }
 
 /// The BVH2 nodes filling a wide node's slots.
@@ -450,43 +443,206 @@ impl Slots {
     }
 }
 
-impl Builder<'_> {
-    /// The BVH2 nodes that fill at most `slots` slots for node `n`'s subtree.
-    fn gather(&self, n: usize, slots: usize, out: &mut Slots) {
-        let node = &self.nodes[n];
-        if node.is_leaf() || slots == 1 {
-            out.push(n);
-            return;
+/// Adds to `out` the BVH2 nodes that fill at most `slots` slots for node `n`'s subtree;
+/// `plans[i - base]` is node `i`'s plan.
+fn gather(nodes: &[Node], plans: &[Plan], base: usize, n: usize, slots: usize, out: &mut Slots) {
+    let node = &nodes[n];
+    if node.is_leaf() || slots == 1 {
+        out.push(n);
+        return;
+    }
+    match plans[n - base].choice[slots - 1] {
+        0 => gather(nodes, plans, base, n, slots - 1, out),
+        k => {
+            let k = usize::from(k);
+            gather(nodes, plans, base, n + 1, k, out);
+            gather(nodes, plans, base, node.first_or_right as usize, slots - k, out);
         }
-        match self.plans[n].choice[slots - 1] {
-            0 => self.gather(n, slots - 1, out),
-            k => {
-                let k = usize::from(k);
-                self.gather(n + 1, k, out);
-                self.gather(node.first_or_right as usize, slots - k, out);
-            }
+    }
+}
+
+/// The BVH2 nodes filling the slots of the wide node standing for node `n` (`n` itself
+/// when it is a leaf, which only the root of a tree of one leaf is).
+fn wide_slots(nodes: &[Node], plans: &[Plan], base: usize, n: usize) -> Slots {
+    let node = &nodes[n];
+    let mut slots = Slots::default();
+    if node.is_leaf() {
+        slots.push(n);
+    } else {
+        let k = usize::from(plans[n - base].expand);
+        gather(nodes, plans, base, n + 1, k, &mut slots);
+        gather(nodes, plans, base, node.first_or_right as usize, WIDE - k, &mut slots);
+    }
+    slots
+}
+
+/// Whether a slot holding BVH2 node `node` (planned as `plan`) refers to a leaf rather than
+/// to a wide node.
+fn is_leaf_slot(node: &Node, plan: &Plan) -> bool {
+    node.is_leaf() || plan.choice[0] == 0
+}
+
+/// What [`Builder::wide_node`] writes for node `n`: the node and its slots' targets.
+fn wide_size(nodes: &[Node], plans: &[Plan], base: usize, n: usize) -> Size {
+    let slots = wide_slots(nodes, plans, base, n);
+    let one = Size { wide: 1, blocks: 0 };
+    slots
+        .as_slice()
+        .iter()
+        .fold(one, |size, &s| size.add(plans[s - base].size))
+}
+
+/// What [`Builder::child`] writes for node `n`, from the sizes of the nodes below it.
+fn child_size(nodes: &[Node], plans: &[Plan], base: usize, n: usize) -> Size {
+    let plan = &plans[n - base];
+    if is_leaf_slot(&nodes[n], plan) {
+        leaf_size(plan.count as usize)
+    } else {
+        wide_size(nodes, plans, base, n)
+    }
+}
+
+/// What [`Builder::leaf`] writes for a leaf of `count` primitives.
+fn leaf_size(count: usize) -> Size {
+    if count <= MAX_REF_BLOCKS * BLOCK {
+        return Size {
+            wide: 0,
+            blocks: count.div_ceil(BLOCK),
+        };
+    }
+    let per = count.div_ceil(WIDE);
+    let mut size = Size { wide: 1, blocks: 0 };
+    let mut left = count;
+    while left > 0 {
+        let n = per.min(left);
+        size = size.add(leaf_size(n));
+        left -= n;
+    }
+    size
+}
+
+/// The counts a part of the layout adds to the statistics.
+#[derive(Clone, Copy, Default)]
+struct Counts {
+    leaves: usize,
+    slots: usize,
+    leaf_prims: usize,
+}
+
+impl Counts {
+    fn add(self, other: Self) -> Self {
+        Self {
+            leaves: self.leaves + other.leaves,
+            slots: self.slots + other.slots,
+            leaf_prims: self.leaf_prims + other.leaf_prims,
+        }
+    }
+}
+
+/// A part of the layout's arrays, written front to back: `wide` is the whole's wide nodes
+/// from `wide_base` on, `blocks` its blocks from `block_base` on, each exactly as long as
+/// the part's [`Size`].
+struct Out<'a> {
+    wide: &'a mut [WideNode],
+    wide_base: usize,
+    wide_len: usize,
+    blocks: &'a mut [TriBlock],
+    block_base: usize,
+    blocks_len: usize,
+    counts: Counts,
+}
+
+impl<'a> Out<'a> {
+    fn new(
+        wide: &'a mut [WideNode],
+        wide_base: usize,
+        blocks: &'a mut [TriBlock],
+        block_base: usize,
+    ) -> Self {
+        Self {
+            wide,
+            wide_base,
+            wide_len: 0,
+            blocks,
+            block_base,
+            blocks_len: 0,
+            counts: Counts::default(),
         }
     }
 
-    /// Appends to `out` the wide node standing for BVH2 node `n` and its subtree, depth
-    /// first (the node, then each slot's subtree or leaf blocks in slot order); returns its
-    /// index. A node over at least [`PARALLEL_PRIMS`] primitives lays out its slots in
-    /// parallel, each into a layout of its own, and appends them in slot order: the same
-    /// arrays as one pass would write.
-    fn wide_node(&self, n: usize, out: &mut Layout) -> u32 {
-        let node = self.nodes[n];
-        let mut slots = Slots::default();
-        if node.is_leaf() {
-            slots.push(n);
-        } else {
-            let k = usize::from(self.plans[n].expand);
-            self.gather(n + 1, k, &mut slots);
-            self.gather(node.first_or_right as usize, WIDE - k, &mut slots);
+    /// Writes the next wide node; returns its index in the whole.
+    fn push_wide(&mut self, node: WideNode) -> usize {
+        self.wide[self.wide_len] = node;
+        self.wide_len += 1;
+        self.wide_base + self.wide_len - 1
+    }
+
+    /// Overwrites wide node `index` (an index in the whole, written by this part).
+    fn set_wide(&mut self, index: usize, node: WideNode) {
+        self.wide[index - self.wide_base] = node;
+    }
+
+    /// Writes the next block.
+    fn push_block(&mut self, block: TriBlock) {
+        self.blocks[self.blocks_len] = block;
+        self.blocks_len += 1;
+    }
+
+    /// What is left, cut into consecutive parts of `sizes`.
+    fn split(&mut self, sizes: &[Size]) -> Vec<Out<'_>> {
+        let mut wide = &mut self.wide[self.wide_len..];
+        let mut blocks = &mut self.blocks[self.blocks_len..];
+        let mut wide_base = self.wide_base + self.wide_len;
+        let mut block_base = self.block_base + self.blocks_len;
+        let mut parts = Vec::with_capacity(sizes.len());
+        for size in sizes {
+            let (w, rest) = std::mem::take(&mut wide).split_at_mut(size.wide);
+            wide = rest;
+            let (b, rest) = std::mem::take(&mut blocks).split_at_mut(size.blocks);
+            blocks = rest;
+            parts.push(Out::new(w, wide_base, b, block_base));
+            wide_base += size.wide;
+            block_base += size.blocks;
         }
+        parts
+    }
+
+    /// Moves past `size` written by parts of [`Out::split`] that counted `counts`.
+    fn skip(&mut self, size: Size, counts: Counts) {
+        self.wide_len += size.wide;
+        self.blocks_len += size.blocks;
+        self.counts = self.counts.add(counts);
+    }
+
+    /// Checks that the part was written to its end: the plan's sizes and the writing agree.
+    fn assert_full(&self) {
+        assert_eq!(
+            (self.wide_len, self.blocks_len),
+            (self.wide.len(), self.blocks.len()),
+            "the layout's planned sizes disagree with what was written"
+        );
+    }
+}
+
+/// Writes the wide nodes and blocks the plan describes.
+struct Builder<'a> {
+    nodes: &'a [Node],
+    plans: &'a [Plan],
+    ids: &'a [u32],
+    geometry: &'a Geometry,
+}
+
+impl Builder<'_> {
+    /// Writes to `out` the wide node standing for BVH2 node `n` and its subtree, depth
+    /// first (the node, then each slot's subtree or leaf blocks in slot order); returns its
+    /// index. A node over at least [`PARALLEL_PRIMS`] primitives writes its slots' targets
+    /// in parallel, each into the part of the arrays its planned size marks out: the same
+    /// arrays as one pass would write.
+    fn wide_node(&self, n: usize, out: &mut Out) -> u32 {
+        let slots = wide_slots(self.nodes, self.plans, 0, n);
         let slots = slots.as_slice();
-        let index = out.wide.len();
-        out.wide.push(WideNode::EMPTY);
-        out.slots += slots.len();
+        let index = out.push_wide(WideNode::EMPTY);
+        out.counts.slots += slots.len();
         let mut wide = WideNode::EMPTY;
         for (slot, &s) in slots.iter().enumerate() {
             let b = self.nodes[s].aabb();
@@ -496,33 +652,36 @@ impl Builder<'_> {
             }
         }
         if self.plans[n].count >= PARALLEL_PRIMS {
-            let parts: Vec<(Layout, u32)> = slots
-                .par_iter()
-                .map(|&s| {
-                    let mut part = Layout::default();
-                    part.reserve(self.plans[s].count as usize);
-                    let child = self.child(s, &mut part);
-                    (part, child)
+            let sizes: Vec<Size> = slots.iter().map(|&s| self.plans[s].size).collect();
+            let mut parts = out.split(&sizes);
+            let children: Vec<u32> = parts
+                .par_iter_mut()
+                .zip(slots)
+                .map(|(part, &s)| {
+                    let child = self.child(s, part);
+                    part.assert_full();
+                    child
                 })
                 .collect();
-            for (slot, (part, child)) in parts.into_iter().enumerate() {
-                wide.child[slot] = out.append(part, child);
-            }
+            let counts = parts.iter().fold(Counts::default(), |c, p| c.add(p.counts));
+            let size = sizes.iter().fold(Size::default(), |a, &b| a.add(b));
+            out.skip(size, counts);
+            wide.child[..slots.len()].copy_from_slice(&children);
         } else {
             for (slot, &s) in slots.iter().enumerate() {
                 wide.child[slot] = self.child(s, out);
             }
         }
-        out.wide[index] = wide;
+        out.set_wide(index, wide);
         index as u32
     }
 
-    /// Appends to `out` what the slot holding BVH2 node `s` refers to (a leaf or a wide
+    /// Writes to `out` what the slot holding BVH2 node `s` refers to (a leaf or a wide
     /// node); returns the reference.
-    fn child(&self, s: usize, out: &mut Layout) -> u32 {
+    fn child(&self, s: usize, out: &mut Out) -> u32 {
         let child = &self.nodes[s];
         let plan = &self.plans[s];
-        if child.is_leaf() || plan.choice[0] == 0 {
+        if is_leaf_slot(child, plan) {
             self.leaf(plan.first as usize, plan.count as usize, child.aabb(), out)
         } else {
             self.wide_node(s, out)
@@ -530,12 +689,11 @@ impl Builder<'_> {
     }
 
     /// A reference to a leaf of the primitives at leaf-order positions `first..first +
-    /// count`, all inside `bounds`, appended to `out`; more than eight blocks' worth become
+    /// count`, all inside `bounds`, written to `out`; more than eight blocks' worth become
     /// a wide node of leaves with the same box.
-    fn leaf(&self, first: usize, count: usize, bounds: Aabb, out: &mut Layout) -> u32 {
+    fn leaf(&self, first: usize, count: usize, bounds: Aabb, out: &mut Out) -> u32 {
         if count > MAX_REF_BLOCKS * BLOCK {
-            let index = out.wide.len();
-            out.wide.push(WideNode::EMPTY);
+            let index = out.push_wide(WideNode::EMPTY);
             let per = count.div_ceil(WIDE);
             let mut wide = WideNode::EMPTY;
             let mut slot = 0;
@@ -550,11 +708,11 @@ impl Builder<'_> {
                 slot += 1;
                 start += n;
             }
-            out.slots += slot;
-            out.wide[index] = wide;
+            out.counts.slots += slot;
+            out.set_wide(index, wide);
             return index as u32;
         }
-        let first_block = out.blocks.len();
+        let first_block = out.block_base + out.blocks_len;
         let mut mixed = false;
         for chunk in self.ids[first..first + count].chunks(BLOCK) {
             let mut block = TriBlock::EMPTY;
@@ -571,14 +729,10 @@ impl Builder<'_> {
                     _ => mixed = true,
                 }
             }
-            out.blocks.push(block);
+            out.push_block(block);
         }
-        assert!(
-            out.blocks.len() <= FIRST_MASK as usize + 1,
-            "more than 2^27 leaf blocks"
-        );
-        out.leaves += 1;
-        out.leaf_prims += count;
+        out.counts.leaves += 1;
+        out.counts.leaf_prims += count;
         LeafRef {
             first: first_block,
             blocks: count.div_ceil(BLOCK),
