@@ -175,28 +175,32 @@ pub(crate) struct Layout {
     pub leaf_prims: usize,
 }
 
-/// Per BVH2 node, what the dynamic program knows.
+/// Per BVH2 node, what the dynamic program decided (24 bytes: one is kept for every node of
+/// the BVH2, and on a 12.6M-triangle mesh that is 13.5 million of them).
 #[derive(Clone, Copy)]
 struct Plan {
-    /// `cost[i - 1]`: the cheapest cost with at most `i` slots.
-    cost: [f32; WIDE],
     /// `choice[0]`: 1 when one slot holds a wide node, 0 when a leaf. `choice[i - 1]` for
     /// `i >= 2`: 0 when `i - 1` slots do as well, else the slots given to the first child.
     choice: [u8; WIDE],
     /// Slots given to the first child when the node becomes a wide node (eight in all).
     expand: u8,
-    /// First leaf-order position and number of primitives below.
-    first: u32,
+    /// Number of primitives below.
     count: u32,
     /// What the node takes in the layout as a child slot's target (see [`child_size`]).
     size: Size,
 }
 
+const _: () = assert!(std::mem::size_of::<Plan>() == 24);
+
+/// `cost[i - 1]`: the cheapest SAH cost of a subtree with at most `i` slots. Only needed
+/// until the parent is planned, so it is not kept in the [`Plan`].
+type Cost = [f32; WIDE];
+
 /// The wide nodes and blocks a part of the layout takes.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct Size {
-    wide: usize,
-    blocks: usize,
+    wide: u32,
+    blocks: u32,
 }
 
 impl Size {
@@ -221,18 +225,15 @@ impl Layout {
         }
         let plans = plan(nodes);
         let size = wide_size(nodes, &plans, 0, 0);
-        assert!(
-            size.blocks <= FIRST_MASK as usize + 1,
-            "more than 2^27 leaf blocks"
-        );
+        assert!(size.blocks <= FIRST_MASK + 1, "more than 2^27 leaf blocks");
         // Every element is written once more below; filling them here, in parallel, faults
         // the pages in on every thread.
         layout
             .wide
-            .par_extend(rayon::iter::repeat_n(WideNode::EMPTY, size.wide));
+            .par_extend(rayon::iter::repeat_n(WideNode::EMPTY, size.wide as usize));
         layout
             .blocks
-            .par_extend(rayon::iter::repeat_n(TriBlock::EMPTY, size.blocks));
+            .par_extend(rayon::iter::repeat_n(TriBlock::EMPTY, size.blocks as usize));
         let builder = Builder {
             nodes,
             plans: &plans,
@@ -311,20 +312,6 @@ impl Layout {
     }
 }
 
-impl Plan {
-    const EMPTY: Self = Self {
-        cost: [0.0; WIDE],
-        choice: [0; WIDE],
-        expand: 0,
-        first: 0,
-        count: 0,
-        size: Size {
-            wide: 0,
-            blocks: 0,
-        },
-    };
-}
-
 /// Subtrees of at least this many BVH2 nodes are planned in parallel with their sibling, and
 /// wide nodes over at least [`PARALLEL_PRIMS`] primitives lay out their children in
 /// parallel. Neither depends on the thread count, and both give the serial result.
@@ -336,58 +323,76 @@ const PARALLEL_PRIMS: u32 = 1 << 15;
 /// The dynamic program, bottom up (a depth-first layout puts children after parents; the
 /// two children's subtrees are independent and go in parallel while large).
 fn plan(nodes: &[Node]) -> Vec<Plan> {
-    let mut plans = vec![Plan::EMPTY; nodes.len()];
+    let empty = Plan {
+        choice: [0; WIDE],
+        expand: 0,
+        count: 0,
+        size: Size::default(),
+    };
+    let mut plans = vec![empty; nodes.len()];
     plan_subtree(nodes, 0, &mut plans);
     plans
 }
 
-/// Plans the subtree of BVH2 node `root`, whose nodes are `root..root + plans.len()`.
-fn plan_subtree(nodes: &[Node], root: usize, plans: &mut [Plan]) {
+/// Plans the subtree of BVH2 node `root`, whose nodes are `root..root + plans.len()`;
+/// returns its cost.
+fn plan_subtree(nodes: &[Node], root: usize, plans: &mut [Plan]) -> Cost {
     let node = &nodes[root];
     if plans.len() < PARALLEL_NODES || node.is_leaf() {
+        // Backwards over a depth-first array, every subtree is done before its parent, the
+        // second child's before the first's: the children's costs are the top two of a stack.
+        let mut costs: Vec<Cost> = Vec::with_capacity(64);
         for i in (0..plans.len()).rev() {
             let node = &nodes[root + i];
-            plans[i] = if node.is_leaf() {
-                plan_node(node, &Plan::EMPTY, &Plan::EMPTY)
+            let (plan, cost) = if node.is_leaf() {
+                plan_leaf(node)
             } else {
                 let right = node.first_or_right as usize - root;
-                plan_node(node, &plans[i + 1], &plans[right])
+                let count = plans[i + 1].count + plans[right].count;
+                let (l, r) = (costs.pop(), costs.pop());
+                plan_node(node, count, &l.expect("planned"), &r.expect("planned"))
             };
+            plans[i] = plan;
             plans[i].size = child_size(nodes, plans, root, root + i);
+            costs.push(cost);
         }
-        return;
+        debug_assert_eq!(costs.len(), 1);
+        return costs[0];
     }
     let right = node.first_or_right as usize - root;
     let (head, rest) = plans.split_at_mut(1);
     let (l, r) = rest.split_at_mut(right - 1);
-    rayon::join(
+    let (lc, rc) = rayon::join(
         || plan_subtree(nodes, root + 1, l),
         || plan_subtree(nodes, root + right, r),
     );
-    head[0] = plan_node(node, &l[0], &r[0]);
+    let (plan, cost) = plan_node(node, l[0].count + r[0].count, &lc, &rc);
+    head[0] = plan;
     plans[0].size = child_size(nodes, plans, root, root);
+    cost
 }
 
-/// The plan of `node` from its children's (`l` and `r`, unused for a leaf).
-fn plan_node(node: &Node, l: &Plan, r: &Plan) -> Plan {
+/// The plan and cost of leaf `node`.
+fn plan_leaf(node: &Node) -> (Plan, Cost) {
+    let cost = node.aabb().surface_area() * C_BLOCK * node.count.div_ceil(BLOCK as u32) as f32;
+    let plan = Plan {
+        choice: [0; WIDE],
+        expand: 0,
+        count: node.count,
+        size: Size::default(),
+    };
+    (plan, [cost; WIDE])
+}
+
+/// The plan and cost of interior `node` over `count` primitives from its children's costs
+/// (`l` and `r`).
+fn plan_node(node: &Node, count: u32, l: &Cost, r: &Cost) -> (Plan, Cost) {
     let area = node.aabb().surface_area();
-    if node.is_leaf() {
-        let cost = area * C_BLOCK * node.count.div_ceil(BLOCK as u32) as f32;
-        return Plan {
-            cost: [cost; WIDE],
-            choice: [0; WIDE],
-            expand: 0,
-            first: node.first_or_right,
-            count: node.count,
-            size: Size::default(),
-        };
-    }
-    let count = l.count + r.count;
     // dist[i]: the best split of `i` slots between the children.
     let mut dist = [(f32::INFINITY, 0u8); WIDE + 1];
     for (i, d) in dist.iter_mut().enumerate().skip(2) {
         for k in 1..i {
-            let c = l.cost[k - 1] + r.cost[i - k - 1];
+            let c = l[k - 1] + r[i - k - 1];
             if c < d.0 {
                 *d = (c, k as u8);
             }
@@ -400,29 +405,28 @@ fn plan_node(node: &Node, l: &Plan, r: &Plan) -> Plan {
         f32::INFINITY
     };
     let mut p = Plan {
-        cost: [0.0; WIDE],
         choice: [0; WIDE],
         expand: dist[WIDE].1,
-        first: l.first,
         count,
         size: Size::default(),
     };
+    let mut cost = [0.0; WIDE];
     // `<=`: between equal costs, the leaf (fewer nodes to visit).
     if as_leaf <= as_node {
-        p.cost[0] = as_leaf;
+        cost[0] = as_leaf;
     } else {
-        p.cost[0] = as_node;
+        cost[0] = as_node;
         p.choice[0] = 1;
     }
-    for (i, &(cost, k)) in dist.iter().enumerate().skip(2) {
-        if cost < p.cost[i - 2] {
-            p.cost[i - 1] = cost;
+    for (i, &(c, k)) in dist.iter().enumerate().skip(2) {
+        if c < cost[i - 2] {
+            cost[i - 1] = c;
             p.choice[i - 1] = k;
         } else {
-            p.cost[i - 1] = p.cost[i - 2];
+            cost[i - 1] = cost[i - 2];
         }
     }
-    p
+    (p, cost)
 }
 
 /// The BVH2 nodes filling a wide node's slots.
@@ -456,7 +460,14 @@ fn gather(nodes: &[Node], plans: &[Plan], base: usize, n: usize, slots: usize, o
         k => {
             let k = usize::from(k);
             gather(nodes, plans, base, n + 1, k, out);
-            gather(nodes, plans, base, node.first_or_right as usize, slots - k, out);
+            gather(
+                nodes,
+                plans,
+                base,
+                node.first_or_right as usize,
+                slots - k,
+                out,
+            );
         }
     }
 }
@@ -471,7 +482,14 @@ fn wide_slots(nodes: &[Node], plans: &[Plan], base: usize, n: usize) -> Slots {
     } else {
         let k = usize::from(plans[n - base].expand);
         gather(nodes, plans, base, n + 1, k, &mut slots);
-        gather(nodes, plans, base, node.first_or_right as usize, WIDE - k, &mut slots);
+        gather(
+            nodes,
+            plans,
+            base,
+            node.first_or_right as usize,
+            WIDE - k,
+            &mut slots,
+        );
     }
     slots
 }
@@ -507,7 +525,7 @@ fn leaf_size(count: usize) -> Size {
     if count <= MAX_REF_BLOCKS * BLOCK {
         return Size {
             wide: 0,
-            blocks: count.div_ceil(BLOCK),
+            blocks: count.div_ceil(BLOCK) as u32,
         };
     }
     let per = count.div_ceil(WIDE);
@@ -596,21 +614,21 @@ impl<'a> Out<'a> {
         let mut block_base = self.block_base + self.blocks_len;
         let mut parts = Vec::with_capacity(sizes.len());
         for size in sizes {
-            let (w, rest) = std::mem::take(&mut wide).split_at_mut(size.wide);
+            let (w, rest) = std::mem::take(&mut wide).split_at_mut(size.wide as usize);
             wide = rest;
-            let (b, rest) = std::mem::take(&mut blocks).split_at_mut(size.blocks);
+            let (b, rest) = std::mem::take(&mut blocks).split_at_mut(size.blocks as usize);
             blocks = rest;
             parts.push(Out::new(w, wide_base, b, block_base));
-            wide_base += size.wide;
-            block_base += size.blocks;
+            wide_base += size.wide as usize;
+            block_base += size.blocks as usize;
         }
         parts
     }
 
     /// Moves past `size` written by parts of [`Out::split`] that counted `counts`.
     fn skip(&mut self, size: Size, counts: Counts) {
-        self.wide_len += size.wide;
-        self.blocks_len += size.blocks;
+        self.wide_len += size.wide as usize;
+        self.blocks_len += size.blocks as usize;
         self.counts = self.counts.add(counts);
     }
 
@@ -682,7 +700,12 @@ impl Builder<'_> {
         let child = &self.nodes[s];
         let plan = &self.plans[s];
         if is_leaf_slot(child, plan) {
-            self.leaf(plan.first as usize, plan.count as usize, child.aabb(), out)
+            let mut first = s;
+            while !self.nodes[first].is_leaf() {
+                first += 1;
+            }
+            let first = self.nodes[first].first_or_right as usize;
+            self.leaf(first, plan.count as usize, child.aabb(), out)
         } else {
             self.wide_node(s, out)
         }
