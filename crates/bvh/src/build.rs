@@ -26,6 +26,7 @@
 use crate::Bvh;
 use crate::node::Node;
 use crate::params::BvhParams;
+use crate::presplit;
 use raybench_geometry::{Aabb, Geometry, Vec3};
 use rayon::prelude::*;
 use std::ops::Range;
@@ -806,11 +807,8 @@ impl Bvh {
         let mut params = params;
         params.bins = params.bins.clamp(2, MAX_BINS);
         params.max_leaf_size = params.max_leaf_size.max(1);
-        let mut items: Vec<Item> = geometry
-            .bounded()
-            .par_iter()
-            .map(|&id| Item::new(geometry.shape(id).bounds().unwrap_or(Aabb::EMPTY), id))
-            .collect();
+        let mut items: Vec<Item> =
+            presplit::references(&geometry, geometry.bounded(), params.presplit, Item::new);
         let mut nodes = Vec::new();
         if !items.is_empty() {
             let extent = items

@@ -11,6 +11,10 @@ pub struct BvhParams {
     pub traversal_cost: f32,
     /// Nodes with at least this many primitives build their two subtrees in parallel.
     pub parallel_threshold: usize,
+    /// Extra references allowed for triangles cut before the build, as a fraction of the
+    /// primitive count (0: none; see the builder's pre-splitting). Cut triangles sit in
+    /// several leaves, each time with the box of their part there.
+    pub presplit: f32,
 }
 
 impl BvhParams {
@@ -22,6 +26,7 @@ impl BvhParams {
             max_leaf_size: 8,
             traversal_cost: 1.0,
             parallel_threshold: 4096,
+            presplit: 0.0,
         }
     }
 
@@ -33,6 +38,7 @@ impl BvhParams {
             max_leaf_size: 4,
             traversal_cost: 1.0,
             parallel_threshold: 4096,
+            presplit: 0.0,
         }
     }
 
@@ -44,6 +50,7 @@ impl BvhParams {
             max_leaf_size: 2,
             traversal_cost: 1.0,
             parallel_threshold: 4096,
+            presplit: 0.0,
         }
     }
 

@@ -14,7 +14,7 @@ use crate::{Backend, Roles, TimedRenderer};
 use raybench_bvh::{Bvh, BvhParams, ObvhsAccel, ObvhsBuildParams};
 
 use raybench_grid::{Grid, GridParams};
-use raybench_packet::{PacketAccel, PacketParams};
+use raybench_packet::{PRESPLIT, PacketAccel, PacketParams};
 #[cfg(feature = "embree")]
 use raybench_peers::{
     EmbreeAccel, EmbreeMode, EmbreeQuality, embree_availability, embree_supports,
@@ -275,7 +275,7 @@ pub static PRESETS: &[Preset] = &[
         false,
         EXACT_PRESET,
         PacketAccel,
-        "packet's BVH8 collapsed from a BVH2 built with BvhParams::fast",
+        "packet's BVH8 collapsed from a BVH2 built with BvhParams::fast, triangles pre-split",
         |g| PacketAccel::build_with(g, packet_over(BvhParams::fast()))
     ),
     preset!(
@@ -284,7 +284,7 @@ pub static PRESETS: &[Preset] = &[
         true,
         EXACT_PRESET,
         PacketAccel,
-        "packet's BVH8 collapsed from a BVH2 built with BvhParams::medium (the default)",
+        "packet's BVH8 collapsed from a BVH2 built with BvhParams::medium, triangles pre-split (the default)",
         |g| PacketAccel::build_with(g, packet_over(BvhParams::medium()))
     ),
     preset!(
@@ -293,8 +293,23 @@ pub static PRESETS: &[Preset] = &[
         false,
         EXACT_PRESET,
         PacketAccel,
-        "packet's BVH8 collapsed from a BVH2 built with BvhParams::quality",
+        "packet's BVH8 collapsed from a BVH2 built with BvhParams::quality, triangles pre-split",
         |g| PacketAccel::build_with(g, packet_over(BvhParams::quality()))
+    ),
+    preset!(
+        "packet",
+        "unsplit",
+        false,
+        EXACT_PRESET,
+        PacketAccel,
+        "packet's BVH8 collapsed from a BVH2 built with BvhParams::medium, no triangle pre-split (one reference per triangle)",
+        |g| PacketAccel::build_with(
+            g,
+            PacketParams {
+                bvh: BvhParams::medium(),
+                ..PacketParams::default()
+            }
+        )
     ),
     #[cfg(feature = "embree")]
     embree_preset!(
@@ -319,11 +334,14 @@ pub static PRESETS: &[Preset] = &[
     ),
 ];
 
-/// The packet backend's parameters over a BVH2 built with `bvh` (instruction set detected,
-/// packets on).
+/// The packet backend's parameters over a BVH2 built with `bvh` and the default
+/// pre-splitting (instruction set detected, packets on).
 fn packet_over(bvh: BvhParams) -> PacketParams {
     PacketParams {
-        bvh,
+        bvh: BvhParams {
+            presplit: PRESPLIT,
+            ..bvh
+        },
         ..PacketParams::default()
     }
 }
