@@ -150,12 +150,6 @@ impl std::fmt::Display for Isa {
     }
 }
 
-/// The default pre-splitting budget of the BVH2 ([`BvhParams::presplit`]): up to 30 % more
-/// references, spent on the triangles whose boxes are mostly empty space. On Sponza it
-/// halves the tree's EPO and cuts triangle tests per primary ray by a quarter; meshes of
-/// similar, well-shaped triangles are not cut at all (see docs/strategies.md).
-pub const PRESPLIT: f32 = 0.3;
-
 /// How [`PacketAccel`] traces batches.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PacketParams {
@@ -164,8 +158,7 @@ pub struct PacketParams {
     pub isa: Isa,
     /// Trace coherent runs of a batch as packets (else every ray goes through the BVH8).
     pub packets: bool,
-    /// The BVH2 the BVH8 is collapsed from: by default the `medium` preset with triangles
-    /// pre-split for up to [`PRESPLIT`] more references.
+    /// The BVH2 the BVH8 is collapsed from.
     pub bvh: BvhParams,
     /// How many incoherent rays a batch keeps in flight.
     pub interleave: Interleave,
@@ -191,10 +184,7 @@ impl Default for PacketParams {
         Self {
             isa: Isa::detect(),
             packets: true,
-            bvh: BvhParams {
-                presplit: PRESPLIT,
-                ..BvhParams::default()
-            },
+            bvh: BvhParams::default(),
             interleave: Interleave::Auto,
         }
     }

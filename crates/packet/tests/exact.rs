@@ -29,6 +29,20 @@ fn geometries() -> Vec<(&'static str, Arc<Geometry>)> {
     let mut pile = tris(generators::icosphere(1));
     pile.extend(std::iter::repeat_n(twins[5].clone(), 100));
     all.push(("pile", Arc::new(Geometry::new(pile))));
+    // Long thin triangles through a sphere's centre among its small ones: pre-splitting
+    // cuts them into parts that sit in several leaves.
+    let mut slivers: Vec<Shape> = (0..60)
+        .map(|i| {
+            let (s, c) = (i as f32 * 0.105).sin_cos();
+            Shape::Triangle(raybench_core::Triangle::new(
+                Vec3::new(c, -1.0, s),
+                Vec3::new(-c, 1.0, -s),
+                Vec3::new(-c * 0.99, 1.0, -s * 1.01),
+            ))
+        })
+        .collect();
+    slivers.extend(tris(generators::icosphere(3)));
+    all.push(("slivers", Arc::new(Geometry::new(slivers))));
     all.push((
         "one sphere",
         Arc::new(Geometry::new(vec![Shape::Sphere(Sphere::new(
@@ -208,8 +222,9 @@ fn avx512_matches_naive() {
 }
 
 /// The BVH8 is collapsed from whatever BVH2 it is given: other presets, a BVH2 split down
-/// to single primitives, and one whose leaves hold more than a leaf reference can name
-/// (100 coincident triangles in one leaf, laid out as a small tree of leaves).
+/// to single primitives, one whose leaves hold more than a leaf reference can name (100
+/// coincident triangles in one leaf, laid out as a small tree of leaves), and one over
+/// pre-split triangles (a triangle in several leaves).
 #[test]
 fn every_bvh2_collapses_exactly() {
     let coarse = BvhParams {
@@ -220,7 +235,17 @@ fn every_bvh2_collapses_exactly() {
         max_leaf_size: 1,
         ..BvhParams::medium()
     };
-    for bvh in [BvhParams::fast(), BvhParams::quality(), fine, coarse] {
+    let presplit = BvhParams {
+        presplit: BvhParams::PRESPLIT,
+        ..BvhParams::medium()
+    };
+    for bvh in [
+        BvhParams::fast(),
+        BvhParams::quality(),
+        fine,
+        coarse,
+        presplit,
+    ] {
         check(PacketParams {
             bvh,
             ..PacketParams::default()

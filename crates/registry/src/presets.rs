@@ -14,7 +14,7 @@ use crate::{Backend, Roles, TimedRenderer};
 use raybench_bvh::{Bvh, BvhParams, ObvhsAccel, ObvhsBuildParams};
 
 use raybench_grid::{Grid, GridParams};
-use raybench_packet::{PRESPLIT, PacketAccel, PacketParams};
+use raybench_packet::{PacketAccel, PacketParams};
 #[cfg(feature = "embree")]
 use raybench_peers::{
     EmbreeAccel, EmbreeMode, EmbreeQuality, embree_availability, embree_supports,
@@ -124,6 +124,15 @@ pub static PRESETS: &[Preset] = &[
         Bvh,
         "bvh built with BvhParams::quality (32 bins, leaves of up to 2)",
         |g| Bvh::build_with(g, BvhParams::quality())
+    ),
+    preset!(
+        "bvh",
+        "presplit",
+        false,
+        EXACT_PRESET,
+        Bvh,
+        "bvh built with BvhParams::medium over triangles pre-split for up to 30 % more references (a triangle in several leaves, each with the box of its part there)",
+        |g| Bvh::build_with(g, presplit())
     ),
     preset!(
         "bvh",
@@ -275,7 +284,7 @@ pub static PRESETS: &[Preset] = &[
         false,
         EXACT_PRESET,
         PacketAccel,
-        "packet's BVH8 collapsed from a BVH2 built with BvhParams::fast, triangles pre-split",
+        "packet's BVH8 collapsed from a BVH2 built with BvhParams::fast",
         |g| PacketAccel::build_with(g, packet_over(BvhParams::fast()))
     ),
     preset!(
@@ -284,7 +293,7 @@ pub static PRESETS: &[Preset] = &[
         true,
         EXACT_PRESET,
         PacketAccel,
-        "packet's BVH8 collapsed from a BVH2 built with BvhParams::medium, triangles pre-split (the default)",
+        "packet's BVH8 collapsed from a BVH2 built with BvhParams::medium (the default)",
         |g| PacketAccel::build_with(g, packet_over(BvhParams::medium()))
     ),
     preset!(
@@ -293,23 +302,17 @@ pub static PRESETS: &[Preset] = &[
         false,
         EXACT_PRESET,
         PacketAccel,
-        "packet's BVH8 collapsed from a BVH2 built with BvhParams::quality, triangles pre-split",
+        "packet's BVH8 collapsed from a BVH2 built with BvhParams::quality",
         |g| PacketAccel::build_with(g, packet_over(BvhParams::quality()))
     ),
     preset!(
         "packet",
-        "unsplit",
+        "presplit",
         false,
         EXACT_PRESET,
         PacketAccel,
-        "packet's BVH8 collapsed from a BVH2 built with BvhParams::medium, no triangle pre-split (one reference per triangle)",
-        |g| PacketAccel::build_with(
-            g,
-            PacketParams {
-                bvh: BvhParams::medium(),
-                ..PacketParams::default()
-            }
-        )
+        "packet's BVH8 collapsed from a BVH2 built with BvhParams::medium over triangles pre-split for up to 30 % more references",
+        |g| PacketAccel::build_with(g, packet_over(presplit()))
     ),
     #[cfg(feature = "embree")]
     embree_preset!(
@@ -334,15 +337,20 @@ pub static PRESETS: &[Preset] = &[
     ),
 ];
 
-/// The packet backend's parameters over a BVH2 built with `bvh` and the default
-/// pre-splitting (instruction set detected, packets on).
+/// The packet backend's parameters over a BVH2 built with `bvh` (instruction set detected,
+/// packets on).
 fn packet_over(bvh: BvhParams) -> PacketParams {
     PacketParams {
-        bvh: BvhParams {
-            presplit: PRESPLIT,
-            ..bvh
-        },
+        bvh,
         ..PacketParams::default()
+    }
+}
+
+/// The `medium` preset over triangles pre-split with [`BvhParams::PRESPLIT`].
+fn presplit() -> BvhParams {
+    BvhParams {
+        presplit: BvhParams::PRESPLIT,
+        ..BvhParams::medium()
     }
 }
 

@@ -42,7 +42,7 @@ fn bad_presets_list_the_known_ones() {
     let e = raybench_registry::backend("bvh:nope").unwrap_err();
     assert_eq!(
         e,
-        "unknown preset 'nope' of backend 'bvh' (known: fast, medium, quality, \
+        "unknown preset 'nope' of backend 'bvh' (known: fast, medium, quality, presplit, \
          ploc_fastest_build, ploc_very_fast_build, ploc_fast_build, ploc_medium_build, \
          ploc_slow_build, ploc_very_slow_build)"
     );
