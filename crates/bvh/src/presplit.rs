@@ -114,7 +114,7 @@ pub(crate) fn references<T: Send>(
 /// The coarsest plane of the power-of-two grid anchored at the origin (the multiple of the
 /// largest power of two) strictly inside `(lo, hi)`, if any.
 fn plane(lo: f32, hi: f32) -> Option<f32> {
-    if !(lo < hi) || !lo.is_finite() || !hi.is_finite() {
+    if !lo.is_finite() || !hi.is_finite() || lo >= hi {
         return None;
     }
     let span = hi - lo;
