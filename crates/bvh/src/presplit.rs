@@ -203,7 +203,7 @@ mod tests {
     use raybench_geometry::Triangle;
 
     fn sliver() -> Geometry {
-        // A long thin triangle across the diagonal of a unit cube, and a small square one.
+        // A long thin triangle across the diagonal of a unit cube, and a small right triangle.
         Geometry::new(vec![
             Shape::Triangle(Triangle::new(
                 Vec3::ZERO,
