@@ -409,6 +409,10 @@ fn best_split(
 /// [`best_split_small`]).
 const SMALL: usize = 12;
 
+/// Bits of an item's index in [`best_split_small`]'s sort keys (`SMALL` items fit).
+const ITEM_BITS: u32 = 4;
+const _: () = assert!(SMALL <= 1 << ITEM_BITS && MAX_BINS << ITEM_BITS <= u16::MAX as usize);
+
 /// [`best_split`] for at most [`SMALL`] items, without bins: per axis, the items sorted by
 /// their bin and swept in that order, with a candidate wherever the bin changes. A bin
 /// boundary's sides are the items below and above it, so this evaluates the same partitions
@@ -447,40 +451,46 @@ fn best_split_small(
             right,
         });
     }
+    let mut boxes = [Box4::EMPTY; SMALL];
+    for (b, it) in boxes.iter_mut().zip(items) {
+        *b = it.bounds();
+    }
     let mut best: Option<Split> = None;
     for axis in (0..3).filter(|&a| valid[a]) {
-        // (bin, item) pairs, insertion-sorted by bin.
-        let mut keys = [(0usize, 0usize); SMALL];
+        // Items by bin, in item order within a bin: `bin << ITEM_BITS | item` sorted as
+        // numbers, without the branches of an insertion sort (see [`sort_keys`]).
+        let mut unsorted = [u16::MAX; SMALL];
         for (i, b) in bins[..n].iter().enumerate() {
-            let key = (b[axis], i);
-            let mut k = i;
-            while k > 0 && keys[k - 1].0 > key.0 {
-                keys[k] = keys[k - 1];
-                k -= 1;
-            }
-            keys[k] = key;
+            unsorted[i] = ((b[axis] as u16) << ITEM_BITS) | i as u16;
         }
-        let keys = &keys[..n];
+        let mut keys = [0u16; SMALL];
+        match n {
+            ..=4 => sort_keys::<4>(&unsorted, n, &mut keys),
+            5..=8 => sort_keys::<8>(&unsorted, n, &mut keys),
+            _ => sort_keys::<SMALL>(&unsorted, n, &mut keys),
+        }
+        let item = |k: usize| usize::from(keys[k] & ((1 << ITEM_BITS) - 1));
+        // Every box here holds at least one item's box, so none is empty.
         let mut right = [Box4::EMPTY; SMALL];
         let mut right_area = [0.0f32; SMALL];
         let mut acc = Box4::EMPTY;
         for k in (1..n).rev() {
-            acc = acc.union(items[keys[k].1].bounds());
+            acc = acc.union(boxes[item(k)]);
             right[k] = acc;
-            right_area[k] = acc.surface_area();
+            right_area[k] = acc.area_non_empty();
         }
         let mut left = Box4::EMPTY;
         for k in 1..n {
-            left = left.union(items[keys[k - 1].1].bounds());
-            if keys[k].0 == keys[k - 1].0 {
+            left = left.union(boxes[item(k - 1)]);
+            if keys[k] >> ITEM_BITS == keys[k - 1] >> ITEM_BITS {
                 continue;
             }
             let cost = params.traversal_cost
-                + (left.surface_area() * k as f32 + right_area[k] * (n - k) as f32) / area;
+                + (left.area_non_empty() * k as f32 + right_area[k] * (n - k) as f32) / area;
             if cost.is_finite() && best.is_none_or(|b| cost < b.cost) {
                 best = Some(Split {
                     axis,
-                    bin: keys[k].0,
+                    bin: usize::from(keys[k] >> ITEM_BITS),
                     cost,
                     left,
                     right: right[k],
@@ -489,6 +499,20 @@ fn best_split_small(
         }
     }
     best
+}
+
+/// Sorts the first `n` (at most `M`) of `unsorted`, distinct keys followed by padding
+/// larger than all of them, into `keys`: each key's place is the number of smaller keys
+/// among the first `M`, counted without branches.
+#[inline]
+fn sort_keys<const M: usize>(unsorted: &[u16; SMALL], n: usize, keys: &mut [u16; SMALL]) {
+    for &key in &unsorted[..n] {
+        let place: usize = unsorted[..M]
+            .iter()
+            .map(|&other| usize::from(other < key))
+            .sum();
+        keys[place] = key;
+    }
 }
 
 /// Items per block of the blocked partition.
@@ -853,6 +877,63 @@ mod tests {
             if id < 1 << 23 {
                 assert!(item.lo.0[3].is_normal(), "id {id}: {:e}", item.lo.0[3]);
                 assert!(item.centroid().0[3].is_normal(), "id {id}");
+            }
+        }
+    }
+
+    /// The split of a small node without bins is the binned split: the same axis, cost,
+    /// boxes and sides, for every item count up to [`SMALL`] and bin counts from 2 to
+    /// [`MAX_BINS`] (items crowded into few bins, so many share one and many bins are
+    /// empty).
+    #[test]
+    fn small_nodes_split_as_the_bins_would() {
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = move || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let params = BvhParams::default();
+        let mut bins = Bins::new();
+        for case in 0..3000 {
+            let n = 2 + case % (SMALL - 1);
+            let bin_count = [2, 3, 16, 64][case % 4];
+            let items: Vec<Item> = (0..n)
+                .map(|id| {
+                    // Corners on a coarse lattice, so that centroids and bins repeat.
+                    let lo = Vec3::new(next(), next(), next()) * 6.0;
+                    let lo = lo.floor() * 0.25;
+                    let size = Vec3::new(next(), next(), next());
+                    Item::new(Aabb::new(lo, lo + size), id as u32)
+                })
+                .collect();
+            let extent = Extent::of(&items);
+            let area = extent.bounds.surface_area();
+            let (binner, valid) = Binner::new(extent.centroids, bin_count);
+            bins.clear(bin_count);
+            bins.add(&binner, &items);
+            let binned = best_split(&bins, &binner, valid, area, &params);
+            let small = best_split_small(&items, &binner, valid, area, &params);
+            let (Some(b), Some(s)) = (binned, small) else {
+                assert!(binned.is_none() && small.is_none(), "case {case}");
+                continue;
+            };
+            let bits = |x: Box4| [x.lo.0, x.hi.0].map(|v| v.map(f32::to_bits));
+            assert_eq!(
+                (b.axis, b.cost.to_bits()),
+                (s.axis, s.cost.to_bits()),
+                "case {case}"
+            );
+            assert_eq!(bits(b.left), bits(s.left), "case {case}");
+            assert_eq!(bits(b.right), bits(s.right), "case {case}");
+            for it in &items {
+                let x = it.centroid_on(b.axis);
+                assert_eq!(
+                    binner.below(x, b.axis, b.bin),
+                    binner.below(x, s.axis, s.bin),
+                    "case {case}"
+                );
             }
         }
     }
