@@ -9,10 +9,10 @@
 //!   leaves stored as contiguous blocks of four triangles with their ids.
 //! - **Coherent packets** (Wald, Slusallek, Benthin and Wagner, "Interactive Rendering with
 //!   Coherent Ray Tracing", 2001): consecutive rays of a batch that share an octant walk the
-//!   BVH8 together, 16 at a time with AVX2 (two vectors of eight lanes), 8 with SSE4.1: one
-//!   interval (frustum) test of the packet against all eight children, per-lane slab tests
-//!   of the children it keeps, nearest child first, each lane clipped to its own best `t`;
-//!   leaves test one triangle against all lanes.
+//!   BVH8 together, 64 at a time with AVX2 (eight vectors of eight lanes) and AVX-512 (four
+//!   of sixteen), 8 with SSE4.1: one interval (frustum) test of the packet against all
+//!   eight children, per-lane slab tests of the children it keeps, nearest child first,
+//!   each lane clipped to its own best `t`; leaves test one triangle against all lanes.
 //! - **Single rays** (`intersect`, `occluded`, and batches whose rays share no octant): one
 //!   SIMD test of eight children, nearest first, children prefetched, one SIMD test per
 //!   block of four triangles; a batch's incoherent rays go two at a time (four when the
@@ -87,6 +87,16 @@ impl Isa {
             Self::Avx512 => 16,
             Self::Avx2 => 8,
             Self::Sse41 | Self::Portable => 4,
+        }
+    }
+
+    /// Vectors per coherent packet.
+    #[must_use]
+    pub fn packet_vectors(self) -> usize {
+        match self {
+            Self::Avx512 => AVX512_VECTORS,
+            Self::Avx2 => AVX2_VECTORS,
+            Self::Sse41 | Self::Portable => NARROW_VECTORS,
         }
     }
 
@@ -229,40 +239,45 @@ impl PacketAccel {
         &self.params
     }
 
-    /// Rays per packet: two vectors.
+    /// Rays per packet: 64 with AVX2 and AVX-512, 8 with four lanes.
     #[must_use]
     pub fn packet_size(&self) -> usize {
-        PACKET_VECTORS * self.params.isa.lanes()
+        self.params.isa.packet_vectors() * self.params.isa.lanes()
     }
 }
 
-/// Vectors per packet: 16 rays with AVX2, 8 with four lanes (measured against one vector:
-/// see docs/strategies.md).
-const PACKET_VECTORS: usize = 2;
+/// Vectors per packet with AVX2: 64 rays (measured against 16 and 32: see
+/// docs/strategies.md).
+const AVX2_VECTORS: usize = 8;
+
+/// Vectors per packet with AVX-512: 64 rays, as with AVX2.
+const AVX512_VECTORS: usize = 4;
+
+/// Vectors per packet with four lanes: 8 rays (measured against one vector).
+const NARROW_VECTORS: usize = 2;
 
 /// The closest hits of a batch: packets where the rays are coherent, single rays otherwise.
 #[inline(always)]
-fn batch_closest<L: Lanes, C: Counters>(
+fn batch_closest<L: Lanes, const K: usize, C: Counters>(
     accel: &PacketAccel,
     rays: &[Ray],
     hits: &mut [Option<Hit>],
     counters: &mut C,
 ) {
     let g = &*accel.geometry;
-    let size = PACKET_VECTORS * L::W;
+    let size = K * L::W;
     let mut best = vec![None::<(u32, PrimHit)>; rays.len()];
     for (ray, b) in rays.iter().zip(best.iter_mut()) {
         counters.add_tests(g.closest_unbounded(ray, b));
     }
     let mut stack = [(0, 0.0); single::STACK];
-    let mut packet_stack: packet::PacketStack<PACKET_VECTORS> =
-        [(0, 0.0, [0; PACKET_VECTORS]); single::STACK];
+    let mut packet_stack: packet::PacketStack<K> = [(0, 0.0, [0; K]); single::STACK];
     // Rays that do not form coherent packets, traced interleaved afterwards.
     let mut pending = Vec::new();
     for (start, chunk) in (0..).step_by(size).zip(rays.chunks(size)) {
         let end = start + chunk.len();
         match packet::octant(chunk).filter(|_| accel.params.packets) {
-            Some(oct) => packet::closest::<L, PACKET_VECTORS, C>(
+            Some(oct) => packet::closest::<L, K, C>(
                 &accel.layout,
                 g,
                 chunk,
@@ -303,17 +318,16 @@ fn batch_closest<L: Lanes, C: Counters>(
 
 /// Any-hit results of a batch, as [`batch_closest`].
 #[inline(always)]
-fn batch_occluded<L: Lanes, C: Counters>(
+fn batch_occluded<L: Lanes, const K: usize, C: Counters>(
     accel: &PacketAccel,
     rays: &[Ray],
     occluded: &mut [bool],
     counters: &mut C,
 ) {
     let g = &*accel.geometry;
-    let size = PACKET_VECTORS * L::W;
+    let size = K * L::W;
     let mut stack = [(0, 0.0); single::STACK];
-    let mut packet_stack: packet::AnyStack<PACKET_VECTORS> =
-        [(0, [0; PACKET_VECTORS]); single::STACK];
+    let mut packet_stack: packet::AnyStack<K> = [(0, [0; K]); single::STACK];
     // Rays that do not form coherent packets, traced interleaved afterwards.
     let mut pending = Vec::new();
     for (start, (chunk, out)) in (0..)
@@ -326,7 +340,7 @@ fn batch_occluded<L: Lanes, C: Counters>(
             *o = hit;
         }
         match packet::octant(chunk).filter(|_| accel.params.packets) {
-            Some(oct) => packet::occluded::<L, PACKET_VECTORS, C>(
+            Some(oct) => packet::occluded::<L, K, C>(
                 &accel.layout,
                 g,
                 chunk,
@@ -405,31 +419,32 @@ fn one_occluded<L: Lanes, C: Counters>(accel: &PacketAccel, ray: &Ray, counters:
     )
 }
 
-/// Instantiates the kernels for one instruction set inside `#[target_feature]` functions.
+/// Instantiates the kernels for one instruction set (its lanes and vectors per packet),
+/// inside functions with `$attr` (the `#[target_feature]` that lets the intrinsics inline).
 macro_rules! entry_points {
-    ($module:ident, $lanes:ty, $feature:literal) => {
-        #[cfg(target_arch = "x86_64")]
+    ($(#[$module_attr:meta])* $module:ident, $lanes:ty, $vectors:expr $(, #[$attr:meta])*) => {
+        $(#[$module_attr])*
         mod $module {
             use super::*;
-            #[target_feature(enable = $feature)]
+            $(#[$attr])*
             pub(super) fn batch_closest<C: Counters>(
                 a: &PacketAccel,
                 r: &[Ray],
                 h: &mut [Option<Hit>],
                 c: &mut C,
             ) {
-                super::batch_closest::<$lanes, C>(a, r, h, c);
+                super::batch_closest::<$lanes, { $vectors }, C>(a, r, h, c);
             }
-            #[target_feature(enable = $feature)]
+            $(#[$attr])*
             pub(super) fn batch_occluded<C: Counters>(
                 a: &PacketAccel,
                 r: &[Ray],
                 o: &mut [bool],
                 c: &mut C,
             ) {
-                super::batch_occluded::<$lanes, C>(a, r, o, c);
+                super::batch_occluded::<$lanes, { $vectors }, C>(a, r, o, c);
             }
-            #[target_feature(enable = $feature)]
+            $(#[$attr])*
             pub(super) fn one_closest<C: Counters>(
                 a: &PacketAccel,
                 r: &Ray,
@@ -437,7 +452,7 @@ macro_rules! entry_points {
             ) -> Option<Hit> {
                 super::one_closest::<$lanes, C>(a, r, c)
             }
-            #[target_feature(enable = $feature)]
+            $(#[$attr])*
             pub(super) fn one_occluded<C: Counters>(a: &PacketAccel, r: &Ray, c: &mut C) -> bool {
                 super::one_occluded::<$lanes, C>(a, r, c)
             }
@@ -445,9 +460,28 @@ macro_rules! entry_points {
     };
 }
 
-entry_points!(avx512, simd::Avx512, "avx512f,avx2");
-entry_points!(avx2, simd::Avx2, "avx2");
-entry_points!(sse41, simd::Sse41, "sse4.1");
+entry_points!(
+    #[cfg(target_arch = "x86_64")]
+    avx512,
+    simd::Avx512,
+    AVX512_VECTORS,
+    #[target_feature(enable = "avx512f,avx2")]
+);
+entry_points!(
+    #[cfg(target_arch = "x86_64")]
+    avx2,
+    simd::Avx2,
+    AVX2_VECTORS,
+    #[target_feature(enable = "avx2")]
+);
+entry_points!(
+    #[cfg(target_arch = "x86_64")]
+    sse41,
+    simd::Sse41,
+    NARROW_VECTORS,
+    #[target_feature(enable = "sse4.1")]
+);
+entry_points!(portable, Portable, NARROW_VECTORS);
 
 /// Calls `$f` of the module for the accelerator's instruction set.
 macro_rules! dispatch {
@@ -463,7 +497,7 @@ macro_rules! dispatch {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: `build_with` keeps `Sse41` only when `is_available` detected SSE4.1.
             Isa::Sse41 => unsafe { sse41::$f($self, $($arg),*) },
-            _ => $f::<Portable, _>($self, $($arg),*),
+            _ => portable::$f($self, $($arg),*),
         }
     };
 }

@@ -1,4 +1,4 @@
-//! Coherent packets through the BVH8: `K` vectors of `W` rays (16 rays with AVX2) share
+//! Coherent packets through the BVH8: `K` vectors of `W` rays (64 rays with AVX2) share
 //! one traversal of the same wide tree the single rays walk.
 //!
 //! At each node, one interval-arithmetic slab test of the whole packet against all eight
@@ -292,10 +292,13 @@ pub(crate) type Entry<const K: usize> = (u32, f32, [u32; K]);
 /// A packet traversal stack (allocated once per batch).
 pub(crate) type PacketStack<const K: usize> = [Entry<K>; STACK];
 
-/// Per-lane state of a closest-hit packet (`32` covers `K * W` for every instruction set).
+/// Most rays in a packet (`K * W` for every instruction set).
+pub(crate) const MAX_PACKET: usize = 64;
+
+/// Per-lane state of a closest-hit packet.
 struct Lanestate {
-    t_best: [f32; 32],
-    limit: [f32; 32],
+    t_best: [f32; MAX_PACKET],
+    limit: [f32; MAX_PACKET],
 }
 
 impl Lanestate {
@@ -323,13 +326,14 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
     scratch: &mut Stack,
     counters: &mut C,
 ) {
+    const { assert!(K * L::W <= MAX_PACKET) };
     if layout.wide.is_empty() {
         return;
     }
     let n = rays.len();
     let mut st = Lanestate {
-        t_best: [0.0; 32],
-        limit: [0.0; 32],
+        t_best: [0.0; MAX_PACKET],
+        limit: [0.0; MAX_PACKET],
     };
     for i in 0..n {
         st.update(i, &rays[i], &best[i]);
@@ -540,7 +544,7 @@ fn packet_leaf<L: Lanes, const K: usize, C: Counters>(
 pub(crate) type AnyEntry<const K: usize> = (u32, [u32; K]);
 
 /// An any-hit packet traversal stack, allocated once per batch (made per packet, its 5.5 KB
-/// were zeroed for every 16 rays).
+/// were zeroed for every packet).
 pub(crate) type AnyStack<const K: usize> = [AnyEntry<K>; STACK];
 
 /// Any-hit results of a coherent packet: `blocked[i]` arrives true for rays already

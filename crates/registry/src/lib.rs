@@ -261,7 +261,7 @@ const BVH: &str =
 const OBVHS: &str = "obvhs crate: PLOC + reinsertion, compressed wide CWBVH8, obvhs traversal";
 const GRID: &str = "uniform grid walked by 3D-DDA (ray marching), mailboxing";
 const GRID2: &str = "two-level grid: crowded cells hold their own grid";
-const PACKET: &str = "SIMD over a BVH8 collapsed by SAH, leaves of 4-triangle blocks: 16-ray packets for coherent rays, interleaved single rays otherwise (AVX2, SSE4.1 or portable, picked at run time; RAYBENCH_ISA overrides)";
+const PACKET: &str = "SIMD over a BVH8 collapsed by SAH, leaves of 4-triangle blocks: 64-ray packets for coherent rays, interleaved single rays otherwise (AVX2, SSE4.1 or portable, picked at run time; RAYBENCH_ISA overrides)";
 
 /// Every backend, the oracle (naive) first.
 ///
@@ -420,7 +420,7 @@ const EMBREE: &str =
 const EMBREE_PACKET: &str = "peer: Intel Embree 3, rtcIntersect16 on 16-ray packets, Embree's own triangle test (not exact)";
 
 const PACKET_SSE41: &str = "packet forced to SSE4.1 (4 lanes, 8-ray packets)";
-const PACKET_AVX512: &str = "packet with AVX-512F packets (16 lanes, 32-ray packets; AVX2 for single rays), a measured extra";
+const PACKET_AVX512: &str = "packet with AVX-512F packets (16 lanes, 64-ray packets; AVX2 for single rays), a measured extra";
 const PACKET_PORTABLE: &str = "packet forced to portable code (4 plain f32 lanes, no intrinsics)";
 
 /// The instruction set the packet backend picks on this CPU and its lanes, for the
