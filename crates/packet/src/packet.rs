@@ -18,7 +18,7 @@
 use crate::layout::{EMPTY_CHILD, LEAF_BIT, Layout, LeafRef, WIDE, WideNode};
 use crate::simd::{Lanes, lanes_below};
 use crate::single::{
-    self, BitIter, FAR_SCALE, STACK, Stack, block_closest, prim_hit, scalar_lanes,
+    self, BitIter, FAR_SCALE, HitValues, STACK, Stack, block_closest, scalar_lanes,
 };
 use crate::tri::{RayLanes, SplatRay, rays_vs_triangle};
 use raybench_geometry::{Counters, Geometry, PrimHit, Ray, cull_bound, keep_closer};
@@ -559,11 +559,9 @@ fn packet_leaf<L: Lanes, const K: usize, C: Counters>(
                 let base = k * L::W;
                 let r = rays_vs_triangle(&tri, lanes, L::load(&st.t_best[base..]), masks[k]);
                 if r.hit != 0 {
-                    let mut t = [0.0f32; 16];
-                    L::store(r.t, &mut t);
+                    let hits = HitValues::new(&r);
                     for lane in BitIter(r.hit) {
-                        let i = base + lane;
-                        keep_closer(&mut best[i], id, prim_hit::<L>(&r, lane, t[lane]));
+                        keep_closer(&mut best[base + lane], id, hits.get(lane));
                     }
                 }
                 for lane in BitIter(r.zero) {

@@ -141,26 +141,44 @@ pub(crate) fn take_hits<L: Lanes>(
     if r.hit == 0 {
         return;
     }
-    let mut t = [0.0f32; 16];
-    L::store(r.t, &mut t);
+    let hits = HitValues::new(r);
     for lane in BitIter(r.hit) {
-        let id = block.id[lane];
-        keep_closer(best, id, prim_hit::<L>(r, lane, t[lane]));
+        keep_closer(best, block.id[lane], hits.get(lane));
     }
 }
 
-/// The scalar routine's `PrimHit` from lane `lane`: `u = V / det`, `v = W / det`.
-#[inline(always)]
-pub(crate) fn prim_hit<L: Lanes>(r: &TriLanes<L>, lane: usize, t: f32) -> PrimHit {
-    let (mut v, mut w, mut det) = ([0.0f32; 16], [0.0f32; 16], [0.0f32; 16]);
-    L::store(r.v, &mut v);
-    L::store(r.w, &mut w);
-    L::store(r.det, &mut det);
-    PrimHit {
-        t,
-        sub: 0,
-        u: v[lane] / det[lane],
-        v: w[lane] / det[lane],
+/// The lanes of a triangle test as the scalar routine's `PrimHit`s: `t`, and `u = V / det`,
+/// `v = W / det` divided once for all lanes (IEEE division, lane by lane the scalar
+/// quotient; dividing per hit lane stored the three vectors again for every lane).
+pub(crate) struct HitValues {
+    t: [f32; 16],
+    u: [f32; 16],
+    v: [f32; 16],
+}
+
+impl HitValues {
+    #[inline(always)]
+    pub fn new<L: Lanes>(r: &TriLanes<L>) -> Self {
+        let mut out = Self {
+            t: [0.0; 16],
+            u: [0.0; 16],
+            v: [0.0; 16],
+        };
+        L::store(r.t, &mut out.t);
+        L::store(L::div(r.v, r.det), &mut out.u);
+        L::store(L::div(r.w, r.det), &mut out.v);
+        out
+    }
+
+    /// The hit of lane `lane`.
+    #[inline(always)]
+    pub fn get(&self, lane: usize) -> PrimHit {
+        PrimHit {
+            t: self.t[lane],
+            sub: 0,
+            u: self.u[lane],
+            v: self.v[lane],
+        }
     }
 }
 
