@@ -11,8 +11,9 @@
 //!   Coherent Ray Tracing", 2001): consecutive rays of a batch that share an octant walk the
 //!   BVH8 together, 64 at a time with AVX2 (eight vectors of eight lanes) and AVX-512 (four
 //!   of sixteen), 8 with SSE4.1: one interval (frustum) test of the packet against all
-//!   eight children, per-lane slab tests of the children it keeps, nearest child first,
-//!   each lane clipped to its own best `t`; leaves test one triangle against all lanes.
+//!   eight children, which rejects those no lane enters and accepts those every lane
+//!   enters, per-lane slab tests of the others it keeps, nearest child first, each lane
+//!   clipped to its own best `t`; leaves test one triangle against all lanes.
 //! - **Single rays** (`intersect`, `occluded`, and batches whose rays share no octant): one
 //!   SIMD test of eight children, nearest first, children prefetched, one SIMD test per
 //!   block of four triangles; a batch's incoherent rays go two at a time (four when the
