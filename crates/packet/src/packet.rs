@@ -20,8 +20,8 @@ use crate::simd::{Lanes, lanes_below};
 use crate::single::{
     self, BitIter, FAR_SCALE, HitValues, STACK, Stack, block_closest, scalar_lanes,
 };
-use crate::tri::{RayLanes, SplatRay, rays_vs_triangle};
-use raybench_geometry::{Counters, Geometry, PrimHit, Ray, cull_bound, keep_closer};
+use crate::tri::{RayLanes, SplatRay, TriLanes, rays_vs_triangle};
+use raybench_geometry::{CULL_SLACK, Counters, Geometry, PrimHit, Ray, cull_bound, keep_closer};
 
 /// Lanes at or below this count leave the packet at an interior node and finish its
 /// subtree one ray at a time (the hybrid of Benthin, Boulos, Lacewell and Wald, "Combining
@@ -337,6 +337,21 @@ impl Lanestate {
         self.t_best[i] = best.map_or(ray.t_max, |(_, h)| h.t);
         self.limit[i] = cull_bound(self.t_best[i]);
     }
+
+    /// [`Self::update`] of the hit lanes of a triangle test of the vector at `base`, in
+    /// vectors: a lane hits only at or before its best `t`, and a tie keeps the same `t`,
+    /// so each hit lane's best `t` is now its `t` (and its limit `cull_bound` of it, the
+    /// same operations: `|t|` as `max(t, 0 - t)`, which gives `+0` for `-0`).
+    #[inline(always)]
+    fn take_hits<L: Lanes>(&mut self, base: usize, r: &TriLanes<L>) {
+        let hit = L::mask(r.hit);
+        let t_best = L::select(hit, r.t, L::load(&self.t_best[base..]));
+        L::store(t_best, &mut self.t_best[base..]);
+        let abs = L::max(r.t, L::sub(L::splat(0.0), r.t));
+        let limit = L::add(r.t, L::mul(abs, L::splat(CULL_SLACK)));
+        let limit = L::select(hit, limit, L::load(&self.limit[base..]));
+        L::store(limit, &mut self.limit[base..]);
+    }
 }
 
 /// Closest hits of a coherent packet of at most `K * W` rays with octant `oct`: `best[i]`
@@ -563,11 +578,10 @@ fn packet_leaf<L: Lanes, const K: usize, C: Counters>(
                     for lane in BitIter(r.hit) {
                         keep_closer(&mut best[base + lane], id, hits.get(lane));
                     }
+                    st.take_hits(base, &r);
                 }
                 for lane in BitIter(r.zero) {
                     g.test_closest(id, &rays[base + lane], &mut best[base + lane]);
-                }
-                for lane in BitIter(r.hit | r.zero) {
                     st.update(base + lane, &rays[base + lane], &best[base + lane]);
                 }
             }

@@ -157,6 +157,7 @@ pub(crate) struct HitValues {
 }
 
 impl HitValues {
+    /// The values of every lane of `r` (those of lanes that did not hit are meaningless).
     #[inline(always)]
     pub fn new<L: Lanes>(r: &TriLanes<L>) -> Self {
         let mut out = Self {
