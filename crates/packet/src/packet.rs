@@ -8,8 +8,9 @@
 //! in between get the per-lane SIMD slab tests, which give each the mask of lanes entering
 //! it. Children are visited nearest first by the frustum's entry bound, each lane clips to
 //! its own best `t`, and leaves test one triangle against all active lanes at once (or,
-//! when few lanes are left, each lane against a block of four triangles). A packet whose active lanes drop
-//! to [`SPLIT_LANES`] at an interior node finishes that subtree ray by ray.
+//! when few lanes are left, each lane against a block of four triangles). A packet whose
+//! active lanes drop to [`SPLIT_LANES`] at an interior node finishes that subtree ray by
+//! ray.
 //!
 //! A packet needs one octant (the same direction signs in every lane, so each axis has one
 //! near plane) and finite rays; batches are cut into packets and any packet that is not
@@ -113,6 +114,7 @@ impl<S: Lanes> Frustum<S> {
         let mut t1 = limit;
         let mut t0_hi = self.t_min_hi;
         let mut t1_lo = limit_lo;
+        // All lanes set (`t_min` is never NaN); cleared where a corner is NaN.
         let mut ordered_all = S::eq(t0_hi, t0_hi);
         let scale = S::splat(FAR_SCALE);
         for axis in 0..3 {
@@ -631,10 +633,14 @@ pub(crate) fn occluded<L: Lanes, const K: usize, C: Counters>(
     let mut tri_lanes: Option<[RayLanes<L>; K]> = None;
     let negative = [oct & 1 != 0, oct & 2 != 0, oct & 4 != 0];
     let frustum = Frustum::<L::Single>::new(&chunks, negative);
-    let packet_limit = rays.iter().fold(f32::NEG_INFINITY, |a, r| a.max(r.t_max));
-    let packet_limit = <L::Single as Lanes>::splat(packet_limit);
-    let packet_limit_lo = rays.iter().fold(f32::INFINITY, |a, r| a.min(r.t_max));
-    let packet_limit_lo = <L::Single as Lanes>::splat(packet_limit_lo);
+    // The largest and the smallest `t_max` of the packet.
+    let (lo, hi) = rays
+        .iter()
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), r| {
+            (lo.min(r.t_max), hi.max(r.t_max))
+        });
+    let packet_limit = <L::Single as Lanes>::splat(hi);
+    let packet_limit_lo = <L::Single as Lanes>::splat(lo);
     stack[0] = (0, open);
     let mut sp = 1;
     while sp > 0 && open.iter().any(|&m| m != 0) {
@@ -813,23 +819,14 @@ mod tests {
         for packet in 0..4000 {
             let n = 1 + packet % (K * Portable::W);
             let base = Vec3::new(rng.coord(4.0), rng.coord(4.0), rng.coord(4.0));
-            let signs = Vec3::new(
+            let mut sign = || {
                 if rng.next().is_multiple_of(2) {
                     1.0
                 } else {
                     -1.0
-                },
-                if rng.next().is_multiple_of(2) {
-                    1.0
-                } else {
-                    -1.0
-                },
-                if rng.next().is_multiple_of(2) {
-                    1.0
-                } else {
-                    -1.0
-                },
-            );
+                }
+            };
+            let signs = Vec3::new(sign(), sign(), sign());
             let flat_axis = packet % 5;
             let rays: Vec<Ray> = (0..n)
                 .map(|_| {
