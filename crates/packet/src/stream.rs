@@ -90,19 +90,21 @@ struct Walker<'s, L: Lanes> {
     splat: SplatRay<L::Narrow>,
     best: Option<(u32, PrimHit)>,
     limit: f32,
+    /// The node to visit next, when the last step chose one (see [`single::descend`]).
+    next: Option<u32>,
     stack: NodeStack<'s>,
 }
 
 impl<'s, L: Lanes> Walker<'s, L> {
     #[inline(always)]
-    fn start(ray: usize, r: &Ray, best: Option<(u32, PrimHit)>, mut stack: NodeStack<'s>) -> Self {
-        stack.push(0, f32::NEG_INFINITY);
+    fn start(ray: usize, r: &Ray, best: Option<(u32, PrimHit)>, stack: NodeStack<'s>) -> Self {
         Self {
             ray,
             wray: WideRay::new(r),
             splat: SplatRay::new(r),
             best,
             limit: cull_bound(best.map_or(r.t_max, |(_, h)| h.t)),
+            next: Some(0),
             stack,
         }
     }
@@ -117,7 +119,7 @@ impl<'s, L: Lanes> Walker<'s, L> {
         r: &Ray,
         counters: &mut C,
     ) -> bool {
-        let Some((index, _)) = self.stack.pop_within(self.limit) else {
+        let Some(index) = single::next_node(&mut self.next, &mut self.stack, self.limit) else {
             return false;
         };
         counters.add_visits(1);
@@ -133,7 +135,7 @@ impl<'s, L: Lanes> Walker<'s, L> {
             );
             self.limit = cull_bound(self.best.map_or(r.t_max, |(_, h)| h.t));
         } else {
-            single::push_children(layout, &self.wray, index, self.limit, &mut self.stack);
+            self.next = single::descend(layout, &self.wray, index, self.limit, &mut self.stack);
         }
         true
     }
