@@ -282,13 +282,10 @@ fn split<L: Lanes, const K: usize>(rays: &[Ray]) -> [(SlabLanes<L>, L::V, u32); 
 #[inline(always)]
 fn triangle_lanes<L: Lanes, const K: usize>(rays: &[Ray]) -> [RayLanes<L>; K] {
     let n = rays.len();
-    let mut out = [RayLanes::new(&rays[..1]); K];
+    let mut out = [RayLanes::new(&rays[..n.min(L::W)]); K];
     for (k, lanes) in out.iter_mut().enumerate().skip(1) {
         let lo = (k * L::W).min(n - 1);
         *lanes = RayLanes::new(&rays[lo..n.min(lo + L::W).max(lo + 1)]);
-    }
-    if n > 1 {
-        out[0] = RayLanes::new(&rays[..n.min(L::W)]);
     }
     out
 }
