@@ -15,10 +15,11 @@
 //!   enters, per-lane slab tests of the others it keeps, nearest child first, each lane
 //!   clipped to its own best `t`; leaves test one triangle against all lanes.
 //! - **Single rays** (`intersect`, `occluded`, and batches whose rays share no octant): one
-//!   SIMD test of eight children, nearest first, children prefetched, one SIMD test per
-//!   block of four triangles; a batch's incoherent rays go two at a time (four when the
-//!   BVH8 exceeds the last-level cache), interleaved step by step so that their memory
-//!   waits overlap (`stream.rs`, [`Interleave`]).
+//!   SIMD test of eight children, nearest first (the nearest visited next without the
+//!   stack), children prefetched, one SIMD test per block of four triangles; a batch's
+//!   incoherent rays go two at a time (four when the BVH8 exceeds the last-level cache),
+//!   interleaved step by step so that their memory waits overlap (`stream.rs`,
+//!   [`Interleave`]).
 //! - **Instruction sets chosen at run time** ([`Isa::detect`]): AVX2, else SSE4.1, else
 //!   portable code (four plain `f32` lanes, the fallback on any target). The same generic
 //!   kernels are instantiated once per instruction set inside a `#[target_feature]`

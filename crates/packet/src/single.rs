@@ -460,3 +460,62 @@ pub(crate) fn leaf_or_push<L: Lanes, C: Counters>(
     push_children_any(layout, wray, index, t_max, stack);
     false
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::layout::WideNode;
+    use crate::simd::Portable;
+    use raybench_geometry::Vec3;
+
+    /// `descend` hands back the nearest child the ray enters and leaves the others on the
+    /// stack to be popped near to far, without the children it misses or enters beyond
+    /// the limit.
+    #[test]
+    fn descend_visits_the_nearest_child_next_and_stacks_the_others() {
+        // Child `slot` is a box from x = near[slot] to near[slot] + 0.5 on the ray's line
+        // (x), except slot 2, which lies off it.
+        let near = [6.0, 2.0, 9.0, 4.0, 1.0, 8.0, 3.0, 7.0];
+        let mut root = WideNode {
+            min: [[0.0; WIDE]; 3],
+            max: [[0.0; WIDE]; 3],
+            child: [0; WIDE],
+        };
+        for (slot, &x) in near.iter().enumerate() {
+            let y = if slot == 2 { 5.0 } else { 0.0 };
+            root.min[0][slot] = x;
+            root.max[0][slot] = x + 0.5;
+            root.min[1][slot] = y - 1.0;
+            root.max[1][slot] = y + 1.0;
+            root.min[2][slot] = -1.0;
+            root.max[2][slot] = 1.0;
+            // Child references are indices of (empty) wide nodes 1 to 8.
+            root.child[slot] = slot as u32 + 1;
+        }
+        let mut layout = Layout::default();
+        layout.wide = vec![root; WIDE + 1];
+        let ray = Ray::new(Vec3::ZERO, Vec3::new(1.0, 0.001, 0.002));
+        let mut storage = [(0, 0.0); STACK];
+        let mut stack = NodeStack::new(&mut storage);
+        // Entered at about x: slot 5 (x = 8) lies beyond the limit.
+        let next = descend(&layout, &WideRay::<Portable>::new(&ray), 0, 7.5, &mut stack);
+        assert_eq!(next, Some(4 + 1));
+        let mut popped = Vec::new();
+        while let Some((child, entry)) = stack.pop_within(f32::INFINITY) {
+            popped.push(child - 1);
+            assert!((entry - near[child as usize - 1]).abs() < 0.01, "{entry}");
+        }
+        assert_eq!(popped, [1, 6, 3, 0, 7]);
+        // A ray that enters nothing gets nothing.
+        let away = Ray::new(Vec3::ZERO, Vec3::new(-1.0, 0.001, 0.002));
+        let next = descend(
+            &layout,
+            &WideRay::<Portable>::new(&away),
+            0,
+            100.0,
+            &mut stack,
+        );
+        assert_eq!(next, None);
+        assert!(stack.pop_within(f32::INFINITY).is_none());
+    }
+}
