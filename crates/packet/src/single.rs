@@ -492,8 +492,10 @@ mod tests {
             // Child references are indices of (empty) wide nodes 1 to 8.
             root.child[slot] = slot as u32 + 1;
         }
-        let mut layout = Layout::default();
-        layout.wide = vec![root; WIDE + 1];
+        let layout = Layout {
+            wide: vec![root; WIDE + 1],
+            ..Layout::default()
+        };
         let ray = Ray::new(Vec3::ZERO, Vec3::new(1.0, 0.001, 0.002));
         let mut storage = [(0, 0.0); STACK];
         let mut stack = NodeStack::new(&mut storage);
