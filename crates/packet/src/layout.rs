@@ -20,6 +20,17 @@
 //! parents instead wrote a large mesh's layout three or four times). Both give the serial
 //! result bit for bit, on any number of threads.
 //!
+//! **Slot order.** A wide node's occupied slots come first, ordered for any-hit queries,
+//! which visit them from the highest slot down: by the probability that a ray entering the
+//! child's box is blocked inside it, per unit of the child's expected cost in the
+//! collapse's cost model (the shadow-ray traversal order of Ize and Hansen, "RTSAH
+//! Traversal Order for Occlusion Rays", EG 2011). A primitive blocks a random line through
+//! a box with the probability of its surface area over the box's (twice its area for a
+//! triangle, seen from both sides), and the children of a node are taken as independent.
+//! Closest-hit traversals sort the children by distance and need no order; the subtrees
+//! are still written in the BVH2's depth-first order, so the memory layout does not depend
+//! on it.
+//!
 //! **A leaf** is one or more [`TriBlock`]s: four triangles' nine coordinates each as four
 //! lanes, then their primitive ids (160 bytes, Embree's `Triangle4` idea), so a leaf is one
 //! run of cache lines and the ids needed to report a hit come with it. Lanes beyond the
@@ -76,7 +87,8 @@ pub(crate) struct WideNode {
     /// `max[axis][child]`.
     pub max: [[f32; WIDE]; 3],
     /// A wide node index, a leaf reference (`LEAF_BIT`, see [`LeafRef`]), or
-    /// [`EMPTY_CHILD`]. Occupied slots come first.
+    /// [`EMPTY_CHILD`]. Occupied slots come first, in ascending any-hit order (the module's
+    /// "slot order").
     pub child: [u32; WIDE],
 }
 
@@ -88,6 +100,19 @@ impl WideNode {
         max: [[f32::NEG_INFINITY; WIDE]; 3],
         child: [EMPTY_CHILD; WIDE],
     };
+
+    /// The node with slot `order[k]` moved to slot `k` (the slots past `order` empty).
+    fn permuted(&self, order: &[usize]) -> Self {
+        let mut node = Self::EMPTY;
+        for (slot, &i) in order.iter().enumerate() {
+            for axis in 0..3 {
+                node.min[axis][slot] = self.min[axis][i];
+                node.max[axis][slot] = self.max[axis][i];
+            }
+            node.child[slot] = self.child[i];
+        }
+        node
+    }
 }
 
 /// Four triangles: `v[3 * vertex + axis][lane]`, then the primitive id of each lane
@@ -209,6 +234,72 @@ impl Size {
             wide: self.wide + other.wide,
             blocks: self.blocks + other.blocks,
         }
+    }
+}
+
+/// What the any-hit slot order knows of a written subtree: the probability that a random
+/// line through its box is blocked inside it, and the expected cost of an any-hit query of
+/// a line that enters the box, in the collapse's cost model ([`C_NODE`] per wide node,
+/// [`C_BLOCK`] per block; Ize and Hansen's RTSAH): a child is visited when the line enters
+/// its box (its share of the box's surface area) and no child visited before blocked it.
+#[derive(Clone, Copy, Debug, Default)]
+struct Occlusion {
+    blocked: f32,
+    cost: f32,
+}
+
+impl Occlusion {
+    /// Of a node with box `bounds` whose slots have boxes `boxes` and occlusions `slots`,
+    /// visited in the order `order` lists them backwards (see [`any_hit_order`]).
+    fn of_node(bounds: Aabb, boxes: &[Aabb], slots: &[Occlusion], order: &[usize]) -> Self {
+        let area = bounds.surface_area();
+        let mut open = 1.0;
+        let mut cost = C_NODE;
+        for &i in order.iter().rev() {
+            let share = line_share(boxes[i].surface_area(), area);
+            cost += open * share * slots[i].cost;
+            open *= 1.0 - slots[i].blocked * share;
+        }
+        Self {
+            blocked: 1.0 - open,
+            cost,
+        }
+    }
+
+    /// The any-hit order key: blocked per unit of cost (0 where that is not a number).
+    fn priority(&self) -> f32 {
+        let p = self.blocked / self.cost;
+        if p.is_finite() { p } else { 0.0 }
+    }
+}
+
+/// The share of the lines through a box of surface area `outer` that also pass through a
+/// convex body of surface area `inner` inside it (Cauchy-Crofton), at most 1; 1 for a box
+/// without area.
+fn line_share(inner: f32, outer: f32) -> f32 {
+    if outer > 0.0 {
+        (inner / outer).min(1.0)
+    } else {
+        1.0
+    }
+}
+
+/// The any-hit order of slots with occlusions `slots`: `order[k]` is the slot to move to
+/// slot `k`, in ascending priority (equal priorities keep their order), so that traversals
+/// that visit the highest slot first visit the highest priority first.
+fn any_hit_order(slots: &[Occlusion]) -> [usize; WIDE] {
+    let mut order: [usize; WIDE] = std::array::from_fn(|i| i);
+    order[..slots.len()].sort_by(|&a, &b| slots[a].priority().total_cmp(&slots[b].priority()));
+    order
+}
+
+/// The surface of `shape` that blocks lines: a triangle's area twice (both sides), a
+/// sphere's area, half the box's for the kinds whose area is not known.
+fn blocking_surface(shape: &Shape) -> f32 {
+    match (shape, shape.area()) {
+        (Shape::Triangle(_), Some(a)) => 2.0 * a as f32,
+        (_, Some(a)) => a as f32,
+        (_, None) => 0.5 * shape.bounds().map_or(0.0, |b| b.surface_area()),
     }
 }
 
@@ -652,27 +743,31 @@ struct Builder<'a> {
 
 impl Builder<'_> {
     /// Writes to `out` the wide node standing for BVH2 node `n` and its subtree, depth
-    /// first (the node, then each slot's subtree or leaf blocks in slot order); returns its
-    /// index. A node over at least [`PARALLEL_PRIMS`] primitives writes its slots' targets
-    /// in parallel, each into the part of the arrays its planned size marks out: the same
-    /// arrays as one pass would write.
-    fn wide_node(&self, n: usize, out: &mut Out) -> u32 {
+    /// first (the node, then each slot's subtree or leaf blocks in the BVH2's depth-first
+    /// order); returns its index and occlusion. Its slots are then put in any-hit order
+    /// (the module's "slot order"). A node over at least [`PARALLEL_PRIMS`] primitives
+    /// writes its slots' targets in parallel, each into the part of the arrays its planned
+    /// size marks out: the same arrays as one pass would write.
+    fn wide_node(&self, n: usize, out: &mut Out) -> (u32, Occlusion) {
         let slots = wide_slots(self.nodes, self.plans, 0, n);
         let slots = slots.as_slice();
         let index = out.push_wide(WideNode::EMPTY);
         out.counts.slots += slots.len();
         let mut wide = WideNode::EMPTY;
+        let mut boxes = [Aabb::EMPTY; WIDE];
         for (slot, &s) in slots.iter().enumerate() {
             let b = self.nodes[s].aabb();
+            boxes[slot] = b;
             for axis in 0..3 {
                 wide.min[axis][slot] = b.min[axis];
                 wide.max[axis][slot] = b.max[axis];
             }
         }
+        let mut occlusion = [Occlusion::default(); WIDE];
         if self.plans[n].count >= PARALLEL_PRIMS {
             let sizes: Vec<Size> = slots.iter().map(|&s| self.plans[s].size).collect();
             let mut parts = out.split(&sizes);
-            let children: Vec<u32> = parts
+            let children: Vec<(u32, Occlusion)> = parts
                 .par_iter_mut()
                 .zip(slots)
                 .map(|(part, &s)| {
@@ -684,19 +779,25 @@ impl Builder<'_> {
             let counts = parts.iter().fold(Counts::default(), |c, p| c.add(p.counts));
             let size = sizes.iter().fold(Size::default(), |a, &b| a.add(b));
             out.skip(size, counts);
-            wide.child[..slots.len()].copy_from_slice(&children);
+            for (slot, &(child, o)) in children.iter().enumerate() {
+                (wide.child[slot], occlusion[slot]) = (child, o);
+            }
         } else {
             for (slot, &s) in slots.iter().enumerate() {
-                wide.child[slot] = self.child(s, out);
+                (wide.child[slot], occlusion[slot]) = self.child(s, out);
             }
         }
-        out.set_wide(index, wide);
-        index as u32
+        let occlusion = &occlusion[..slots.len()];
+        let order = &any_hit_order(occlusion)[..slots.len()];
+        out.set_wide(index, wide.permuted(order));
+        let bounds = self.nodes[n].aabb();
+        let node = Occlusion::of_node(bounds, &boxes[..slots.len()], occlusion, order);
+        (index as u32, node)
     }
 
     /// Writes to `out` what the slot holding BVH2 node `s` refers to (a leaf or a wide
-    /// node); returns the reference.
-    fn child(&self, s: usize, out: &mut Out) -> u32 {
+    /// node); returns the reference and its occlusion.
+    fn child(&self, s: usize, out: &mut Out) -> (u32, Occlusion) {
         let child = &self.nodes[s];
         let plan = &self.plans[s];
         if is_leaf_slot(child, plan) {
@@ -712,13 +813,14 @@ impl Builder<'_> {
     }
 
     /// A reference to a leaf of the primitives at leaf-order positions `first..first +
-    /// count`, all inside `bounds`, written to `out`; more than eight blocks' worth become
-    /// a wide node of leaves with the same box.
-    fn leaf(&self, first: usize, count: usize, bounds: Aabb, out: &mut Out) -> u32 {
+    /// count`, all inside `bounds`, written to `out`, and its occlusion; more than eight
+    /// blocks' worth become a wide node of leaves with the same box.
+    fn leaf(&self, first: usize, count: usize, bounds: Aabb, out: &mut Out) -> (u32, Occlusion) {
         if count > MAX_REF_BLOCKS * BLOCK {
             let index = out.push_wide(WideNode::EMPTY);
             let per = count.div_ceil(WIDE);
             let mut wide = WideNode::EMPTY;
+            let mut occlusion = [Occlusion::default(); WIDE];
             let mut slot = 0;
             let mut start = first;
             while start < first + count {
@@ -727,21 +829,29 @@ impl Builder<'_> {
                     wide.min[axis][slot] = bounds.min[axis];
                     wide.max[axis][slot] = bounds.max[axis];
                 }
-                wide.child[slot] = self.leaf(start, n, bounds, out);
+                (wide.child[slot], occlusion[slot]) = self.leaf(start, n, bounds, out);
                 slot += 1;
                 start += n;
             }
             out.counts.slots += slot;
-            out.set_wide(index, wide);
-            return index as u32;
+            let occlusion = &occlusion[..slot];
+            let order = &any_hit_order(occlusion)[..slot];
+            out.set_wide(index, wide.permuted(order));
+            let node = Occlusion::of_node(bounds, &[bounds; WIDE][..slot], occlusion, order);
+            return (index as u32, node);
         }
         let first_block = out.block_base + out.blocks_len;
         let mut mixed = false;
+        // The primitives block a line through the box independently.
+        let area = bounds.surface_area();
+        let mut open = 1.0;
         for chunk in self.ids[first..first + count].chunks(BLOCK) {
             let mut block = TriBlock::EMPTY;
             for (lane, &id) in chunk.iter().enumerate() {
                 block.id[lane] = id;
-                match self.geometry.shape(id) {
+                let shape = self.geometry.shape(id);
+                open *= 1.0 - line_share(blocking_surface(shape), area);
+                match shape {
                     Shape::Triangle(t) => {
                         for (k, v) in t.v.iter().enumerate() {
                             block.v[3 * k][lane] = v.x;
@@ -756,12 +866,17 @@ impl Builder<'_> {
         }
         out.counts.leaves += 1;
         out.counts.leaf_prims += count;
-        LeafRef {
+        let blocks = count.div_ceil(BLOCK);
+        let leaf = LeafRef {
             first: first_block,
-            blocks: count.div_ceil(BLOCK),
+            blocks,
             mixed,
-        }
-        .encode()
+        };
+        let occlusion = Occlusion {
+            blocked: 1.0 - open,
+            cost: C_BLOCK * blocks as f32,
+        };
+        (leaf.encode(), occlusion)
     }
 }
 
@@ -805,6 +920,55 @@ mod tests {
                 assert!(q.max_depth as usize <= bvh.depth(), "{q:?}");
             }
         }
+    }
+
+    /// A wall and, in front of it, a cloud of small triangles whose boxes the ray passes
+    /// through without touching a triangle: the wall, likeliest to block per unit of
+    /// cost, takes the highest occupied slot of the root, so an any-hit ray through the
+    /// cloud to the wall is blocked on its first leaf. In depth-first order (the wall on
+    /// the low side of the split, so in slot 0) the ray would walk the cloud first.
+    #[test]
+    fn any_hit_order_puts_the_likeliest_blocker_first() {
+        use raybench_geometry::{Accel, Ray, RayCounters, Triangle};
+        let mut shapes = vec![Shape::Triangle(Triangle::new(
+            Vec3::new(-10.0, -100.0, -100.0),
+            Vec3::new(-10.0, 100.0, -100.0),
+            Vec3::new(-10.0, 0.0, 100.0),
+        ))];
+        // Thin triangles at x in [-9, -1], each in a plane y + z = d, |d| in [0.05, 0.25]:
+        // their boxes all hold the axis, the triangles never meet it.
+        let mut seed = 7u32;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            f64::from(seed) as f32 / u32::MAX as f32
+        };
+        for i in 0..400 {
+            let x = -9.0 + 8.0 * next();
+            let d = if i % 2 == 0 { 1.0 } else { -1.0 } * (0.05 + 0.2 * next());
+            shapes.push(Shape::Triangle(Triangle::new(
+                Vec3::new(x, -0.5, d + 0.5),
+                Vec3::new(x, 0.5, d - 0.5),
+                Vec3::new(x + 0.05, 0.5, d - 0.5),
+            )));
+        }
+        let g = Arc::new(Geometry::new(shapes));
+        let accel = crate::PacketAccel::build(Arc::clone(&g));
+        let ray = Ray::with_interval(Vec3::ZERO, -Vec3::X, 0.0, 20.0);
+        let mut counters = RayCounters::default();
+        assert!(accel.occluded(&ray, &mut counters));
+        assert!(counters.node_visits <= 3, "{counters:?}");
+        assert_eq!(counters.prim_tests, 1, "{counters:?}");
+
+        let bvh = Bvh::build_with(Arc::clone(&g), BvhParams::default());
+        let layout = Layout::new(&bvh, &g);
+        let root = &layout.wide[0];
+        let last = root.child.iter().rposition(|&c| c != EMPTY_CHILD).unwrap();
+        assert!(
+            root.min[0][last] == -10.0 && root.max[0][last] == -10.0,
+            "{root:?}"
+        );
     }
 
     #[test]

@@ -472,8 +472,11 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
                         continue;
                     };
                     let e = t[slot];
+                    // Equal entries (lanes starting inside both boxes) leave the lower slot
+                    // to be popped first: the layout's any-hit order, backwards, had 11 %
+                    // fewer triangle tests per shadow ray on Sponza than forwards.
                     let mut j = count;
-                    while j > 0 && found[j - 1].1 < e {
+                    while j > 0 && found[j - 1].1 <= e {
                         found[j] = found[j - 1];
                         j -= 1;
                     }
@@ -598,7 +601,8 @@ pub(crate) type AnyStack<const K: usize> = [AnyEntry<K>; STACK];
 
 /// Any-hit results of a coherent packet: `blocked[i]` arrives true for rays already
 /// blocked (by an unbounded primitive) and leaves true for every blocked ray. A lane leaves
-/// the packet as soon as it is blocked, and the packet stops when none is left; as in
+/// the packet as soon as it is blocked, and the packet stops when none is left. Children
+/// are pushed in slot order, so the highest slot (the layout's any-hit order) goes first. As in
 /// [`closest`], a packet down to [`SPLIT_LANES`] lanes at an interior node finishes that
 /// subtree ray by ray, and a leaf block meets few lanes one lane at a time.
 #[inline(always)]

@@ -290,9 +290,10 @@ pub(crate) fn descend<L: Lanes>(
                 if child == EMPTY_CHILD {
                     continue;
                 }
-                // Insertion sort, descending by entry.
+                // Insertion sort, descending by entry; between equal entries the lower
+                // slot is nearer (as in the packet traversal).
                 let mut j = n;
-                while j > 0 && found[j - 1].1 < t[lane] {
+                while j > 0 && found[j - 1].1 <= t[lane] {
                     found[j] = found[j - 1];
                     j -= 1;
                 }
@@ -382,7 +383,8 @@ pub(crate) fn closest<L: Lanes, C: Counters>(
 }
 
 /// The children of wide node `index` that `ray` enters at or before `t_max`, pushed onto
-/// `stack` in slot order (any-hit queries need no order), each prefetched.
+/// `stack` in slot order, each prefetched: the highest slot, the child likeliest to block
+/// the ray per unit of cost (the layout's slot order), is popped first.
 #[inline(always)]
 pub(crate) fn push_children_any<L: Lanes>(
     layout: &Layout,
@@ -519,5 +521,29 @@ mod tests {
         );
         assert_eq!(next, None);
         assert!(stack.pop_within(f32::INFINITY).is_none());
+        // A ray starting inside slots 1, 3 and 6 enters them at its `t_min`: the lowest
+        // slot is visited next, the others popped in slot order.
+        let inside = Ray::new(Vec3::ZERO, Vec3::new(1.0, 0.001, 0.002));
+        let mut wide = layout.wide[0];
+        for slot in [1, 3, 6] {
+            wide.min[0][slot] = -1.0;
+        }
+        let layout = Layout {
+            wide: vec![wide; WIDE + 1],
+            ..Layout::default()
+        };
+        let next = descend(
+            &layout,
+            &WideRay::<Portable>::new(&inside),
+            0,
+            0.5,
+            &mut stack,
+        );
+        assert_eq!(next, Some(1 + 1));
+        let mut popped = Vec::new();
+        while let Some((child, _)) = stack.pop_within(f32::INFINITY) {
+            popped.push(child - 1);
+        }
+        assert_eq!(popped, [3, 6]);
     }
 }
