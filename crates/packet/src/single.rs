@@ -266,8 +266,8 @@ pub(crate) type Stack = [(u32, f32); STACK];
 ///
 /// Returning the nearest child instead of pushing it keeps the step from a node to the next
 /// out of the stack's memory, as Embree's single-ray traversal does: with one child entered,
-/// the most frequent case, the stack is not touched. (The same for any-hit rays, with the
-/// child of the highest slot, measured slower there.)
+/// the most frequent case, the stack is not touched. Any-hit rays do the same with the
+/// child in the highest slot ([`descend_any`]).
 #[inline(always)]
 pub(crate) fn descend<L: Lanes>(
     layout: &Layout,
@@ -382,18 +382,22 @@ pub(crate) fn closest<L: Lanes, C: Counters>(
     best
 }
 
-/// The children of wide node `index` that `ray` enters at or before `t_max`, pushed onto
-/// `stack` in slot order, each prefetched: the highest slot, the child likeliest to block
-/// the ray per unit of cost (the layout's slot order), is popped first.
+/// The child of wide node `index` in the highest slot that `ray` enters at or before
+/// `t_max` (none when it enters none), to be visited next; the other children entered are
+/// pushed onto `stack` in slot order, so that the next highest is popped first. Each is
+/// prefetched. The highest slot holds the child likeliest to block the ray per unit of
+/// cost (the layout's slot order); as in [`descend`], the step to it keeps out of the
+/// stack's memory.
 #[inline(always)]
-pub(crate) fn push_children_any<L: Lanes>(
+pub(crate) fn descend_any<L: Lanes>(
     layout: &Layout,
     wray: &WideRay<L>,
     index: u32,
     t_max: L::V,
     stack: &mut NodeStack<'_>,
-) {
+) -> Option<u32> {
     let node = &layout.wide[index as usize];
+    let mut next = None;
     let mut first = 0;
     while first < WIDE {
         let (_, bits) = wray.entries(&node.min, &node.max, first, t_max);
@@ -401,11 +405,14 @@ pub(crate) fn push_children_any<L: Lanes>(
             let child = node.child[first + lane];
             if child != EMPTY_CHILD {
                 prefetch_child(layout, child);
-                stack.push(child, f32::NEG_INFINITY);
+                if let Some(lower) = next.replace(child) {
+                    stack.push(lower, f32::NEG_INFINITY);
+                }
             }
         }
         first += L::W;
     }
+    next
 }
 
 /// Whether anything in the subtree under the child reference `root` blocks `ray`.
@@ -425,22 +432,33 @@ pub(crate) fn occluded<L: Lanes, C: Counters>(
     let splat = SplatRay::<L::Narrow>::new(ray);
     let t_max = <L::Single as Lanes>::splat(ray.t_max);
     let mut stack = NodeStack::new(stack);
-    stack.push(root, f32::NEG_INFINITY);
-    while let Some((index, _)) = stack.pop_within(f32::INFINITY) {
-        if leaf_or_push::<L, C>(
+    let mut next = Some(root);
+    while let Some(index) = next_node(&mut next, &mut stack, f32::INFINITY) {
+        let step = leaf_or_descend::<L, C>(
             layout, g, ray, &wray, &splat, t_max, index, &mut stack, counters,
-        ) {
-            return true;
+        );
+        match step {
+            AnyStep::Blocked => return true,
+            AnyStep::Next(child) => next = child,
         }
     }
     false
 }
 
-/// One step of an any-hit traversal: tests the leaf `index` (true when it blocks `ray`) or
-/// pushes the children of the wide node `index`.
+/// What one step of an any-hit traversal found.
+pub(crate) enum AnyStep {
+    /// The leaf blocks the ray.
+    Blocked,
+    /// The node to visit next without the stack ([`descend_any`]; none after a leaf that
+    /// does not block, or a node whose children the ray misses).
+    Next(Option<u32>),
+}
+
+/// One step of an any-hit traversal: tests the leaf `index`, or takes the children of the
+/// wide node `index` ([`descend_any`]).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn leaf_or_push<L: Lanes, C: Counters>(
+pub(crate) fn leaf_or_descend<L: Lanes, C: Counters>(
     layout: &Layout,
     g: &Geometry,
     ray: &Ray,
@@ -450,17 +468,20 @@ pub(crate) fn leaf_or_push<L: Lanes, C: Counters>(
     index: u32,
     stack: &mut NodeStack<'_>,
     counters: &mut C,
-) -> bool {
+) -> AnyStep {
     counters.add_visits(1);
     if index & LEAF_BIT != 0 {
         let leaf = LeafRef::decode(index);
         if C::ENABLED {
             counters.add_tests(leaf_prims(layout, leaf));
         }
-        return leaf_occluded(layout, g, leaf, ray, splat);
+        return if leaf_occluded(layout, g, leaf, ray, splat) {
+            AnyStep::Blocked
+        } else {
+            AnyStep::Next(None)
+        };
     }
-    push_children_any(layout, wray, index, t_max, stack);
-    false
+    AnyStep::Next(descend_any(layout, wray, index, t_max, stack))
 }
 
 #[cfg(test)]
@@ -470,20 +491,17 @@ mod tests {
     use crate::simd::Portable;
     use raybench_geometry::Vec3;
 
-    /// `descend` hands back the nearest child the ray enters and leaves the others on the
-    /// stack to be popped near to far, without the children it misses or enters beyond
-    /// the limit.
-    #[test]
-    fn descend_visits_the_nearest_child_next_and_stacks_the_others() {
-        // Child `slot` is a box from x = near[slot] to near[slot] + 0.5 on the ray's line
-        // (x), except slot 2, which lies off it.
-        let near = [6.0, 2.0, 9.0, 4.0, 1.0, 8.0, 3.0, 7.0];
+    /// Child `slot` is a box from x = NEAR[slot] to NEAR[slot] + 0.5 on the x axis, except
+    /// slot 2, which lies off it; the children are (empty) wide nodes 1 to 8.
+    const NEAR: [f32; WIDE] = [6.0, 2.0, 9.0, 4.0, 1.0, 8.0, 3.0, 7.0];
+
+    fn row_of_boxes() -> Layout {
         let mut root = WideNode {
             min: [[0.0; WIDE]; 3],
             max: [[0.0; WIDE]; 3],
             child: [0; WIDE],
         };
-        for (slot, &x) in near.iter().enumerate() {
+        for (slot, &x) in NEAR.iter().enumerate() {
             let y = if slot == 2 { 5.0 } else { 0.0 };
             root.min[0][slot] = x;
             root.max[0][slot] = x + 0.5;
@@ -491,13 +509,21 @@ mod tests {
             root.max[1][slot] = y + 1.0;
             root.min[2][slot] = -1.0;
             root.max[2][slot] = 1.0;
-            // Child references are indices of (empty) wide nodes 1 to 8.
             root.child[slot] = slot as u32 + 1;
         }
-        let layout = Layout {
+        Layout {
             wide: vec![root; WIDE + 1],
             ..Layout::default()
-        };
+        }
+    }
+
+    /// `descend` hands back the nearest child the ray enters and leaves the others on the
+    /// stack to be popped near to far, without the children it misses or enters beyond
+    /// the limit.
+    #[test]
+    fn descend_visits_the_nearest_child_next_and_stacks_the_others() {
+        let near = NEAR;
+        let layout = row_of_boxes();
         let ray = Ray::new(Vec3::ZERO, Vec3::new(1.0, 0.001, 0.002));
         let mut storage = [(0, 0.0); STACK];
         let mut stack = NodeStack::new(&mut storage);
@@ -545,5 +571,28 @@ mod tests {
             popped.push(child - 1);
         }
         assert_eq!(popped, [3, 6]);
+    }
+
+    /// `descend_any` hands back the child in the highest slot the ray enters and leaves the
+    /// others on the stack to be popped from the highest slot down, without the children it
+    /// misses or enters beyond `t_max`.
+    #[test]
+    fn descend_any_visits_the_highest_slot_next_and_stacks_the_others() {
+        let layout = row_of_boxes();
+        let ray = Ray::new(Vec3::ZERO, Vec3::new(1.0, 0.001, 0.002));
+        let mut storage = [(0, 0.0); STACK];
+        let mut stack = NodeStack::new(&mut storage);
+        let wray = WideRay::<Portable>::new(&ray);
+        // Slot 5 (x = 8) lies beyond t_max, slot 2 off the ray.
+        let next = descend_any(&layout, &wray, 0, Portable::splat(7.5), &mut stack);
+        assert_eq!(next, Some(7 + 1));
+        let mut popped = Vec::new();
+        while let Some((child, _)) = stack.pop_within(f32::INFINITY) {
+            popped.push(child - 1);
+        }
+        assert_eq!(popped, [6, 4, 3, 1, 0]);
+        let next = descend_any(&layout, &wray, 0, Portable::splat(0.5), &mut stack);
+        assert_eq!(next, None);
+        assert!(stack.pop_within(f32::INFINITY).is_none());
     }
 }

@@ -19,7 +19,7 @@
 
 use crate::layout::{LEAF_BIT, Layout, LeafRef};
 use crate::simd::Lanes;
-use crate::single::{self, STACK, Stack, WideRay};
+use crate::single::{self, AnyStep, STACK, Stack, WideRay};
 use crate::tri::SplatRay;
 use raybench_geometry::{Counters, Geometry, NodeStack, PrimHit, Ray, cull_bound};
 
@@ -191,18 +191,20 @@ struct AnyWalker<'s, L: Lanes> {
     splat: SplatRay<L::Narrow>,
     t_max: <L::Single as Lanes>::V,
     stack: NodeStack<'s>,
+    /// The node to visit next without the stack (see [`single::descend_any`]).
+    next: Option<u32>,
 }
 
 impl<'s, L: Lanes> AnyWalker<'s, L> {
     #[inline(always)]
-    fn start(ray: usize, r: &Ray, mut stack: NodeStack<'s>) -> Self {
-        stack.push(0, f32::NEG_INFINITY);
+    fn start(ray: usize, r: &Ray, stack: NodeStack<'s>) -> Self {
         Self {
             ray,
             wray: WideRay::new(r),
             splat: SplatRay::new(r),
             t_max: <L::Single as Lanes>::splat(r.t_max),
             stack,
+            next: Some(0),
         }
     }
 }
@@ -232,10 +234,10 @@ pub(crate) fn occluded<L: Lanes, C: Counters, const S: usize>(
         for slot in &mut walkers {
             let Some(w) = slot else { continue };
             let r = &rays[w.ray];
-            let done = match w.stack.pop_within(f32::INFINITY) {
+            let done = match single::next_node(&mut w.next, &mut w.stack, f32::INFINITY) {
                 None => true,
-                Some((index, _)) => {
-                    let hit = single::leaf_or_push::<L, C>(
+                Some(index) => {
+                    let step = single::leaf_or_descend::<L, C>(
                         layout,
                         g,
                         r,
@@ -246,12 +248,18 @@ pub(crate) fn occluded<L: Lanes, C: Counters, const S: usize>(
                         &mut w.stack,
                         counters,
                     );
-                    if hit {
-                        blocked[w.ray] = true;
-                        // Empty the stack for the next ray.
-                        while w.stack.pop_within(f32::INFINITY).is_some() {}
+                    match step {
+                        AnyStep::Blocked => {
+                            blocked[w.ray] = true;
+                            // Empty the stack for the next ray.
+                            while w.stack.pop_within(f32::INFINITY).is_some() {}
+                            true
+                        }
+                        AnyStep::Next(child) => {
+                            w.next = child;
+                            false
+                        }
                     }
-                    hit
                 }
             };
             if !done {
