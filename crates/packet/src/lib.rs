@@ -12,11 +12,13 @@
 //!   BVH8 together, 64 at a time with AVX2 (eight vectors of eight lanes) and AVX-512 (four
 //!   of sixteen), 8 with SSE4.1: one interval (frustum) test of the packet against all
 //!   eight children, which rejects those no lane enters and accepts those every lane
-//!   enters, per-lane slab tests of the others it keeps, nearest child first, each lane
-//!   clipped to its own best `t`; leaves test one triangle against all lanes.
+//!   enters, per-lane slab tests of the others it keeps, nearest child first (for any hits
+//!   the layout's slot order), each lane clipped to its own best `t`; leaves test one
+//!   triangle against all lanes.
 //! - **Single rays** (`intersect`, `occluded`, and batches whose rays share no octant): one
 //!   SIMD test of eight children, nearest first (the nearest visited next without the
-//!   stack), children prefetched, one SIMD test per block of four triangles; a batch's
+//!   stack; for any hits the child in the highest slot, see the layout's slot order),
+//!   children prefetched, one SIMD test per block of four triangles; a batch's
 //!   incoherent rays go two at a time (four when the BVH8 exceeds the last-level cache),
 //!   interleaved step by step so that their memory waits overlap (`stream.rs`,
 //!   [`Interleave`]).
