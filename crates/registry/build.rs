@@ -1,8 +1,9 @@
 //! Records the source revision the binary is built from, for `raybench --version` and the
 //! machine description of every report: the environment variable `RAYBENCH_REVISION` at
 //! build time when set (for packagers), else the short commit hash of the git checkout the
-//! workspace is, else `unknown` (a source tarball, or a workspace inside another project's
-//! repository). Also records how it was compiled (`RAYBENCH_BUILD`: the compiler's version,
+//! workspace is, with `-dirty` when the tracked sources (`crates/`, `tests/`, the manifest
+//! and the lock file) differ from that commit, else `unknown` (a source tarball, or a
+//! workspace inside another project's repository). Also records how it was compiled (`RAYBENCH_BUILD`: the compiler's version,
 //! the optimisation level, debug assertions, the target and `RUSTFLAGS`), for the reports'
 //! reproducibility block.
 
@@ -71,7 +72,8 @@ fn git(dir: &Path, args: &[&str]) -> Option<String> {
 }
 
 /// The short hash of `HEAD` when the workspace (two levels above this crate) is the top of
-/// a git checkout; asks Cargo to run this again when `HEAD` moves.
+/// a git checkout, with `-dirty` when the tracked sources differ from it (staged or not);
+/// asks Cargo to run this again when `HEAD` moves or a source changes.
 fn git_revision(manifest: &Path) -> Option<String> {
     let workspace = manifest.join("../..").canonicalize().ok()?;
     let top = PathBuf::from(git(manifest, &["rev-parse", "--show-toplevel"])?);
@@ -90,5 +92,30 @@ fn git_revision(manifest: &Path) -> Option<String> {
             }
         }
     }
-    git(manifest, &["rev-parse", "--short", "HEAD"])
+    let hash = git(manifest, &["rev-parse", "--short", "HEAD"])?;
+    // Cargo scans a watched directory's files, so an edit anywhere in the sources reruns
+    // this (a `git diff` of a few milliseconds).
+    for source in SOURCES {
+        println!(
+            "cargo:rerun-if-changed={}",
+            workspace.join(source).display()
+        );
+    }
+    let mut diff = vec!["diff", "--quiet", "HEAD", "--"];
+    diff.extend(SOURCES);
+    let clean = Command::new("git")
+        .current_dir(&workspace)
+        .args(&diff)
+        .status()
+        .ok()?;
+    // 0: no difference, 1: differences; anything else is git failing.
+    match clean.code() {
+        Some(0) => Some(hash),
+        Some(1) => Some(format!("{hash}-dirty")),
+        _ => None,
+    }
 }
+
+/// The workspace paths whose changes make a build `-dirty`: everything compiled into the
+/// binaries.
+const SOURCES: [&str; 4] = ["crates", "tests", "Cargo.toml", "Cargo.lock"];

@@ -704,3 +704,75 @@ pub fn compare_hits(ref_ids: &[u32], ref_t: &[f32], ids: &[u32], t: &[f32]) -> C
         max_rel_dt,
     }
 }
+
+#[cfg(test)]
+mod revision_tests {
+    use std::path::Path;
+    use std::process::Command;
+
+    /// The output of `git ARGS` in the workspace, or its exit code when it prints nothing.
+    fn git(args: &[&str]) -> Option<(i32, String)> {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let out = Command::new("git")
+            .current_dir(root)
+            .args(args)
+            .output()
+            .ok()?;
+        Some((
+            out.status.code()?,
+            String::from_utf8_lossy(&out.stdout).trim().to_string(),
+        ))
+    }
+
+    /// `VERSION` names the checkout's commit, marked `-dirty` exactly when the sources
+    /// differ from it: a report's revision says whether it is the committed code.
+    #[test]
+    fn version_names_the_commit_and_marks_a_dirty_tree() {
+        if std::env::var_os("RAYBENCH_REVISION").is_some() {
+            eprintln!("skipped: RAYBENCH_REVISION names the revision");
+            return;
+        }
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let top =
+            git(&["rev-parse", "--show-toplevel"]).map(|(_, top)| Path::new(&top).canonicalize());
+        let (Some(Ok(top)), Ok(root)) = (top, root.canonicalize()) else {
+            eprintln!(
+                "skipped: not built from a git checkout (VERSION is {})",
+                super::VERSION
+            );
+            return;
+        };
+        if top != root {
+            eprintln!(
+                "skipped: the workspace is inside another repository (VERSION is {})",
+                super::VERSION
+            );
+            return;
+        }
+        let Some((0, hash)) = git(&["rev-parse", "--short", "HEAD"]) else {
+            panic!("git rev-parse HEAD failed in a checkout");
+        };
+        let Some((code @ (0 | 1), _)) = git(&[
+            "diff",
+            "--quiet",
+            "HEAD",
+            "--",
+            "crates",
+            "tests",
+            "Cargo.toml",
+            "Cargo.lock",
+        ]) else {
+            panic!("git diff failed in a checkout where git rev-parse worked");
+        };
+        let want = if code == 0 {
+            hash
+        } else {
+            format!("{hash}-dirty")
+        };
+        assert!(
+            super::VERSION.ends_with(&format!("({want})")),
+            "VERSION {} should name {want}",
+            super::VERSION
+        );
+    }
+}
