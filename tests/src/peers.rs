@@ -1,8 +1,9 @@
 //! The peer benchmark (`benches/peers.rs`): the workload of `../shared/PEERS.md`, generated
 //! once per mesh, traced by every exact raybench CPU backend and every peer in one process.
 //!
-//! Per mesh ([`MESHES`]: three generated meshes and three shared ones) and contestant:
-//! the build (best of `repeat`, all cores), then for each ray set (primary: the scene
+//! Per mesh ([`MESHES`]: three generated meshes and three shared ones): every contestant's
+//! builds in interleaved rounds ([`build_rounds`], all cores, the best kept); then per
+//! contestant one more build, which it traces with, and for each ray set (primary: the scene
 //! camera's `N x N` rays in the renderer's tile order; incoherent: seeded random rays in the
 //! mesh's box; shadow, ao and diffuse: derived from `bvh`'s primary hits by
 //! [`ray_sets::derived`]; or the rays of `--rays-file`) the closest hits (`intersect_batch`)
@@ -116,7 +117,8 @@ options:
   --meshes A,B          sphere, soup, terrain, dabrovic-sponza, bunny, bunny-field (default: all),
                         or scene specs; `flat:SCENE` flattens an instanced scene
   --contestants A,B     only these (see --list); `bvh` is always built as the reference
-  --repeat N            timed runs per figure and builds, best kept (default 3)
+  --repeat N            timed runs per figure and builds, best kept (default 3; meshes
+                        that build fast get more builds, interleaved across contestants)
   --chunk N             rays per intersect_batch / occluded_batch call (default 1024)
   --threads N           threads of the all-cores figures (default: every core)
   --json PATH           where the JSON goes (default: target/raybench-peers.json)
@@ -476,25 +478,59 @@ fn pool(threads: usize) -> ThreadPool {
         .expect("a thread pool")
 }
 
-/// A prepared renderer of `c` for `scene` and its best build time of `repeat` on `pool`,
-/// or why it cannot run.
+/// A prepared renderer of `c` for `scene` and its build time on `pool`, or why it cannot
+/// run.
 fn build(
     c: &Contestant,
     scene: &Arc<Scene>,
     pool: &ThreadPool,
-    repeat: usize,
 ) -> Result<(Box<dyn Renderer>, f64), String> {
     let mut r = (c.make)();
     r.availability()?;
     r.supports(scene)?;
-    let mut best = f64::INFINITY;
-    for _ in 0..repeat {
-        let timings = pool
-            .install(|| r.prepare(scene))
-            .map_err(|e| e.to_string())?;
-        best = best.min(timings.get("build").unwrap_or(f64::NAN));
+    let timings = pool
+        .install(|| r.prepare(scene))
+        .map_err(|e| e.to_string())?;
+    Ok((r, timings.get("build").unwrap_or(f64::NAN)))
+}
+
+/// Seconds of interleaved builds per mesh after which [`build_rounds`] stops adding
+/// rounds (once it has its minimum).
+const BUILD_BUDGET_S: f64 = 2.0;
+
+/// The most interleaved build rounds per mesh.
+const MAX_BUILD_ROUNDS: usize = 20;
+
+/// Per contestant (in order), the best and the number of its builds of `scene` in
+/// interleaved rounds on `pool` (each contestant built once per round and dropped, so that
+/// a drift of the machine's state during the mesh's builds touches every contestant
+/// alike), or why it cannot run. At least `repeat - 1` rounds (the build that prepares a
+/// contestant for tracing adds one more), then more while the rounds so far took under
+/// [`BUILD_BUDGET_S`], up to [`MAX_BUILD_ROUNDS`]: small meshes, whose builds take
+/// milliseconds and move most from run to run, get many.
+fn build_rounds(
+    contestants: &[Contestant],
+    scene: &Arc<Scene>,
+    pool: &ThreadPool,
+    repeat: usize,
+) -> Vec<Result<(f64, usize), String>> {
+    let mut best: Vec<Result<(f64, usize), String>> =
+        contestants.iter().map(|_| Ok((f64::INFINITY, 0))).collect();
+    let start = Instant::now();
+    for round in 0..MAX_BUILD_ROUNDS {
+        let enough = round >= repeat.saturating_sub(1);
+        if enough && start.elapsed().as_secs_f64() >= BUILD_BUDGET_S {
+            break;
+        }
+        for (c, slot) in contestants.iter().zip(&mut best) {
+            let Ok((b, n)) = slot else { continue };
+            match build(c, scene, pool) {
+                Ok((_, s)) => *slot = Ok((b.min(s), *n + 1)),
+                Err(e) => *slot = Err(e),
+            }
+        }
     }
-    Ok((r, best))
+    best
 }
 
 impl Workload {
@@ -530,7 +566,7 @@ impl Workload {
             .into_iter()
             .find(|c| c.name == REFERENCE)
             .expect("bvh is registered");
-        let (r, _) = build(&reference, &scene, pool, 1)?;
+        let (r, _) = build(&reference, &scene, pool)?;
         let tracer = r.batch_tracer().expect("bvh is a CPU structure");
         let mut sources: Vec<(&'static str, Vec<Ray>, bool)> = Vec::new();
         let mut skipped_sets = Vec::new();
@@ -605,9 +641,11 @@ fn measure(
     w: &Workload,
     o: &Options,
     pools: &[(usize, ThreadPool)],
+    (earlier_s, earlier_builds): (f64, usize),
 ) -> Result<ContestantReport, String> {
     let all = &pools.last().expect("at least one pool").1;
-    let (r, build_s) = build(c, &w.scene, all, o.repeat)?;
+    let (r, build_s) = build(c, &w.scene, all)?;
+    let (build_s, builds) = (build_s.min(earlier_s), earlier_builds + 1);
     let tracer = r.batch_tracer().ok_or("not a CPU structure")?;
     let count = r.counts_tests();
     let mut ray_sets = Vec::new();
@@ -677,6 +715,7 @@ fn measure(
         name: c.name.to_string(),
         kind: c.kind,
         build_s,
+        builds,
         build_vs_embree: None,
         ray_sets,
     })
@@ -765,9 +804,12 @@ pub fn run(
             skipped_sets: w.skipped_sets.clone(),
             contestants: Vec::new(),
         };
-        for c in &contestants {
+        let start = Instant::now();
+        let builds = build_rounds(&contestants, &w.scene, all, o.repeat);
+        eprintln!("  builds in {:.1?}", start.elapsed());
+        for (c, builds) in contestants.iter().zip(builds) {
             let start = Instant::now();
-            match measure(c, &w, o, &pools) {
+            match builds.and_then(|b| measure(c, &w, o, &pools, b)) {
                 Ok(m) => {
                     eprintln!("  {} measured in {:.1?}", c.name, start.elapsed());
                     mesh.contestants.push(m);

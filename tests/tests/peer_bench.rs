@@ -237,6 +237,16 @@ fn tiny_run_measures_every_contestant_and_writes_json() {
             }
             assert_eq!(c.build_vs_embree.is_some(), embree);
         }
+        // Builds in interleaved rounds: every contestant as many, and tiny meshes (builds
+        // of microseconds) more than `--repeat` asks for, at most 20 rounds and the one
+        // traced with.
+        let builds: Vec<_> = m.contestants.iter().map(|c| c.builds).collect();
+        assert!(
+            builds.iter().all(|&b| b == builds[0]),
+            "{}: {builds:?}",
+            m.name
+        );
+        assert!((2..=21).contains(&builds[0]), "{}: {builds:?}", m.name);
     }
     let tables = report.tables();
     for c in &report.meshes[0].contestants {
@@ -251,6 +261,7 @@ fn tiny_run_measures_every_contestant_and_writes_json() {
     let first = &json["meshes"][0]["contestants"][0];
     assert_eq!(first["name"], "bvh");
     assert_eq!(first["kind"], "raybench");
+    assert!(first["builds"].as_u64().unwrap() >= 2);
     assert_eq!(first["ray_sets"][1]["name"], "incoherent");
     assert!(
         first["ray_sets"][0]["any"]["runs"][1]["mrays"]

@@ -16,7 +16,8 @@
 //!     "skipped_sets": [ { "name": "shadow", "reason": "no shadow rays: the scene has no light ..." } ],
 //!     "contestants": [ {
 //!       "name": "bvh", "kind": "raybench" | "peer",
-//!       "build_s": 0.012,            // best of `repeat`, all cores
+//!       "build_s": 0.012,            // best of `builds`, all cores
+//!       "builds": 21,                // interleaved rounds and the one traced with
 //!       "build_vs_embree": 1.9,      // build_s / embree1-default's build_s (lower is faster)
 //!       "ray_sets": [ {
 //!         "name": "primary",
@@ -77,7 +78,8 @@ pub struct WorkloadInfo {
     pub seed: u32,
     /// Rays per `intersect_batch` / `occluded_batch` call.
     pub chunk: usize,
-    /// Timed runs per figure (the best is kept) and builds per contestant.
+    /// Timed runs per figure (the best is kept), and the fewest builds per contestant
+    /// (`ContestantReport::builds` says how many each had).
     pub repeat: usize,
     /// Thread counts measured.
     pub threads: Vec<usize>,
@@ -131,8 +133,11 @@ pub struct ContestantReport {
     pub name: String,
     /// Whose structure.
     pub kind: Kind,
-    /// Best build time of `repeat`, seconds, all cores.
+    /// Best build time, seconds, all cores.
     pub build_s: f64,
+    /// Builds `build_s` is the best of: the interleaved rounds and the one traced with
+    /// (`build_rounds` in the parent module).
+    pub builds: usize,
     /// `build_s` over Embree's (`embree1-default`); `None` without Embree.
     pub build_vs_embree: Option<f64>,
     /// One entry per ray set.
@@ -382,13 +387,19 @@ impl Report {
             }
             let _ = writeln!(
                 out,
-                "| contestant | build ms ({} threads) |{}",
+                "| contestant | build ms ({} threads) | builds |{}",
                 threads.last().copied().unwrap_or(1),
                 if embree { " vs Embree build |" } else { "" }
             );
-            let _ = writeln!(out, "|---|---:|{}", if embree { "---:|" } else { "" });
+            let _ = writeln!(out, "|---|---:|---:|{}", if embree { "---:|" } else { "" });
             for c in &m.contestants {
-                let _ = write!(out, "| {} | {:.1} |", c.name, 1e3 * c.build_s);
+                let _ = write!(
+                    out,
+                    "| {} | {:.1} | {} |",
+                    c.name,
+                    1e3 * c.build_s,
+                    c.builds
+                );
                 if embree {
                     let _ = write!(
                         out,
