@@ -487,6 +487,7 @@ pub(crate) fn leaf_or_descend<L: Lanes, C: Counters>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::huge::HugeArray;
     use crate::layout::WideNode;
     use crate::simd::Portable;
     use raybench_geometry::Vec3;
@@ -512,7 +513,7 @@ mod tests {
             root.child[slot] = slot as u32 + 1;
         }
         Layout {
-            wide: vec![root; WIDE + 1],
+            wide: HugeArray::filled(WIDE + 1, root),
             ..Layout::default()
         }
     }
@@ -555,7 +556,7 @@ mod tests {
             wide.min[0][slot] = -1.0;
         }
         let layout = Layout {
-            wide: vec![wide; WIDE + 1],
+            wide: HugeArray::filled(WIDE + 1, wide),
             ..Layout::default()
         };
         let next = descend(
