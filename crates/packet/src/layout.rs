@@ -38,7 +38,6 @@
 //! coordinates (never hit by the SIMD test); leaves with such primitives carry
 //! [`MIXED_BIT`] and test them with the core's scalar routine.
 
-use crate::huge::HugeArray;
 use raybench_bvh::{Bvh, Node};
 use raybench_geometry::{Aabb, Geometry, Shape, TreeView};
 use rayon::prelude::*;
@@ -188,9 +187,9 @@ impl LeafRef {
 #[derive(Debug, Default)]
 pub(crate) struct Layout {
     /// The BVH8; node 0 is the root. Empty when there are no bounded primitives.
-    pub wide: HugeArray<WideNode>,
+    pub wide: Vec<WideNode>,
     /// The leaves' triangle blocks.
-    pub blocks: HugeArray<TriBlock>,
+    pub blocks: Vec<TriBlock>,
     /// Number of leaves.
     pub leaves: usize,
     /// Nodes of the BVH2 the tree was collapsed from.
@@ -319,9 +318,13 @@ impl Layout {
         let size = wide_size(nodes, &plans, 0, 0);
         assert!(size.blocks <= FIRST_MASK + 1, "more than 2^27 leaf blocks");
         // Every element is written once more below; filling them here, in parallel, faults
-        // the pages in on every thread (huge ones where the OS grants them).
-        layout.wide = HugeArray::filled(size.wide as usize, WideNode::EMPTY);
-        layout.blocks = HugeArray::filled(size.blocks as usize, TriBlock::EMPTY);
+        // the pages in on every thread.
+        layout
+            .wide
+            .par_extend(rayon::iter::repeat_n(WideNode::EMPTY, size.wide as usize));
+        layout
+            .blocks
+            .par_extend(rayon::iter::repeat_n(TriBlock::EMPTY, size.blocks as usize));
         let builder = Builder {
             nodes,
             plans: &plans,
@@ -989,11 +992,11 @@ mod tests {
         one.tree_view().check_leaves(&g).unwrap();
         let bits = |l: &Layout| {
             let mut v: Vec<u32> = Vec::new();
-            for n in l.wide.iter() {
+            for n in &l.wide {
                 v.extend(n.min.iter().chain(&n.max).flatten().map(|x| x.to_bits()));
                 v.extend(n.child);
             }
-            for b in l.blocks.iter() {
+            for b in &l.blocks {
                 v.extend(b.v.iter().flatten().map(|x| x.to_bits()));
                 v.extend(b.id);
             }

@@ -34,11 +34,9 @@
 //! tests are the core's conservative slab test with the same early-exit rule, so hits and
 //! `t` equal the naive backend's bit for bit.
 //!
-//! `unsafe` is confined to the intrinsics wrapper (`simd.rs`), the calls of the
-//! `#[target_feature]` entry points after detection (this file) and the huge-page arrays the
-//! kernels walk (`huge.rs`: allocation, `madvise`).
+//! `unsafe` is confined to the intrinsics wrapper (`simd.rs`) and the calls of the
+//! `#[target_feature]` entry points after detection (this file).
 
-mod huge;
 mod layout;
 mod packet;
 mod simd;

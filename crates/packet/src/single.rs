@@ -487,7 +487,6 @@ pub(crate) fn leaf_or_descend<L: Lanes, C: Counters>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::huge::HugeArray;
     use crate::layout::WideNode;
     use crate::simd::Portable;
     use raybench_geometry::Vec3;
@@ -513,7 +512,7 @@ mod tests {
             root.child[slot] = slot as u32 + 1;
         }
         Layout {
-            wide: HugeArray::filled(WIDE + 1, root),
+            wide: vec![root; WIDE + 1],
             ..Layout::default()
         }
     }
@@ -556,7 +555,7 @@ mod tests {
             wide.min[0][slot] = -1.0;
         }
         let layout = Layout {
-            wide: HugeArray::filled(WIDE + 1, wide),
+            wide: vec![wide; WIDE + 1],
             ..Layout::default()
         };
         let next = descend(
