@@ -634,18 +634,19 @@ fn per_ray(counters: Option<RayCounters>, n: usize, f: impl Fn(RayCounters) -> u
     counters.map(|c| f(c) as f64 / n.max(1) as f64)
 }
 
-/// Measures contestant `c` on workload `w`: build, then per ray set the untimed counted
-/// pass and the timed runs.
+/// Measures contestant `c` on workload `w`: one more build (the one it traces with; its
+/// time joins `earlier`, the best and the count of its [`build_rounds`]), then per ray set
+/// the untimed counted pass and the timed runs.
 fn measure(
     c: &Contestant,
     w: &Workload,
     o: &Options,
     pools: &[(usize, ThreadPool)],
-    (earlier_s, earlier_builds): (f64, usize),
+    earlier: (f64, usize),
 ) -> Result<ContestantReport, String> {
     let all = &pools.last().expect("at least one pool").1;
     let (r, build_s) = build(c, &w.scene, all)?;
-    let (build_s, builds) = (build_s.min(earlier_s), earlier_builds + 1);
+    let (build_s, builds) = (build_s.min(earlier.0), earlier.1 + 1);
     let tracer = r.batch_tracer().ok_or("not a CPU structure")?;
     let count = r.counts_tests();
     let mut ray_sets = Vec::new();
