@@ -3,9 +3,9 @@
 //! build time when set (for packagers), else the short commit hash of the git checkout the
 //! workspace is, with `-dirty` when the tracked sources (`crates/`, `tests/`, the manifest
 //! and the lock file) differ from that commit, else `unknown` (a source tarball, or a
-//! workspace inside another project's repository). Also records how it was compiled (`RAYBENCH_BUILD`: the compiler's version,
-//! the optimisation level, debug assertions, the target and `RUSTFLAGS`), for the reports'
-//! reproducibility block.
+//! workspace inside another project's repository). Also records how it was compiled
+//! (`RAYBENCH_BUILD`: the compiler's version, the optimisation level, debug assertions,
+//! the target and `RUSTFLAGS`), for the reports' reproducibility block.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

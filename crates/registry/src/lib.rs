@@ -710,7 +710,8 @@ mod revision_tests {
     use std::path::Path;
     use std::process::Command;
 
-    /// The output of `git ARGS` in the workspace, or its exit code when it prints nothing.
+    /// The exit code and the trimmed output of `git ARGS` in the workspace; `None` when git
+    /// cannot run or is ended by a signal.
     fn git(args: &[&str]) -> Option<(i32, String)> {
         let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
         let out = Command::new("git")
