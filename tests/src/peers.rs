@@ -2,25 +2,33 @@
 //! once per mesh, traced by every exact raybench CPU backend and every peer in one process.
 //!
 //! Per mesh ([`MESHES`]: three generated meshes and three shared ones): every contestant's
-//! builds in interleaved rounds ([`build_rounds`], all cores, the best kept); then per
-//! contestant one more build, which it traces with, and for each ray set (primary: the scene
-//! camera's `N x N` rays in the renderer's tile order; incoherent: seeded random rays in the
-//! mesh's box; shadow, ao and diffuse: derived from `bvh`'s primary hits by
-//! [`ray_sets::derived`]; or the rays of `--rays-file`) the closest hits (`intersect_batch`)
-//! and the any hits (`occluded_batch`: the any-hit sets' own rays, the others' rays ending
-//! at half of `bvh`'s closest hit, where misses keep their `t_max`), each
-//! timed on 1 thread and on all cores (a local rayon pool over `chunk`-ray batches; best of
-//! `repeat`), after one untimed pass on all cores that counts node visits and primitive
-//! tests (contestants that count) and the rays whose answer differs from `bvh`'s.
+//! builds in interleaved rounds ([`build_rounds`], all cores, the best kept); then one more
+//! build per contestant, which it traces with, kept while the memory holds the structures
+//! (the contestants built together form a group; one group where memory allows). For each
+//! ray set (primary: the scene camera's `N x N` rays in the renderer's tile order;
+//! incoherent: seeded random rays in the mesh's box; shadow, ao and diffuse: derived from
+//! `bvh`'s primary hits by [`ray_sets::derived`]; or the rays of `--rays-file`) each
+//! contestant's untimed pass on all cores counts node visits and primitive tests
+//! (contestants that count) and the rays whose answer differs from `bvh`'s; then the closest
+//! hits (`intersect_batch`) and the any hits (`occluded_batch`: the any-hit sets' own rays,
+//! the others' rays ending at half of `bvh`'s closest hit, where misses keep their `t_max`)
+//! are timed on 1 thread and on all cores (a local rayon pool over `chunk`-ray batches) in
+//! `repeat` rounds, every contestant of the group once per round in a rotated order, so that
+//! a slow phase of the machine lands on all of them rather than on the one whose turn it
+//! was; a round the machine interfered with is taken again (the shared rules of
+//! `raybench_report::rounds`). The median is kept, and each ratio to Embree is the median of
+//! the rounds' ratios with its interval.
 //!
 //! [`contestants`] says who runs, [`report`] what is written ([`report::Report`], JSON
-//! schema `raybench-peers/1`) and printed.
+//! schema `raybench-peers/2`) and printed.
 
 pub mod contestants;
 pub mod report;
 
 use contestants::Contestant;
 use raybench_core::{Hit, Ray, RayCounters, RaySet, Renderer, Scene, ray_sets};
+use raybench_registry::interference;
+use raybench_report::rounds::{self, Policy, Repeat, Sample, Tally};
 use rayon::ThreadPool;
 use rayon::prelude::*;
 use report::{
@@ -79,7 +87,8 @@ pub struct Options {
     pub rays_file: Option<PathBuf>,
     /// Rays per batch call.
     pub chunk: usize,
-    /// Timed runs per figure and builds per contestant (the best is kept).
+    /// Timed rounds per figure (the median is kept) and the fewest builds per contestant
+    /// (the best is kept).
     pub repeat: usize,
     /// Threads of the "all cores" figures.
     pub threads: usize,
@@ -117,8 +126,9 @@ options:
   --meshes A,B          sphere, soup, terrain, dabrovic-sponza, bunny, bunny-field (default: all),
                         or scene specs; `flat:SCENE` flattens an instanced scene
   --contestants A,B     only these (see --list); `bvh` is always built as the reference
-  --repeat N            timed runs per figure and builds, best kept (default 3; meshes
-                        that build fast get more builds, interleaved across contestants)
+  --repeat N            timed rounds per figure, every contestant once per round, the
+                        median kept (default 5), and the fewest builds, the best kept
+                        (meshes that build fast get more, interleaved across contestants)
   --chunk N             rays per intersect_batch / occluded_batch call (default 1024)
   --threads N           threads of the all-cores figures (default: every core)
   --json PATH           where the JSON goes (default: target/raybench-peers.json)
@@ -155,7 +165,7 @@ impl Options {
             ao_rays: ray_sets::DEFAULT_AO_RAYS,
             rays_file: None,
             chunk: 1024,
-            repeat: 3,
+            repeat: 5,
             threads: std::thread::available_parallelism().map_or(1, std::num::NonZero::get),
             json: default_json(),
         }
@@ -454,17 +464,32 @@ fn sum(parts: &[RayCounters]) -> RayCounters {
     total
 }
 
-/// Best of `repeat` timings of `f` on `pool`, seconds.
-fn best_of(pool: &ThreadPool, repeat: usize, mut f: impl FnMut() + Send) -> f64 {
-    pool.install(|| {
-        (0..repeat)
-            .map(|_| {
-                let start = Instant::now();
-                f();
-                start.elapsed().as_secs_f64()
-            })
-            .fold(f64::INFINITY, f64::min)
-    })
+/// The kept rounds of `n` contestants, `repeat` per contestant ([`rounds::run`]: every
+/// contestant once per round in a rotated order, a round the machine interfered with taken
+/// again within the redo budget); `pass(i)` runs contestant `i`'s timed pass.
+fn timed_rounds(n: usize, repeat: usize, mut pass: impl FnMut(usize)) -> Vec<Tally<()>> {
+    let policy = Policy {
+        repeat: Repeat::Fixed(u32::try_from(repeat).unwrap_or(u32::MAX)),
+        min_sample: 0.0,
+        budget: 0.0,
+    };
+    let tallies = rounds::run(n, &policy, |i| {
+        let (seconds, interference) = interference::during(|| {
+            let start = Instant::now();
+            pass(i);
+            start.elapsed().as_secs_f64()
+        });
+        Ok::<_, std::convert::Infallible>(Sample {
+            seconds,
+            elapsed: seconds,
+            contended: interference.is_some_and(|i| i.contended()),
+            extra: (),
+        })
+    });
+    match tallies {
+        Ok(t) => t,
+        Err(never) => match never {},
+    }
 }
 
 /// A rayon pool of `threads` workers.
@@ -634,92 +659,161 @@ fn per_ray(counters: Option<RayCounters>, n: usize, f: impl Fn(RayCounters) -> u
     counters.map(|c| f(c) as f64 / n.max(1) as f64)
 }
 
-/// Measures contestant `c` on workload `w`: one more build (the one it traces with; its
-/// time joins `earlier`, the best and the count of its [`build_rounds`]), then per ray set
-/// the untimed counted pass and the timed runs.
-fn measure(
-    c: &Contestant,
+/// A contestant built for tracing: its renderer, and the best and the count of its builds.
+struct Prepared<'a> {
+    contestant: &'a Contestant,
+    renderer: Box<dyn Renderer>,
+    build_s: f64,
+    builds: usize,
+}
+
+/// Builds contestant `c` for tracing on `pool` (one more build: its time joins `earlier`,
+/// the best and the count of its [`build_rounds`]), or why it cannot trace.
+fn prepare<'a>(
+    c: &'a Contestant,
+    scene: &Arc<Scene>,
+    pool: &ThreadPool,
+    earlier: (f64, usize),
+) -> Result<Prepared<'a>, String> {
+    let (renderer, build_s) = build(c, scene, pool)?;
+    renderer.batch_tracer().ok_or("not a CPU structure")?;
+    Ok(Prepared {
+        contestant: c,
+        renderer,
+        build_s: build_s.min(earlier.0),
+        builds: earlier.1 + 1,
+    })
+}
+
+/// Memory kept free beyond twice the largest structure built so far before another
+/// contestant joins a group ([`room_for_another`]): 1 GiB.
+const MEMORY_RESERVE: u64 = 1 << 30;
+
+/// Whether another contestant may be built while the group's structures are kept, with
+/// `available` bytes free (`None`: unknown, so no) and the largest build so far having
+/// taken `largest` bytes: room for twice that (the next contestant's structure is not
+/// known in advance) and [`MEMORY_RESERVE`].
+fn room_for_another(available: Option<u64>, largest: u64) -> bool {
+    available.is_some_and(|a| a >= largest.saturating_mul(2).saturating_add(MEMORY_RESERVE))
+}
+
+/// Measures the contestants of `group` on workload `w`: per ray set, each contestant's
+/// untimed counted pass on all cores (counters and the rays that differ from `bvh`), then
+/// per thread count and query the timed rounds of every contestant of the group
+/// ([`timed_rounds`]).
+fn measure_group(
+    group: &[Prepared<'_>],
     w: &Workload,
     o: &Options,
     pools: &[(usize, ThreadPool)],
-    earlier: (f64, usize),
-) -> Result<ContestantReport, String> {
+) -> Vec<ContestantReport> {
     let all = &pools.last().expect("at least one pool").1;
-    let (r, build_s) = build(c, &w.scene, all)?;
-    let (build_s, builds) = (build_s.min(earlier.0), earlier.1 + 1);
-    let tracer = r.batch_tracer().ok_or("not a CPU structure")?;
-    let count = r.counts_tests();
-    let mut ray_sets = Vec::new();
+    let tracers: Vec<&dyn raybench_core::BatchTracer> = group
+        .iter()
+        .map(|p| p.renderer.batch_tracer().expect("checked by prepare"))
+        .collect();
+    let mut reports: Vec<ContestantReport> = group
+        .iter()
+        .map(|p| ContestantReport {
+            name: p.contestant.name.to_string(),
+            kind: p.contestant.kind,
+            build_s: p.build_s,
+            builds: p.builds,
+            build_vs_embree: None,
+            ray_sets: Vec::new(),
+        })
+        .collect();
     for s in &w.sets {
         let n = s.rays.len();
-        let closest = all.install(|| closest_pass(tracer, &s.rays, o.chunk, count));
-        let any = all.install(|| any_pass(tracer, &s.shadow, o.chunk, count));
-        let differ_closest = closest
-            .answers
+        let mut queries: Vec<(QueryReport, QueryReport)> = group
             .iter()
-            .zip(&s.closest)
-            .filter(|(h, r)| h.map(|h| h.prim) != **r)
-            .count();
-        let differ_any = any
-            .answers
-            .iter()
-            .zip(&s.occluded)
-            .filter(|(a, b)| a != b)
-            .count();
-        let mut hits = closest.answers;
-        let mut occluded = any.answers;
-        let mut closest_runs = Vec::new();
-        let mut any_runs = Vec::new();
+            .zip(&tracers)
+            .map(|(p, &tracer)| {
+                let count = p.renderer.counts_tests();
+                let closest = all.install(|| closest_pass(tracer, &s.rays, o.chunk, count));
+                let any = all.install(|| any_pass(tracer, &s.shadow, o.chunk, count));
+                let differ_closest = closest
+                    .answers
+                    .iter()
+                    .zip(&s.closest)
+                    .filter(|(h, r)| h.map(|h| h.prim) != **r)
+                    .count();
+                let differ_any = any
+                    .answers
+                    .iter()
+                    .zip(&s.occluded)
+                    .filter(|(a, b)| a != b)
+                    .count();
+                let query = |differ, counters: Option<RayCounters>| QueryReport {
+                    runs: Vec::new(),
+                    differ,
+                    node_visits_per_ray: per_ray(counters, n, |c| c.node_visits),
+                    prim_tests_per_ray: per_ray(counters, n, |c| c.prim_tests),
+                    ratios: Vec::new(),
+                };
+                (
+                    query(differ_closest, closest.counters),
+                    query(differ_any, any.counters),
+                )
+            })
+            .collect();
         for (threads, pool) in pools {
-            let seconds = best_of(pool, o.repeat, || {
-                hits.par_chunks_mut(o.chunk)
-                    .zip(s.rays.par_chunks(o.chunk))
-                    .for_each(|(h, r)| tracer.trace_batch(r, h));
+            let mut hits = vec![None; n];
+            let closest = timed_rounds(group.len(), o.repeat, |i| {
+                pool.install(|| {
+                    hits.par_chunks_mut(o.chunk)
+                        .zip(s.rays.par_chunks(o.chunk))
+                        .for_each(|(h, r)| tracers[i].trace_batch(r, h));
+                });
+                std::hint::black_box(&hits);
             });
-            closest_runs.push(Run {
-                threads: *threads,
-                seconds,
-                mrays: n as f64 / seconds / 1e6,
+            let mut occluded = vec![false; n];
+            let any = timed_rounds(group.len(), o.repeat, |i| {
+                pool.install(|| {
+                    occluded
+                        .par_chunks_mut(o.chunk)
+                        .zip(s.shadow.par_chunks(o.chunk))
+                        .for_each(|(a, r)| tracers[i].occlude_batch(r, a));
+                });
+                std::hint::black_box(&occluded);
             });
-            let seconds = best_of(pool, o.repeat, || {
-                occluded
-                    .par_chunks_mut(o.chunk)
-                    .zip(s.shadow.par_chunks(o.chunk))
-                    .for_each(|(a, r)| tracer.occlude_batch(r, a));
-            });
-            any_runs.push(Run {
-                threads: *threads,
-                seconds,
-                mrays: n as f64 / seconds / 1e6,
+            for ((q, c), a) in queries.iter_mut().zip(&closest).zip(&any) {
+                q.0.runs.push(Run::of(*threads, n, c));
+                q.1.runs.push(Run::of(*threads, n, a));
+            }
+        }
+        for (r, (closest, any)) in reports.iter_mut().zip(queries) {
+            r.ray_sets.push(SetReport {
+                name: s.name,
+                closest,
+                any,
             });
         }
-        std::hint::black_box((&hits, &occluded));
-        ray_sets.push(SetReport {
-            name: s.name,
-            closest: QueryReport {
-                runs: closest_runs,
-                differ: differ_closest,
-                node_visits_per_ray: per_ray(closest.counters, n, |c| c.node_visits),
-                prim_tests_per_ray: per_ray(closest.counters, n, |c| c.prim_tests),
-                ratios: Vec::new(),
-            },
-            any: QueryReport {
-                runs: any_runs,
-                differ: differ_any,
-                node_visits_per_ray: per_ray(any.counters, n, |c| c.node_visits),
-                prim_tests_per_ray: per_ray(any.counters, n, |c| c.prim_tests),
-                ratios: Vec::new(),
-            },
-        });
     }
-    Ok(ContestantReport {
-        name: c.name.to_string(),
-        kind: c.kind,
-        build_s,
-        builds,
-        build_vs_embree: None,
-        ray_sets,
-    })
+    reports
+}
+
+/// Measures `group` ([`measure_group`]) into `mesh` and empties it (dropping its
+/// structures).
+fn measure_and_report(
+    group: &mut Vec<Prepared<'_>>,
+    w: &Workload,
+    o: &Options,
+    pools: &[(usize, ThreadPool)],
+    mesh: &mut MeshReport,
+) {
+    if group.is_empty() {
+        return;
+    }
+    let start = Instant::now();
+    let names: Vec<String> = group
+        .iter()
+        .map(|p| p.contestant.name.to_string())
+        .collect();
+    mesh.contestants.extend(measure_group(group, w, o, pools));
+    eprintln!("  {} measured in {:.1?}", names.join(", "), start.elapsed());
+    mesh.groups.push(names);
+    group.clear();
 }
 
 /// Embree's version, or why it is absent.
@@ -803,17 +897,28 @@ pub fn run(
                 .collect(),
             skipped: Vec::new(),
             skipped_sets: w.skipped_sets.clone(),
+            groups: Vec::new(),
             contestants: Vec::new(),
         };
         let start = Instant::now();
         let builds = build_rounds(&contestants, &w.scene, all, o.repeat);
         eprintln!("  builds in {:.1?}", start.elapsed());
+        // Contestants are kept built while the memory holds them, and each group is timed
+        // in the same rounds.
+        let mut group: Vec<Prepared<'_>> = Vec::new();
+        let mut largest = 0u64;
         for (c, builds) in contestants.iter().zip(builds) {
-            let start = Instant::now();
-            match builds.and_then(|b| measure(c, &w, o, &pools, b)) {
-                Ok(m) => {
-                    eprintln!("  {} measured in {:.1?}", c.name, start.elapsed());
-                    mesh.contestants.push(m);
+            if !group.is_empty() && !room_for_another(raybench_scene::available_memory(), largest) {
+                measure_and_report(&mut group, &w, o, &pools, &mut mesh);
+            }
+            let before = raybench_scene::available_memory();
+            match builds.and_then(|b| prepare(c, &w.scene, all, b)) {
+                Ok(p) => {
+                    let after = raybench_scene::available_memory();
+                    if let (Some(before), Some(after)) = (before, after) {
+                        largest = largest.max(before.saturating_sub(after));
+                    }
+                    group.push(p);
                 }
                 Err(reason) => {
                     eprintln!("  {} skipped: {reason}", c.name);
@@ -824,6 +929,7 @@ pub fn run(
                 }
             }
         }
+        measure_and_report(&mut group, &w, o, &pools, &mut mesh);
         mesh.compute_ratios();
         report.meshes.push(mesh);
         on_mesh(&report)?;
@@ -841,4 +947,21 @@ pub fn write_json(report: &Report, path: &std::path::Path) -> Result<(), String>
     }
     let text = serde_json::to_string_pretty(report).map_err(|e| e.to_string())?;
     std::fs::write(path, text + "\n").map_err(|e| format!("{}: {e}", path.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Another contestant is built beside a group's structures only where the memory is
+    /// known and holds twice the largest structure so far and the reserve.
+    #[test]
+    fn groups_grow_while_the_memory_holds_them() {
+        let gib = 1 << 30;
+        assert!(room_for_another(Some(3 * gib), gib));
+        assert!(!room_for_another(Some(3 * gib - 1), gib));
+        assert!(room_for_another(Some(MEMORY_RESERVE), 0));
+        assert!(!room_for_another(None, 0));
+        assert!(!room_for_another(Some(u64::MAX - 1), u64::MAX));
+    }
 }

@@ -160,7 +160,7 @@ fn tiny_run_measures_every_contestant_and_writes_json() {
         "--rays",
         "2000",
         "--repeat",
-        "1",
+        "2",
         "--chunk",
         "100",
         "--threads",
@@ -221,6 +221,12 @@ fn tiny_run_measures_every_contestant_and_writes_json() {
                     let threads: Vec<_> = q.runs.iter().map(|r| r.threads).collect();
                     assert_eq!(threads, [1, 2]);
                     assert!(q.runs.iter().all(|r| r.mrays.is_finite() && r.mrays > 0.0));
+                    // Two kept rounds each, the median between the best and the slowest.
+                    for r in &q.runs {
+                        assert_eq!(r.samples_s.len(), 2, "{}", c.name);
+                        let slowest = r.samples_s.iter().copied().fold(0.0, f64::max);
+                        assert!(r.best_s <= r.median_s && r.median_s <= slowest);
+                    }
                     match c.kind {
                         Kind::Raybench => {
                             assert_eq!(q.differ, 0, "{} {} {}", c.name, m.name, s.name);
@@ -230,9 +236,15 @@ fn tiny_run_measures_every_contestant_and_writes_json() {
                         // Peers differ on edge rays only.
                         Kind::Peer => assert!(q.differ * 100 <= n, "{} {}", c.name, q.differ),
                     }
-                    // One ratio per Embree reference and thread count.
+                    // One ratio per Embree reference and thread count, each with the
+                    // interval of two paired rounds.
                     assert_eq!(q.ratios.is_empty(), !embree, "{}", c.name);
                     assert_eq!(q.ratios.len() % 2, 0);
+                    for r in &q.ratios {
+                        let [lo, hi] = r.interval.unwrap();
+                        assert!(lo <= r.value && r.value <= hi, "{r:?}");
+                        assert_eq!(r.confidence, Some(0.5));
+                    }
                 }
             }
             assert_eq!(c.build_vs_embree.is_some(), embree);
@@ -247,6 +259,9 @@ fn tiny_run_measures_every_contestant_and_writes_json() {
             m.name
         );
         assert!((2..=21).contains(&builds[0]), "{}: {builds:?}", m.name);
+        // Every contestant that ran was timed in some group, in table order.
+        let grouped: Vec<_> = m.groups.concat();
+        assert_eq!(grouped, ran, "{}", m.name);
     }
     let tables = report.tables();
     for c in &report.meshes[0].contestants {
@@ -256,19 +271,18 @@ fn tiny_run_measures_every_contestant_and_writes_json() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&o.json).unwrap()).unwrap();
     std::fs::remove_dir_all(&dir).unwrap();
-    assert_eq!(json["schema"], "raybench-peers/1");
+    assert_eq!(json["schema"], "raybench-peers/2");
     assert_eq!(json["workload"]["threads"], serde_json::json!([1, 2]));
     let first = &json["meshes"][0]["contestants"][0];
     assert_eq!(first["name"], "bvh");
     assert_eq!(first["kind"], "raybench");
     assert!(first["builds"].as_u64().unwrap() >= 2);
     assert_eq!(first["ray_sets"][1]["name"], "incoherent");
-    assert!(
-        first["ray_sets"][0]["any"]["runs"][1]["mrays"]
-            .as_f64()
-            .unwrap()
-            > 0.0
-    );
+    let run = &first["ray_sets"][0]["any"]["runs"][1];
+    assert!(run["mrays"].as_f64().unwrap() > 0.0);
+    assert_eq!(run["samples_s"].as_array().unwrap().len(), 2);
+    assert!(run["redone"].is_u64() && run["contended"].is_u64());
+    assert!(tables.contains("2 rounds per figure"), "{tables}");
     assert!(json["machine"]["cpu"].is_string());
 }
 

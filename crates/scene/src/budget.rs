@@ -77,8 +77,9 @@ pub fn parse_size(text: &str) -> Result<Option<u64>, String> {
     Ok(Some(bytes))
 }
 
-/// `MemAvailable` of `/proc/meminfo`, in bytes.
-fn available_memory() -> Option<u64> {
+/// `MemAvailable` of `/proc/meminfo`, in bytes; `None` where that file does not exist.
+#[must_use]
+pub fn available_memory() -> Option<u64> {
     let info = std::fs::read_to_string("/proc/meminfo").ok()?;
     let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
     let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;

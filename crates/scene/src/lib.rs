@@ -44,8 +44,8 @@ mod transform;
 
 pub use bpt::{BptPatch, load_bpt_file, parse_bpt};
 pub use budget::{
-    DEFAULT_SHARE, MEMORY_LIMIT_ENV, MemoryBudget, flatten_within_budget, flattened_bytes_estimate,
-    human_bytes, parse_size, set_memory_limit,
+    DEFAULT_SHARE, MEMORY_LIMIT_ENV, MemoryBudget, available_memory, flatten_within_budget,
+    flattened_bytes_estimate, human_bytes, parse_size, set_memory_limit,
 };
 pub use builtin::{
     BUILTIN_SCENES, Benchmark, BuiltinScene, Matrix, Purpose, builtin, for_experiment, matrix,

@@ -1,9 +1,9 @@
-//! The peer benchmark's results: the JSON schema (`raybench-peers/1`) and the tables printed
+//! The peer benchmark's results: the JSON schema (`raybench-peers/2`) and the tables printed
 //! from it.
 //!
 //! ```text
 //! {
-//!   "schema": "raybench-peers/1",
+//!   "schema": "raybench-peers/2",
 //!   "machine": { cpu, cores, threads, isa, gpu, os, version },   // as raybench report's
 //!   "packet_isa": "avx2",            // what raybench_packet::Isa::detect chose
 //!   "embree": "Embree 3.13.5, native packets 4/8/16" | "absent: ...",
@@ -14,6 +14,7 @@
 //!     "ray_sets": [ { "name": "primary", "rays": 1048576, "hits": 640000 } ],
 //!     "skipped": [ { "name": "packet-avx512", "reason": "this CPU has no AVX-512F" } ],
 //!     "skipped_sets": [ { "name": "shadow", "reason": "no shadow rays: the scene has no light ..." } ],
+//!     "groups": [ ["bvh", "packet", ...] ],   // contestants timed in the same rounds
 //!     "contestants": [ {
 //!       "name": "bvh", "kind": "raybench" | "peer",
 //!       "build_s": 0.012,            // best of `builds`, all cores
@@ -22,11 +23,17 @@
 //!       "ray_sets": [ {
 //!         "name": "primary",
 //!         "closest": {               // intersect_batch; "any": occluded_batch on shadow rays
-//!           "runs": [ { "threads": 1, "seconds": 0.25, "mrays": 4.1 } ],   // best of repeat
+//!           "runs": [ { "threads": 1, "median_s": 0.25, "best_s": 0.24,
+//!                       "samples_s": [0.25, 0.24, 0.26], // kept rounds, in round order
+//!                       "mrays": 4.1,                    // at the median
+//!                       "redone": 0, "contended": 0 } ],
 //!           "differ": 0,             // rays whose hit/miss or primitive differs from bvh's
 //!           "node_visits_per_ray": 37.0, "prim_tests_per_ray": 2.2,       // or null
-//!           "ratios": [ { "reference": "embree16-robust", "threads": 1, "value": 0.37 } ]
-//!         },
+//!           "ratios": [ { "reference": "embree16-robust", "threads": 1,
+//!                         "value": 0.37,              // median of the rounds' ratios
+//!                         "interval": [0.35, 0.39], "confidence": 0.75,  // or null
+//!                         "verdict": "behind" } ]     // ahead, behind, within noise,
+//!         },                                          // noise unknown
 //!         "any": { ... }
 //!       } ]
 //!     } ]
@@ -39,11 +46,13 @@ use super::contestants::Kind;
 use super::contestants::embree::{PACKET_DEFAULT, PACKET_ROBUST, SINGLE_DEFAULT, SINGLE_ROBUST};
 use raybench_core::RaySet;
 use raybench_report::results::Machine;
+use raybench_report::rounds::Tally;
+use raybench_report::stats::{self, Change};
 use serde::Serialize;
 use std::fmt::Write as _;
 
 /// The schema name written into every file.
-pub const SCHEMA: &str = "raybench-peers/1";
+pub const SCHEMA: &str = "raybench-peers/2";
 
 /// A whole run.
 #[derive(Clone, Debug, Serialize)]
@@ -78,8 +87,9 @@ pub struct WorkloadInfo {
     pub seed: u32,
     /// Rays per `intersect_batch` / `occluded_batch` call.
     pub chunk: usize,
-    /// Timed runs per figure (the best is kept), and the fewest builds per contestant
-    /// (`ContestantReport::builds` says how many each had).
+    /// Timed rounds per figure (every contestant timed once per round, the median kept),
+    /// and the fewest builds per contestant (`ContestantReport::builds` says how many each
+    /// had).
     pub repeat: usize,
     /// Thread counts measured.
     pub threads: Vec<usize>,
@@ -102,6 +112,10 @@ pub struct MeshReport {
     pub skipped: Vec<Skipped>,
     /// Ray sets that hold no ray on this mesh (a shadow set without lights), with why.
     pub skipped_sets: Vec<Skipped>,
+    /// The contestants timed in the same rounds, in table order: one group where the
+    /// machine's memory holds every contestant's structure at once, more where it does not
+    /// (figures of different groups were not taken side by side).
+    pub groups: Vec<Vec<String>>,
     /// Contestants' figures, in table order.
     pub contestants: Vec<ContestantReport>,
 }
@@ -171,26 +185,116 @@ pub struct QueryReport {
     pub ratios: Vec<Ratio>,
 }
 
-/// A timed figure.
-#[derive(Clone, Copy, Debug, Serialize)]
+/// A timed figure: the kept rounds of one query on one thread count.
+#[derive(Clone, Debug, Serialize)]
 pub struct Run {
     /// Worker threads.
     pub threads: usize,
-    /// Best time of `repeat`, seconds.
-    pub seconds: f64,
-    /// Million rays per second.
+    /// Median of the kept rounds, seconds.
+    pub median_s: f64,
+    /// Fastest kept round, seconds.
+    pub best_s: f64,
+    /// Seconds of every kept round, in round order (round `k` of every contestant of a
+    /// group was taken in the same round, so [`Ratio`]s pair them by index).
+    pub samples_s: Vec<f64>,
+    /// Million rays per second at the median.
     pub mrays: f64,
+    /// Rounds taken again because the machine interfered (another process waited for the
+    /// CPUs: `raybench_registry::interference`).
+    pub redone: u32,
+    /// Kept rounds the machine interfered with (the redo budget spent, or the machine busy
+    /// throughout).
+    pub contended: u32,
 }
 
-/// A throughput ratio to a reference contestant (above 1: faster than the reference).
+impl Run {
+    /// The figure of `rays` rays on `threads` threads from the kept rounds of `tally` (at
+    /// least one).
+    #[must_use]
+    pub fn of<X>(threads: usize, rays: usize, tally: &Tally<X>) -> Self {
+        let median_s = stats::median(&tally.seconds).unwrap_or(f64::NAN);
+        Self {
+            threads,
+            median_s,
+            best_s: tally.seconds.iter().copied().fold(f64::INFINITY, f64::min),
+            samples_s: tally.seconds.clone(),
+            mrays: rays as f64 / median_s / 1e6,
+            redone: tally.redone,
+            contended: tally.contended,
+        }
+    }
+}
+
+/// A throughput ratio to a reference contestant timed in the same rounds (above 1: faster
+/// than the reference).
 #[derive(Clone, Debug, Serialize)]
 pub struct Ratio {
     /// The reference contestant.
     pub reference: &'static str,
     /// Worker threads of both figures.
     pub threads: usize,
-    /// Contestant's Mrays/s over the reference's.
+    /// The median over the rounds of the reference's time over the contestant's
+    /// ([`stats::paired_ratio`]: a slow phase of the machine lands on both sides of a
+    /// round and cancels out).
     pub value: f64,
+    /// The distribution-free interval of `value`, `[lo, hi]`; `None` with one round.
+    pub interval: Option<[f64; 2]>,
+    /// The probability that `interval` holds the true ratio (below 0.95 where few rounds
+    /// allow no more: 0.75 for three, 0.94 for five).
+    pub confidence: Option<f64>,
+    /// What the interval says.
+    pub verdict: Verdict,
+}
+
+/// What a [`Ratio`]'s interval says of the contestant against the reference.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum Verdict {
+    /// Faster: the interval lies above 1 and the ratio is at least `1 + MIN_EFFECT`
+    /// ([`stats::MIN_EFFECT`]).
+    #[serde(rename = "ahead")]
+    Ahead,
+    /// Slower, likewise.
+    #[serde(rename = "behind")]
+    Behind,
+    /// The interval holds 1, or the difference is under [`stats::MIN_EFFECT`].
+    #[serde(rename = "within noise")]
+    WithinNoise,
+    /// One round: the noise is unknown.
+    #[serde(rename = "noise unknown")]
+    NoiseUnknown,
+}
+
+impl Ratio {
+    /// `own` against `base` (the reference `reference`'s figure on the same thread count,
+    /// timed in the same rounds).
+    #[must_use]
+    pub fn of(reference: &'static str, own: &Run, base: &Run) -> Self {
+        let (value, interval) = stats::paired_ratio(&base.samples_s, &own.samples_s);
+        let (time, time_interval) = stats::paired_ratio(&own.samples_s, &base.samples_s);
+        let verdict = match stats::judge(time, time_interval, stats::MIN_EFFECT) {
+            Change::Faster => Verdict::Ahead,
+            Change::Slower => Verdict::Behind,
+            Change::Same => Verdict::WithinNoise,
+            Change::Unknown => Verdict::NoiseUnknown,
+        };
+        Self {
+            reference,
+            threads: own.threads,
+            value,
+            interval: interval.map(|i| [i.lo, i.hi]),
+            confidence: interval.map(|i| i.confidence),
+            verdict,
+        }
+    }
+
+    /// The table's cell: the ratio, behind `~` when it is within the noise.
+    #[must_use]
+    pub fn cell(&self) -> String {
+        match self.verdict {
+            Verdict::WithinNoise => format!("~{:.2}", self.value),
+            _ => format!("{:.2}", self.value),
+        }
+    }
 }
 
 /// Which query of a ray set.
@@ -229,10 +333,13 @@ impl QueryReport {
     /// Mrays/s on `threads`, if measured.
     #[must_use]
     pub fn mrays(&self, threads: usize) -> Option<f64> {
-        self.runs
-            .iter()
-            .find(|r| r.threads == threads)
-            .map(|r| r.mrays)
+        self.run(threads).map(|r| r.mrays)
+    }
+
+    /// The figure on `threads`, if measured.
+    #[must_use]
+    pub fn run(&self, threads: usize) -> Option<&Run> {
+        self.runs.iter().find(|r| r.threads == threads)
     }
 }
 
@@ -268,12 +375,8 @@ impl MeshReport {
                             continue;
                         };
                         for run in &q.runs {
-                            if let Some(base) = r.mrays(run.threads) {
-                                q.ratios.push(Ratio {
-                                    reference,
-                                    threads: run.threads,
-                                    value: run.mrays / base,
-                                });
+                            if let Some(base) = r.run(run.threads) {
+                                q.ratios.push(Ratio::of(reference, run, base));
                             }
                         }
                     }
@@ -283,13 +386,38 @@ impl MeshReport {
     }
 }
 
-/// `a / b` per thread count as `"a / b"` with `digits` decimals, `-` where absent.
-fn per_threads(threads: &[usize], digits: usize, value: impl Fn(usize) -> Option<f64>) -> String {
+/// The cells of every thread count joined as `"a / b"`, `-` where absent.
+fn per_threads(threads: &[usize], cell: impl Fn(usize) -> Option<String>) -> String {
     threads
         .iter()
-        .map(|&t| value(t).map_or_else(|| "-".to_string(), |v| format!("{v:.digits$}")))
+        .map(|&t| cell(t).unwrap_or_else(|| "-".to_string()))
         .collect::<Vec<_>>()
         .join(" / ")
+}
+
+/// Mrays/s with two decimals.
+fn mrays_cell(v: f64) -> String {
+    format!("{v:.2}")
+}
+
+/// How the figures were taken and what a ratio cell says, for `repeat` rounds.
+fn timing_rule(repeat: usize) -> String {
+    let rounds = format!(
+        "{repeat} round{} per figure, every contestant once per round in a rotated order \
+         (a round the machine interfered with taken again), the median kept",
+        if repeat == 1 { "" } else { "s" }
+    );
+    // The confidence of the round ratios' interval depends on the count alone.
+    let samples: Vec<f64> = (0..repeat).map(|k| k as f64).collect();
+    match stats::median_interval(&samples) {
+        Some(i) => format!(
+            "{rounds}; a ratio is the median of the rounds' ratios, shown as ~R where its \
+             {:.0} % interval holds 1 or the difference is under {:.0} %",
+            100.0 * i.confidence,
+            100.0 * stats::MIN_EFFECT
+        ),
+        None => format!("{rounds}; one round: the ratios' noise is unknown"),
+    }
 }
 
 impl Report {
@@ -347,10 +475,11 @@ impl Report {
         let _ = writeln!(
             out,
             "Workload: primary {0} x {0} in {1} x {1} tiles, {2} incoherent rays (seed {3}), \
-             {4}-ray batches, best of {5}; any hit on rays ending at {6} of bvh's closest hit; \
-             figures at {t_label} threads",
-            w.primary_size, w.tile, w.incoherent_rays, w.seed, w.chunk, w.repeat, w.shadow_fraction
+             {4}-ray batches; any hit on rays ending at {5} of bvh's closest hit; figures at \
+             {t_label} threads",
+            w.primary_size, w.tile, w.incoherent_rays, w.seed, w.chunk, w.shadow_fraction
         );
+        let _ = writeln!(out, "Timing: {}", timing_rule(w.repeat));
         if !self.has_embree() && !self.embree.starts_with("Embree") {
             let _ = writeln!(
                 out,
@@ -384,6 +513,14 @@ impl Report {
             }
             for s in &m.skipped_sets {
                 let _ = writeln!(out, "skipped ray set {}: {}", s.name, s.reason);
+            }
+            if m.groups.len() > 1 {
+                let groups: Vec<String> = m.groups.iter().map(|g| g.join(", ")).collect();
+                let _ = writeln!(
+                    out,
+                    "timed in separate rounds (the memory holds no more structures at once): {}",
+                    groups.join(" | ")
+                );
             }
             let _ = writeln!(
                 out,
@@ -454,20 +591,24 @@ impl Report {
                         out,
                         "| {} | {} |",
                         c.name,
-                        per_threads(threads, 2, |t| cl.mrays(t))
+                        per_threads(threads, |t| cl.mrays(t).map(mrays_cell))
                     );
                     let ratio = |q: &QueryReport, reference: &str, t: usize| {
                         q.ratios
                             .iter()
                             .find(|r| r.reference == reference && r.threads == t)
-                            .map(|r| r.value)
+                            .map(Ratio::cell)
                     };
                     for (r, _) in closest_refs {
-                        let _ = write!(out, " {} |", per_threads(threads, 2, |t| ratio(cl, r, t)));
+                        let _ = write!(out, " {} |", per_threads(threads, |t| ratio(cl, r, t)));
                     }
-                    let _ = write!(out, " {} |", per_threads(threads, 2, |t| an.mrays(t)));
+                    let _ = write!(
+                        out,
+                        " {} |",
+                        per_threads(threads, |t| an.mrays(t).map(mrays_cell))
+                    );
                     for (r, _) in any_refs {
-                        let _ = write!(out, " {} |", per_threads(threads, 2, |t| ratio(an, r, t)));
+                        let _ = write!(out, " {} |", per_threads(threads, |t| ratio(an, r, t)));
                     }
                     let count =
                         |v: Option<f64>| v.map_or_else(|| "-".into(), |v| format!("{v:.1}"));
@@ -485,5 +626,51 @@ impl Report {
             }
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(samples_s: &[f64]) -> Run {
+        let tally = Tally::<()> {
+            seconds: samples_s.to_vec(),
+            ..Tally::default()
+        };
+        Run::of(1, 1_000_000, &tally)
+    }
+
+    /// A ratio pairs the rounds: a slow round of both sides cancels out, a contestant
+    /// faster in every round of five is ahead, one whose rounds straddle the reference's is
+    /// within the noise, and one round says nothing of the noise.
+    #[test]
+    fn ratios_pair_the_rounds_and_judge_by_their_interval() {
+        let reference = run(&[1.0, 1.0, 2.0, 1.0, 1.0]);
+        let ahead = Ratio::of("r", &run(&[0.8, 0.8, 1.6, 0.81, 0.79]), &reference);
+        assert_eq!(ahead.verdict, Verdict::Ahead);
+        assert_eq!(ahead.value, 1.0 / 0.8);
+        let [lo, hi] = ahead.interval.unwrap();
+        assert!(lo > 1.2 && hi < 1.3, "{ahead:?}");
+        assert_eq!(ahead.confidence, Some(0.9375));
+        assert_eq!(ahead.cell(), "1.25");
+        let behind = Ratio::of("r", &reference, &run(&[0.8, 0.8, 1.6, 0.81, 0.79]));
+        assert_eq!(behind.verdict, Verdict::Behind);
+        let tie = Ratio::of("r", &run(&[0.97, 1.04, 1.9, 0.99, 1.02]), &reference);
+        assert_eq!(tie.verdict, Verdict::WithinNoise);
+        assert!(tie.cell().starts_with('~'), "{}", tie.cell());
+        let once = Ratio::of("r", &run(&[0.5]), &run(&[1.0]));
+        assert_eq!((once.verdict, once.interval), (Verdict::NoiseUnknown, None));
+        assert_eq!(once.cell(), "2.00");
+        // The figure is the median round: 1 Mrays in 1 s.
+        assert_eq!((reference.mrays, reference.best_s), (1.0, 1.0));
+    }
+
+    #[test]
+    fn the_timing_rule_states_the_rounds_and_the_confidence() {
+        let five = timing_rule(5);
+        assert!(five.starts_with("5 rounds per figure"), "{five}");
+        assert!(five.contains("94 % interval"), "{five}");
+        assert!(timing_rule(1).ends_with("one round: the ratios' noise is unknown"));
     }
 }
