@@ -6,6 +6,36 @@ use crate::common::{assert_success, raybench_command, write};
 use crate::{root, tmp_dir};
 use std::process::Command;
 
+/// Whether this process ignores SIGINT: a disposition inherited from whoever started the
+/// tests (a background job of a non-interactive shell has it so) and passed on through
+/// `exec`, so that `kill -INT` would end no child. Linux's `/proc/self/status` says;
+/// elsewhere it is taken as not ignored.
+#[cfg(unix)]
+fn sigint_ignored() -> bool {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|status| {
+            let mask = status.lines().find_map(|l| l.strip_prefix("SigIgn:"))?;
+            u64::from_str_radix(mask.trim(), 16).ok()
+        })
+        .is_some_and(|mask| mask & (1 << (2 - 1)) != 0)
+}
+
+/// `raybench` as a command that an interrupt ends: where this process ignores SIGINT
+/// ([`sigint_ignored`]), started through coreutils' `env --default-signal=INT`, which
+/// restores the default action before it runs raybench in its place (same process).
+#[cfg(unix)]
+fn interruptible_raybench() -> Command {
+    if !sigint_ignored() {
+        return raybench_command();
+    }
+    let mut command = Command::new("env");
+    command
+        .arg("--default-signal=INT")
+        .arg(raybench_command().get_program());
+    command
+}
+
 /// Ctrl-C while the image is being written, the moment an in-place write would leave a
 /// truncated file under the final name: the previous file there stays whole (images are
 /// written to a temporary name and renamed into place only when complete), and the process
@@ -27,7 +57,7 @@ fn an_interrupted_render_leaves_the_previous_image_whole() {
         .status()
         .expect("mkfifo runs");
     assert!(made.success());
-    let mut child = raybench_command()
+    let mut child = interruptible_raybench()
         .args([
             "render", "spheres", "--width", "128", "--height", "128", "--out", &out,
         ])
@@ -87,7 +117,7 @@ fn an_interrupt_during_the_render_writes_nothing() {
     let dir = tmp_dir("interrupt-render");
     let out = write(&dir, "out.png", b"the previous image");
     // Path tracing at 1024 spp (minutes): interrupted once its step has begun.
-    let mut child = raybench_command()
+    let mut child = interruptible_raybench()
         .args([
             "render", "spheres", "--mode", "path", "--spp", "1024", "--width", "512", "--height",
             "512", "--out", &out,
@@ -131,7 +161,21 @@ fn interrupt_and_check(child: &mut std::process::Child, out: &str, context: &str
         .status()
         .expect("kill runs");
     assert!(sent.success());
-    let status = child.wait().unwrap();
+    // At most 3,000 polls 20 ms apart: a process the signal does not end is killed and
+    // reported rather than waited for (it would wait on the test's pipe for ever).
+    let mut status = None;
+    for _ in 0..3000 {
+        status = child.try_wait().unwrap();
+        if status.is_some() {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let Some(status) = status else {
+        let _ = child.kill();
+        let _ = child.wait();
+        panic!("SIGINT did not end raybench within a minute; {context}");
+    };
     assert_eq!(
         std::os::unix::process::ExitStatusExt::signal(&status),
         Some(2),
