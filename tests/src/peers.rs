@@ -937,7 +937,9 @@ pub fn run(
     Ok(report)
 }
 
-/// Writes `report` as pretty JSON to `path`, creating its directory.
+/// Writes `report` as JSON to `path`, creating its directory: compact, on one line (every
+/// round of every figure makes a full run's indented file over a megabyte; the tables are
+/// the form to read, `jq .` indents it).
 ///
 /// # Errors
 /// The path and the I/O error.
@@ -945,7 +947,7 @@ pub fn write_json(report: &Report, path: &std::path::Path) -> Result<(), String>
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     }
-    let text = serde_json::to_string_pretty(report).map_err(|e| e.to_string())?;
+    let text = serde_json::to_string(report).map_err(|e| e.to_string())?;
     std::fs::write(path, text + "\n").map_err(|e| format!("{}: {e}", path.display()))
 }
 
