@@ -47,6 +47,7 @@ fn main() -> ExitCode {
     match result {
         Ok(report) => {
             print!("{}", report.skipped_meshes_text());
+            print!("{}", report.summary());
             if let Err(e) = peers::write_json(&report, &options.json) {
                 eprintln!("error: peers: cannot write the JSON: {e}");
                 return ExitCode::FAILURE;

@@ -267,6 +267,19 @@ fn tiny_run_measures_every_contestant_and_writes_json() {
     for c in &report.meshes[0].contestants {
         assert!(tables.contains(&format!("| {} |", c.name)), "{}", c.name);
     }
+    // The goals' table: a row per mesh, a ratio or `-` per ray set and query, where Embree
+    // ran.
+    let summary = report.summary();
+    assert_eq!(summary.is_empty(), !cfg!(feature = "embree"), "{summary}");
+    for m in &report.meshes {
+        let row = summary
+            .lines()
+            .find(|l| l.starts_with(&format!("| {} |", m.name)));
+        if cfg!(feature = "embree") {
+            let cells = row.unwrap().matches(" / ").count();
+            assert_eq!(cells, m.ray_sets.len() + 1, "{}", row.unwrap());
+        }
+    }
     peers::write_json(&report, &o.json).unwrap();
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&o.json).unwrap()).unwrap();

@@ -329,6 +329,32 @@ pub fn references(set: &str, query: Query) -> &'static [(&'static str, &'static 
 /// Embree's build, the reference of `build_vs_embree`.
 pub const BUILD_REFERENCE: &str = SINGLE_DEFAULT;
 
+/// Every Embree variant.
+const EMBREE: [&str; 4] = [SINGLE_ROBUST, SINGLE_DEFAULT, PACKET_ROBUST, PACKET_DEFAULT];
+
+/// The build goal of `bvh`: at most this multiple of Embree's fastest build.
+pub const BVH_BUILD_GOAL: f64 = 1.2;
+
+/// The build goal of `packet`, likewise.
+pub const PACKET_BUILD_GOAL: f64 = 1.5;
+
+/// On mesh `m`, ray set `set`: the ratio of the fastest exact raybench backend (by median
+/// on `threads`) to the fastest Embree variant, their rounds paired; `None` where either
+/// is missing.
+fn best_against_embree(m: &MeshReport, set: &str, query: Query, threads: usize) -> Option<Ratio> {
+    let fastest = |pick: &dyn Fn(&ContestantReport) -> bool| {
+        m.contestants
+            .iter()
+            .filter(|c| pick(c))
+            .filter_map(|c| Some((c, c.query(set, query)?.run(threads)?)))
+            .max_by(|a, b| a.1.mrays.total_cmp(&b.1.mrays))
+    };
+    let (_, own) = fastest(&|c| c.kind == Kind::Raybench)?;
+    let (reference, base) = fastest(&|c| EMBREE.contains(&c.name.as_str()))?;
+    let name = EMBREE.into_iter().find(|e| *e == reference.name)?;
+    Some(Ratio::of(name, own, base))
+}
+
 impl QueryReport {
     /// Mrays/s on `threads`, if measured.
     #[must_use]
@@ -429,6 +455,67 @@ impl Report {
             out.push_str(&self.mesh_tables(m));
         }
         out.push_str(&self.skipped_meshes_text());
+        out.push_str(&self.summary());
+        out
+    }
+
+    /// The goals' table: per mesh and ray set, the best exact raybench backend against the
+    /// best Embree variant on one thread (closest / any hits), and the builds of `bvh` and
+    /// `packet` against Embree's fastest; empty without Embree's figures.
+    #[must_use]
+    pub fn summary(&self) -> String {
+        let mut out = String::new();
+        if !self.has_embree() {
+            return out;
+        }
+        let threads = self.workload.threads.first().copied().unwrap_or(1);
+        let sets: Vec<&str> = {
+            let mut names: Vec<&str> = Vec::new();
+            for s in self.meshes.iter().flat_map(|m| &m.ray_sets) {
+                if !names.contains(&s.name) {
+                    names.push(s.name);
+                }
+            }
+            names
+        };
+        let _ = writeln!(
+            out,
+            "\n## Against Embree\n\nThe best exact raybench backend over the best Embree \
+             variant, by median Mrays/s on {threads} thread{}, rounds paired (~: within the \
+             noise); builds: time over Embree's fastest build, lower is faster (goals: `bvh` \
+             at most {BVH_BUILD_GOAL}, `packet` at most {PACKET_BUILD_GOAL}).\n",
+            if threads == 1 { "" } else { "s" }
+        );
+        let mut head = String::from("| mesh |");
+        let mut rule = String::from("|---|");
+        for s in &sets {
+            let _ = write!(head, " {s} closest / any |");
+            rule.push_str("---:|");
+        }
+        let _ = writeln!(out, "{head} build bvh / packet |\n{rule}---:|");
+        for m in &self.meshes {
+            let _ = write!(out, "| {} |", m.name);
+            for s in &sets {
+                let cell = |query| {
+                    best_against_embree(m, s, query, threads)
+                        .map_or_else(|| "-".into(), |r| r.cell())
+                };
+                let _ = write!(out, " {} / {} |", cell(Query::Closest), cell(Query::Any));
+            }
+            let fastest = m
+                .contestants
+                .iter()
+                .filter(|c| EMBREE.contains(&c.name.as_str()))
+                .map(|c| c.build_s)
+                .fold(f64::INFINITY, f64::min);
+            let build = |name: &str| {
+                m.contestants
+                    .iter()
+                    .find(|c| c.name == name)
+                    .map_or_else(|| "-".into(), |c| format!("{:.2}", c.build_s / fastest))
+            };
+            let _ = writeln!(out, " {} / {} |", build("bvh"), build("packet"));
+        }
         out
     }
 
