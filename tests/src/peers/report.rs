@@ -332,6 +332,9 @@ pub const BUILD_REFERENCE: &str = SINGLE_DEFAULT;
 /// Every Embree variant.
 const EMBREE: [&str; 4] = [SINGLE_ROBUST, SINGLE_DEFAULT, PACKET_ROBUST, PACKET_DEFAULT];
 
+/// Embree's variants in robust mode: watertight, as raybench's exact backends are.
+const EMBREE_ROBUST: [&str; 2] = [SINGLE_ROBUST, PACKET_ROBUST];
+
 /// The build goal of `bvh`: at most this multiple of Embree's fastest build.
 pub const BVH_BUILD_GOAL: f64 = 1.2;
 
@@ -339,9 +342,15 @@ pub const BVH_BUILD_GOAL: f64 = 1.2;
 pub const PACKET_BUILD_GOAL: f64 = 1.5;
 
 /// On mesh `m`, ray set `set`: the ratio of the fastest exact raybench backend (by median
-/// on `threads`) to the fastest Embree variant, their rounds paired; `None` where either
-/// is missing.
-fn best_against_embree(m: &MeshReport, set: &str, query: Query, threads: usize) -> Option<Ratio> {
+/// on `threads`) to the fastest of the Embree `variants`, their rounds paired; `None` where
+/// either is missing.
+fn best_against_embree(
+    m: &MeshReport,
+    set: &str,
+    query: Query,
+    threads: usize,
+    variants: &[&'static str],
+) -> Option<Ratio> {
     let fastest = |pick: &dyn Fn(&ContestantReport) -> bool| {
         m.contestants
             .iter()
@@ -350,8 +359,8 @@ fn best_against_embree(m: &MeshReport, set: &str, query: Query, threads: usize) 
             .max_by(|a, b| a.1.mrays.total_cmp(&b.1.mrays))
     };
     let (_, own) = fastest(&|c| c.kind == Kind::Raybench)?;
-    let (reference, base) = fastest(&|c| EMBREE.contains(&c.name.as_str()))?;
-    let name = EMBREE.into_iter().find(|e| *e == reference.name)?;
+    let (reference, base) = fastest(&|c| variants.contains(&c.name.as_str()))?;
+    let name = variants.iter().copied().find(|e| *e == reference.name)?;
     Some(Ratio::of(name, own, base))
 }
 
@@ -486,35 +495,62 @@ impl Report {
              at most {BVH_BUILD_GOAL}, `packet` at most {PACKET_BUILD_GOAL}).\n",
             if threads == 1 { "" } else { "s" }
         );
+        out.push_str(&self.summary_table(&sets, threads, &EMBREE, true));
+        let _ = writeln!(
+            out,
+            "\nThe same against Embree's robust mode only (watertight, as raybench's exact \
+             backends are; its default mode is not):\n"
+        );
+        out.push_str(&self.summary_table(&sets, threads, &EMBREE_ROBUST, false));
+        out
+    }
+
+    /// [`Report::summary`]'s table against the Embree `variants`, with the builds' column
+    /// when `builds`.
+    fn summary_table(
+        &self,
+        sets: &[&str],
+        threads: usize,
+        variants: &[&'static str],
+        builds: bool,
+    ) -> String {
+        let mut out = String::new();
         let mut head = String::from("| mesh |");
         let mut rule = String::from("|---|");
-        for s in &sets {
+        for s in sets {
             let _ = write!(head, " {s} closest / any |");
             rule.push_str("---:|");
         }
-        let _ = writeln!(out, "{head} build bvh / packet |\n{rule}---:|");
+        if builds {
+            head.push_str(" build bvh / packet |");
+            rule.push_str("---:|");
+        }
+        let _ = writeln!(out, "{head}\n{rule}");
         for m in &self.meshes {
             let _ = write!(out, "| {} |", m.name);
-            for s in &sets {
+            for s in sets {
                 let cell = |query| {
-                    best_against_embree(m, s, query, threads)
+                    best_against_embree(m, s, query, threads, variants)
                         .map_or_else(|| "-".into(), |r| r.cell())
                 };
                 let _ = write!(out, " {} / {} |", cell(Query::Closest), cell(Query::Any));
             }
-            let fastest = m
-                .contestants
-                .iter()
-                .filter(|c| EMBREE.contains(&c.name.as_str()))
-                .map(|c| c.build_s)
-                .fold(f64::INFINITY, f64::min);
-            let build = |name: &str| {
-                m.contestants
+            if builds {
+                let fastest = m
+                    .contestants
                     .iter()
-                    .find(|c| c.name == name)
-                    .map_or_else(|| "-".into(), |c| format!("{:.2}", c.build_s / fastest))
-            };
-            let _ = writeln!(out, " {} / {} |", build("bvh"), build("packet"));
+                    .filter(|c| variants.contains(&c.name.as_str()))
+                    .map(|c| c.build_s)
+                    .fold(f64::INFINITY, f64::min);
+                let build = |name: &str| {
+                    m.contestants
+                        .iter()
+                        .find(|c| c.name == name)
+                        .map_or_else(|| "-".into(), |c| format!("{:.2}", c.build_s / fastest))
+                };
+                let _ = write!(out, " {} / {} |", build("bvh"), build("packet"));
+            }
+            out.push('\n');
         }
         out
     }
