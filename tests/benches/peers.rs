@@ -28,6 +28,10 @@ fn main() -> ExitCode {
             }
             return ExitCode::SUCCESS;
         }
+        Ok(Command::CacheProbe(per_size)) => {
+            print!("{}", peers::cache_probe::run(per_size));
+            return ExitCode::SUCCESS;
+        }
         Err(e) => {
             eprintln!("error: peers: {e}");
             return ExitCode::from(2);

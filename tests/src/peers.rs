@@ -22,6 +22,7 @@
 //! [`contestants`] says who runs, [`report`] what is written ([`report::Report`], JSON
 //! schema `raybench-peers/2`) and printed.
 
+pub mod cache_probe;
 pub mod contestants;
 pub mod report;
 
@@ -105,6 +106,8 @@ pub enum Command {
     Help,
     /// List the contestants.
     List,
+    /// Time random walks through memory ([`cache_probe`]) for about this long each.
+    CacheProbe(std::time::Duration),
 }
 
 /// The command line's usage.
@@ -133,6 +136,10 @@ options:
   --threads N           threads of the all-cores figures (default: every core)
   --json PATH           where the JSON goes (default: target/raybench-peers.json)
   --list                list the contestants and exit
+  --cache-probe         time random walks that fit the L2, fit the last-level cache and
+                        miss it, 10 s each, and print how much their samples spread
+                        (on a virtual machine whose cache other guests share, the second
+                        spreads between the cache's latency and the memory's); then exit
   --help                this text";
 
 /// `target/raybench-peers.json` beside the running benchmark (its executable lives in
@@ -199,6 +206,9 @@ impl Options {
                 "--bench" => {}
                 "--help" | "-h" => return Ok(Command::Help),
                 "--list" => return Ok(Command::List),
+                "--cache-probe" => {
+                    return Ok(Command::CacheProbe(std::time::Duration::from_secs(10)));
+                }
                 "--quick" => {
                     o.primary_size = 256;
                     o.incoherent_rays = 65_536;

@@ -54,6 +54,10 @@ fn defaults_are_the_peers_workload() {
     assert_eq!((s.primary_size, s.incoherent_rays), (64, 100));
     assert_eq!(parse(&["--help"]), Ok(Command::Help));
     assert_eq!(parse(&["--list"]), Ok(Command::List));
+    assert_eq!(
+        parse(&["--cache-probe"]),
+        Ok(Command::CacheProbe(std::time::Duration::from_secs(10)))
+    );
     assert_eq!(o.sets, RaySet::ALL);
     let d = options(&[
         "--sets",
