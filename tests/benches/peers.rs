@@ -29,7 +29,7 @@ fn main() -> ExitCode {
             return ExitCode::SUCCESS;
         }
         Ok(Command::CacheProbe(per_size)) => {
-            print!("{}", peers::cache_probe::run(per_size));
+            print!("{}", raybench_report::cache_probe::table(per_size));
             return ExitCode::SUCCESS;
         }
         Err(e) => {
@@ -51,6 +51,7 @@ fn main() -> ExitCode {
     match result {
         Ok(report) => {
             print!("{}", report.skipped_meshes_text());
+            print!("{}", report.cache_text());
             print!("{}", report.summary());
             if let Err(e) = peers::write_json(&report, &options.json) {
                 eprintln!("error: peers: cannot write the JSON: {e}");

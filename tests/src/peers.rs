@@ -22,13 +22,13 @@
 //! [`contestants`] says who runs, [`report`] what is written ([`report::Report`], JSON
 //! schema `raybench-peers/2`) and printed.
 
-pub mod cache_probe;
 pub mod contestants;
 pub mod report;
 
 use contestants::Contestant;
 use raybench_core::{Hit, Ray, RayCounters, RaySet, Renderer, Scene, ray_sets};
 use raybench_registry::interference;
+use raybench_report::cache_probe;
 use raybench_report::rounds::{self, Policy, Repeat, Sample, Tally};
 use rayon::ThreadPool;
 use rayon::prelude::*;
@@ -106,7 +106,8 @@ pub enum Command {
     Help,
     /// List the contestants.
     List,
-    /// Time random walks through memory ([`cache_probe`]) for about this long each.
+    /// Time random walks through memory (`raybench_report::cache_probe`) for about this
+    /// long each.
     CacheProbe(std::time::Duration),
 }
 
@@ -838,6 +839,10 @@ fn embree_description() -> String {
     }
 }
 
+/// How long the last-level cache's walk is timed before and after a run
+/// ([`Report::cache`]).
+const CACHE_PROBE_TIME: std::time::Duration = std::time::Duration::from_secs(1);
+
 /// Runs the benchmark, printing progress to stderr and calling `on_mesh` with the report
 /// so far after each mesh (the caller prints and saves as it goes, so an interrupted run
 /// keeps the meshes it finished).
@@ -866,6 +871,7 @@ pub fn run(
         },
         meshes: Vec::new(),
         skipped_meshes: Vec::new(),
+        cache: [Some(cache_probe::last_level(CACHE_PROBE_TIME)), None],
     };
     let pools: Vec<(usize, ThreadPool)> = threads.iter().map(|&t| (t, pool(t))).collect();
     let all = &pools.last().expect("at least one pool").1;
@@ -944,6 +950,7 @@ pub fn run(
         report.meshes.push(mesh);
         on_mesh(&report)?;
     }
+    report.cache[1] = Some(cache_probe::last_level(CACHE_PROBE_TIME));
     Ok(report)
 }
 

@@ -183,6 +183,24 @@ fn tiny_run_measures_every_contestant_and_writes_json() {
     .unwrap();
     assert_eq!(calls, 2);
     assert_eq!(report.meshes.len(), 2);
+    // The last-level cache's walk, before and after, in the header and the tables.
+    let [Some(before), Some(after)] = report.cache else {
+        panic!("no cache walk: {:?}", report.cache)
+    };
+    assert!(
+        before.samples > 0 && after.fastest_ns > 0.0,
+        "{before:?} {after:?}"
+    );
+    assert!(
+        report
+            .header()
+            .contains("Last-level cache before the run: a random walk")
+    );
+    assert!(
+        report
+            .tables()
+            .contains("Last-level cache after the run: a random walk")
+    );
     let all = contestants::all();
     for m in &report.meshes {
         let ran: Vec<_> = m.contestants.iter().map(|c| c.name.as_str()).collect();
@@ -304,6 +322,11 @@ fn tiny_run_measures_every_contestant_and_writes_json() {
     assert!(run["redone"].is_u64() && run["contended"].is_u64());
     assert!(tables.contains("2 rounds per figure"), "{tables}");
     assert!(json["machine"]["cpu"].is_string());
+    assert!(
+        json["cache"][1]["median_ns"]
+            .as_f64()
+            .is_some_and(|ns| ns > 0.0)
+    );
 }
 
 /// `--rays-file` replaces the ray sets with a file's rays: one set named `file`, its any

@@ -5,6 +5,7 @@
 //! shards (parts of the matrix run on several machines or at several times).
 
 pub mod baseline;
+pub mod cache_probe;
 pub mod charts;
 mod ctx;
 pub mod diff;
@@ -43,6 +44,10 @@ pub const MIN_SAMPLE_FULL: f64 = 0.1;
 pub const BUDGET_QUICK: f64 = 0.1;
 /// [`BUDGET_QUICK`] for the full run.
 pub const BUDGET_FULL: f64 = 1.0;
+
+/// How long the last-level cache's walk is timed before and after a run
+/// ([`Shard::cache`]).
+const CACHE_PROBE_TIME: std::time::Duration = std::time::Duration::from_millis(500);
 
 /// A stable hash (FNV-1a, 64 bits) of `bytes`: a preset's colour for presets this build
 /// does not know, and the executable's fingerprint in a shard's [`results::Plan`].
@@ -218,6 +223,7 @@ pub fn run(opts: &Options) -> Result<Results> {
     std::fs::create_dir_all(opts.out.join("images"))
         .with_context(|| format!("cannot create {}", opts.out.display()))?;
     std::fs::create_dir_all(opts.out.join("charts"))?;
+    let cache_before = cache_probe::last_level(CACHE_PROBE_TIME);
     let started = machine::now_utc();
     let wall = Instant::now();
     let load_before = interference::load_average();
@@ -236,6 +242,7 @@ pub fn run(opts: &Options) -> Result<Results> {
             load: None,
             ranked_by_device: opts.device_time,
             others: None,
+            cache: None,
             pinned: opts.pin,
             repeat: ctx.policy.repeat.name(),
             min_sample: ctx.policy.min_sample,
@@ -277,6 +284,7 @@ pub fn run(opts: &Options) -> Result<Results> {
         .zip(interference::MachineUse::now())
         .and_then(|(before, after)| after.others_since(&before))
         .map(|o| [o.share, o.steal]);
+    results.shards[0].cache = Some([cache_before, cache_probe::last_level(CACHE_PROBE_TIME)]);
     results.fit();
     let appendix = before.as_ref().map(|(before, name)| {
         baseline::markdown(

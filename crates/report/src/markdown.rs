@@ -143,7 +143,7 @@ pub fn report(results: &Results, charts: &Charts) -> String {
         let m = &sh.machine;
         let _ = writeln!(
             s,
-            "**Shard {}/{}**{}{}: {}, {} logical cores ({} worker threads{}); {}; GPU: {}; {}; {}. Started {} UTC, took {:.0} s{}{}{}.\n\n`{}`\n",
+            "**Shard {}/{}**{}{}: {}, {} logical cores ({} worker threads{}); {}; GPU: {}; {}; {}. Started {} UTC, took {:.0} s{}{}{}{}.\n\n`{}`\n",
             sh.index,
             sh.count,
             if sh.quick { " (quick)" } else { "" },
@@ -173,6 +173,12 @@ pub fn report(results: &Results, charts: &Charts) -> String {
                 "; other processes took {:.1}% of the CPUs' time meanwhile ({:.1}% stolen by the hypervisor)",
                 share * 100.0,
                 steal * 100.0
+            )),
+            sh.cache.map_or_else(String::new, |[before, after]| format!(
+                "; a random walk through {} of the last-level cache took {} before, {} after",
+                before.size(),
+                before.describe(),
+                after.describe()
             )),
             if sh.repeat.is_empty() {
                 String::new()
@@ -332,6 +338,7 @@ mod tests {
             load: None,
             ranked_by_device: false,
             others: None,
+            cache: None,
             pinned: false,
             repeat: String::new(),
             min_sample: 0.0,
@@ -374,6 +381,15 @@ mod tests {
         (full.quick, full.pinned) = (true, true);
         full.load = Some([[0.5, 0.0, 0.0], [1.25, 0.0, 0.0]]);
         full.others = Some([0.123, 0.004]);
+        let walk = |median_ns| crate::results::CacheWalk {
+            bytes: 8 << 20,
+            samples: 140,
+            fastest_ns: 20.0,
+            median_ns,
+            p90_ns: 90.0,
+            slowest_ns: 100.0,
+        };
+        full.cache = Some([walk(30.0), walk(70.0)]);
         (full.repeat, full.min_sample) = ("auto".into(), 0.05);
         let s = text(&Results {
             shards: vec![plain, full],
@@ -391,8 +407,10 @@ mod tests {
                 "**Shard 2/2** (quick) on `node7`: cpu, 4 logical cores (3 worker threads, \
                  pinned to cores); isa; GPU: none; os; v. Started 2026-01-02 03:04:05 UTC, took \
                  12 s; load average 0.50 before, 1.25 after (1 minute); other processes took \
-                 12.3% of the CPUs' time meanwhile (0.4% stolen by the hypervisor); repetitions \
-                 auto, each at least 50 ms.\n"
+                 12.3% of the CPUs' time meanwhile (0.4% stolen by the hypervisor); a random walk \
+                 through 8.0 MiB of the last-level cache took 30.0 ns per step at the median, \
+                 20.0 at the fastest (1.50x) before, 70.0 ns per step at the median, 20.0 at \
+                 the fastest (3.50x) after; repetitions auto, each at least 50 ms.\n"
             ),
             "{s}"
         );

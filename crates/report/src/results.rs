@@ -155,6 +155,12 @@ pub struct Shard {
     /// hypervisor's steal; `null` where `/proc` does not tell and in older files.
     #[serde(default)]
     pub others: Option<[f64; 2]>,
+    /// A random walk through a quarter of the last-level cache, timed for half a second
+    /// when the shard started and when it ended ([`crate::cache_probe::last_level`]): where
+    /// other machines share that cache, its median step moves away from its fastest;
+    /// `null` in older files.
+    #[serde(default)]
+    pub cache: Option<[CacheWalk; 2]>,
     /// Whether the worker threads were pinned to cores (`--pin`).
     #[serde(default)]
     pub pinned: bool,
@@ -170,6 +176,24 @@ pub struct Shard {
     /// files written before it was recorded.
     #[serde(default)]
     pub plan: Option<Plan>,
+}
+
+/// A random walk through memory, one dependent load per step, timed in samples
+/// ([`crate::cache_probe`]), summarised.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CacheWalk {
+    /// Bytes walked through.
+    pub bytes: u64,
+    /// Samples taken (100,000 steps each).
+    pub samples: u32,
+    /// Nanoseconds per step of the fastest sample.
+    pub fastest_ns: f64,
+    /// Of the median sample.
+    pub median_ns: f64,
+    /// Of the 90th percentile.
+    pub p90_ns: f64,
+    /// Of the slowest sample.
+    pub slowest_ns: f64,
 }
 
 /// The whole report a shard is part of: what `merge` checks its shards share, and which

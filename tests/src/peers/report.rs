@@ -45,6 +45,7 @@
 use super::contestants::Kind;
 use super::contestants::embree::{PACKET_DEFAULT, PACKET_ROBUST, SINGLE_DEFAULT, SINGLE_ROBUST};
 use raybench_core::RaySet;
+use raybench_report::results::CacheWalk;
 use raybench_report::results::Machine;
 use raybench_report::rounds::Tally;
 use raybench_report::stats::{self, Change};
@@ -72,6 +73,11 @@ pub struct Report {
     /// Meshes that could not be loaded here (the shared meshes without the assets
     /// directory, a flattened scene over the memory budget), with why.
     pub skipped_meshes: Vec<Skipped>,
+    /// A random walk through a quarter of the last-level cache, timed for a second before
+    /// the run and after it (`null` until the run ends;
+    /// `raybench_report::cache_probe::last_level`): where other machines share that cache,
+    /// the median step moves away from the fastest, and the small meshes' Mrays/s with it.
+    pub cache: [Option<CacheWalk>; 2],
 }
 
 /// The workload's parameters.
@@ -464,6 +470,7 @@ impl Report {
             out.push_str(&self.mesh_tables(m));
         }
         out.push_str(&self.skipped_meshes_text());
+        out.push_str(&self.cache_text());
         out.push_str(&self.summary());
         out
     }
@@ -555,6 +562,18 @@ impl Report {
         out
     }
 
+    /// The last-level cache's walk after the run, one line (empty until the run ends).
+    #[must_use]
+    pub fn cache_text(&self) -> String {
+        self.cache[1].map_or_else(String::new, |after| {
+            format!(
+                "\nLast-level cache after the run: a random walk through {} took {}\n",
+                after.size(),
+                after.describe()
+            )
+        })
+    }
+
     /// The meshes that could not be loaded, one line each with why (empty when none).
     #[must_use]
     pub fn skipped_meshes_text(&self) -> String {
@@ -603,6 +622,14 @@ impl Report {
             w.primary_size, w.tile, w.incoherent_rays, w.seed, w.chunk, w.shadow_fraction
         );
         let _ = writeln!(out, "Timing: {}", timing_rule(w.repeat));
+        if let Some(before) = &self.cache[0] {
+            let _ = writeln!(
+                out,
+                "Last-level cache before the run: a random walk through {} took {}",
+                before.size(),
+                before.describe()
+            );
+        }
         if !self.has_embree() && !self.embree.starts_with("Embree") {
             let _ = writeln!(
                 out,

@@ -29,6 +29,19 @@ fn every_timing_carries_its_interval_and_counts() {
     let shard = &r["shards"][0];
     assert_eq!(shard["repeat"], "6");
     assert_eq!(shard["min_sample"], 0.002);
+    // The last-level cache's walk, before and after, in the JSON and the machine's line.
+    for walk in [&shard["cache"][0], &shard["cache"][1]] {
+        let (fastest, median) = (walk["fastest_ns"].as_f64(), walk["median_ns"].as_f64());
+        assert!(
+            fastest.is_some_and(|f| f > 0.0 && f <= median.unwrap()),
+            "{walk}"
+        );
+        assert!(walk["samples"].as_u64().is_some_and(|n| n > 0), "{walk}");
+    }
+    assert!(
+        markdown(&dir).contains("a random walk through"),
+        "no cache walk in REPORT.md"
+    );
     let runs = r["runs"].as_array().unwrap();
     assert_eq!(runs.len(), 4);
     for run in runs {

@@ -354,6 +354,7 @@ mod tests {
                 load: None,
                 ranked_by_device: false,
                 others: None,
+                cache: None,
                 pinned: false,
                 repeat: String::new(),
                 min_sample: 0.0,

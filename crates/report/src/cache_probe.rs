@@ -1,6 +1,7 @@
-//! How steady this machine's memory is (`--cache-probe`): a random walk through memory sized
-//! to stay in the level-2 cache, to stay in the last-level cache, and to miss it, timed in
-//! many short samples.
+//! How steady this machine's memory is: random walks through memory sized to stay in the
+//! level-2 cache, to stay in the last-level cache, and to miss it, timed in many short
+//! samples (the peer benchmark's `--cache-probe`; the last-level walk is also taken for a
+//! second before and after every report and peer run).
 //!
 //! A walk's step is one dependent load, as a BVH traversal's step from a node to its child
 //! is, so the time per step is the latency of the level that holds the walk. A walk that
@@ -10,8 +11,9 @@
 //! between the cache's latency and the memory's, and so do the timings of every mesh whose
 //! structure lives there.
 
+use crate::machine::describe;
+pub use crate::results::CacheWalk;
 use raybench_core::sampling::pcg3d;
-use raybench_report::machine::describe;
 use std::time::{Duration, Instant};
 
 /// Bytes of one slot of the walk: a cache line.
@@ -74,13 +76,64 @@ impl Walk {
     }
 }
 
+impl CacheWalk {
+    /// Samples of a walk through `bytes` for about `time` (at least one).
+    #[must_use]
+    pub fn measure(bytes: usize, time: Duration) -> Self {
+        let mut walk = Walk::new(bytes);
+        let start = Instant::now();
+        let mut ns = vec![walk.sample()];
+        while start.elapsed() < time {
+            ns.push(walk.sample());
+        }
+        ns.sort_by(f64::total_cmp);
+        let at = |q: f64| ns[((ns.len() - 1) as f64 * q).round() as usize];
+        Self {
+            bytes: bytes as u64,
+            samples: u32::try_from(ns.len()).unwrap_or(u32::MAX),
+            fastest_ns: at(0.0),
+            median_ns: at(0.5),
+            p90_ns: at(0.9),
+            slowest_ns: at(1.0),
+        }
+    }
+
+    /// The median sample over the fastest: near 1 where nothing else touches the level that
+    /// holds the walk.
+    #[must_use]
+    pub fn ratio(&self) -> f64 {
+        self.median_ns / self.fastest_ns
+    }
+
+    /// The bytes walked through, in KiB or MiB.
+    #[must_use]
+    pub fn size(&self) -> String {
+        crate::fmt::bytes(self.bytes)
+    }
+
+    /// One line: median and fastest nanoseconds per step and their ratio.
+    #[must_use]
+    pub fn describe(&self) -> String {
+        format!(
+            "{:.1} ns per step at the median, {:.1} at the fastest ({:.2}x)",
+            self.median_ns,
+            self.fastest_ns,
+            self.ratio()
+        )
+    }
+}
+
 /// The walks' sizes: half the level-2 cache, a quarter of the last-level cache, four times
 /// the last-level cache (at most 1 GiB), from the machine's description (1 MiB and 32 MiB
 /// where it does not say).
 fn sizes() -> [(&'static str, usize); 3] {
     let caches = describe(1).caches.unwrap_or_default();
-    let l2 = caches.l2.unwrap_or(1 << 20) as usize;
-    let last = caches.l3.map_or(32 << 20, |b| b as usize).max(l2);
+    let l2 = usize::try_from(caches.l2.unwrap_or(1 << 20)).unwrap_or(1 << 20);
+    let last = caches
+        .l3
+        .and_then(|b| usize::try_from(b).ok())
+        .unwrap_or(32 << 20)
+        .max(l2);
     [
         ("half the L2", l2 / 2),
         ("a quarter of the last-level cache", last / 4),
@@ -88,32 +141,33 @@ fn sizes() -> [(&'static str, usize); 3] {
     ]
 }
 
-/// Runs the walks for about `per_size` each and returns a table of their spread.
+/// The walk through a quarter of the last-level cache for about `time`: its spread says how
+/// much other machines sharing that cache took of it meanwhile.
 #[must_use]
-pub fn run(per_size: Duration) -> String {
-    let mut out = String::from(
+pub fn last_level(time: Duration) -> CacheWalk {
+    CacheWalk::measure(sizes()[1].1, time)
+}
+
+/// Runs the three walks for about `per_size` each and returns a markdown table of their
+/// spread.
+#[must_use]
+pub fn table(per_size: Duration) -> String {
+    let mut out = format!(
         "Random walks through memory, one dependent load per step, timed in samples of \
-         100,000 steps\n(ns per step; spread: the median sample over the fastest):\n\n\
+         {STEPS} steps (ns per step; spread: the median sample over the fastest):\n\n\
          | walk | bytes | samples | fastest | median | 90th percentile | slowest | spread |\n\
-         |---|---:|---:|---:|---:|---:|---:|---:|\n",
+         |---|---:|---:|---:|---:|---:|---:|---:|\n"
     );
     for (name, bytes) in sizes() {
-        let mut walk = Walk::new(bytes);
-        let start = Instant::now();
-        let mut ns = vec![walk.sample()];
-        while start.elapsed() < per_size {
-            ns.push(walk.sample());
-        }
-        ns.sort_by(f64::total_cmp);
-        let at = |q: f64| ns[((ns.len() - 1) as f64 * q).round() as usize];
+        let w = CacheWalk::measure(bytes, per_size);
         out += &format!(
             "| {name} | {bytes} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2}x |\n",
-            ns.len(),
-            at(0.0),
-            at(0.5),
-            at(0.9),
-            at(1.0),
-            at(0.5) / at(0.0)
+            w.samples,
+            w.fastest_ns,
+            w.median_ns,
+            w.p90_ns,
+            w.slowest_ns,
+            w.ratio()
         );
     }
     out
@@ -138,5 +192,15 @@ mod tests {
             assert_eq!(at, 0, "{lines} lines: not back at the start");
         }
         assert!(Walk::new(1 << 16).sample() > 0.0);
+        let w = CacheWalk::measure(1 << 16, Duration::from_millis(20));
+        assert!(w.samples >= 1, "{w:?}");
+        assert!(
+            0.0 < w.fastest_ns
+                && w.fastest_ns <= w.median_ns
+                && w.median_ns <= w.p90_ns
+                && w.p90_ns <= w.slowest_ns,
+            "{w:?}"
+        );
+        assert!(w.describe().contains("ns per step"), "{}", w.describe());
     }
 }
