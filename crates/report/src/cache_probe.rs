@@ -11,7 +11,6 @@
 //! between the cache's latency and the memory's, and so do the timings of every mesh whose
 //! structure lives there.
 
-use crate::machine::describe;
 pub use crate::results::CacheWalk;
 use raybench_core::sampling::pcg3d;
 use std::time::{Duration, Instant};
@@ -123,11 +122,11 @@ impl CacheWalk {
     }
 }
 
-/// The walks' sizes: half the level-2 cache, a quarter of the last-level cache, four times
-/// the last-level cache (at most 1 GiB), from the machine's description (1 MiB and 32 MiB
+/// The walks' sizes: half the level-2 cache, a quarter of the last-level cache (at most
+/// 256 MiB), four times the last-level cache (at most 1 GiB), from sysfs (1 MiB and 32 MiB
 /// where it does not say).
 fn sizes() -> [(&'static str, usize); 3] {
-    let caches = describe(1).caches.unwrap_or_default();
+    let caches = crate::machine::caches().unwrap_or_default();
     let l2 = usize::try_from(caches.l2.unwrap_or(1 << 20)).unwrap_or(1 << 20);
     let last = caches
         .l3
@@ -136,7 +135,7 @@ fn sizes() -> [(&'static str, usize); 3] {
         .max(l2);
     [
         ("half the L2", l2 / 2),
-        ("a quarter of the last-level cache", last / 4),
+        ("a quarter of the last-level cache", (last / 4).min(1 << 28)),
         ("four times the last-level cache", (4 * last).min(1 << 30)),
     ]
 }

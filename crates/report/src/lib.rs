@@ -47,7 +47,7 @@ pub const BUDGET_FULL: f64 = 1.0;
 
 /// How long the last-level cache's walk is timed before and after a run
 /// ([`Shard::cache`]).
-const CACHE_PROBE_TIME: std::time::Duration = std::time::Duration::from_millis(500);
+const CACHE_PROBE_TIME: std::time::Duration = std::time::Duration::from_millis(250);
 
 /// A stable hash (FNV-1a, 64 bits) of `bytes`: a preset's colour for presets this build
 /// does not know, and the executable's fingerprint in a shard's [`results::Plan`].

@@ -18,8 +18,14 @@ pub fn describe(threads: usize) -> Machine {
         build: raybench_registry::BUILD.to_string(),
         frequency: frequency(),
         smt: smt(),
-        caches: caches_in(std::path::Path::new(CACHE_DIR)),
+        caches: caches(),
     }
+}
+
+/// This machine's data caches (CPU 0's), where Linux describes them.
+#[must_use]
+pub fn caches() -> Option<Caches> {
+    caches_in(std::path::Path::new(CACHE_DIR))
 }
 
 /// Where Linux describes CPU 0's caches: one `index*` folder per cache, with its `level`,

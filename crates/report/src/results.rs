@@ -155,9 +155,9 @@ pub struct Shard {
     /// hypervisor's steal; `null` where `/proc` does not tell and in older files.
     #[serde(default)]
     pub others: Option<[f64; 2]>,
-    /// A random walk through a quarter of the last-level cache, timed for half a second
-    /// when the shard started and when it ended ([`crate::cache_probe::last_level`]): where
-    /// other machines share that cache, its median step moves away from its fastest;
+    /// A random walk through a quarter of the last-level cache, timed for a quarter of a
+    /// second when the shard started and when it ended ([`crate::cache_probe::last_level`]):
+    /// where other machines share that cache, its median step moves away from its fastest;
     /// `null` in older files.
     #[serde(default)]
     pub cache: Option<[CacheWalk; 2]>,
