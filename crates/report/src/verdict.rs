@@ -445,7 +445,7 @@ fn cache_noise(results: &Results) -> Option<String> {
     } else {
         format!(
             "the last-level cache was quiet (a walk through {} of it within {ratio:.2} times \
-             its fastest step at the median, before and after every shard)",
+             its fastest step at the median, before and after every shard that timed it)",
             walk.size()
         )
     })
@@ -1017,7 +1017,8 @@ pub(crate) mod tests {
         assert!(
             s.contains(
                 "; the last-level cache was quiet (a walk through 8.0 MiB of it within 1.20 \
-                 times its fastest step at the median, before and after every shard)"
+                 times its fastest step at the median, before and after every shard that timed \
+                 it)"
             ),
             "{s}"
         );
