@@ -41,7 +41,7 @@ fn cycle(lines: usize, seed: u32) -> Vec<[u32; LINE / 4]> {
 }
 
 /// A walk through memory, ready to be timed.
-pub struct Walk {
+struct Walk {
     memory: Vec<[u32; LINE / 4]>,
     at: u32,
 }
@@ -49,8 +49,7 @@ pub struct Walk {
 impl Walk {
     /// A walk through `bytes` of memory (at least two cache lines), brought into the
     /// caches by one untimed pass.
-    #[must_use]
-    pub fn new(bytes: usize) -> Self {
+    fn new(bytes: usize) -> Self {
         let mut walk = Self {
             memory: cycle((bytes / LINE).max(2), 1),
             at: 0,
@@ -68,7 +67,7 @@ impl Walk {
     }
 
     /// Nanoseconds per step of one timed sample of [`STEPS`] steps.
-    pub fn sample(&mut self) -> f64 {
+    fn sample(&mut self) -> f64 {
         let start = Instant::now();
         self.steps(STEPS);
         start.elapsed().as_secs_f64() * 1e9 / STEPS as f64
