@@ -262,7 +262,8 @@ pub(crate) type Stack = [(u32, f32); STACK];
 
 /// The nearest child of wide node `index` that `ray` enters at or before `limit` (none when
 /// it enters none), to be visited next; the other children entered are pushed onto `stack`
-/// far to near (so that the nearest of them is popped first). Each is prefetched.
+/// far to near (so that the nearest of them is popped first). Each is prefetched. One or
+/// two children entered, most visits, take neither a loop nor a sort.
 ///
 /// Returning the nearest child instead of pushing it keeps the step from a node to the next
 /// out of the stack's memory, as Embree's single-ray traversal does: with one child entered,
@@ -277,31 +278,59 @@ pub(crate) fn descend<L: Lanes>(
     stack: &mut NodeStack<'_>,
 ) -> Option<u32> {
     let node = &layout.wide[index as usize];
-    let mut found = [(0u32, 0.0f32); WIDE];
-    let mut n = 0;
+    let mut t = [0.0f32; 16];
+    let mut bits = 0;
     let mut first = 0;
     while first < WIDE {
-        let (t0, bits) = wray.entries(&node.min, &node.max, first, L::splat(limit));
-        if bits != 0 {
-            let mut t = [0.0f32; 16];
-            L::store(t0, &mut t);
-            for lane in BitIter(bits) {
-                let child = node.child[first + lane];
-                if child == EMPTY_CHILD {
-                    continue;
-                }
-                // Insertion sort, descending by entry; between equal entries the lower
-                // slot is nearer (as in the packet traversal).
-                let mut j = n;
-                while j > 0 && found[j - 1].1 <= t[lane] {
-                    found[j] = found[j - 1];
-                    j -= 1;
-                }
-                found[j] = (child, t[lane]);
-                n += 1;
-            }
-        }
+        let (t0, b) = wray.entries(&node.min, &node.max, first, L::splat(limit));
+        L::store(t0, &mut t[first..]);
+        bits |= b << first;
         first += L::W;
+    }
+    if bits == 0 {
+        return None;
+    }
+    // One or two children entered (most visits) take no loop and no sort; the nearer of
+    // two is chosen without a branch on the distances, which no predictor can learn.
+    let a = bits.trailing_zeros() as usize;
+    let rest = bits & (bits - 1);
+    if rest == 0 {
+        let child = node.child[a];
+        if child == EMPTY_CHILD {
+            return None;
+        }
+        prefetch_child(layout, child);
+        return Some(child);
+    }
+    if rest & (rest - 1) == 0 {
+        let b = rest.trailing_zeros() as usize;
+        let pair = [(node.child[a], t[a]), (node.child[b], t[b])];
+        if pair[0].0 != EMPTY_CHILD && pair[1].0 != EMPTY_CHILD {
+            // Between equal entries the lower slot is nearer (as in the packet traversal).
+            let b_nearer = usize::from(pair[1].1 < pair[0].1);
+            let (near, far) = (pair[b_nearer], pair[1 - b_nearer]);
+            prefetch_child(layout, far.0);
+            stack.push(far.0, far.1);
+            prefetch_child(layout, near.0);
+            return Some(near.0);
+        }
+    }
+    let mut found = [(0u32, 0.0f32); WIDE];
+    let mut n = 0;
+    for lane in BitIter(bits) {
+        let child = node.child[lane];
+        if child == EMPTY_CHILD {
+            continue;
+        }
+        // Insertion sort, descending by entry; between equal entries the lower slot is
+        // nearer.
+        let mut j = n;
+        while j > 0 && found[j - 1].1 <= t[lane] {
+            found[j] = found[j - 1];
+            j -= 1;
+        }
+        found[j] = (child, t[lane]);
+        n += 1;
     }
     let (&(nearest, _), farther) = found[..n].split_last()?;
     for &(child, entry) in farther {
@@ -571,6 +600,37 @@ mod tests {
             popped.push(child - 1);
         }
         assert_eq!(popped, [3, 6]);
+    }
+
+    /// With one or two children entered (the paths without a sort), `descend` still visits
+    /// the nearest next and stacks the other; between equal entries the lower slot is
+    /// nearer.
+    #[test]
+    fn descend_orders_one_or_two_children_like_many() {
+        let layout = row_of_boxes();
+        let ray = Ray::new(Vec3::ZERO, Vec3::new(1.0, 0.001, 0.002));
+        let wray = WideRay::<Portable>::new(&ray);
+        let mut storage = [(0, 0.0); STACK];
+        let mut stack = NodeStack::new(&mut storage);
+        // Only slot 4 (x = 1) lies within 1.5.
+        assert_eq!(descend(&layout, &wray, 0, 1.5, &mut stack), Some(4 + 1));
+        assert!(stack.pop_within(f32::INFINITY).is_none());
+        // Slots 4 (x = 1) and 1 (x = 2) lie within 2.5: the lower slot is the farther.
+        assert_eq!(descend(&layout, &wray, 0, 2.5, &mut stack), Some(4 + 1));
+        assert_eq!(stack.pop_within(f32::INFINITY).map(|e| e.0), Some(1 + 1));
+        assert!(stack.pop_within(f32::INFINITY).is_none());
+        // A ray starting inside slots 3 and 6 enters both at its `t_min`: slot 3 first.
+        let mut wide = layout.wide[0];
+        for slot in [3, 6] {
+            wide.min[0][slot] = -1.0;
+        }
+        let tied = Layout {
+            wide: vec![wide; WIDE + 1],
+            ..Layout::default()
+        };
+        assert_eq!(descend(&tied, &wray, 0, 0.5, &mut stack), Some(3 + 1));
+        assert_eq!(stack.pop_within(f32::INFINITY).map(|e| e.0), Some(6 + 1));
+        assert!(stack.pop_within(f32::INFINITY).is_none());
     }
 
     /// `descend_any` hands back the child in the highest slot the ray enters and leaves the
