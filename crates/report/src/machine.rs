@@ -88,12 +88,18 @@ fn caches_in(dir: &std::path::Path) -> Option<Caches> {
 
 /// The first line of `/proc/cpuinfo` starting with `key`, its value trimmed.
 fn cpuinfo(key: &str) -> Option<String> {
-    std::fs::read_to_string("/proc/cpuinfo").ok().and_then(|s| {
-        s.lines()
-            .find(|l| l.starts_with(key))
-            .and_then(|l| l.split_once(':'))
-            .map(|(_, v)| v.trim().to_string())
-    })
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| cpuinfo_field(&s, key))
+}
+
+/// The value of the first `key : value` line of `/proc/cpuinfo`'s text whose key is exactly
+/// `key` (`model` is not `model name`).
+fn cpuinfo_field(text: &str, key: &str) -> Option<String> {
+    text.lines()
+        .filter_map(|l| l.split_once(':'))
+        .find(|(k, _)| k.trim() == key)
+        .map(|(_, v)| v.trim().to_string())
 }
 
 /// The contents of a sysfs file, trimmed; `None` when it is missing or empty.
@@ -186,7 +192,26 @@ fn host() -> String {
 }
 
 fn cpu_model() -> String {
-    cpuinfo("model name").unwrap_or_else(|| format!("unknown ({})", std::env::consts::ARCH))
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| cpu_model_in(&s))
+        .unwrap_or_else(|| format!("unknown ({})", std::env::consts::ARCH))
+}
+
+/// The model name in `/proc/cpuinfo`'s text, with the x86 family and model numbers where it
+/// gives them: a virtual machine's guest often sees a bare `AMD EPYC` for CPUs of different
+/// generations (with different caches and instruction sets), whose timings do not compare.
+fn cpu_model_in(text: &str) -> Option<String> {
+    let name = cpuinfo_field(text, "model name")?;
+    Some(
+        match (
+            cpuinfo_field(text, "cpu family"),
+            cpuinfo_field(text, "model"),
+        ) {
+            (Some(family), Some(model)) => format!("{name} (family {family}, model {model})"),
+            _ => name,
+        },
+    )
 }
 
 /// What the backends with a [`raybench_registry::Backend::detail`] chose (the packet backend's
@@ -283,6 +308,22 @@ fn civil_from_days(days: i64) -> (i64, u32, u32) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The CPU is named with its family and model where `/proc/cpuinfo` gives them, and a
+    /// key is matched whole (`model` is not `model name`).
+    #[test]
+    fn the_cpu_is_named_with_its_family_and_model() {
+        let x86 = "processor\t: 0\nvendor_id\t: AuthenticAMD\ncpu family\t: 25\n\
+                   model\t\t: 1\nmodel name\t: AMD EPYC\nstepping\t: 1\n";
+        assert_eq!(
+            cpu_model_in(x86).as_deref(),
+            Some("AMD EPYC (family 25, model 1)")
+        );
+        assert_eq!(cpuinfo_field(x86, "model").as_deref(), Some("1"));
+        let bare = "processor\t: 0\nmodel name\t: Some CPU\n";
+        assert_eq!(cpu_model_in(bare).as_deref(), Some("Some CPU"));
+        assert_eq!(cpu_model_in("processor\t: 0\n"), None);
+    }
 
     #[test]
     fn civil_dates() {
