@@ -86,7 +86,7 @@ fn caches_in(dir: &std::path::Path) -> Option<Caches> {
     (caches != Caches::default()).then_some(caches)
 }
 
-/// The first line of `/proc/cpuinfo` starting with `key`, its value trimmed.
+/// The value of the first line of `/proc/cpuinfo` whose key is `key`, trimmed.
 fn cpuinfo(key: &str) -> Option<String> {
     std::fs::read_to_string("/proc/cpuinfo")
         .ok()
