@@ -38,6 +38,7 @@ pub(crate) const MAX_DEPTH: usize = 60;
 
 /// Largest supported bin count.
 const MAX_BINS: usize = 64;
+const _: () = assert!(MAX_BINS.is_power_of_two() && MAX_BINS <= 256);
 
 /// Nodes with at least this many items bin in parallel chunks of [`BINNING_CHUNK`] items.
 const PARALLEL_BINNING: usize = 1 << 17;
@@ -259,7 +260,10 @@ impl Binner {
                 let f = if f > 0.0 { f } else { 0.0 };
                 if f < last { f } else { last }
             });
-        let b = f.0.map(|x| x as i32 as usize);
+        // Every lane is now in `0..=last` (below 64), so the conversion to `u8` truncates
+        // exactly; unlike one to `i32`, whose saturation at `i32::MAX` compiles to a compare
+        // and branch per lane, it compiles to the bare truncating instruction.
+        let b = f.0.map(|x| x as u8 as usize);
         [
             b[0] & (MAX_BINS - 1),
             b[1] & (MAX_BINS - 1),
