@@ -374,6 +374,64 @@ fn coincident_and_overlapping_triangles_follow_the_tie_rule() {
     assert!(hits.iter().any(Option::is_some));
 }
 
+/// Rays nearly parallel to a long, thin triangle, passing beside it: the watertight test's
+/// edge functions (rounded in the sheared frame) can accept such a ray at a `t` whose point
+/// lies outside the triangle's box, which no tree visits. The sliver and its neighbour are
+/// Sponza's triangles 10153 and 8282, and the first ray an ambient-occlusion ray of the
+/// peer benchmark that naive once answered with the sliver and every tree with the
+/// neighbour; the others sweep origins just outside the sliver's long edges and directions
+/// a few thousandths of a radian out of its plane.
+#[test]
+fn grazing_rays_beside_a_sliver() {
+    let neighbour = [
+        Vec3::new(-11.108409, 7.74331, -0.132862),
+        Vec3::new(-11.067223, 7.74331, -0.071221),
+        Vec3::new(-11.057983, 7.06331, -0.075048),
+    ];
+    let sliver = [
+        Vec3::new(0.00724, 5.838312, 2.429488),
+        Vec3::new(0.00724, 5.830812, 2.441489),
+        Vec3::new(-10.83276, 5.830812, 2.441488),
+    ];
+    let mut b = SceneBuilder::new("sliver");
+    b.add_mesh("sliver", &triangles(&[neighbour, sliver]), 0)
+        .unwrap();
+    let scene = Arc::new(b.build());
+    let mut rays = vec![Ray::with_interval(
+        Vec3::new(-8.515367, 5.8383155, 2.429439),
+        Vec3::new(-0.65317875, 0.40024507, -0.6427764),
+        0.000_265_766,
+        4.159_358_5,
+    )];
+    let normal = (sliver[1] - sliver[0])
+        .cross(sliver[2] - sliver[0])
+        .normalize();
+    for edge in [[0, 2], [1, 2], [0, 1]] {
+        let (p, q) = (sliver[edge[0]], sliver[edge[1]]);
+        let along = (q - p).normalize();
+        let across = normal.cross(along);
+        for i in 1..16 {
+            let at = p + (q - p) * (i as f32 / 16.0);
+            for offset in [-1e-3, -1e-4, -1e-5, 0.0, 1e-5, 1e-4, 1e-3] {
+                for tilt in [-3e-3, -1e-3, -1e-4, 0.0, 1e-4, 1e-3, 3e-3] {
+                    for turn in [-1.0f32, -0.3, 0.3, 1.0] {
+                        let origin = at + across * offset + normal * (offset * 0.5);
+                        let dir = along * turn.cos() + across * turn.sin() + normal * tilt;
+                        rays.push(Ray::new(origin - dir * 0.5, dir));
+                    }
+                }
+            }
+        }
+    }
+    let hits = check("grazing rays beside a sliver", &scene, &rays);
+    assert_eq!(
+        hits[0].map(|h| h.prim),
+        Some(0),
+        "the neighbour, not the sliver"
+    );
+    assert!(hits.iter().any(|h| h.is_some_and(|h| h.prim == 1)));
+}
+
 /// Grid cell planes of a grid over the mixed scene, every backend (the grid suite in
 /// `grid_cases.rs` does this for generated scenes; here the planes cut the cube's faces and
 /// the coincident triangles too).

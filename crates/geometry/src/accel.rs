@@ -28,7 +28,10 @@ pub struct AccelStats {
 /// 1. **Tie rule.** The closest hit is the one with the smallest `t`; equal `t` goes to the
 ///    smaller primitive id ([`Hit::closer`]).
 /// 2. **Conservative culling.** A box or cell test may accept a ray that misses, never reject
-///    one that hits (robust slab test, [`crate::Aabb::intersect`]; pad where needed).
+///    one that hits (robust slab test, [`crate::Aabb::intersect`]; pad where needed). A
+///    triangle's hit is one whose box the ray enters by then
+///    ([`crate::Triangle::box_entered_by`]), so the slab test of any box holding it
+///    accepts the ray.
 /// 3. **Strict early exits.** Skip a node only when its entry `t` is *greater* than the best
 ///    `t` so far (equal must still be visited, for the tie rule), with the small relative
 ///    slack of [`crate::cull_bound`] that absorbs the rounding of two different routines; a grid

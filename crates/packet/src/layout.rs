@@ -39,7 +39,7 @@
 //! [`MIXED_BIT`] and test them with the core's scalar routine.
 
 use raybench_bvh::{Bvh, Node};
-use raybench_geometry::{Aabb, Geometry, Shape, TreeView};
+use raybench_geometry::{Aabb, Geometry, Shape, TreeView, Triangle, Vec3};
 use rayon::prelude::*;
 
 /// Children per wide node.
@@ -150,6 +150,17 @@ impl TriBlock {
     pub fn triangle(&self, lane: usize) -> [f32; 9] {
         std::array::from_fn(|c| self.v[c][lane])
     }
+}
+
+/// The core's triangle of nine coordinates ([`TriBlock::triangle`]): the geometry's own
+/// vertices, bit for bit.
+#[inline(always)]
+pub(crate) fn core_triangle(c: &[f32; 9]) -> Triangle {
+    Triangle::new(
+        Vec3::new(c[0], c[1], c[2]),
+        Vec3::new(c[3], c[4], c[5]),
+        Vec3::new(c[6], c[7], c[8]),
+    )
 }
 
 /// A decoded leaf reference.

@@ -16,7 +16,7 @@
 //! near plane) and finite rays; batches are cut into packets and any packet that is not
 //! coherent in that sense takes the single-ray path lane by lane.
 
-use crate::layout::{EMPTY_CHILD, LEAF_BIT, Layout, LeafRef, WIDE, WideNode};
+use crate::layout::{EMPTY_CHILD, LEAF_BIT, Layout, LeafRef, WIDE, WideNode, core_triangle};
 use crate::simd::{Lanes, lanes_below};
 use crate::single::{
     self, BitIter, FAR_SCALE, HitValues, STACK, Stack, block_closest, scalar_lanes,
@@ -59,10 +59,7 @@ impl<S: Lanes> Frustum<S> {
     /// per-ray `f32::min` loop this replaces spent a third of a primary any-hit packet's
     /// time on its NaN checks).
     #[inline(always)]
-    fn new<L: Lanes, const K: usize>(
-        chunks: &[(SlabLanes<L>, L::V, u32); K],
-        negative: [bool; 3],
-    ) -> Self {
+    fn new<L: Lanes, const K: usize>(chunks: &Chunks<L, K>, negative: [bool; 3]) -> Self {
         let mut origin = [(S::splat(0.0), S::splat(0.0)); 3];
         let mut inv = [(S::splat(0.0), S::splat(0.0)); 3];
         for axis in 0..3 {
@@ -211,10 +208,21 @@ impl<L: Lanes> SlabLanes<L> {
     /// common direction signs.
     #[inline(always)]
     fn enters(&self, node: &WideNode, slot: usize, negative: &[bool; 3], limit: L::V) -> u32 {
+        let min = std::array::from_fn(|axis| node.min[axis][slot]);
+        let max = std::array::from_fn(|axis| node.max[axis][slot]);
+        self.enters_box(min, max, negative, limit)
+    }
+
+    /// The lanes that enter the box `[min, max]` no later than their lane of `limit`, as
+    /// [`SlabLanes::enters`] tests a child (per lane, the decision of the core's
+    /// `SlabRay::entry`: a NaN axis leaves the bound, and the maximum and minimum are
+    /// exact in any order).
+    #[inline(always)]
+    fn enters_box(&self, min: [f32; 3], max: [f32; 3], negative: &[bool; 3], limit: L::V) -> u32 {
         let mut t0 = self.t_min;
         let mut t1 = limit;
         for (axis, &neg) in negative.iter().enumerate() {
-            let (lo, hi) = (node.min[axis][slot], node.max[axis][slot]);
+            let (lo, hi) = (min[axis], max[axis]);
             let (near, far) = if neg { (hi, lo) } else { (lo, hi) };
             let tn = L::mul(L::sub(L::splat(near), self.origin[axis]), self.inv[axis]);
             let tf = L::mul(L::sub(L::splat(far), self.origin[axis]), self.inv[axis]);
@@ -226,10 +234,14 @@ impl<L: Lanes> SlabLanes<L> {
     }
 }
 
+/// A packet's vectors for box tests: slab-test lanes, `t_max` and the mask of lanes
+/// holding a ray ([`split`]).
+type Chunks<L, const K: usize> = [(SlabLanes<L>, <L as Lanes>::V, u32); K];
+
 /// The `K` vectors of a packet of at most `K * W` rays for box tests: slab-test lanes,
 /// `t_max` and the mask of lanes holding a ray. Missing rays repeat the last one.
 #[inline(always)]
-fn split<L: Lanes, const K: usize>(rays: &[Ray]) -> [(SlabLanes<L>, L::V, u32); K] {
+fn split<L: Lanes, const K: usize>(rays: &[Ray]) -> Chunks<L, K> {
     let n = rays.len();
     let mut buf = [[0.0f32; 16]; 8];
     let mut out = [(
@@ -346,10 +358,44 @@ impl Lanestate {
         let hit = L::mask(r.hit);
         let t_best = L::select(hit, r.t, L::load(&self.t_best[base..]));
         L::store(t_best, &mut self.t_best[base..]);
-        let abs = L::max(r.t, L::sub(L::splat(0.0), r.t));
-        let limit = L::add(r.t, L::mul(abs, L::splat(CULL_SLACK)));
-        let limit = L::select(hit, limit, L::load(&self.limit[base..]));
+        let limit = L::select(hit, cull_bounds::<L>(r.t), L::load(&self.limit[base..]));
         L::store(limit, &mut self.limit[base..]);
+    }
+}
+
+/// [`cull_bound`] of every lane of `t`, with the same operations (`|t|` as `max(t, 0 - t)`,
+/// which gives `+0` for `-0`).
+#[inline(always)]
+fn cull_bounds<L: Lanes>(t: L::V) -> L::V {
+    let abs = L::max(t, L::sub(L::splat(0.0), t));
+    L::add(t, L::mul(abs, L::splat(CULL_SLACK)))
+}
+
+/// `r` keeping only the hit lanes whose ray enters the box of the triangle `tri` (nine
+/// coordinates) by its hit: the core's `Triangle::box_entered_by` in lanes (the box as the
+/// core computes it, each lane's slab test as [`SlabLanes::enters`] makes it, up to
+/// [`cull_bound`] of the lane's `t`), so that a lane the edge functions accept beside its
+/// triangle is no hit, as in the scalar routine.
+#[inline(always)]
+fn boxed<L: Lanes>(
+    tri: &[f32; 9],
+    slab: &SlabLanes<L>,
+    negative: &[bool; 3],
+    r: TriLanes<L>,
+) -> TriLanes<L> {
+    if r.hit == 0 {
+        return r;
+    }
+    let b = core_triangle(tri).bounds();
+    let entered = slab.enters_box(
+        b.min.to_array(),
+        b.max.to_array(),
+        negative,
+        cull_bounds::<L>(r.t),
+    );
+    TriLanes {
+        hit: r.hit & entered,
+        ..r
     }
 }
 
@@ -410,6 +456,7 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
                 g,
                 rays,
                 lanes,
+                (&chunks, &negative),
                 LeafRef::decode(index),
                 &masks,
                 best,
@@ -498,7 +545,7 @@ pub(crate) fn closest<L: Lanes, const K: usize, C: Counters>(
 /// their lane of `limits`, or `None` when no lane does.
 #[inline(always)]
 fn child_lanes<L: Lanes, const K: usize>(
-    chunks: &[(SlabLanes<L>, L::V, u32); K],
+    chunks: &Chunks<L, K>,
     node: &WideNode,
     slot: usize,
     negative: &[bool; 3],
@@ -524,6 +571,7 @@ fn packet_leaf<L: Lanes, const K: usize, C: Counters>(
     g: &Geometry,
     rays: &[Ray],
     tri_lanes: &[RayLanes<L>; K],
+    (chunks, negative): (&Chunks<L, K>, &[bool; 3]),
     leaf: LeafRef,
     masks: &[u32; K],
     best: &mut [Option<(u32, PrimHit)>],
@@ -575,6 +623,7 @@ fn packet_leaf<L: Lanes, const K: usize, C: Counters>(
                 }
                 let base = k * L::W;
                 let r = rays_vs_triangle(&tri, lanes, L::load(&st.t_best[base..]), masks[k]);
+                let r = boxed(&tri, &chunks[k].0, negative, r);
                 if r.hit != 0 {
                     let hits = HitValues::new(&r);
                     for lane in BitIter(r.hit) {
@@ -659,7 +708,7 @@ pub(crate) fn occluded<L: Lanes, const K: usize, C: Counters>(
                 g,
                 rays,
                 tri_lanes,
-                &chunks,
+                (&chunks, &negative),
                 LeafRef::decode(index),
                 masks,
                 &mut open,
@@ -715,7 +764,7 @@ fn packet_leaf_any<L: Lanes, const K: usize, C: Counters>(
     g: &Geometry,
     rays: &[Ray],
     tri_lanes: &[RayLanes<L>; K],
-    chunks: &[(SlabLanes<L>, L::V, u32); K],
+    (chunks, negative): (&Chunks<L, K>, &[bool; 3]),
     leaf: LeafRef,
     entered: [u32; K],
     open: &mut [u32; K],
@@ -764,6 +813,7 @@ fn packet_leaf_any<L: Lanes, const K: usize, C: Counters>(
                 let (mut hit, mut test) = (0, m);
                 if scalar & (1 << j) == 0 {
                     let r = rays_vs_triangle(&tri, lanes, *t_max, m);
+                    let r = boxed(&tri, &chunks[k].0, negative, r);
                     (hit, test) = (r.hit, r.zero);
                 }
                 if test != 0 {

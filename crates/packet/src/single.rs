@@ -2,7 +2,7 @@
 //! children hit are visited nearest first, and a leaf tests its blocks of four triangles
 //! one SIMD test each.
 
-use crate::layout::{BLOCK, EMPTY_CHILD, LEAF_BIT, Layout, LeafRef, TriBlock, WIDE};
+use crate::layout::{BLOCK, EMPTY_CHILD, LEAF_BIT, Layout, LeafRef, TriBlock, WIDE, core_triangle};
 use crate::simd::{Lanes, prefetch};
 use crate::tri::{SplatRay, TriLanes, ray_vs_block};
 use raybench_geometry::{
@@ -104,7 +104,7 @@ pub(crate) fn block_closest<L: Lanes>(
     // Unused lanes hold NaN coordinates, which neither hit nor need the scalar routine:
     // the ids are read only for hits.
     let r = ray_vs_block(block, splat, t_max, ALL_LANES);
-    take_hits(block, &r, best);
+    take_hits(block, ray, &r, best);
     for lane in BitIter(r.zero) {
         g.test_closest(block.id[lane], ray, best);
     }
@@ -131,10 +131,12 @@ pub(crate) fn scalar_lanes(g: &Geometry, block: &TriBlock) -> u32 {
     m
 }
 
-/// Merges the hit lanes of a block test into `best` by the tie rule.
+/// Merges the hit lanes of a block test of `ray` into `best` by the tie rule (those whose
+/// triangle's box the ray enters: see [`boxed`]).
 #[inline(always)]
 pub(crate) fn take_hits<L: Lanes>(
     block: &TriBlock,
+    ray: &Ray,
     r: &TriLanes<L>,
     best: &mut Option<(u32, PrimHit)>,
 ) {
@@ -142,9 +144,26 @@ pub(crate) fn take_hits<L: Lanes>(
         return;
     }
     let hits = HitValues::new(r);
-    for lane in BitIter(r.hit) {
+    for lane in BitIter(boxed(block, ray, &hits.t, r.hit)) {
         keep_closer(best, block.id[lane], hits.get(lane));
     }
+}
+
+/// The lanes of `hit` (a block test of `ray` with distances `t`) whose triangle's box the
+/// ray enters by its hit, by the core's own check ([`Triangle::box_entered_by`]): a lane
+/// the edge functions accept beside its triangle is no hit, as in the scalar routine.
+/// Hits are few, so the check runs lane by lane.
+///
+/// [`Triangle::box_entered_by`]: raybench_geometry::Triangle::box_entered_by
+#[inline(always)]
+pub(crate) fn boxed(block: &TriBlock, ray: &Ray, t: &[f32; 16], hit: u32) -> u32 {
+    let mut kept = 0;
+    for lane in BitIter(hit) {
+        if core_triangle(&block.triangle(lane)).box_entered_by(ray, t[lane]) {
+            kept |= 1 << lane;
+        }
+    }
+    kept
 }
 
 /// The lanes of a triangle test as the scalar routine's `PrimHit`s: `t`, and `u = V / det`,
@@ -214,7 +233,11 @@ pub(crate) fn block_occluded<L: Lanes>(
 ) -> bool {
     let r = ray_vs_block(block, splat, ray.t_max, ALL_LANES);
     if r.hit != 0 {
-        return true;
+        let mut t = [0.0; 16];
+        L::store(r.t, &mut t);
+        if boxed(block, ray, &t, r.hit) != 0 {
+            return true;
+        }
     }
     let mut scalar = r.zero;
     if mixed {
