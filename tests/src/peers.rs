@@ -129,7 +129,9 @@ options:
   --rays-file FILE      replay a ray file (raybench rays export) instead of the sets
   --meshes A,B          sphere, soup, terrain, dabrovic-sponza, bunny, bunny-field (default: all),
                         or scene specs; `flat:SCENE` flattens an instanced scene
-  --contestants A,B     only these (see --list); `bvh` is always built as the reference
+  --contestants A,B     only these (see --list), or an exact backend's build preset
+                        (`packet:ploc`; `raybench backends` lists them); `bvh` is always
+                        built as the reference
   --repeat N            timed rounds per figure, every contestant once per round, the
                         median kept (default 5), and the fewest builds, the best kept
                         (meshes that build fast get more, interleaved across contestants)

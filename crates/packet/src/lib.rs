@@ -45,7 +45,7 @@ mod stream;
 mod tri;
 
 use layout::Layout;
-use raybench_bvh::{Bvh, BvhParams};
+use raybench_bvh::{Bvh, BvhParams, ObvhsBuildParams};
 use raybench_geometry::{
     Accel, AccelStats, Counters, Geometry, Hit, PrimHit, QualityParams, Ray, StructureQuality,
 };
@@ -172,10 +172,47 @@ pub struct PacketParams {
     pub isa: Isa,
     /// Trace coherent runs of a batch as packets (else every ray goes through the BVH8).
     pub packets: bool,
-    /// The BVH2 the BVH8 is collapsed from.
-    pub bvh: BvhParams,
+    /// The builder of the BVH2 the BVH8 is collapsed from.
+    pub bvh: Bvh2Builder,
     /// How many incoherent rays a batch keeps in flight.
     pub interleave: Interleave,
+}
+
+/// The builder of the BVH2 that [`PacketAccel`] collapses into its BVH8. Either tree gives
+/// the same hits; the trees, their build times and their speed differ.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Bvh2Builder {
+    /// raybench's binned SAH builder (`raybench-bvh`) with these parameters (the default:
+    /// [`BvhParams::medium`]).
+    Binned(BvhParams),
+    /// obvhs's PLOC (Meister and Bittner 2018) with its reinsertion pass, at obvhs's
+    /// `fast_build` preset with leaves of at most `max_leaf` primitives (the collapse
+    /// chooses leaves of up to eight from them), copied into raybench's layout with boxes
+    /// recomputed from raybench's own ([`Bvh::build_ploc`]).
+    Ploc {
+        /// Largest leaf of the BVH2.
+        max_leaf: u32,
+    },
+}
+
+impl Bvh2Builder {
+    /// The PLOC tree of the `packet:ploc` preset: leaves of at most two primitives.
+    pub const PLOC: Self = Self::Ploc { max_leaf: 2 };
+
+    /// Builds the BVH2 over `geometry`.
+    #[must_use]
+    pub fn build(self, geometry: Arc<Geometry>) -> Bvh {
+        match self {
+            Self::Binned(params) => Bvh::build_with(geometry, params),
+            Self::Ploc { max_leaf } => {
+                let params = ObvhsBuildParams {
+                    max_prims_per_leaf: max_leaf.max(1),
+                    ..ObvhsBuildParams::fast_build()
+                };
+                Bvh::build_ploc(geometry, params)
+            }
+        }
+    }
 }
 
 /// How many of a batch's incoherent rays (those not traced as packets) are in flight at
@@ -198,7 +235,7 @@ impl Default for PacketParams {
         Self {
             isa: Isa::detect(),
             packets: true,
-            bvh: BvhParams::default(),
+            bvh: Bvh2Builder::Binned(BvhParams::default()),
             interleave: Interleave::Auto,
         }
     }
@@ -222,7 +259,7 @@ impl PacketAccel {
         if !params.isa.is_available() {
             params.isa = Isa::Portable;
         }
-        let bvh = Bvh::build_with(Arc::clone(&geometry), params.bvh);
+        let bvh = params.bvh.build(Arc::clone(&geometry));
         let layout = Layout::new(&bvh, &geometry);
         let streams = match params.interleave {
             Interleave::Auto => stream::width(layout.memory_bytes()),

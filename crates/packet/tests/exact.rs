@@ -7,7 +7,7 @@ use raybench_core::{
     Accel, Camera, Geometry, Hit, NoCounters, Plane, Ray, Shape, Sphere, Vec3, ray_sets,
 };
 use raybench_naive::NaiveAccel;
-use raybench_packet::{Interleave, Isa, PacketAccel, PacketParams};
+use raybench_packet::{Bvh2Builder, Interleave, Isa, PacketAccel, PacketParams};
 use raybench_scene::generators;
 use std::sync::{Arc, OnceLock};
 
@@ -224,7 +224,7 @@ fn avx512_matches_naive() {
 /// The BVH8 is collapsed from whatever BVH2 it is given: other presets, a BVH2 split down
 /// to single primitives, one whose leaves hold more than a leaf reference can name (100
 /// coincident triangles in one leaf, laid out as a small tree of leaves), and one over
-/// pre-split triangles (a triangle in several leaves).
+/// pre-split triangles (a triangle in several leaves); then obvhs's PLOC trees.
 #[test]
 fn every_bvh2_collapses_exactly() {
     let coarse = BvhParams {
@@ -247,7 +247,14 @@ fn every_bvh2_collapses_exactly() {
         presplit,
     ] {
         check(PacketParams {
-            bvh,
+            bvh: Bvh2Builder::Binned(bvh),
+            ..PacketParams::default()
+        });
+    }
+    // obvhs's PLOC trees: leaves of one, two (the `ploc` preset) and eight primitives.
+    for max_leaf in [1, 2, 8] {
+        check(PacketParams {
+            bvh: Bvh2Builder::Ploc { max_leaf },
             ..PacketParams::default()
         });
     }

@@ -14,7 +14,7 @@ use crate::{Backend, Roles, TimedRenderer};
 use raybench_bvh::{Bvh, BvhParams, ObvhsAccel, ObvhsBuildParams};
 
 use raybench_grid::{Grid, GridParams};
-use raybench_packet::{PacketAccel, PacketParams};
+use raybench_packet::{Bvh2Builder, PacketAccel, PacketParams};
 #[cfg(feature = "embree")]
 use raybench_peers::{
     EmbreeAccel, EmbreeMode, EmbreeQuality, embree_availability, embree_supports,
@@ -314,6 +314,21 @@ pub static PRESETS: &[Preset] = &[
         "packet's BVH8 collapsed from a BVH2 built with BvhParams::medium over triangles pre-split for up to 30 % more references",
         |g| PacketAccel::build_with(g, packet_over(presplit()))
     ),
+    preset!(
+        "packet",
+        "ploc",
+        false,
+        EXACT_PRESET,
+        PacketAccel,
+        "packet's BVH8 collapsed from obvhs's PLOC BVH2 with reinsertion (its fast_build, leaves of up to two): fewer node visits on Sponza than the binned tree",
+        |g| PacketAccel::build_with(
+            g,
+            PacketParams {
+                bvh: Bvh2Builder::PLOC,
+                ..PacketParams::default()
+            }
+        )
+    ),
     #[cfg(feature = "embree")]
     embree_preset!(
         "low",
@@ -341,7 +356,7 @@ pub static PRESETS: &[Preset] = &[
 /// packets on).
 fn packet_over(bvh: BvhParams) -> PacketParams {
     PacketParams {
-        bvh,
+        bvh: Bvh2Builder::Binned(bvh),
         ..PacketParams::default()
     }
 }

@@ -51,22 +51,38 @@ pub fn all() -> Vec<Contestant> {
         .collect()
 }
 
-/// The contestants called `names`, in table order.
+/// The contestants called `names`, in table order; a build preset of an exact backend
+/// (`packet:ploc`, see `raybench backends`) joins them after the others, in the order
+/// named.
 ///
 /// # Errors
-/// A name that is no contestant, with the list of known ones.
+/// A name that is neither a contestant nor an exact backend's preset, with the list of
+/// known contestants.
 pub fn select(names: &[String]) -> Result<Vec<Contestant>, String> {
     let all = all();
-    if let Some(unknown) = names.iter().find(|n| !all.iter().any(|c| c.name == *n)) {
-        let known: Vec<_> = all.iter().map(|c| c.name).collect();
-        return Err(format!(
-            "unknown contestant '{unknown}' (known: {})",
-            known.join(", ")
-        ));
+    let mut presets = Vec::new();
+    for name in names.iter().filter(|n| !all.iter().any(|c| c.name == *n)) {
+        match raybench_registry::backend(name) {
+            Ok(b) if name.contains(':') && b.exact() => presets.push(Contestant {
+                name: b.name,
+                kind: Kind::Raybench,
+                description: b.description,
+                make: b.make,
+            }),
+            _ => {
+                let known: Vec<_> = all.iter().map(|c| c.name).collect();
+                return Err(format!(
+                    "unknown contestant '{name}' (known: {}, or an exact backend's preset \
+                     such as packet:ploc)",
+                    known.join(", ")
+                ));
+            }
+        }
     }
     Ok(all
         .into_iter()
         .filter(|c| names.iter().any(|n| n == c.name))
+        .chain(presets)
         .collect())
 }
 
