@@ -53,8 +53,9 @@ impl Triangle {
     /// f64. Hits on an edge or vertex count (both neighbours report them; the tie rule of
     /// [`crate::Hit::closer`] picks one).
     ///
-    /// This routine is the definition of a triangle hit: SIMD and GPU backends reproduce
-    /// its operations in this order. `t = T / det`, `u = V / det` (the weight of `v1`),
+    /// This routine is the definition of a triangle hit: the SIMD kernels reproduce its
+    /// operations in this order (the GPU kernels its edge test alone, within their
+    /// tolerance). `t = T / det`, `u = V / det` (the weight of `v1`),
     /// `v = W / det` (the weight of `v2`); the sub-primitive id is 0.
     ///
     /// A hit also needs the ray to enter the triangle's box by then

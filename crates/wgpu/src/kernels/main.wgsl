@@ -297,7 +297,9 @@ fn box_entry(r: Ray, lo: vec3<f32>, hi: vec3<f32>, t_max: f32) -> f32 {
     return -1.0;
 }
 
-// `Triangle::intersect` (watertight, Woop et al. 2013) without the double-precision retry:
+// `Triangle::intersect` (watertight, Woop et al. 2013) without the double-precision retry
+// and without the check that the ray enters the triangle's box (a grazing ray can be
+// accepted beside a long, thin triangle; the GPU is held to a tolerance, not bit for bit):
 // (t, u, v, 1) on a hit, w = 0 on a miss.
 fn triangle_hit(r: Ray, v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>, t_max: f32) -> vec4<f32> {
     let a = v0 - r.o;
