@@ -8,7 +8,8 @@
 //!   with rayon; a flattened depth-first layout of 32-byte nodes whose first child follows
 //!   its parent; stack traversal, nearest child first, with strict early exits.
 //!   [`Bvh::build_ploc`] fills the same layout with obvhs's PLOC topology, so builders can
-//!   be compared under one traversal kernel.
+//!   be compared under one traversal kernel; [`Bvh::reinserted`] runs obvhs's reinsertion
+//!   optimiser over a finished tree.
 //! - [`ObvhsAccel`] (backend `obvhs`): the `obvhs` crate's production layout (PLOC with
 //!   reinsertion, compressed wide CWBVH8 nodes) with its own traversal.
 //!

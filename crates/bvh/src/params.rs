@@ -26,7 +26,7 @@ impl BvhParams {
 
     /// Fastest build: 8 bins, leaves of up to 8.
     #[must_use]
-    pub fn fast() -> Self {
+    pub const fn fast() -> Self {
         Self {
             bins: 8,
             max_leaf_size: 8,
@@ -38,7 +38,7 @@ impl BvhParams {
 
     /// The default: 16 bins, leaves of up to 4.
     #[must_use]
-    pub fn medium() -> Self {
+    pub const fn medium() -> Self {
         Self {
             bins: 16,
             max_leaf_size: 4,
@@ -50,7 +50,7 @@ impl BvhParams {
 
     /// Best trees: 32 bins, leaves of up to 2.
     #[must_use]
-    pub fn quality() -> Self {
+    pub const fn quality() -> Self {
         Self {
             bins: 32,
             max_leaf_size: 2,
