@@ -193,17 +193,25 @@ pub enum Bvh2Builder {
         /// Largest leaf of the BVH2.
         max_leaf: u32,
     },
+    /// The binned builder's tree with these parameters, then obvhs's reinsertion optimiser
+    /// over all of its nodes ([`Bvh::reinserted`] at batch ratio 1): subtrees moved to
+    /// where they lower the surface-area cost, the leaves kept.
+    Reinserted(BvhParams),
 }
 
 impl Bvh2Builder {
     /// The PLOC tree of the `packet:ploc` preset: leaves of at most two primitives.
     pub const PLOC: Self = Self::Ploc { max_leaf: 2 };
 
+    /// The tree of the `packet:reinserted` preset: the default binned tree, reinserted.
+    pub const REINSERTED: Self = Self::Reinserted(BvhParams::medium());
+
     /// Builds the BVH2 over `geometry`.
     #[must_use]
     pub fn build(self, geometry: Arc<Geometry>) -> Bvh {
         match self {
             Self::Binned(params) => Bvh::build_with(geometry, params),
+            Self::Reinserted(params) => Bvh::build_with(geometry, params).reinserted(1.0),
             Self::Ploc { max_leaf } => {
                 let params = ObvhsBuildParams {
                     max_prims_per_leaf: max_leaf.max(1),

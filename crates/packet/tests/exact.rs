@@ -224,7 +224,8 @@ fn avx512_matches_naive() {
 /// The BVH8 is collapsed from whatever BVH2 it is given: other presets, a BVH2 split down
 /// to single primitives, one whose leaves hold more than a leaf reference can name (100
 /// coincident triangles in one leaf, laid out as a small tree of leaves), and one over
-/// pre-split triangles (a triangle in several leaves); then obvhs's PLOC trees.
+/// pre-split triangles (a triangle in several leaves); then obvhs's PLOC trees and binned
+/// trees after obvhs's reinsertion.
 #[test]
 fn every_bvh2_collapses_exactly() {
     let coarse = BvhParams {
@@ -255,6 +256,13 @@ fn every_bvh2_collapses_exactly() {
     for max_leaf in [1, 2, 8] {
         check(PacketParams {
             bvh: Bvh2Builder::Ploc { max_leaf },
+            ..PacketParams::default()
+        });
+    }
+    // Binned trees after reinsertion: the preset's, and one with leaves of one primitive.
+    for bvh in [BvhParams::medium(), fine] {
+        check(PacketParams {
+            bvh: Bvh2Builder::Reinserted(bvh),
             ..PacketParams::default()
         });
     }

@@ -329,6 +329,21 @@ pub static PRESETS: &[Preset] = &[
             }
         )
     ),
+    preset!(
+        "packet",
+        "reinserted",
+        false,
+        EXACT_PRESET,
+        PacketAccel,
+        "packet's BVH8 collapsed from the medium binned BVH2 after obvhs's reinsertion optimiser over all nodes: fewer node visits on Sponza, no change on the generated meshes, builds 2-4x longer",
+        |g| PacketAccel::build_with(
+            g,
+            PacketParams {
+                bvh: Bvh2Builder::REINSERTED,
+                ..PacketParams::default()
+            }
+        )
+    ),
     #[cfg(feature = "embree")]
     embree_preset!(
         "low",
