@@ -2,12 +2,80 @@
 //! BVH4_CPU and BVH8_CPU that `src/tinybvh.rs` calls, against the `tiny_bvh.h` that the
 //! `tinybvh-rs` crate ships. That crate is a dependency for no platform (Cargo.toml): it is
 //! pinned by Cargo.lock and downloaded by `cargo fetch`, never compiled, and its Rust API is
-//! not used. Without the feature this script does nothing.
+//! not used.
+//!
+//! With the feature `embree`: checks, on Linux, that the linker will find Intel Embree 3
+//! (`libembree3.so`, which the `embree` crate links), so that a machine without it gets one
+//! line saying what to install instead of a linker error at the end of the build.
+//!
+//! Without either feature this script does nothing.
 
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
+    #[cfg(feature = "embree")]
+    embree::check();
     #[cfg(feature = "tinybvh")]
     tinybvh::compile();
+}
+
+#[cfg(feature = "embree")]
+mod embree {
+    use std::env;
+    use std::path::PathBuf;
+
+    /// The library the `embree` crate links (`cargo:rustc-link-lib=embree3`), as the
+    /// linker looks for it.
+    const LIBRARY: &str = "libembree3.so";
+
+    /// The folders the linker searches: the `embree` crate's `EMBREE_DIR/lib`, those of
+    /// `LIBRARY_PATH`, and the system's (Debian's multiarch folder first).
+    fn search_dirs() -> Vec<PathBuf> {
+        let mut dirs = Vec::new();
+        if let Some(dir) = env::var_os("EMBREE_DIR") {
+            dirs.push(PathBuf::from(dir).join("lib"));
+        }
+        if let Some(paths) = env::var_os("LIBRARY_PATH") {
+            dirs.extend(env::split_paths(&paths));
+        }
+        let arch = env::var("CARGO_CFG_TARGET_ARCH").unwrap_or_default();
+        for dir in [
+            format!("/usr/lib/{arch}-linux-gnu"),
+            "/usr/local/lib".into(),
+            "/usr/lib64".into(),
+            "/usr/lib".into(),
+            format!("/lib/{arch}-linux-gnu"),
+            "/lib64".into(),
+            "/lib".into(),
+        ] {
+            dirs.push(dir.into());
+        }
+        dirs
+    }
+
+    /// Stops the build with one `error:` line when no search folder holds the library.
+    /// Other systems are left to their linker.
+    pub fn check() {
+        println!("cargo:rerun-if-env-changed=EMBREE_DIR");
+        println!("cargo:rerun-if-env-changed=LIBRARY_PATH");
+        if env::var("CARGO_CFG_TARGET_OS").as_deref() != Ok("linux") {
+            return;
+        }
+        if let Some(found) = search_dirs()
+            .into_iter()
+            .map(|d| d.join(LIBRARY))
+            .find(|f| f.exists())
+        {
+            // Checked again if it goes away.
+            println!("cargo:rerun-if-changed={}", found.display());
+            return;
+        }
+        eprintln!(
+            "error: the feature `embree` needs Intel Embree 3 and no {LIBRARY} was found in \
+             EMBREE_DIR/lib, LIBRARY_PATH or the system's library folders: install it \
+             (Debian and Ubuntu: apt install libembree-dev) or set EMBREE_DIR to its prefix"
+        );
+        std::process::exit(1);
+    }
 }
 
 #[cfg(feature = "tinybvh")]
