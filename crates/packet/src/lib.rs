@@ -194,8 +194,8 @@ pub enum Bvh2Builder {
         max_leaf: u32,
     },
     /// The binned builder's tree with these parameters, then one pass of obvhs's
-    /// reinsertion optimiser over all of its nodes ([`Bvh::reinserted`]): subtrees moved to
-    /// where they lower the surface-area cost, the leaves kept.
+    /// reinsertion optimiser over the largest fifth of its nodes ([`Bvh::reinserted`]):
+    /// subtrees moved to where they lower the surface-area cost, the leaves kept.
     Reinserted(BvhParams),
 }
 
@@ -211,7 +211,7 @@ impl Bvh2Builder {
     pub fn build(self, geometry: Arc<Geometry>) -> Bvh {
         match self {
             Self::Binned(params) => Bvh::build_with(geometry, params),
-            Self::Reinserted(params) => Bvh::build_with(geometry, params).reinserted(&[1.0]),
+            Self::Reinserted(params) => Bvh::build_with(geometry, params).reinserted(&[0.2]),
             Self::Ploc { max_leaf } => {
                 let params = ObvhsBuildParams {
                     max_prims_per_leaf: max_leaf.max(1),
