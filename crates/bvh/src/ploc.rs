@@ -245,6 +245,43 @@ mod tests {
     }
 
     #[test]
+    fn obvhs_gets_the_tree_breadth_first_and_gives_it_back_unchanged() {
+        let t = Bvh::build_with(soup(), crate::BvhParams::fast());
+        assert!(t.depth() > 6, "too shallow a tree to tell the orders apart");
+        let tree = t.to_obvhs();
+        assert_eq!(tree.nodes.len(), t.nodes().len());
+        // Children are numbered after their parent, so one sweep sets every depth.
+        assert!(
+            tree.nodes
+                .iter()
+                .enumerate()
+                .all(|(i, n)| n.is_leaf() || n.first_index as usize > i)
+        );
+        // Breadth first (a partial reinsertion pass takes its candidates from the front):
+        // no node lies deeper than the one numbered after it.
+        let mut depth = vec![0usize; tree.nodes.len()];
+        for (i, n) in tree.nodes.iter().enumerate() {
+            if !n.is_leaf() {
+                let first = n.first_index as usize;
+                depth[first] = depth[i] + 1;
+                depth[first + 1] = depth[i] + 1;
+            }
+        }
+        assert!(
+            depth.windows(2).all(|d| d[0] <= d[1]),
+            "not numbered breadth first"
+        );
+        let mut back = Bvh {
+            nodes: Vec::new(),
+            prim_ids: Vec::new(),
+            ..t.clone()
+        };
+        back.copy_topology(&tree, |i| t.prim_ids()[i as usize]);
+        assert_eq!(back.nodes(), t.nodes());
+        assert_eq!(back.prim_ids(), t.prim_ids());
+    }
+
+    #[test]
     fn a_lone_leaf_is_left_alone() {
         let tri = Shape::Triangle(Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y));
         let t = Bvh::build(Arc::new(Geometry::new(vec![tri; 3])));
