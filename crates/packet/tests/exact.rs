@@ -268,6 +268,42 @@ fn every_bvh2_collapses_exactly() {
     }
 }
 
+/// A tree too large for the preset's pass to take a fifth of its nodes: the pass takes
+/// `REINSERTION_CANDIDATES` of them, still lowers the cost, and the hits stay the binned
+/// tree's (which `every_bvh2_collapses_exactly` checks against the oracle).
+#[test]
+fn a_large_tree_is_reinserted_over_capped_candidates() {
+    let mesh = generators::icosphere(6);
+    let g = Arc::new(Geometry::new(
+        mesh.triangles().map(Shape::Triangle).collect(),
+    ));
+    let binned = Bvh2Builder::Binned(BvhParams::medium()).build(Arc::clone(&g));
+    let reinserted = Bvh2Builder::REINSERTED.build(Arc::clone(&g));
+    assert!(
+        binned.nodes().len() > 5 * Bvh2Builder::REINSERTION_CANDIDATES,
+        "{} nodes: a fifth of them is under the cap",
+        binned.nodes().len()
+    );
+    reinserted.validate().unwrap();
+    assert!(
+        reinserted.sah_cost() < binned.sah_cost(),
+        "SAH {} -> {}",
+        binned.sah_cost(),
+        reinserted.sah_cost()
+    );
+    let rays = ray_sets::incoherent(g.bounds(), 20_000, 7);
+    let mut hits = 0;
+    for ray in &rays {
+        let (a, b) = (
+            reinserted.intersect(ray, &mut NoCounters),
+            binned.intersect(ray, &mut NoCounters),
+        );
+        assert!(same(&a, &b), "{ray:?}: {a:?} against {b:?}");
+        hits += usize::from(b.is_some());
+    }
+    assert!(hits > 1000, "only {hits} of {} rays hit", rays.len());
+}
+
 #[test]
 fn detection_picks_an_available_set() {
     assert!(Isa::detect().is_available());
