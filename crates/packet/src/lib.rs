@@ -214,6 +214,7 @@ impl Bvh2Builder {
     /// (on a flattened field of 12.6 million triangles, 13.5 million nodes, a pass over a
     /// fifth took 4.2 s, over 8,192 nodes 1.8 s, most of it handing the tree over and back).
     pub const REINSERTION_CANDIDATES: usize = 8192;
+
     /// Builds the BVH2 over `geometry`.
     #[must_use]
     pub fn build(self, geometry: Arc<Geometry>) -> Bvh {
