@@ -60,10 +60,10 @@ impl Bvh {
 
     /// This tree after obvhs's reinsertion optimiser (Meister and Bittner, "Parallel
     /// Reinsertion for Bounding Volume Hierarchy Optimization", 2018): one pass per entry
-    /// of `passes`, each over that fraction of the nodes (the largest of the upper levels),
-    /// moves subtrees to where they lower the tree's surface-area cost most (obvhs's own builds run sixteen passes, the
-    /// first over 2 % to 5 % of the nodes, each later one over fewer). The leaves keep
-    /// their primitives; the tree is copied back into the depth-first layout and refitted
+    /// of `passes`, each over that fraction of the nodes (the largest of the upper
+    /// levels), moves subtrees to where they lower the tree's surface-area cost most
+    /// (obvhs's own builds run sixteen passes, the first over 2 % to 5 % of the nodes,
+    /// each later one over fewer). The leaves keep their primitives; the tree is copied back into the depth-first layout and refitted
     /// exactly, so the hits stay bit-identical to the naive backend's. The same tree on
     /// any thread count.
     #[must_use]
