@@ -8,8 +8,9 @@
 //! kernel). Only obvhs's topology is used: its boxes (and any rounding in them) are not, so
 //! the hits are bit-identical to the naive backend's as for every [`Bvh`].
 //!
-//! [`Bvh::reinserted`] goes the other way first: a finished tree (the binned builder's) is
-//! handed to obvhs's reinsertion optimiser and its new topology copied back the same way.
+//! [`Bvh::reinserted`] goes the other way first: the top of a finished tree (the binned
+//! builder's) is handed to obvhs's reinsertion optimiser, the subtrees below it as leaves,
+//! and the new top copied back around those subtrees, which move as whole blocks.
 
 use crate::build::MAX_DEPTH;
 use crate::{Bvh, BvhParams, Node};
@@ -18,6 +19,7 @@ use obvhs::BvhBuildParams;
 use obvhs::bvh2::Bvh2;
 use obvhs::bvh2::node::Bvh2Node;
 use raybench_geometry::{Aabb, Geometry};
+use std::ops::Range;
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -63,34 +65,53 @@ impl Bvh {
     /// of `passes`, each over that fraction of the nodes (the largest of the upper
     /// levels), moves subtrees to where they lower the tree's surface-area cost most
     /// (obvhs's own builds run sixteen passes, the first over 2 % to 5 % of the nodes,
-    /// each later one over fewer). The leaves keep their primitives; the tree is copied back into the depth-first layout and refitted
-    /// exactly, so the hits stay bit-identical to the naive backend's. The same tree on
-    /// any thread count.
+    /// each later one over fewer). The same tree on any thread count.
+    ///
+    /// obvhs gets only the top of the tree, the nodes among which the passes pick their
+    /// candidates and as many again below them; each subtree under that top goes over as
+    /// one leaf and comes back whole, its nodes, boxes and primitives copied as they were,
+    /// and only the nodes above them get new boxes, the unions of their children's (exact,
+    /// as a refit's). So the hand-over costs the top's size, not the tree's; subtrees that
+    /// would reach below the traversal's depth limit become leaves there. The leaves keep
+    /// their primitives, so the hits stay bit-identical to the naive backend's.
     #[must_use]
-    pub fn reinserted(mut self, passes: &[f32]) -> Self {
-        if self.nodes.len() < 3 || passes.is_empty() {
+    pub fn reinserted(self, passes: &[f32]) -> Self {
+        let n = self.nodes.len();
+        if n < 3 || passes.is_empty() {
             return self;
         }
-        let mut tree = self.to_obvhs();
+        // A pass over a fraction `f` of `n` nodes moves up to `floor(f n)` of them (at least
+        // one), taking as candidates the largest of the first `2 (floor(f n) + 1)`.
+        let moves: Vec<usize> = passes
+            .iter()
+            .map(|&f| ((n as f32 * f) as usize).max(1))
+            .collect();
+        let pool = 2 * (moves.iter().max().copied().unwrap_or(1) + 1);
+        let (mut tree, blocks) = self.to_obvhs(pool.saturating_mul(TOP_MARGIN));
+        // The same moves over the smaller tree (half a node above each, against rounding).
+        let handed = tree.nodes.len() as f32;
+        let fractions = moves.iter().map(|&m| (m as f32 + 0.5) / handed).collect();
         obvhs::bvh2::reinsertion::ReinsertionOptimizer::default().run(
             &mut tree,
             1.0,
-            Some(passes.to_vec()),
+            Some(fractions),
         );
-        let prim_ids = std::mem::take(&mut self.prim_ids);
-        self.prim_ids.reserve(prim_ids.len());
-        self.nodes.clear();
-        self.copy_topology(&tree, |i| prim_ids[i as usize]);
-        self
+        self.with_top(&tree, &blocks)
     }
 
-    /// This tree in obvhs's layout (siblings side by side), its leaves indexing the
-    /// primitive-id array directly. The nodes are numbered breadth first: a reinsertion
-    /// pass over a fraction `f` of the nodes takes its candidates from the first `2 f` of
-    /// the array (sorted by area), which must therefore be the top of the tree (numbered
-    /// depth first, passes starting at a fifth of Sponza's nodes saved at most a third of
-    /// what one such pass saves now).
-    fn to_obvhs(&self) -> Bvh2 {
+    /// The top `top` nodes of this tree, numbered breadth first, in obvhs's layout
+    /// (siblings side by side), and for each of its leaves the subtree of this tree it
+    /// stands for (its root node): the children of the top's nodes that are not in the
+    /// top themselves become leaves whole, as do the top's own leaves. A leaf's
+    /// `first_index` is its subtree's place in the returned list. With `top` at least the
+    /// node count the whole tree goes over.
+    ///
+    /// Breadth first because a reinsertion pass over a fraction `f` of the nodes takes its
+    /// candidates from the first `2 f` of the array (sorted by area), which must therefore
+    /// be the top of the tree (numbered depth first, passes starting at a fifth of Sponza's
+    /// nodes saved at most a third of what one such pass saves now); and because then the
+    /// first `top` nodes are numbered as they would be in the whole tree.
+    fn to_obvhs(&self, top: usize) -> (Bvh2, Vec<u32>) {
         let node = |n: &Node, prim_count: u32, first_index: u32| Bvh2Node {
             aabb: obvhs::aabb::Aabb {
                 min: Vec3A::from(n.min),
@@ -100,15 +121,21 @@ impl Bvh {
             first_index,
             ..Bvh2Node::default()
         };
-        let mut nodes = vec![Bvh2Node::default(); self.nodes.len()];
-        nodes[0] = node(&self.nodes[0], 0, 0);
+        let mut nodes = vec![
+            Bvh2Node::default();
+            self.nodes
+                .len()
+                .min(top.saturating_mul(2).saturating_add(1))
+        ];
+        let mut blocks = Vec::new();
         // (raybench node, obvhs node), breadth first.
         let mut queue = std::collections::VecDeque::from([(0usize, 0usize)]);
         let mut next = 1;
         while let Some((ours, theirs)) = queue.pop_front() {
             let n = &self.nodes[ours];
-            if n.is_leaf() {
-                nodes[theirs] = node(n, n.count, n.first_or_right);
+            if n.is_leaf() || theirs >= top {
+                nodes[theirs] = node(n, 1, blocks.len() as u32);
+                blocks.push(ours as u32);
                 continue;
             }
             nodes[theirs] = node(n, 0, next as u32);
@@ -116,10 +143,124 @@ impl Bvh {
             queue.push_back((n.first_or_right as usize, next + 1));
             next += 2;
         }
-        Bvh2 {
+        nodes.truncate(next);
+        let tree = Bvh2 {
             nodes,
-            primitive_indices: (0..self.prim_ids.len() as u32).collect(),
+            primitive_indices: (0..blocks.len() as u32).collect(),
             ..Bvh2::default()
+        };
+        (tree, blocks)
+    }
+
+    /// This tree with `tree`'s topology above the subtrees `blocks` (which its leaves
+    /// stand for: see [`Bvh::to_obvhs`]), in depth-first order, left subtree first. A
+    /// subtree's nodes and primitives are contiguous in the depth-first layout and are
+    /// copied as one block, its indices shifted; one that would reach below the
+    /// traversal's depth limit is copied node by node down to it, where its subtrees
+    /// become leaves holding all their primitives. The nodes above the blocks get the
+    /// unions of their children's boxes.
+    fn with_top(self, tree: &Bvh2, blocks: &[u32]) -> Self {
+        let old = &self.nodes;
+        // Levels of each subtree (a leaf has 1), children after parents.
+        let mut height = vec![1u8; old.len()];
+        for i in (0..old.len()).rev() {
+            let n = &old[i];
+            if !n.is_leaf() {
+                let below = height[i + 1].max(height[n.first_or_right as usize]);
+                height[i] = below.saturating_add(1);
+            }
+        }
+        let mut nodes = Vec::with_capacity(old.len());
+        let mut prim_ids = Vec::with_capacity(self.prim_ids.len());
+        // Nodes made here, whose boxes are set once their children's are.
+        let mut made = Vec::new();
+        // Depth first: (obvhs node or, with `OURS`, a node of this tree; node to patch
+        // with this node's index as its second child; depth).
+        const OURS: usize = 1 << (usize::BITS - 1);
+        let mut stack: Vec<(usize, Option<usize>, usize)> = vec![(0, None, 1)];
+        while let Some((at, patch, depth)) = stack.pop() {
+            let index = nodes.len();
+            if let Some(p) = patch {
+                let parent: &mut Node = &mut nodes[p];
+                parent.first_or_right = index as u32;
+            }
+            let ours = if at & OURS != 0 {
+                at & !OURS
+            } else {
+                let node = &tree.nodes[at];
+                if node.is_leaf() {
+                    blocks[node.first_index as usize] as usize
+                } else if depth >= MAX_DEPTH {
+                    // One leaf for all the subtrees below.
+                    let (first, mut bounds) = (prim_ids.len() as u32, Aabb::EMPTY);
+                    let mut below = vec![at];
+                    while let Some(b) = below.pop() {
+                        let b = &tree.nodes[b];
+                        if b.is_leaf() {
+                            let root = blocks[b.first_index as usize] as usize;
+                            prim_ids.extend_from_slice(&self.prim_ids[subtree_extent(old, root).1]);
+                            bounds = bounds.union(old[root].aabb());
+                        } else {
+                            below.extend([b.first_index as usize + 1, b.first_index as usize]);
+                        }
+                    }
+                    nodes.push(Node {
+                        min: bounds.min,
+                        first_or_right: first,
+                        max: bounds.max,
+                        count: prim_ids.len() as u32 - first,
+                    });
+                    continue;
+                } else {
+                    made.push(index);
+                    nodes.push(Node::default());
+                    let first = node.first_index as usize;
+                    stack.push((first + 1, Some(index), depth + 1));
+                    stack.push((first, None, depth + 1));
+                    continue;
+                }
+            };
+            let (span, prims) = subtree_extent(old, ours);
+            if depth + usize::from(height[ours]) - 1 <= MAX_DEPTH {
+                let node_shift = index as i64 - ours as i64;
+                let prim_shift = prim_ids.len() as i64 - prims.start as i64;
+                nodes.extend(old[span].iter().map(|n| {
+                    let shift = if n.is_leaf() { prim_shift } else { node_shift };
+                    Node {
+                        first_or_right: (i64::from(n.first_or_right) + shift) as u32,
+                        ..*n
+                    }
+                }));
+                prim_ids.extend_from_slice(&self.prim_ids[prims]);
+            } else if depth >= MAX_DEPTH {
+                let first = prim_ids.len() as u32;
+                prim_ids.extend_from_slice(&self.prim_ids[prims]);
+                nodes.push(Node {
+                    first_or_right: first,
+                    count: prim_ids.len() as u32 - first,
+                    ..old[ours]
+                });
+            } else {
+                nodes.push(Node {
+                    first_or_right: 0,
+                    ..old[ours]
+                });
+                let right = old[ours].first_or_right as usize;
+                stack.push((right | OURS, Some(index), depth + 1));
+                stack.push(((ours + 1) | OURS, None, depth + 1));
+            }
+        }
+        for &i in made.iter().rev() {
+            let b = nodes[i + 1]
+                .aabb()
+                .union(nodes[nodes[i].first_or_right as usize].aabb());
+            nodes[i].min = b.min;
+            nodes[i].max = b.max;
+        }
+        Self {
+            nodes,
+            prim_ids,
+            ..self
         }
     }
 
@@ -171,10 +312,38 @@ impl Bvh {
     }
 }
 
+/// How many more nodes than the reinsertion passes' candidate pool [`Bvh::reinserted`]
+/// hands to obvhs (the pool is the first `2 (m + 1)` nodes for a pass that moves `m`): the
+/// nodes below the pool are where the passes can move a candidate to.
+const TOP_MARGIN: usize = 2;
+
+/// The nodes of the subtree under `root` of the depth-first `nodes` and the range of the
+/// primitive ids its leaves cover (both contiguous): the subtree ends after its rightmost
+/// leaf, and its primitives run from its leftmost leaf's first to its rightmost leaf's
+/// last.
+fn subtree_extent(nodes: &[Node], root: usize) -> (Range<usize>, Range<usize>) {
+    let mut left = root;
+    while !nodes[left].is_leaf() {
+        left += 1;
+    }
+    let mut right = root;
+    while !nodes[right].is_leaf() {
+        right = nodes[right].first_or_right as usize;
+    }
+    let last = &nodes[right];
+    (
+        root..right + 1,
+        nodes[left].first_or_right as usize..(last.first_or_right + last.count) as usize,
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use crate::Bvh;
+    use crate::build::MAX_DEPTH;
     use obvhs::BvhBuildParams;
+    use obvhs::bvh2::Bvh2;
+    use obvhs::bvh2::node::Bvh2Node;
     use raybench_geometry::{Accel, Geometry, Ray, RayCounters, Shape, Triangle, Vec3};
     use std::sync::Arc;
 
@@ -248,8 +417,12 @@ mod tests {
     fn obvhs_gets_the_tree_breadth_first_and_gives_it_back_unchanged() {
         let t = Bvh::build_with(soup(), crate::BvhParams::fast());
         assert!(t.depth() > 6, "too shallow a tree to tell the orders apart");
-        let tree = t.to_obvhs();
+        let (tree, blocks) = t.to_obvhs(usize::MAX);
         assert_eq!(tree.nodes.len(), t.nodes().len());
+        assert_eq!(
+            blocks.len(),
+            t.nodes().iter().filter(|n| n.is_leaf()).count()
+        );
         // Children are numbered after their parent, so one sweep sets every depth.
         assert!(
             tree.nodes
@@ -271,14 +444,117 @@ mod tests {
             depth.windows(2).all(|d| d[0] <= d[1]),
             "not numbered breadth first"
         );
-        let mut back = Bvh {
-            nodes: Vec::new(),
-            prim_ids: Vec::new(),
-            ..t.clone()
-        };
-        back.copy_topology(&tree, |i| t.prim_ids()[i as usize]);
+        let back = t.clone().with_top(&tree, &blocks);
         assert_eq!(back.nodes(), t.nodes());
         assert_eq!(back.prim_ids(), t.prim_ids());
+        // Only the top: the same first nodes, the rest as whole subtrees, and the same
+        // tree back.
+        let (top, blocks) = t.to_obvhs(40);
+        assert!(
+            top.nodes.len() <= 81 && blocks.len() > 20,
+            "{}",
+            top.nodes.len()
+        );
+        for (a, b) in top.nodes.iter().zip(&tree.nodes).take(40) {
+            assert_eq!((a.aabb, a.is_leaf()), (b.aabb, b.is_leaf()));
+        }
+        let back = t.clone().with_top(&top, &blocks);
+        assert_eq!(back.nodes(), t.nodes());
+        assert_eq!(back.prim_ids(), t.prim_ids());
+    }
+
+    /// A top deeper than the depth limit: the subtrees that would reach below it are
+    /// copied node by node down to it, and what lies below becomes leaves, so the tree
+    /// keeps every primitive once and gives the same hits.
+    #[test]
+    fn subtrees_hung_below_the_depth_limit_are_cut_there() {
+        let g = soup();
+        let t = Bvh::build_with(Arc::clone(&g), crate::BvhParams::fast());
+        let (_, blocks) = t.to_obvhs(64);
+        assert!(blocks.len() > MAX_DEPTH + 2, "{} subtrees", blocks.len());
+        // A chain: interior node 2 k holds subtree k and the interior node 2 k + 2, so
+        // subtree k hangs at depth k + 2; the last interior node holds the last two.
+        let leaf = |k: usize| Bvh2Node {
+            prim_count: 1,
+            first_index: k as u32,
+            ..Bvh2Node::default()
+        };
+        let inner = |first: usize| Bvh2Node {
+            first_index: first as u32,
+            ..Bvh2Node::default()
+        };
+        let k = blocks.len();
+        let mut nodes = vec![inner(1)];
+        for i in 0..k - 1 {
+            nodes.push(leaf(i));
+            nodes.push(if i + 2 < k {
+                inner(nodes.len() + 1)
+            } else {
+                leaf(k - 1)
+            });
+        }
+        let chain = Bvh2 {
+            nodes,
+            ..Bvh2::default()
+        };
+        let cut = t.clone().with_top(&chain, &blocks);
+        cut.validate().unwrap();
+        assert_eq!(cut.depth(), MAX_DEPTH);
+        assert_same_hits(&cut, &t);
+    }
+
+    /// A pass that moves fewer nodes than the tree holds hands obvhs only the top, and the
+    /// tree it gives back is valid, cheaper, exactly boxed and traced alike.
+    #[test]
+    fn a_tree_larger_than_its_top_is_reinserted_in_blocks() {
+        let g = Arc::new(Geometry::new(
+            raybench_scene::generators::soup(20_000, 1)
+                .triangles()
+                .map(Shape::Triangle)
+                .collect(),
+        ));
+        let binned = Bvh::build_with(Arc::clone(&g), crate::BvhParams::fast());
+        let moves = (binned.nodes().len() as f32 * 0.1) as usize;
+        let (top, _) = binned.to_obvhs(2 * (moves + 1) * super::TOP_MARGIN);
+        assert!(
+            top.nodes.len() < binned.nodes().len() * 3 / 4,
+            "{} of {} nodes handed over",
+            top.nodes.len(),
+            binned.nodes().len()
+        );
+        let reinserted = binned.clone().reinserted(&[0.1]);
+        reinserted.validate().unwrap();
+        assert!(reinserted.depth() <= MAX_DEPTH);
+        assert!(
+            reinserted.sah_cost() < binned.sah_cost(),
+            "SAH {} -> {}",
+            binned.sah_cost(),
+            reinserted.sah_cost()
+        );
+        let mut refitted = reinserted.clone();
+        refitted.refit_boxes();
+        assert_eq!(refitted.nodes(), reinserted.nodes(), "boxes not exact");
+        let mut ids = reinserted.prim_ids().to_vec();
+        ids.sort_unstable();
+        assert_eq!(ids, (0..g.len() as u32).collect::<Vec<_>>());
+        // Rays from all sides through the soup's unit cube.
+        let (mut c, mut hits) = (RayCounters::default(), 0);
+        for k in 0..2000u32 {
+            let t = k as f32 * 0.618;
+            let o = Vec3::new(t.sin(), t.cos(), (t * 1.3).sin()) * 30.0;
+            let ray = Ray::new(o, Vec3::new(t.cos(), (2.0 * t).sin(), t.sin()) * 0.8 - o);
+            let (a, b) = (
+                reinserted.intersect(&ray, &mut c),
+                binned.intersect(&ray, &mut c),
+            );
+            assert_eq!(
+                a.map(|h| (h.prim, h.t.to_bits())),
+                b.map(|h| (h.prim, h.t.to_bits()))
+            );
+            assert_eq!(reinserted.occluded(&ray, &mut c), b.is_some());
+            hits += usize::from(b.is_some());
+        }
+        assert!(hits > 1000, "only {hits} of 2000 rays hit");
     }
 
     #[test]
