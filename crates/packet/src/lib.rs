@@ -208,13 +208,12 @@ impl Bvh2Builder {
     pub const REINSERTED: Self = Self::Reinserted(BvhParams::medium());
 
     /// The most nodes one reinsertion pass of [`Bvh2Builder::Reinserted`] takes as
-    /// candidates. The largest nodes, which a pass takes first, hold most of the gain: on
-    /// Sponza (61,303 nodes) a pass over 1,000 of them saved 78 % to 92 % of the node
-    /// visits that one over a fifth saved, and the pass's time grows with its candidates
-    /// (on a flattened field of 12.6 million triangles, 13.5 million nodes, a pass over a
-    /// fifth took 4.2 s, over 8,192 nodes 1.8 s when the whole tree was handed over and
-    /// back, about 0.6 s now that only its top is: see [`Bvh::reinserted`]).
-    pub const REINSERTION_CANDIDATES: usize = 8192;
+    /// candidates. The largest nodes, which a pass takes first, hold most of the gain, and
+    /// the pass's time grows with its candidates: on Sponza (61,303 nodes) 2,048 of them
+    /// keep 84 % to 96 % of the node visits that 8,192 save, for a third of the time (1.6
+    /// ms against 4.4 ms on two threads, where the binned build takes 14 ms); see
+    /// docs/strategies.md, "Reinserting the binned tree".
+    pub const REINSERTION_CANDIDATES: usize = 2048;
 
     /// Builds the BVH2 over `geometry`.
     #[must_use]

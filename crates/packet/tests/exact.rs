@@ -273,7 +273,7 @@ fn every_bvh2_collapses_exactly() {
 /// tree's (which `every_bvh2_collapses_exactly` checks against the oracle).
 #[test]
 fn a_large_tree_is_reinserted_over_capped_candidates() {
-    let mesh = generators::icosphere(6);
+    let mesh = generators::soup(20_000, 1);
     let g = Arc::new(Geometry::new(
         mesh.triangles().map(Shape::Triangle).collect(),
     ));
