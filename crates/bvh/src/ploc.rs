@@ -361,11 +361,19 @@ mod tests {
     /// Asserts that `t` gives `reference`'s closest hits (id and `t`) and any hits on 500
     /// rays across the soup, of which 192 hit.
     fn assert_same_hits(t: &Bvh, reference: &Bvh) {
-        let mut hits = 0;
-        for k in 0..500u32 {
+        let rays = (0..500u32).map(|k| {
             let o = Vec3::new(-3.0, 0.1 + 0.023 * k as f32, 0.05 + 0.021 * k as f32);
-            let ray = Ray::new(o, Vec3::new(1.0, 0.01 * (k % 7) as f32, 0.002));
-            let mut c = RayCounters::default();
+            Ray::new(o, Vec3::new(1.0, 0.01 * (k % 7) as f32, 0.002))
+        });
+        let hits = assert_same_hits_on(t, reference, rays);
+        assert!(hits > 150, "only {hits} of 500 rays hit");
+    }
+
+    /// Asserts that `t` gives `reference`'s closest hits (id and `t`) and any hits on
+    /// `rays`; returns how many hit.
+    fn assert_same_hits_on(t: &Bvh, reference: &Bvh, rays: impl Iterator<Item = Ray>) -> usize {
+        let (mut c, mut hits) = (RayCounters::default(), 0);
+        for ray in rays {
             let (a, b) = (t.intersect(&ray, &mut c), reference.intersect(&ray, &mut c));
             assert_eq!(
                 a.map(|h| (h.prim, h.t.to_bits())),
@@ -374,7 +382,7 @@ mod tests {
             assert_eq!(t.occluded(&ray, &mut c), b.is_some());
             hits += usize::from(b.is_some());
         }
-        assert!(hits > 150, "only {hits} of 500 rays hit");
+        hits
     }
 
     #[test]
@@ -538,22 +546,12 @@ mod tests {
         ids.sort_unstable();
         assert_eq!(ids, (0..g.len() as u32).collect::<Vec<_>>());
         // Rays from all sides through the soup's unit cube.
-        let (mut c, mut hits) = (RayCounters::default(), 0);
-        for k in 0..2000u32 {
+        let rays = (0..2000u32).map(|k| {
             let t = k as f32 * 0.618;
             let o = Vec3::new(t.sin(), t.cos(), (t * 1.3).sin()) * 30.0;
-            let ray = Ray::new(o, Vec3::new(t.cos(), (2.0 * t).sin(), t.sin()) * 0.8 - o);
-            let (a, b) = (
-                reinserted.intersect(&ray, &mut c),
-                binned.intersect(&ray, &mut c),
-            );
-            assert_eq!(
-                a.map(|h| (h.prim, h.t.to_bits())),
-                b.map(|h| (h.prim, h.t.to_bits()))
-            );
-            assert_eq!(reinserted.occluded(&ray, &mut c), b.is_some());
-            hits += usize::from(b.is_some());
-        }
+            Ray::new(o, Vec3::new(t.cos(), (2.0 * t).sin(), t.sin()) * 0.8 - o)
+        });
+        let hits = assert_same_hits_on(&reinserted, &binned, rays);
         assert!(hits > 1000, "only {hits} of 2000 rays hit");
     }
 
