@@ -19,6 +19,7 @@ use obvhs::BvhBuildParams;
 use obvhs::bvh2::Bvh2;
 use obvhs::bvh2::node::Bvh2Node;
 use raybench_geometry::{Aabb, Geometry};
+use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::Arc;
 use std::time::Duration;
@@ -74,8 +75,13 @@ impl Bvh {
     /// as a refit's). So the hand-over costs the top's size, not the tree's; subtrees that
     /// would reach below the traversal's depth limit become leaves there. The leaves keep
     /// their primitives, so the hits stay bit-identical to the naive backend's.
+    ///
+    /// The passes' tree is kept only where it lowers the tree's surface-area cost
+    /// ([`Bvh::sah_cost`]) by more than the fraction `min_gain` of it; otherwise this tree
+    /// comes back as it was, without the copy (on regular meshes the passes move nothing:
+    /// the hand-over and the passes are then all they cost).
     #[must_use]
-    pub fn reinserted(self, passes: &[f32]) -> Self {
+    pub fn reinserted(self, passes: &[f32], min_gain: f64) -> Self {
         let n = self.nodes.len();
         if n < 3 || passes.is_empty() {
             return self;
@@ -91,12 +97,40 @@ impl Bvh {
         // The same moves over the smaller tree (half a node above each, against rounding).
         let handed = tree.nodes.len() as f32;
         let fractions = moves.iter().map(|&m| (m as f32 + 0.5) / handed).collect();
+        let before = interior_area(&tree);
         obvhs::bvh2::reinsertion::ReinsertionOptimizer::default().run(
             &mut tree,
             1.0,
             Some(fractions),
         );
-        self.with_top(&tree, &blocks)
+        // Only the top's interior nodes changed: the subtrees below are the same.
+        let gain = f64::from(self.params.traversal_cost) * (before - interior_area(&tree));
+        if gain > min_gain * self.weighted_cost() {
+            self.with_top(&tree, &blocks)
+        } else {
+            self
+        }
+    }
+
+    /// [`Bvh::sah_cost`] times the root's surface area: every interior node's area times
+    /// the traversal cost, every leaf's times its primitive count. Summed in chunks of a
+    /// fixed size, so the same on any thread count.
+    fn weighted_cost(&self) -> f64 {
+        let c_t = f64::from(self.params.traversal_cost);
+        let partial: Vec<f64> = self
+            .nodes
+            .par_chunks(COPY_CHUNK)
+            .map(|chunk| {
+                chunk
+                    .iter()
+                    .map(|n| {
+                        let weight = if n.is_leaf() { f64::from(n.count) } else { c_t };
+                        weight * f64::from(n.aabb().surface_area())
+                    })
+                    .sum()
+            })
+            .collect();
+        partial.iter().sum()
     }
 
     /// The top `top` nodes of this tree, numbered breadth first, in obvhs's layout
@@ -159,97 +193,149 @@ impl Bvh {
     /// traversal's depth limit is copied node by node down to it, where its subtrees
     /// become leaves holding all their primitives. The nodes above the blocks get the
     /// unions of their children's boxes.
+    ///
+    /// The new arrays are planned first, on one thread, over the top and the blocks' extents
+    /// (found in parallel, each block walking only its own nodes); then every block is
+    /// copied into the range the plan gives it, in parallel. The result does not depend on
+    /// the thread count.
     fn with_top(self, tree: &Bvh2, blocks: &[u32]) -> Self {
         let old = &self.nodes;
-        // Levels of each subtree (a leaf has 1), children after parents.
-        let mut height = vec![1u8; old.len()];
-        for i in (0..old.len()).rev() {
-            let n = &old[i];
-            if !n.is_leaf() {
-                let below = height[i + 1].max(height[n.first_or_right as usize]);
-                height[i] = below.saturating_add(1);
-            }
-        }
-        let mut nodes = Vec::with_capacity(old.len());
-        let mut prim_ids = Vec::with_capacity(self.prim_ids.len());
-        // Nodes made here, whose boxes are set once their children's are.
+        let extents: Vec<Subtree> = blocks
+            .par_iter()
+            .map(|&root| Subtree::of(old, root as usize))
+            .collect();
+        // The new node array as pieces in order, and the ranges of the old primitive ids
+        // that make up the new one.
+        let mut pieces: Vec<Piece> = Vec::new();
+        let mut prim_ranges: Vec<Range<usize>> = Vec::new();
+        let (mut node_count, mut prim_count) = (0usize, 0usize);
+        // Interior nodes made here (indices into the new array), whose boxes are set once
+        // their children's are.
         let mut made = Vec::new();
-        // Depth first: (obvhs node or, with `OURS`, a node of this tree; node to patch
-        // with this node's index as its second child; depth).
+        // Depth first: (obvhs node or, with `OURS`, a node of this tree; the piece of the
+        // node to patch with this node's index as its second child; depth).
         const OURS: usize = 1 << (usize::BITS - 1);
         let mut stack: Vec<(usize, Option<usize>, usize)> = vec![(0, None, 1)];
         while let Some((at, patch, depth)) = stack.pop() {
-            let index = nodes.len();
-            if let Some(p) = patch {
-                let parent: &mut Node = &mut nodes[p];
-                parent.first_or_right = index as u32;
+            if let Some(p) = patch
+                && let Piece::One(parent) = &mut pieces[p]
+            {
+                parent.first_or_right = node_count as u32;
             }
-            let ours = if at & OURS != 0 {
-                at & !OURS
+            let (ours, subtree) = if at & OURS != 0 {
+                let ours = at & !OURS;
+                (ours, Subtree::of(old, ours))
             } else {
                 let node = &tree.nodes[at];
                 if node.is_leaf() {
-                    blocks[node.first_index as usize] as usize
+                    let block = node.first_index as usize;
+                    (blocks[block] as usize, extents[block].clone())
                 } else if depth >= MAX_DEPTH {
                     // One leaf for all the subtrees below.
-                    let (first, mut bounds) = (prim_ids.len() as u32, Aabb::EMPTY);
+                    let (first, mut bounds) = (prim_count, Aabb::EMPTY);
                     let mut below = vec![at];
                     while let Some(b) = below.pop() {
                         let b = &tree.nodes[b];
                         if b.is_leaf() {
-                            let root = blocks[b.first_index as usize] as usize;
-                            prim_ids.extend_from_slice(&self.prim_ids[subtree_extent(old, root).1]);
-                            bounds = bounds.union(old[root].aabb());
+                            let block = b.first_index as usize;
+                            let prims = extents[block].prims.clone();
+                            prim_count += prims.len();
+                            prim_ranges.push(prims);
+                            bounds = bounds.union(old[blocks[block] as usize].aabb());
                         } else {
                             below.extend([b.first_index as usize + 1, b.first_index as usize]);
                         }
                     }
-                    nodes.push(Node {
+                    pieces.push(Piece::One(Node {
                         min: bounds.min,
-                        first_or_right: first,
+                        first_or_right: first as u32,
                         max: bounds.max,
-                        count: prim_ids.len() as u32 - first,
-                    });
+                        count: (prim_count - first) as u32,
+                    }));
+                    node_count += 1;
                     continue;
                 } else {
-                    made.push(index);
-                    nodes.push(Node::default());
+                    made.push(node_count);
                     let first = node.first_index as usize;
-                    stack.push((first + 1, Some(index), depth + 1));
+                    stack.push((first + 1, Some(pieces.len()), depth + 1));
                     stack.push((first, None, depth + 1));
+                    pieces.push(Piece::One(Node::default()));
+                    node_count += 1;
                     continue;
                 }
             };
-            let (span, prims) = subtree_extent(old, ours);
-            if depth + usize::from(height[ours]) - 1 <= MAX_DEPTH {
-                let node_shift = index as i64 - ours as i64;
-                let prim_shift = prim_ids.len() as i64 - prims.start as i64;
-                nodes.extend(old[span].iter().map(|n| {
-                    let shift = if n.is_leaf() { prim_shift } else { node_shift };
-                    Node {
-                        first_or_right: (i64::from(n.first_or_right) + shift) as u32,
-                        ..*n
-                    }
-                }));
-                prim_ids.extend_from_slice(&self.prim_ids[prims]);
-            } else if depth >= MAX_DEPTH {
-                let first = prim_ids.len() as u32;
-                prim_ids.extend_from_slice(&self.prim_ids[prims]);
-                nodes.push(Node {
-                    first_or_right: first,
-                    count: prim_ids.len() as u32 - first,
-                    ..old[ours]
+            let Subtree {
+                nodes: span,
+                prims,
+                levels,
+            } = subtree;
+            if depth + levels - 1 <= MAX_DEPTH {
+                pieces.push(Piece::Whole {
+                    node_shift: node_count as i64 - span.start as i64,
+                    prim_shift: prim_count as i64 - prims.start as i64,
+                    nodes: span.clone(),
                 });
+                node_count += span.len();
+                prim_count += prims.len();
+                prim_ranges.push(prims);
+            } else if depth >= MAX_DEPTH {
+                pieces.push(Piece::One(Node {
+                    first_or_right: prim_count as u32,
+                    count: prims.len() as u32,
+                    ..old[ours]
+                }));
+                node_count += 1;
+                prim_count += prims.len();
+                prim_ranges.push(prims);
             } else {
-                nodes.push(Node {
+                let right = old[ours].first_or_right as usize;
+                stack.push((right | OURS, Some(pieces.len()), depth + 1));
+                stack.push(((ours + 1) | OURS, None, depth + 1));
+                pieces.push(Piece::One(Node {
                     first_or_right: 0,
                     ..old[ours]
-                });
-                let right = old[ours].first_or_right as usize;
-                stack.push((right | OURS, Some(index), depth + 1));
-                stack.push(((ours + 1) | OURS, None, depth + 1));
+                }));
+                node_count += 1;
             }
         }
+        let mut nodes = Vec::with_capacity(node_count);
+        nodes.par_extend(rayon::iter::repeat_n(Node::default(), node_count));
+        split_by(&mut nodes, pieces.iter().map(Piece::len))
+            .into_par_iter()
+            .zip(&pieces)
+            .for_each(|(dst, piece)| match piece {
+                Piece::One(node) => dst[0] = *node,
+                Piece::Whole {
+                    nodes: span,
+                    node_shift,
+                    prim_shift,
+                } => {
+                    let shift = |n: &Node| {
+                        let by = if n.is_leaf() { prim_shift } else { node_shift };
+                        Node {
+                            first_or_right: (i64::from(n.first_or_right) + by) as u32,
+                            ..*n
+                        }
+                    };
+                    dst.par_chunks_mut(COPY_CHUNK)
+                        .zip(old[span.clone()].par_chunks(COPY_CHUNK))
+                        .for_each(|(d, s)| {
+                            for (d, s) in d.iter_mut().zip(s) {
+                                *d = shift(s);
+                            }
+                        });
+                }
+            });
+        let mut prim_ids = Vec::with_capacity(prim_count);
+        prim_ids.par_extend(rayon::iter::repeat_n(0, prim_count));
+        split_by(&mut prim_ids, prim_ranges.iter().map(Range::len))
+            .into_par_iter()
+            .zip(&prim_ranges)
+            .for_each(|(dst, src)| {
+                dst.par_chunks_mut(COPY_CHUNK)
+                    .zip(self.prim_ids[src.clone()].par_chunks(COPY_CHUNK))
+                    .for_each(|(d, s)| d.copy_from_slice(s));
+            });
         for &i in made.iter().rev() {
             let b = nodes[i + 1]
                 .aabb()
@@ -317,30 +403,103 @@ impl Bvh {
 /// nodes below the pool are where the passes can move a candidate to.
 const TOP_MARGIN: usize = 2;
 
-/// The nodes of the subtree under `root` of the depth-first `nodes` and the range of the
-/// primitive ids its leaves cover (both contiguous): the subtree ends after its rightmost
-/// leaf, and its primitives run from its leftmost leaf's first to its rightmost leaf's
-/// last.
-fn subtree_extent(nodes: &[Node], root: usize) -> (Range<usize>, Range<usize>) {
-    let mut left = root;
-    while !nodes[left].is_leaf() {
-        left += 1;
+/// The surface areas of `tree`'s interior nodes, summed.
+fn interior_area(tree: &Bvh2) -> f64 {
+    tree.nodes
+        .iter()
+        .filter(|n| !n.is_leaf())
+        .map(|n| 2.0 * f64::from(n.aabb.half_area()))
+        .sum()
+}
+
+/// Elements per parallel task when [`Bvh::with_top`] copies a large block or
+/// [`Bvh::weighted_cost`] sums a tree's areas.
+const COPY_CHUNK: usize = 1 << 14;
+
+/// A subtree of a depth-first node array.
+#[derive(Clone, Debug, PartialEq)]
+struct Subtree {
+    /// Its nodes (contiguous: the root, then the left subtree, then the right).
+    nodes: Range<usize>,
+    /// The primitive ids its leaves cover (contiguous too).
+    prims: Range<usize>,
+    /// Its levels: 1 for a leaf.
+    levels: usize,
+}
+
+impl Subtree {
+    /// The subtree under `root` of the depth-first `nodes`, found by walking its nodes in
+    /// array order: after a leaf comes the second child of the nearest node above it whose
+    /// second child is still to come, and after the last leaf the subtree ends.
+    fn of(nodes: &[Node], root: usize) -> Self {
+        // The depths of the second children still to come, the nearest last.
+        let mut pending: Vec<usize> = Vec::with_capacity(MAX_DEPTH + 2);
+        let (mut i, mut depth, mut levels) = (root, 1, 1);
+        let mut first_prim = None;
+        loop {
+            levels = levels.max(depth);
+            let n = &nodes[i];
+            if n.is_leaf() {
+                let first = *first_prim.get_or_insert(n.first_or_right as usize);
+                match pending.pop() {
+                    Some(d) => depth = d,
+                    None => {
+                        return Self {
+                            nodes: root..i + 1,
+                            prims: first..(n.first_or_right + n.count) as usize,
+                            levels,
+                        };
+                    }
+                }
+            } else {
+                depth += 1;
+                pending.push(depth);
+            }
+            i += 1;
+        }
     }
-    let mut right = root;
-    while !nodes[right].is_leaf() {
-        right = nodes[right].first_or_right as usize;
+}
+
+/// A piece of the node array [`Bvh::with_top`] writes.
+enum Piece {
+    /// One node, as it is.
+    One(Node),
+    /// A subtree copied whole: the old `nodes`, second-child indices shifted by
+    /// `node_shift` and leaves' first primitives by `prim_shift`.
+    Whole {
+        nodes: Range<usize>,
+        node_shift: i64,
+        prim_shift: i64,
+    },
+}
+
+impl Piece {
+    /// Nodes it writes.
+    fn len(&self) -> usize {
+        match self {
+            Self::One(_) => 1,
+            Self::Whole { nodes, .. } => nodes.len(),
+        }
     }
-    let last = &nodes[right];
-    (
-        root..right + 1,
-        nodes[left].first_or_right as usize..(last.first_or_right + last.count) as usize,
-    )
+}
+
+/// `v` cut into consecutive slices of the lengths `lens` (which add up to at most its
+/// length).
+fn split_by<T>(v: &mut [T], lens: impl Iterator<Item = usize>) -> Vec<&mut [T]> {
+    let mut rest = v;
+    lens.map(|len| {
+        let (head, tail) = std::mem::take(&mut rest).split_at_mut(len);
+        rest = tail;
+        head
+    })
+    .collect()
 }
 
 #[cfg(test)]
 mod tests {
-    use crate::Bvh;
+    use super::Subtree;
     use crate::build::MAX_DEPTH;
+    use crate::{Bvh, Node};
     use obvhs::BvhBuildParams;
     use obvhs::bvh2::Bvh2;
     use obvhs::bvh2::node::Bvh2Node;
@@ -405,7 +564,7 @@ mod tests {
     fn reinsertion_keeps_the_hits_and_lowers_the_cost() {
         let g = soup();
         let binned = Bvh::build_with(Arc::clone(&g), crate::BvhParams::fast());
-        let reinserted = binned.clone().reinserted(&[1.0, 0.5]);
+        let reinserted = binned.clone().reinserted(&[1.0, 0.5], 0.0);
         reinserted.validate().unwrap();
         assert!(reinserted.depth() <= crate::build::MAX_DEPTH);
         assert_ne!(reinserted.nodes(), binned.nodes(), "nothing was reinserted");
@@ -530,8 +689,23 @@ mod tests {
             top.nodes.len(),
             binned.nodes().len()
         );
-        let reinserted = binned.clone().reinserted(&[0.1]);
+        let reinserted = binned.clone().reinserted(&[0.1], 0.0);
         reinserted.validate().unwrap();
+        // The blocks are copied in parallel: the same tree on one thread.
+        let serial = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap()
+            .install(|| binned.clone().reinserted(&[0.1], 0.0));
+        assert_eq!(serial.nodes(), reinserted.nodes());
+        assert_eq!(serial.prim_ids(), reinserted.prim_ids());
+        // Kept only when it gains more than asked for.
+        let gain = 1.0 - reinserted.sah_cost() / binned.sah_cost();
+        let kept = binned.clone().reinserted(&[0.1], 0.5 * gain);
+        assert_eq!(kept.nodes(), reinserted.nodes());
+        let dropped = binned.clone().reinserted(&[0.1], 1.5 * gain);
+        assert_eq!(dropped.nodes(), binned.nodes());
+        assert_eq!(dropped.prim_ids(), binned.prim_ids());
         assert!(reinserted.depth() <= MAX_DEPTH);
         assert!(
             reinserted.sah_cost() < binned.sah_cost(),
@@ -556,11 +730,46 @@ mod tests {
     }
 
     #[test]
+    fn a_subtree_is_found_by_walking_its_nodes() {
+        fn reference(nodes: &[Node], i: usize) -> Subtree {
+            let n = &nodes[i];
+            if n.is_leaf() {
+                let first = n.first_or_right as usize;
+                return Subtree {
+                    nodes: i..i + 1,
+                    prims: first..first + n.count as usize,
+                    levels: 1,
+                };
+            }
+            let (l, r) = (
+                reference(nodes, i + 1),
+                reference(nodes, n.first_or_right as usize),
+            );
+            assert_eq!((l.nodes.end, l.prims.end), (r.nodes.start, r.prims.start));
+            Subtree {
+                nodes: i..r.nodes.end,
+                prims: l.prims.start..r.prims.end,
+                levels: 1 + l.levels.max(r.levels),
+            }
+        }
+        let t = Bvh::build_with(soup(), crate::BvhParams::fast());
+        assert!(t.depth() > 6);
+        for i in 0..t.nodes().len() {
+            assert_eq!(
+                Subtree::of(t.nodes(), i),
+                reference(t.nodes(), i),
+                "node {i}"
+            );
+        }
+        assert_eq!(Subtree::of(t.nodes(), 0).levels, t.depth());
+    }
+
+    #[test]
     fn a_lone_leaf_is_left_alone() {
         let tri = Shape::Triangle(Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y));
         let t = Bvh::build(Arc::new(Geometry::new(vec![tri; 3])));
         assert_eq!(t.nodes().len(), 1);
-        assert_eq!(t.clone().reinserted(&[1.0]).nodes(), t.nodes());
+        assert_eq!(t.clone().reinserted(&[1.0], 0.0).nodes(), t.nodes());
     }
 
     #[test]

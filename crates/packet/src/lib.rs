@@ -215,6 +215,13 @@ impl Bvh2Builder {
     /// docs/strategies.md, "Reinserting the binned tree".
     pub const REINSERTION_CANDIDATES: usize = 2048;
 
+    /// The least fraction of the BVH2's surface-area cost a reinsertion pass of
+    /// [`Bvh2Builder::Reinserted`] must save for its tree to be kept; otherwise the binned
+    /// tree is collapsed as it was, and the pass has cost only the hand-over and its
+    /// search. On Sponza the pass saves 7.7 %, on the flattened `bunny-field` 1.5 %, on the
+    /// bunny 0.06 % (node visits within 0.02 per ray) and on the generated meshes nothing.
+    pub const MIN_REINSERTION_GAIN: f64 = 0.005;
+
     /// Builds the BVH2 over `geometry`.
     #[must_use]
     pub fn build(self, geometry: Arc<Geometry>) -> Bvh {
@@ -224,7 +231,7 @@ impl Bvh2Builder {
                 let tree = Bvh::build_with(geometry, params);
                 let nodes = tree.nodes().len().max(1) as f32;
                 let fraction = (Self::REINSERTION_CANDIDATES as f32 / nodes).min(0.2);
-                tree.reinserted(&[fraction])
+                tree.reinserted(&[fraction], Self::MIN_REINSERTION_GAIN)
             }
             Self::Ploc { max_leaf } => {
                 let params = ObvhsBuildParams {
