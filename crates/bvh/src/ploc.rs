@@ -202,7 +202,9 @@ impl Bvh {
         let old = &self.nodes;
         let extents: Vec<Subtree> = blocks
             .par_iter()
-            .map(|&root| Subtree::of(old, root as usize))
+            .map_init(Vec::new, |pending, &root| {
+                Subtree::of(old, root as usize, pending)
+            })
             .collect();
         // The new node array as pieces in order, and the ranges of the old primitive ids
         // that make up the new one.
@@ -224,7 +226,7 @@ impl Bvh {
             }
             let (ours, subtree) = if at & OURS != 0 {
                 let ours = at & !OURS;
-                (ours, Subtree::of(old, ours))
+                (ours, Subtree::of(old, ours, &mut Vec::new()))
             } else {
                 let node = &tree.nodes[at];
                 if node.is_leaf() {
@@ -430,10 +432,11 @@ struct Subtree {
 impl Subtree {
     /// The subtree under `root` of the depth-first `nodes`, found by walking its nodes in
     /// array order: after a leaf comes the second child of the nearest node above it whose
-    /// second child is still to come, and after the last leaf the subtree ends.
-    fn of(nodes: &[Node], root: usize) -> Self {
-        // The depths of the second children still to come, the nearest last.
-        let mut pending: Vec<usize> = Vec::with_capacity(MAX_DEPTH + 2);
+    /// second child is still to come, and after the last leaf the subtree ends. `pending`
+    /// is scratch space (the depths of the second children still to come, the nearest
+    /// last), empty again on return.
+    fn of(nodes: &[Node], root: usize, pending: &mut Vec<usize>) -> Self {
+        debug_assert!(pending.is_empty());
         let (mut i, mut depth, mut levels) = (root, 1, 1);
         let mut first_prim = None;
         loop {
@@ -756,12 +759,12 @@ mod tests {
         assert!(t.depth() > 6);
         for i in 0..t.nodes().len() {
             assert_eq!(
-                Subtree::of(t.nodes(), i),
+                Subtree::of(t.nodes(), i, &mut Vec::new()),
                 reference(t.nodes(), i),
                 "node {i}"
             );
         }
-        assert_eq!(Subtree::of(t.nodes(), 0).levels, t.depth());
+        assert_eq!(Subtree::of(t.nodes(), 0, &mut Vec::new()).levels, t.depth());
     }
 
     #[test]
