@@ -79,7 +79,8 @@ impl Bvh {
     /// The passes' tree is kept only where it lowers the tree's surface-area cost
     /// ([`Bvh::sah_cost`]) by more than the fraction `min_gain` of it; otherwise this tree
     /// comes back as it was, without the copy (on regular meshes the passes move nothing:
-    /// the hand-over and the passes are then all they cost).
+    /// the hand-over and the passes are then all they cost). A tree whose root box has no
+    /// finite area is never reinserted.
     #[must_use]
     pub fn reinserted(self, passes: &[f32], min_gain: f64) -> Self {
         let n = self.nodes.len();
@@ -103,9 +104,11 @@ impl Bvh {
             1.0,
             Some(fractions),
         );
-        // Only the top's interior nodes changed: the subtrees below are the same.
+        // Only the top's interior nodes changed: the subtrees below are the same, unless the
+        // new top hangs one below the depth limit, where it is cut into leaves (rare, and
+        // not counted here).
         let gain = f64::from(self.params.traversal_cost) * (before - interior_area(&tree));
-        if gain > min_gain * self.weighted_cost() {
+        if gain > 0.0 && gain > min_gain * self.weighted_cost() {
             self.with_top(&tree, &blocks)
         } else {
             self
@@ -195,9 +198,10 @@ impl Bvh {
     /// unions of their children's boxes.
     ///
     /// The new arrays are planned first, on one thread, over the top and the blocks' extents
-    /// (found in parallel, each block walking only its own nodes); then every block is
-    /// copied into the range the plan gives it, in parallel. The result does not depend on
-    /// the thread count.
+    /// (found in parallel, each block walking only its own nodes; a block copied node by
+    /// node walks each of its subtrees down to the limit again, a case the binned trees
+    /// rarely reach); then every block is copied into the range the plan gives it, in
+    /// parallel. The result does not depend on the thread count.
     fn with_top(self, tree: &Bvh2, blocks: &[u32]) -> Self {
         let old = &self.nodes;
         let extents: Vec<Subtree> = blocks
@@ -218,15 +222,17 @@ impl Bvh {
         // node to patch with this node's index as its second child; depth).
         const OURS: usize = 1 << (usize::BITS - 1);
         let mut stack: Vec<(usize, Option<usize>, usize)> = vec![(0, None, 1)];
+        let mut scratch = Vec::new();
         while let Some((at, patch, depth)) = stack.pop() {
-            if let Some(p) = patch
-                && let Piece::One(parent) = &mut pieces[p]
-            {
+            if let Some(p) = patch {
+                let Piece::One(parent) = &mut pieces[p] else {
+                    unreachable!("a node with a second child is a piece of its own")
+                };
                 parent.first_or_right = node_count as u32;
             }
             let (ours, subtree) = if at & OURS != 0 {
                 let ours = at & !OURS;
-                (ours, Subtree::of(old, ours, &mut Vec::new()))
+                (ours, Subtree::of(old, ours, &mut scratch))
             } else {
                 let node = &tree.nodes[at];
                 if node.is_leaf() {
@@ -694,18 +700,21 @@ mod tests {
         );
         let reinserted = binned.clone().reinserted(&[0.1], 0.0);
         reinserted.validate().unwrap();
-        // The blocks are copied in parallel: the same tree on one thread.
-        let serial = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap()
-            .install(|| binned.clone().reinserted(&[0.1], 0.0));
-        assert_eq!(serial.nodes(), reinserted.nodes());
-        assert_eq!(serial.prim_ids(), reinserted.prim_ids());
+        // The blocks are copied in parallel: the same tree on one thread and on four.
+        for threads in [1, 4] {
+            let t = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| binned.clone().reinserted(&[0.1], 0.0));
+            assert_eq!(t.nodes(), reinserted.nodes(), "{threads} threads");
+            assert_eq!(t.prim_ids(), reinserted.prim_ids(), "{threads} threads");
+        }
         // Kept only when it gains more than asked for.
         let gain = 1.0 - reinserted.sah_cost() / binned.sah_cost();
         let kept = binned.clone().reinserted(&[0.1], 0.5 * gain);
         assert_eq!(kept.nodes(), reinserted.nodes());
+        assert_eq!(kept.prim_ids(), reinserted.prim_ids());
         let dropped = binned.clone().reinserted(&[0.1], 1.5 * gain);
         assert_eq!(dropped.nodes(), binned.nodes());
         assert_eq!(dropped.prim_ids(), binned.prim_ids());
