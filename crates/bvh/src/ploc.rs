@@ -741,6 +741,37 @@ mod tests {
         assert!(hits > 1000, "only {hits} of 2000 rays hit");
     }
 
+    /// The gain is weighed as `Bvh::sah_cost` weighs a tree, traversal cost included: with
+    /// `C_t` = 2 a threshold a little under the gain keeps the tree, one above drops it.
+    #[test]
+    fn the_gain_is_weighed_as_the_sah_weighs_it() {
+        let params = crate::BvhParams {
+            traversal_cost: 2.0,
+            ..crate::BvhParams::fast()
+        };
+        let g = Arc::new(Geometry::new(
+            raybench_scene::generators::soup(20_000, 1)
+                .triangles()
+                .map(Shape::Triangle)
+                .collect(),
+        ));
+        let binned = Bvh::build_with(g, params);
+        let root = f64::from(binned.nodes()[0].aabb().surface_area());
+        let sah = binned.weighted_cost() / root;
+        assert!(
+            (sah - binned.sah_cost()).abs() < 1e-6 * sah,
+            "{sah} against {}",
+            binned.sah_cost()
+        );
+        let reinserted = binned.clone().reinserted(&[1.0], 0.0);
+        let gain = 1.0 - reinserted.sah_cost() / binned.sah_cost();
+        assert!(gain > 0.0, "nothing was reinserted");
+        let kept = binned.clone().reinserted(&[1.0], 0.8 * gain);
+        assert_eq!(kept.nodes(), reinserted.nodes());
+        let dropped = binned.clone().reinserted(&[1.0], 1.25 * gain);
+        assert_eq!(dropped.nodes(), binned.nodes());
+    }
+
     #[test]
     fn a_subtree_is_found_by_walking_its_nodes() {
         fn reference(nodes: &[Node], i: usize) -> Subtree {
