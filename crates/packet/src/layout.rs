@@ -211,7 +211,7 @@ pub(crate) struct Layout {
     pub leaf_prims: usize,
 }
 
-/// Per BVH2 node, what the dynamic program decided (24 bytes: one is kept for every node of
+/// Per BVH2 node, what the dynamic program decided (16 bytes: one is kept for every node of
 /// the BVH2, and on a 12.6M-triangle mesh that is 13.5 million of them).
 #[derive(Clone, Copy)]
 struct Plan {
@@ -222,11 +222,9 @@ struct Plan {
     expand: u8,
     /// Number of primitives below.
     count: u32,
-    /// What the node takes in the layout as a child slot's target (see [`child_size`]).
-    size: Size,
 }
 
-const _: () = assert!(std::mem::size_of::<Plan>() == 24);
+const _: () = assert!(std::mem::size_of::<Plan>() == 16);
 
 /// `cost[i - 1]`: the cheapest SAH cost of a subtree with at most `i` slots. Only needed
 /// until the parent is planned, so it is not kept in the [`Plan`].
@@ -326,7 +324,7 @@ impl Layout {
             return layout;
         }
         let plans = plan(nodes);
-        let size = wide_size(nodes, &plans, 0, 0);
+        let size = wide_size(nodes, &plans, 0);
         assert!(size.blocks <= FIRST_MASK + 1, "more than 2^27 leaf blocks");
         // Every element is written once more below; filling them here, in parallel, faults
         // the pages in on every thread.
@@ -429,7 +427,6 @@ fn plan(nodes: &[Node]) -> Vec<Plan> {
         choice: [0; WIDE],
         expand: 0,
         count: 0,
-        size: Size::default(),
     };
     let mut plans = vec![empty; nodes.len()];
     plan_subtree(nodes, 0, &mut plans);
@@ -455,7 +452,6 @@ fn plan_subtree(nodes: &[Node], root: usize, plans: &mut [Plan]) -> Cost {
                 plan_node(node, count, &l.expect("planned"), &r.expect("planned"))
             };
             plans[i] = plan;
-            plans[i].size = child_size(nodes, plans, root, root + i);
             costs.push(cost);
         }
         debug_assert_eq!(costs.len(), 1);
@@ -470,7 +466,6 @@ fn plan_subtree(nodes: &[Node], root: usize, plans: &mut [Plan]) -> Cost {
     );
     let (plan, cost) = plan_node(node, l[0].count + r[0].count, &lc, &rc);
     head[0] = plan;
-    plans[0].size = child_size(nodes, plans, root, root);
     cost
 }
 
@@ -481,7 +476,6 @@ fn plan_leaf(node: &Node) -> (Plan, Cost) {
         choice: [0; WIDE],
         expand: 0,
         count: node.count,
-        size: Size::default(),
     };
     (plan, [cost; WIDE])
 }
@@ -510,7 +504,6 @@ fn plan_node(node: &Node, count: u32, l: &Cost, r: &Cost) -> (Plan, Cost) {
         choice: [0; WIDE],
         expand: dist[WIDE].1,
         count,
-        size: Size::default(),
     };
     let mut cost = [0.0; WIDE];
     // `<=`: between equal costs, the leaf (fewer nodes to visit).
@@ -549,45 +542,36 @@ impl Slots {
     }
 }
 
-/// Adds to `out` the BVH2 nodes that fill at most `slots` slots for node `n`'s subtree;
-/// `plans[i - base]` is node `i`'s plan.
-fn gather(nodes: &[Node], plans: &[Plan], base: usize, n: usize, slots: usize, out: &mut Slots) {
+/// Adds to `out` the BVH2 nodes that fill at most `slots` slots for node `n`'s subtree.
+fn gather(nodes: &[Node], plans: &[Plan], n: usize, slots: usize, out: &mut Slots) {
     let node = &nodes[n];
     if node.is_leaf() || slots == 1 {
         out.push(n);
         return;
     }
-    match plans[n - base].choice[slots - 1] {
-        0 => gather(nodes, plans, base, n, slots - 1, out),
+    match plans[n].choice[slots - 1] {
+        0 => gather(nodes, plans, n, slots - 1, out),
         k => {
             let k = usize::from(k);
-            gather(nodes, plans, base, n + 1, k, out);
-            gather(
-                nodes,
-                plans,
-                base,
-                node.first_or_right as usize,
-                slots - k,
-                out,
-            );
+            gather(nodes, plans, n + 1, k, out);
+            gather(nodes, plans, node.first_or_right as usize, slots - k, out);
         }
     }
 }
 
 /// The BVH2 nodes filling the slots of the wide node standing for node `n` (`n` itself
 /// when it is a leaf, which only the root of a tree of one leaf is).
-fn wide_slots(nodes: &[Node], plans: &[Plan], base: usize, n: usize) -> Slots {
+fn wide_slots(nodes: &[Node], plans: &[Plan], n: usize) -> Slots {
     let node = &nodes[n];
     let mut slots = Slots::default();
     if node.is_leaf() {
         slots.push(n);
     } else {
-        let k = usize::from(plans[n - base].expand);
-        gather(nodes, plans, base, n + 1, k, &mut slots);
+        let k = usize::from(plans[n].expand);
+        gather(nodes, plans, n + 1, k, &mut slots);
         gather(
             nodes,
             plans,
-            base,
             node.first_or_right as usize,
             WIDE - k,
             &mut slots,
@@ -602,23 +586,36 @@ fn is_leaf_slot(node: &Node, plan: &Plan) -> bool {
     node.is_leaf() || plan.choice[0] == 0
 }
 
-/// What [`Builder::wide_node`] writes for node `n`: the node and its slots' targets.
-fn wide_size(nodes: &[Node], plans: &[Plan], base: usize, n: usize) -> Size {
-    let slots = wide_slots(nodes, plans, base, n);
+/// What [`Builder::wide_node`] writes for node `n`: the node and its slots' targets. Only
+/// the wide nodes below `n` are walked, not every BVH2 node, the slots of those over at
+/// least [`PARALLEL_PRIMS`] primitives in parallel. Nothing is kept: the layout's total
+/// walks the whole wide tree once, and each wide node that writes its slots in parallel
+/// walks its subtree again for their parts (a few walks of the wide nodes in all, fewer
+/// node visits than planning a size for every BVH2 node).
+fn wide_size(nodes: &[Node], plans: &[Plan], n: usize) -> Size {
+    let slots = wide_slots(nodes, plans, n);
+    let slots = slots.as_slice();
     let one = Size { wide: 1, blocks: 0 };
-    slots
-        .as_slice()
-        .iter()
-        .fold(one, |size, &s| size.add(plans[s - base].size))
+    if plans[n].count >= PARALLEL_PRIMS {
+        slots
+            .par_iter()
+            .map(|&s| child_size(nodes, plans, s))
+            .reduce(Size::default, Size::add)
+            .add(one)
+    } else {
+        slots
+            .iter()
+            .fold(one, |size, &s| size.add(child_size(nodes, plans, s)))
+    }
 }
 
-/// What [`Builder::child`] writes for node `n`, from the sizes of the nodes below it.
-fn child_size(nodes: &[Node], plans: &[Plan], base: usize, n: usize) -> Size {
-    let plan = &plans[n - base];
+/// What [`Builder::child`] writes for node `n`.
+fn child_size(nodes: &[Node], plans: &[Plan], n: usize) -> Size {
+    let plan = &plans[n];
     if is_leaf_slot(&nodes[n], plan) {
         leaf_size(plan.count as usize)
     } else {
-        wide_size(nodes, plans, base, n)
+        wide_size(nodes, plans, n)
     }
 }
 
@@ -744,6 +741,11 @@ impl<'a> Out<'a> {
     }
 }
 
+/// How many primitives ahead (in leaf order) [`Builder::leaf`] prefetches the primitive
+/// it will copy: leaves are written in leaf order, and the primitives of a mesh's leaf
+/// order are scattered through the geometry.
+const PREFETCH_AHEAD: usize = 8;
+
 /// Writes the wide nodes and blocks the plan describes.
 struct Builder<'a> {
     nodes: &'a [Node],
@@ -757,10 +759,10 @@ impl Builder<'_> {
     /// first (the node, then each slot's subtree or leaf blocks in the BVH2's depth-first
     /// order); returns its index and occlusion. Its slots are then put in any-hit order
     /// (the module's "slot order"). A node over at least [`PARALLEL_PRIMS`] primitives
-    /// writes its slots' targets in parallel, each into the part of the arrays its planned
-    /// size marks out: the same arrays as one pass would write.
+    /// writes its slots' targets in parallel, each into the part of the arrays its size
+    /// ([`child_size`]) marks out: the same arrays as one pass would write.
     fn wide_node(&self, n: usize, out: &mut Out) -> (u32, Occlusion) {
-        let slots = wide_slots(self.nodes, self.plans, 0, n);
+        let slots = wide_slots(self.nodes, self.plans, n);
         let slots = slots.as_slice();
         let index = out.push_wide(WideNode::EMPTY);
         out.counts.slots += slots.len();
@@ -776,7 +778,10 @@ impl Builder<'_> {
         }
         let mut occlusion = [Occlusion::default(); WIDE];
         if self.plans[n].count >= PARALLEL_PRIMS {
-            let sizes: Vec<Size> = slots.iter().map(|&s| self.plans[s].size).collect();
+            let sizes: Vec<Size> = slots
+                .par_iter()
+                .map(|&s| child_size(self.nodes, self.plans, s))
+                .collect();
             let mut parts = out.split(&sizes);
             let children: Vec<(u32, Occlusion)> = parts
                 .par_iter_mut()
@@ -856,9 +861,12 @@ impl Builder<'_> {
         // The primitives block a line through the box independently.
         let area = bounds.surface_area();
         let mut open = 1.0;
-        for chunk in self.ids[first..first + count].chunks(BLOCK) {
+        for (c, chunk) in self.ids[first..first + count].chunks(BLOCK).enumerate() {
             let mut block = TriBlock::EMPTY;
             for (lane, &id) in chunk.iter().enumerate() {
+                if let Some(&ahead) = self.ids.get(first + c * BLOCK + lane + PREFETCH_AHEAD) {
+                    crate::simd::prefetch(self.geometry.shape(ahead));
+                }
                 block.id[lane] = id;
                 let shape = self.geometry.shape(id);
                 open *= 1.0 - line_share(blocking_surface(shape), area);
