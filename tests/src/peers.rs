@@ -2,7 +2,8 @@
 //! once per mesh, traced by every exact raybench CPU backend and every peer in one process.
 //!
 //! Per mesh ([`MESHES`]: three generated meshes and three shared ones): every contestant's
-//! builds in interleaved rounds ([`build_rounds`], all cores, the best kept); then one more
+//! builds in interleaved rounds ([`build_rounds`], all cores, the best kept and the rounds
+//! paired for the ratio to Embree's build and its interval); then one more
 //! build per contestant, which it traces with, kept while the memory holds the structures
 //! (the contestants built together form a group; one group where memory allows). For each
 //! ray set (primary: the scene camera's `N x N` rays in the renderer's tile order;
@@ -539,10 +540,10 @@ const BUILD_BUDGET_S: f64 = 2.0;
 /// The most interleaved build rounds per mesh.
 const MAX_BUILD_ROUNDS: usize = 20;
 
-/// Per contestant (in order), the best and the number of its builds of `scene` in
-/// interleaved rounds on `pool` (each contestant built once per round and dropped, so that
-/// a drift of the machine's state during the mesh's builds touches every contestant
-/// alike), or why it cannot run. At least `repeat - 1` rounds (the build that prepares a
+/// Per contestant (in order), the times of its builds of `scene` in interleaved rounds on
+/// `pool`, in round order (each contestant built once per round and dropped, so that a
+/// drift of the machine's state during the mesh's builds touches every contestant alike,
+/// and two contestants' builds of one round pair up), or why it cannot run. At least `repeat - 1` rounds (the build that prepares a
 /// contestant for tracing adds one more), then more while the rounds so far took under
 /// [`BUILD_BUDGET_S`], up to [`MAX_BUILD_ROUNDS`]: small meshes, whose builds take
 /// milliseconds and move most from run to run, get many.
@@ -551,24 +552,24 @@ fn build_rounds(
     scene: &Arc<Scene>,
     pool: &ThreadPool,
     repeat: usize,
-) -> Vec<Result<(f64, usize), String>> {
-    let mut best: Vec<Result<(f64, usize), String>> =
-        contestants.iter().map(|_| Ok((f64::INFINITY, 0))).collect();
+) -> Vec<Result<Vec<f64>, String>> {
+    let mut times: Vec<Result<Vec<f64>, String>> =
+        contestants.iter().map(|_| Ok(Vec::new())).collect();
     let start = Instant::now();
     for round in 0..MAX_BUILD_ROUNDS {
         let enough = round >= repeat.saturating_sub(1);
         if enough && start.elapsed().as_secs_f64() >= BUILD_BUDGET_S {
             break;
         }
-        for (c, slot) in contestants.iter().zip(&mut best) {
-            let Ok((b, n)) = slot else { continue };
+        for (c, slot) in contestants.iter().zip(&mut times) {
+            let Ok(rounds) = slot else { continue };
             match build(c, scene, pool) {
-                Ok((_, s)) => *slot = Ok((b.min(s), *n + 1)),
+                Ok((_, s)) => rounds.push(s),
                 Err(e) => *slot = Err(e),
             }
         }
     }
-    best
+    times
 }
 
 impl Workload {
@@ -672,29 +673,34 @@ fn per_ray(counters: Option<RayCounters>, n: usize, f: impl Fn(RayCounters) -> u
     counters.map(|c| f(c) as f64 / n.max(1) as f64)
 }
 
-/// A contestant built for tracing: its renderer, and the best and the count of its builds.
+/// A contestant built for tracing: its renderer, the best and the count of its builds, and
+/// the times of its [`build_rounds`].
 struct Prepared<'a> {
     contestant: &'a Contestant,
     renderer: Box<dyn Renderer>,
     build_s: f64,
     builds: usize,
+    rounds_s: Vec<f64>,
 }
 
-/// Builds contestant `c` for tracing on `pool` (one more build: its time joins `earlier`,
-/// the best and the count of its [`build_rounds`]), or why it cannot trace.
+/// Builds contestant `c` for tracing on `pool`, after `rounds_s`, the times of its
+/// [`build_rounds`] (one more build, which joins them in the best and the count but not
+/// in the rounds: it is not paired with the other contestants' builds), or why it cannot
+/// trace.
 fn prepare<'a>(
     c: &'a Contestant,
     scene: &Arc<Scene>,
     pool: &ThreadPool,
-    earlier: (f64, usize),
+    rounds_s: Vec<f64>,
 ) -> Result<Prepared<'a>, String> {
     let (renderer, build_s) = build(c, scene, pool)?;
     renderer.batch_tracer().ok_or("not a CPU structure")?;
     Ok(Prepared {
         contestant: c,
         renderer,
-        build_s: build_s.min(earlier.0),
-        builds: earlier.1 + 1,
+        build_s: rounds_s.iter().copied().fold(build_s, f64::min),
+        builds: rounds_s.len() + 1,
+        rounds_s,
     })
 }
 
@@ -732,7 +738,9 @@ fn measure_group(
             kind: p.contestant.kind,
             build_s: p.build_s,
             builds: p.builds,
+            build_rounds_s: p.rounds_s.clone(),
             build_vs_embree: None,
+            build_ratio: None,
             ray_sets: Vec::new(),
         })
         .collect();

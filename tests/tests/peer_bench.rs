@@ -270,6 +270,15 @@ fn tiny_run_measures_every_contestant_and_writes_json() {
                 }
             }
             assert_eq!(c.build_vs_embree.is_some(), embree);
+            // The interleaved rounds' builds, paired with Embree's for the build ratio's
+            // interval; the build traced with is not among them, yet among the best.
+            assert_eq!(c.build_rounds_s.len() + 1, c.builds, "{}", c.name);
+            assert!(c.build_rounds_s.iter().all(|&b| b >= c.build_s));
+            assert_eq!(c.build_ratio.is_some(), embree, "{}", c.name);
+            if let Some(r) = &c.build_ratio {
+                let [lo, hi] = r.interval.unwrap();
+                assert!(lo <= r.value && r.value <= hi, "{r:?}");
+            }
         }
         // Builds in interleaved rounds: every contestant as many, and tiny meshes (builds
         // of microseconds) more than `--repeat` asks for, at most 20 rounds and the one

@@ -19,7 +19,11 @@
 //!       "name": "bvh", "kind": "raybench" | "peer",
 //!       "build_s": 0.012,            // best of `builds`, all cores
 //!       "builds": 21,                // interleaved rounds and the one traced with
+//!       "build_rounds_s": [0.013, 0.012, ...],  // the interleaved rounds, in round order
 //!       "build_vs_embree": 1.9,      // build_s / embree1-default's build_s (lower is faster)
+//!       "build_ratio": { "reference": "embree1-default",   // or null
+//!                        "value": 1.95,                // median of the rounds' ratios
+//!                        "interval": [1.85, 2.1], "confidence": 0.96 },  // or null
 //!       "ray_sets": [ {
 //!         "name": "primary",
 //!         "closest": {               // intersect_batch; "any": occluded_batch on shadow rays
@@ -158,8 +162,14 @@ pub struct ContestantReport {
     /// Builds `build_s` is the best of: the interleaved rounds and the one traced with
     /// (`build_rounds` in the parent module).
     pub builds: usize,
+    /// The times of the interleaved build rounds, seconds, in round order (the build
+    /// traced with is not among them: it was not paired with the others' builds).
+    pub build_rounds_s: Vec<f64>,
     /// `build_s` over Embree's (`embree1-default`); `None` without Embree.
     pub build_vs_embree: Option<f64>,
+    /// The build against Embree's (`embree1-default`), the rounds paired; `None` without
+    /// Embree.
+    pub build_ratio: Option<BuildRatio>,
     /// One entry per ray set.
     pub ray_sets: Vec<SetReport>,
 }
@@ -250,6 +260,42 @@ pub struct Ratio {
     pub confidence: Option<f64>,
     /// What the interval says.
     pub verdict: Verdict,
+}
+
+/// A build time over a reference's, the interleaved rounds paired (above 1: slower than the
+/// reference).
+#[derive(Clone, Debug, Serialize)]
+pub struct BuildRatio {
+    /// The reference contestant.
+    pub reference: &'static str,
+    /// The median over the rounds of the contestant's build time over the reference's
+    /// ([`stats::paired_ratio`]; `NaN` without rounds).
+    pub value: f64,
+    /// The distribution-free interval of `value`, `[lo, hi]`; `None` with one round.
+    pub interval: Option<[f64; 2]>,
+    /// The probability that `interval` holds the true ratio.
+    pub confidence: Option<f64>,
+}
+
+impl BuildRatio {
+    /// The rounds `own_s` against the reference `reference`'s rounds `base_s`.
+    #[must_use]
+    pub fn of(reference: &'static str, own_s: &[f64], base_s: &[f64]) -> Self {
+        let (value, interval) = stats::paired_ratio(own_s, base_s);
+        Self {
+            reference,
+            value,
+            interval: interval.map(|i| [i.lo, i.hi]),
+            confidence: interval.map(|i| i.confidence),
+        }
+    }
+
+    /// The interval as a cell, `[lo-hi]`; `-` without one.
+    #[must_use]
+    pub fn interval_cell(&self) -> String {
+        self.interval
+            .map_or_else(|| "-".into(), |[lo, hi]| format!("[{lo:.2}-{hi:.2}]"))
+    }
 }
 
 /// What a [`Ratio`]'s interval says of the contestant against the reference.
@@ -404,9 +450,11 @@ impl MeshReport {
     pub fn compute_ratios(&mut self) {
         let snapshot = self.contestants.clone();
         let find = |name: &str| snapshot.iter().find(|c| c.name == name);
-        let build_ref = find(BUILD_REFERENCE).map(|c| c.build_s);
+        let build_ref = find(BUILD_REFERENCE);
         for c in &mut self.contestants {
-            c.build_vs_embree = build_ref.map(|b| c.build_s / b);
+            c.build_vs_embree = build_ref.map(|b| c.build_s / b.build_s);
+            c.build_ratio = build_ref
+                .map(|b| BuildRatio::of(BUILD_REFERENCE, &c.build_rounds_s, &b.build_rounds_s));
             for s in &mut c.ray_sets {
                 let name = s.name;
                 for (query, q) in [(Query::Closest, &mut s.closest), (Query::Any, &mut s.any)] {
@@ -434,6 +482,17 @@ fn per_threads(threads: &[usize], cell: impl Fn(usize) -> Option<String>) -> Str
         .map(|&t| cell(t).unwrap_or_else(|| "-".to_string()))
         .collect::<Vec<_>>()
         .join(" / ")
+}
+
+/// The build of `own` against `reference`'s: the best build over the best, and the interval
+/// of the median of the interleaved rounds' ratios (where there are two rounds or more).
+fn build_cell(own: &ContestantReport, reference: &ContestantReport) -> String {
+    let best = format!("{:.2}", own.build_s / reference.build_s);
+    let rounds = BuildRatio::of("", &own.build_rounds_s, &reference.build_rounds_s);
+    match rounds.interval {
+        Some(_) => format!("{best} {}", rounds.interval_cell()),
+        None => best,
+    }
 }
 
 /// Mrays/s with two decimals.
@@ -498,8 +557,11 @@ impl Report {
             out,
             "\n## Against Embree\n\nThe best exact raybench backend over the best Embree \
              variant, by median Mrays/s on {threads} thread{}, rounds paired (~: within the \
-             noise); builds: time over Embree's fastest build, lower is faster (goals: `bvh` \
-             at most {BVH_BUILD_GOAL}, `packet` at most {PACKET_BUILD_GOAL}).\n",
+             noise); builds: the best build over Embree's fastest best build, lower is \
+             faster (goals: `bvh` at most {BVH_BUILD_GOAL}, `packet` at most \
+             {PACKET_BUILD_GOAL}), and in brackets the interval of the median of the ratios \
+             of the builds' interleaved rounds, paired by round (its confidence, by the \
+             rounds' count, is in the JSON).\n",
             if threads == 1 { "" } else { "s" }
         );
         out.push_str(&self.summary_table(&sets, threads, &EMBREE, true));
@@ -547,13 +609,13 @@ impl Report {
                     .contestants
                     .iter()
                     .filter(|c| variants.contains(&c.name.as_str()))
-                    .map(|c| c.build_s)
-                    .fold(f64::INFINITY, f64::min);
+                    .min_by(|a, b| a.build_s.total_cmp(&b.build_s));
                 let build = |name: &str| {
-                    m.contestants
-                        .iter()
-                        .find(|c| c.name == name)
-                        .map_or_else(|| "-".into(), |c| format!("{:.2}", c.build_s / fastest))
+                    let own = m.contestants.iter().find(|c| c.name == name);
+                    match (own, fastest) {
+                        (Some(c), Some(e)) => build_cell(c, e),
+                        _ => "-".into(),
+                    }
                 };
                 let _ = write!(out, " {} / {} |", build("bvh"), build("packet"));
             }
@@ -676,9 +738,17 @@ impl Report {
                 out,
                 "| contestant | build ms ({} threads) | builds |{}",
                 threads.last().copied().unwrap_or(1),
-                if embree { " vs Embree build |" } else { "" }
+                if embree {
+                    " vs Embree build | rounds' ratio [interval] |"
+                } else {
+                    ""
+                }
             );
-            let _ = writeln!(out, "|---|---:|---:|{}", if embree { "---:|" } else { "" });
+            let _ = writeln!(
+                out,
+                "|---|---:|---:|{}",
+                if embree { "---:|---:|" } else { "" }
+            );
             for c in &m.contestants {
                 let _ = write!(
                     out,
@@ -690,9 +760,13 @@ impl Report {
                 if embree {
                     let _ = write!(
                         out,
-                        " {} |",
+                        " {} | {} |",
                         c.build_vs_embree
-                            .map_or_else(|| "-".into(), |v| format!("{v:.2}"))
+                            .map_or_else(|| "-".into(), |v| format!("{v:.2}")),
+                        c.build_ratio.as_ref().map_or_else(
+                            || "-".into(),
+                            |r| format!("{:.2} {}", r.value, r.interval_cell())
+                        )
                     );
                 }
                 out.push('\n');
@@ -814,6 +888,37 @@ mod tests {
         assert_eq!(once.cell(), "2.00");
         // The figure is the median round: 1 Mrays in 1 s.
         assert_eq!((reference.mrays, reference.best_s), (1.0, 1.0));
+    }
+
+    /// A build ratio pairs the interleaved rounds: the median of the rounds' ratios with
+    /// its interval, a slow round of both sides cancelling out; the cell gives the best
+    /// over the best beside that interval, and the best alone with one round.
+    #[test]
+    fn build_ratios_pair_the_rounds() {
+        let contestant = |build_s: f64, rounds: &[f64]| ContestantReport {
+            name: "c".into(),
+            kind: Kind::Raybench,
+            build_s,
+            builds: rounds.len() + 1,
+            build_rounds_s: rounds.to_vec(),
+            build_vs_embree: None,
+            build_ratio: None,
+            ray_sets: Vec::new(),
+        };
+        let embree = contestant(1.0, &[1.0, 2.0, 1.1, 1.0, 1.05]);
+        let own = contestant(1.4, &[1.5, 3.0, 1.65, 1.45, 1.6]);
+        let r = BuildRatio::of("e", &own.build_rounds_s, &embree.build_rounds_s);
+        assert_eq!(r.value, 1.5);
+        let [lo, hi] = r.interval.unwrap();
+        assert!(lo >= 1.45 && hi <= 1.55 && lo < hi, "{r:?}");
+        assert_eq!(r.confidence, Some(0.9375));
+        assert_eq!(r.interval_cell(), format!("[{lo:.2}-{hi:.2}]"));
+        assert_eq!(build_cell(&own, &embree), format!("1.40 [{lo:.2}-{hi:.2}]"));
+        let once = contestant(1.4, &[1.5]);
+        assert_eq!(build_cell(&once, &contestant(1.0, &[1.0])), "1.40");
+        let none = BuildRatio::of("e", &[], &[]);
+        assert!(none.value.is_nan() && none.interval.is_none());
+        assert_eq!(none.interval_cell(), "-");
     }
 
     #[test]
