@@ -543,10 +543,11 @@ const MAX_BUILD_ROUNDS: usize = 20;
 /// Per contestant (in order), the times of its builds of `scene` in interleaved rounds on
 /// `pool`, in round order (each contestant built once per round and dropped, so that a
 /// drift of the machine's state during the mesh's builds touches every contestant alike,
-/// and two contestants' builds of one round pair up), or why it cannot run. At least `repeat - 1` rounds (the build that prepares a
-/// contestant for tracing adds one more), then more while the rounds so far took under
-/// [`BUILD_BUDGET_S`], up to [`MAX_BUILD_ROUNDS`]: small meshes, whose builds take
-/// milliseconds and move most from run to run, get many.
+/// and two contestants' builds of one round pair up), or why it cannot run. At least
+/// `repeat - 1` rounds (the build that prepares a contestant for tracing adds one more),
+/// then more while the rounds so far took under [`BUILD_BUDGET_S`], up to
+/// [`MAX_BUILD_ROUNDS`]: small meshes, whose builds take milliseconds and move most from
+/// run to run, get many.
 fn build_rounds(
     contestants: &[Contestant],
     scene: &Arc<Scene>,
