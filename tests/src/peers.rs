@@ -2,8 +2,9 @@
 //! once per mesh, traced by every exact raybench CPU backend and every peer in one process.
 //!
 //! Per mesh ([`MESHES`]: three generated meshes and three shared ones): every contestant's
-//! builds in interleaved rounds ([`build_rounds`], all cores, the best kept and the rounds
-//! paired for the ratio to Embree's build and its interval); then one more
+//! builds in interleaved rounds ([`build_rounds`], all cores, a shuffled order per round,
+//! the machine's memory events counted; the best kept and the rounds paired for the ratio
+//! to Embree's build and its interval); then one more
 //! build per contestant, which it traces with, kept while the memory holds the structures
 //! (the contestants built together form a group; one group where memory allows). For each
 //! ray set (primary: the scene camera's `N x N` rays in the renderer's tile order;
@@ -28,14 +29,14 @@ pub mod report;
 
 use contestants::Contestant;
 use raybench_core::{Hit, Ray, RayCounters, RaySet, Renderer, Scene, ray_sets};
-use raybench_registry::interference;
+use raybench_registry::interference::{self, MemoryEvents};
 use raybench_report::cache_probe;
 use raybench_report::rounds::{self, Policy, Repeat, Sample, Tally};
 use rayon::ThreadPool;
 use rayon::prelude::*;
 use report::{
-    ContestantReport, MeshReport, QueryReport, RaySetInfo, Report, Run, SCHEMA, SetReport, Skipped,
-    WorkloadInfo,
+    BuildMemory, ContestantReport, MeshReport, QueryReport, RaySetInfo, Report, Run, SCHEMA,
+    SetReport, Skipped, WorkloadInfo,
 };
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -540,37 +541,68 @@ const BUILD_BUDGET_S: f64 = 2.0;
 /// The most interleaved build rounds per mesh.
 const MAX_BUILD_ROUNDS: usize = 20;
 
-/// Per contestant (in order), the times of its builds of `scene` in interleaved rounds on
-/// `pool`, in round order (each contestant built once per round and dropped, so that a
-/// drift of the machine's state during the mesh's builds touches every contestant alike,
-/// and two contestants' builds of one round pair up), or why it cannot run. At least
-/// `repeat - 1` rounds (the build that prepares a contestant for tracing adds one more),
-/// then more while the rounds so far took under [`BUILD_BUDGET_S`], up to
-/// [`MAX_BUILD_ROUNDS`]: small meshes, whose builds take milliseconds and move most from
-/// run to run, get many.
+/// A contestant's interleaved builds of one mesh ([`build_rounds`]).
+#[derive(Debug, Default)]
+struct BuildRounds {
+    /// Seconds of each build, in round order.
+    seconds: Vec<f64>,
+    /// The machine's memory events during its builds; `None` where the system does not
+    /// tell.
+    memory: Option<MemoryEvents>,
+}
+
+/// Per contestant (in order), its builds of `scene` in interleaved rounds on `pool` (each
+/// contestant built once per round and dropped, so that a drift of the machine's state
+/// during the mesh's builds touches every contestant alike, and two contestants' builds of
+/// one round pair up), or why it cannot run. Each round takes the contestants in a freshly
+/// shuffled order ([`rounds::shuffled`]), so that none always follows the same one and
+/// inherits what it left behind. At least `repeat - 1` rounds (the build that prepares a
+/// contestant for tracing adds one more), then more while the rounds so far took under
+/// [`BUILD_BUDGET_S`], up to [`MAX_BUILD_ROUNDS`]: small meshes, whose builds take
+/// milliseconds and move most from run to run, get many.
+///
+/// Unlike the traces' rounds, a build the machine interfered with is not taken again: the
+/// run-queue test ([`interference::during`]) cannot tell another process from a
+/// contestant's own threads, and Embree's and tinybvh's builds run on thread pools of
+/// their own that wait on one another (on a quiet 2-vCPU guest, most of tinybvh's builds
+/// read as contended). The paired rounds' median and its interval absorb a slow round.
 fn build_rounds(
     contestants: &[Contestant],
     scene: &Arc<Scene>,
     pool: &ThreadPool,
     repeat: usize,
-) -> Vec<Result<Vec<f64>, String>> {
-    let mut times: Vec<Result<Vec<f64>, String>> =
-        contestants.iter().map(|_| Ok(Vec::new())).collect();
+) -> Vec<Result<BuildRounds, String>> {
+    let mut out: Vec<Result<BuildRounds, String>> = contestants
+        .iter()
+        .map(|_| {
+            Ok(BuildRounds {
+                seconds: Vec::new(),
+                memory: MemoryEvents::now().map(|_| MemoryEvents::default()),
+            })
+        })
+        .collect();
     let start = Instant::now();
     for round in 0..MAX_BUILD_ROUNDS {
         let enough = round >= repeat.saturating_sub(1);
         if enough && start.elapsed().as_secs_f64() >= BUILD_BUDGET_S {
             break;
         }
-        for (c, slot) in contestants.iter().zip(&mut times) {
-            let Ok(rounds) = slot else { continue };
-            match build(c, scene, pool) {
-                Ok((_, s)) => rounds.push(s),
-                Err(e) => *slot = Err(e),
+        for i in rounds::shuffled(round, contestants.len()) {
+            let Ok(b) = &mut out[i] else { continue };
+            let before = MemoryEvents::now();
+            let built = build(&contestants[i], scene, pool);
+            if let (Some(total), Some(before), Some(after)) =
+                (&mut b.memory, before, MemoryEvents::now())
+            {
+                *total += after.since(&before);
+            }
+            match built {
+                Ok((_, s)) => b.seconds.push(s),
+                Err(e) => out[i] = Err(e),
             }
         }
     }
-    times
+    out
 }
 
 impl Workload {
@@ -675,33 +707,33 @@ fn per_ray(counters: Option<RayCounters>, n: usize, f: impl Fn(RayCounters) -> u
 }
 
 /// A contestant built for tracing: its renderer, the best and the count of its builds, and
-/// the times of its [`build_rounds`].
+/// its [`build_rounds`].
 struct Prepared<'a> {
     contestant: &'a Contestant,
     renderer: Box<dyn Renderer>,
     build_s: f64,
     builds: usize,
-    rounds_s: Vec<f64>,
+    rounds: BuildRounds,
 }
 
-/// Builds contestant `c` for tracing on `pool`, after `rounds_s`, the times of its
-/// [`build_rounds`] (one more build, which joins them in the best and the count but not
+/// Builds contestant `c` for tracing on `pool`, after `rounds`, its [`build_rounds`] (one
+/// more build, which joins them in the best and the count but not
 /// in the rounds: it is not paired with the other contestants' builds), or why it cannot
 /// trace.
 fn prepare<'a>(
     c: &'a Contestant,
     scene: &Arc<Scene>,
     pool: &ThreadPool,
-    rounds_s: Vec<f64>,
+    rounds: BuildRounds,
 ) -> Result<Prepared<'a>, String> {
     let (renderer, build_s) = build(c, scene, pool)?;
     renderer.batch_tracer().ok_or("not a CPU structure")?;
     Ok(Prepared {
         contestant: c,
         renderer,
-        build_s: rounds_s.iter().copied().fold(build_s, f64::min),
-        builds: rounds_s.len() + 1,
-        rounds_s,
+        build_s: rounds.seconds.iter().copied().fold(build_s, f64::min),
+        builds: rounds.seconds.len() + 1,
+        rounds,
     })
 }
 
@@ -739,7 +771,8 @@ fn measure_group(
             kind: p.contestant.kind,
             build_s: p.build_s,
             builds: p.builds,
-            build_rounds_s: p.rounds_s.clone(),
+            build_rounds_s: p.rounds.seconds.clone(),
+            build_memory: p.rounds.memory.map(BuildMemory::from),
             build_vs_embree: None,
             build_ratio: None,
             ray_sets: Vec::new(),

@@ -274,6 +274,14 @@ fn tiny_run_measures_every_contestant_and_writes_json() {
             // interval; the build traced with is not among them, yet among the best.
             assert_eq!(c.build_rounds_s.len() + 1, c.builds, "{}", c.name);
             assert!(c.build_rounds_s.iter().all(|&b| b >= c.build_s));
+            // The machine's memory events during the builds are read wherever the system
+            // tells them.
+            assert_eq!(
+                c.build_memory.is_some(),
+                raybench_registry::interference::MemoryEvents::now().is_some(),
+                "{}",
+                c.name
+            );
             assert_eq!(c.build_ratio.is_some(), embree, "{}", c.name);
             if let Some(r) = &c.build_ratio {
                 let [lo, hi] = r.interval.unwrap();

@@ -169,3 +169,99 @@ impl MachineUse {
         })
     }
 }
+
+/// The kernel's memory events since boot that slow a build down without another process
+/// running (Linux `/proc/vmstat`): page faults served with a transparent huge page, and
+/// allocations that stalled to compact memory for one. A build that took huge pages
+/// touched fewer pages (one fault per 2 MiB instead of per 4 KiB); one that stalled waited
+/// for the kernel to move other pages first.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MemoryEvents {
+    /// `thp_fault_alloc`: faults served with a newly allocated huge page.
+    pub thp_fault_alloc: u64,
+    /// `compact_stall`: allocations that waited for direct compaction.
+    pub compact_stall: u64,
+}
+
+impl MemoryEvents {
+    /// The counters now; `None` where the system does not tell.
+    #[must_use]
+    pub fn now() -> Option<Self> {
+        Self::parse(&std::fs::read_to_string("/proc/vmstat").ok()?)
+    }
+
+    /// The counters in the text of `/proc/vmstat` (`name value` lines); `None` when either
+    /// is missing.
+    #[must_use]
+    pub fn parse(vmstat: &str) -> Option<Self> {
+        let (mut thp, mut stall) = (None, None);
+        for line in vmstat.lines() {
+            let mut it = line.split_whitespace();
+            let (Some(name), Some(value)) = (it.next(), it.next()) else {
+                continue;
+            };
+            match name {
+                "thp_fault_alloc" => thp = value.parse().ok(),
+                "compact_stall" => stall = value.parse().ok(),
+                _ => {}
+            }
+        }
+        Some(Self {
+            thp_fault_alloc: thp?,
+            compact_stall: stall?,
+        })
+    }
+
+    /// The events between `earlier` and `self`.
+    #[must_use]
+    pub fn since(&self, earlier: &Self) -> Self {
+        Self {
+            thp_fault_alloc: self.thp_fault_alloc.saturating_sub(earlier.thp_fault_alloc),
+            compact_stall: self.compact_stall.saturating_sub(earlier.compact_stall),
+        }
+    }
+}
+
+impl std::ops::AddAssign for MemoryEvents {
+    fn add_assign(&mut self, other: Self) {
+        self.thp_fault_alloc += other.thp_fault_alloc;
+        self.compact_stall += other.compact_stall;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn memory_events_read_their_two_counters() {
+        let text =
+            "nr_free_pages 1000\ncompact_stall 3\nthp_fault_alloc 315\nthp_fault_fallback 2\n";
+        let now = MemoryEvents::parse(text).expect("both counters");
+        assert_eq!(
+            now,
+            MemoryEvents {
+                thp_fault_alloc: 315,
+                compact_stall: 3
+            }
+        );
+        let earlier = MemoryEvents {
+            thp_fault_alloc: 300,
+            compact_stall: 3,
+        };
+        assert_eq!(
+            now.since(&earlier),
+            MemoryEvents {
+                thp_fault_alloc: 15,
+                compact_stall: 0
+            }
+        );
+        let mut total = now;
+        total += earlier;
+        assert_eq!((total.thp_fault_alloc, total.compact_stall), (615, 6));
+        assert_eq!(
+            MemoryEvents::parse("nr_free_pages 1000\ncompact_stall 3\n"),
+            None
+        );
+    }
+}

@@ -137,6 +137,21 @@ pub fn order(round: usize, n: usize) -> impl Iterator<Item = usize> {
     (0..n).map(move |i| (i + round) % n.max(1))
 }
 
+/// The contestants' order in round `round` of `n`, shuffled: a permutation drawn for each
+/// round (Fisher-Yates from SplitMix64 keyed by the round), so that no contestant always
+/// follows the same one, as in [`order`]'s rotation, and whatever one leaves behind (freed
+/// memory, cold caches) falls on a different one each round. The same round always gives
+/// the same order.
+#[must_use]
+pub fn shuffled(round: usize, n: usize) -> Vec<usize> {
+    let mut v: Vec<usize> = (0..n).collect();
+    let mut g = stats::SplitMix(0x0b5e_55ed ^ (round as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+    for i in (1..n).rev() {
+        v.swap(i, g.below(i + 1));
+    }
+    v
+}
+
 /// Times `n` contestants in rounds under `policy`: `sample(i)` takes one sample of
 /// contestant `i`. A contended sample is taken again, up to [`Repeat::minimum`] times per
 /// contestant and while fewer than [`PERSISTENT`] samples in a row were contended; past
@@ -220,6 +235,38 @@ mod tests {
         .unwrap();
         assert_eq!(calls, [0, 1, 2, 1, 2, 0, 2, 0, 1]);
         assert_eq!(order(4, 3).collect::<Vec<_>>(), [1, 2, 0]);
+    }
+
+    #[test]
+    fn shuffled_rounds_are_permutations_that_change_who_comes_first_and_next() {
+        let n = 10;
+        let orders: Vec<Vec<usize>> = (0..20).map(|r| shuffled(r, n)).collect();
+        for o in &orders {
+            let mut sorted = o.clone();
+            sorted.sort_unstable();
+            assert_eq!(sorted, (0..n).collect::<Vec<_>>());
+        }
+        assert_eq!(
+            shuffled(3, n),
+            orders[3],
+            "a round's order is a function of the round"
+        );
+        // Over 20 rounds, contestant 0 is first in more than one round and follows more
+        // than one contestant (a rotation would give it the same predecessor every round).
+        let firsts: std::collections::HashSet<usize> = orders.iter().map(|o| o[0]).collect();
+        assert!(firsts.len() > 3, "{orders:?}");
+        let before_0: std::collections::HashSet<usize> = orders
+            .iter()
+            .filter_map(|o| {
+                o.iter()
+                    .position(|&i| i == 0)
+                    .filter(|&p| p > 0)
+                    .map(|p| o[p - 1])
+            })
+            .collect();
+        assert!(before_0.len() > 3, "{orders:?}");
+        assert!(shuffled(0, 0).is_empty());
+        assert_eq!(shuffled(5, 1), [0]);
     }
 
     #[test]

@@ -102,11 +102,12 @@ pub fn median_interval(samples: &[f64]) -> Option<Interval> {
     })
 }
 
-/// SplitMix64: a counter-based generator, so every interval is a function of its samples.
-struct SplitMix(u64);
+/// SplitMix64: a counter-based generator, so every interval is a function of its samples
+/// (and every shuffled round order of [`crate::rounds::shuffled`] a function of its round).
+pub(crate) struct SplitMix(pub(crate) u64);
 
 impl SplitMix {
-    fn next(&mut self) -> u64 {
+    pub(crate) fn next(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
@@ -115,7 +116,7 @@ impl SplitMix {
     }
 
     /// An index below `n`.
-    fn below(&mut self, n: usize) -> usize {
+    pub(crate) fn below(&mut self, n: usize) -> usize {
         ((u128::from(self.next()) * n as u128) >> 64) as usize
     }
 }

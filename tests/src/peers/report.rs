@@ -20,6 +20,7 @@
 //!       "build_s": 0.012,            // best of `builds`, all cores
 //!       "builds": 21,                // interleaved rounds and the one traced with
 //!       "build_rounds_s": [0.013, 0.012, ...],  // the interleaved rounds, in round order
+//!       "build_memory": { "thp_fault_alloc": 0, "compact_stall": 0 },  // or null
 //!       "build_vs_embree": 1.9,      // build_s / embree1-default's build_s (lower is faster)
 //!       "build_ratio": { "reference": "embree1-default",   // or null
 //!                        "value": 1.95,                // median of the rounds' ratios
@@ -49,6 +50,7 @@
 use super::contestants::Kind;
 use super::contestants::embree::{PACKET_DEFAULT, PACKET_ROBUST, SINGLE_DEFAULT, SINGLE_ROBUST};
 use raybench_core::RaySet;
+use raybench_registry::interference::MemoryEvents;
 use raybench_report::results::CacheWalk;
 use raybench_report::results::Machine;
 use raybench_report::rounds::Tally;
@@ -165,6 +167,9 @@ pub struct ContestantReport {
     /// The times of the interleaved build rounds, seconds, in round order (the build
     /// traced with is not among them: it was not paired with the others' builds).
     pub build_rounds_s: Vec<f64>,
+    /// The machine's memory events during the interleaved builds; `None` where the system
+    /// does not tell.
+    pub build_memory: Option<BuildMemory>,
     /// `build_s` over Embree's (`embree1-default`); `None` without Embree.
     pub build_vs_embree: Option<f64>,
     /// The build against Embree's (`embree1-default`), the rounds paired; `None` without
@@ -172,6 +177,25 @@ pub struct ContestantReport {
     pub build_ratio: Option<BuildRatio>,
     /// One entry per ray set.
     pub ray_sets: Vec<SetReport>,
+}
+
+/// Memory events of the whole machine (Linux `/proc/vmstat`) during a contestant's builds
+/// (`raybench_registry::interference::MemoryEvents`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct BuildMemory {
+    /// Page faults served with a newly allocated transparent huge page.
+    pub thp_fault_alloc: u64,
+    /// Allocations that waited for the kernel to compact memory.
+    pub compact_stall: u64,
+}
+
+impl From<MemoryEvents> for BuildMemory {
+    fn from(m: MemoryEvents) -> Self {
+        Self {
+            thp_fault_alloc: m.thp_fault_alloc,
+            compact_stall: m.compact_stall,
+        }
+    }
 }
 
 /// One contestant on one ray set.
@@ -734,20 +758,27 @@ impl Report {
                     groups.join(" | ")
                 );
             }
+            let memory = m.contestants.iter().any(|c| c.build_memory.is_some());
             let _ = writeln!(
                 out,
-                "| contestant | build ms ({} threads) | builds |{}",
+                "| contestant | build ms ({} threads) | builds |{}{}",
                 threads.last().copied().unwrap_or(1),
                 if embree {
                     " vs Embree build | rounds' ratio [interval] |"
+                } else {
+                    ""
+                },
+                if memory {
+                    " huge-page faults / compaction stalls |"
                 } else {
                     ""
                 }
             );
             let _ = writeln!(
                 out,
-                "|---|---:|---:|{}",
-                if embree { "---:|---:|" } else { "" }
+                "|---|---:|---:|{}{}",
+                if embree { "---:|---:|" } else { "" },
+                if memory { "---:|" } else { "" }
             );
             for c in &m.contestants {
                 let _ = write!(
@@ -766,6 +797,16 @@ impl Report {
                         c.build_ratio.as_ref().map_or_else(
                             || "-".into(),
                             |r| format!("{:.2} {}", r.value, r.interval_cell())
+                        )
+                    );
+                }
+                if memory {
+                    let _ = write!(
+                        out,
+                        " {} |",
+                        c.build_memory.map_or_else(
+                            || "-".into(),
+                            |m| format!("{} / {}", m.thp_fault_alloc, m.compact_stall)
                         )
                     );
                 }
@@ -901,6 +942,7 @@ mod tests {
             build_s,
             builds: rounds.len() + 1,
             build_rounds_s: rounds.to_vec(),
+            build_memory: None,
             build_vs_embree: None,
             build_ratio: None,
             ray_sets: Vec::new(),
