@@ -139,9 +139,9 @@ pub fn order(round: usize, n: usize) -> impl Iterator<Item = usize> {
 
 /// The contestants' order in round `round` of `n`, shuffled: a permutation drawn for each
 /// round (Fisher-Yates from SplitMix64 keyed by the round), so that no contestant always
-/// follows the same one, as in [`order`]'s rotation, and whatever one leaves behind (freed
-/// memory, cold caches) falls on a different one each round. The same round always gives
-/// the same order.
+/// follows the same one (as each does under [`order`]'s rotation), and whatever one leaves
+/// behind (freed memory, cold caches) falls on a different one each round. The same round
+/// always gives the same order.
 #[must_use]
 pub fn shuffled(round: usize, n: usize) -> Vec<usize> {
     let mut v: Vec<usize> = (0..n).collect();
