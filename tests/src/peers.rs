@@ -542,7 +542,7 @@ const BUILD_BUDGET_S: f64 = 2.0;
 const MAX_BUILD_ROUNDS: usize = 20;
 
 /// A contestant's interleaved builds of one mesh ([`build_rounds`]).
-#[derive(Debug, Default)]
+#[derive(Debug)]
 struct BuildRounds {
     /// Seconds of each build, in round order.
     seconds: Vec<f64>,
@@ -572,12 +572,14 @@ fn build_rounds(
     pool: &ThreadPool,
     repeat: usize,
 ) -> Vec<Result<BuildRounds, String>> {
+    // Counted from zero where the system tells the events at all.
+    let memory = MemoryEvents::now().map(|_| MemoryEvents::default());
     let mut out: Vec<Result<BuildRounds, String>> = contestants
         .iter()
         .map(|_| {
             Ok(BuildRounds {
                 seconds: Vec::new(),
-                memory: MemoryEvents::now().map(|_| MemoryEvents::default()),
+                memory,
             })
         })
         .collect();
