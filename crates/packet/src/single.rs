@@ -10,8 +10,7 @@ use raybench_geometry::{
 };
 
 /// `1 + 2 gamma(3)`: the far-distance scale of the conservative slab test (the core's).
-pub(crate) const FAR_SCALE: f32 =
-    1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
+pub(crate) use raybench_geometry::FAR_SCALE;
 
 /// A ray prepared for wide slab tests: for each axis, which of a node's `min`/`max` arrays
 /// holds the near plane (by the sign of the inverse direction, as `raybench_geometry::SlabRay`).
