@@ -9,6 +9,7 @@
 //! ```text
 //! cargo bench -p raybench-tests --bench peers --features embree
 //! cargo bench -p raybench-tests --bench peers -- --quick --meshes sphere --contestants bvh,packet,obvhs-bvh2
+//! cargo bench -p raybench-tests --bench peers -- --diff before.json after.json
 //! cargo bench -p raybench-tests --bench peers -- --help
 //! ```
 
@@ -31,6 +32,26 @@ fn main() -> ExitCode {
         Ok(Command::CacheProbe(per_size)) => {
             print!("{}", raybench_report::cache_probe::table(per_size));
             return ExitCode::SUCCESS;
+        }
+        Ok(Command::Diff(before, after, reference)) => {
+            let figures = peers::diff::read(&before).and_then(|b| {
+                let a = peers::diff::read(&after)?;
+                peers::diff::diff(&b, &a, reference.as_deref())
+            });
+            return match figures {
+                Ok(f) => {
+                    let name = |p: &std::path::Path| p.display().to_string();
+                    print!(
+                        "{}",
+                        peers::diff::markdown(&f, &name(&before), &name(&after))
+                    );
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: peers --diff: {e}");
+                    ExitCode::FAILURE
+                }
+            };
         }
         Err(e) => {
             eprintln!("error: peers: {e}");

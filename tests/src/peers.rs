@@ -25,6 +25,7 @@
 //! schema `raybench-peers/2`) and printed.
 
 pub mod contestants;
+pub mod diff;
 pub mod report;
 
 use contestants::Contestant;
@@ -111,6 +112,9 @@ pub enum Command {
     /// Time random walks through memory (`raybench_report::cache_probe`) for about this
     /// long each.
     CacheProbe(std::time::Duration),
+    /// Set two runs' JSON side by side ([`diff`]): before, after, and the reference
+    /// contestant asked for.
+    Diff(PathBuf, PathBuf, Option<String>),
 }
 
 /// The command line's usage.
@@ -145,6 +149,11 @@ options:
                         miss it, 10 s each, and print how much their samples spread
                         (on a virtual machine whose cache other guests share, the second
                         spreads between the cache's latency and the memory's); then exit
+  --diff BEFORE AFTER   set two runs' JSON side by side: per figure, the change of the
+                        contestant's speed relative to a reference timed in the same
+                        rounds (by default its first Embree reference), with an interval
+                        and a verdict; then exit
+  --reference NAME      the reference of --diff (a contestant of both runs)
   --help                this text";
 
 /// `target/raybench-peers.json` beside the running benchmark (its executable lives in
@@ -192,6 +201,7 @@ impl Options {
         let mut o = Self::full();
         let mut args = args.into_iter();
         let (mut size, mut rays) = (None, None);
+        let (mut runs, mut reference) = (None, None);
         while let Some(arg) = args.next() {
             let mut value = |name: &str| args.next().ok_or_else(|| format!("{name} needs a value"));
             let positive = |name: &str, v: String| -> Result<usize, String> {
@@ -232,6 +242,11 @@ impl Options {
                 "--chunk" => o.chunk = positive("--chunk", value("--chunk")?)?,
                 "--threads" => o.threads = positive("--threads", value("--threads")?)?,
                 "--json" => o.json = PathBuf::from(value("--json")?),
+                "--diff" => {
+                    let before = PathBuf::from(value("--diff")?);
+                    runs = Some((before, PathBuf::from(value("--diff")?)));
+                }
+                "--reference" => reference = Some(value("--reference")?),
                 "--rays-file" => o.rays_file = Some(PathBuf::from(value("--rays-file")?)),
                 "--ao-rays" => {
                     let n = positive("--ao-rays", value("--ao-rays")?)?;
@@ -277,6 +292,13 @@ impl Options {
                 }
                 other => return Err(format!("unknown option '{other}' (see --help)")),
             }
+        }
+        match (runs, reference) {
+            (Some((before, after)), reference) => {
+                return Ok(Command::Diff(before, after, reference));
+            }
+            (None, Some(_)) => return Err("--reference is an option of --diff".into()),
+            (None, None) => {}
         }
         if let Some(s) = size {
             o.primary_size = s;

@@ -58,6 +58,20 @@ fn defaults_are_the_peers_workload() {
         parse(&["--cache-probe"]),
         Ok(Command::CacheProbe(std::time::Duration::from_secs(10)))
     );
+    assert_eq!(
+        parse(&[
+            "--diff",
+            "a.json",
+            "b.json",
+            "--reference",
+            "embree1-robust"
+        ]),
+        Ok(Command::Diff(
+            "a.json".into(),
+            "b.json".into(),
+            Some("embree1-robust".into())
+        ))
+    );
     assert_eq!(o.sets, RaySet::ALL);
     let d = options(&[
         "--sets",
@@ -88,6 +102,11 @@ fn bad_options_are_refused_with_a_reason() {
         (&["--sets", ","], "--sets: empty list"),
         (&["--sets", "primary,up"], "--sets: unknown ray set 'up'"),
         (&["--ao-rays", "5000"], "--ao-rays: 5000 is above 1024"),
+        (&["--diff", "a.json"], "--diff needs a value"),
+        (
+            &["--reference", "bvh"],
+            "--reference is an option of --diff",
+        ),
         (
             &["--frobnicate"],
             "unknown option '--frobnicate' (see --help)",
@@ -344,6 +363,32 @@ fn tiny_run_measures_every_contestant_and_writes_json() {
             .as_f64()
             .is_some_and(|ns| ns > 0.0)
     );
+    // A run set beside itself: every figure of every contestant (the build and, per ray
+    // set, query and thread count), each unchanged.
+    let figures = peers::diff::diff(&json, &json, None).unwrap();
+    let expected: usize = json["meshes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| {
+            let contestants = m["contestants"].as_array().unwrap().len();
+            contestants * (1 + m["ray_sets"].as_array().unwrap().len() * 2 * 2)
+        })
+        .sum();
+    assert_eq!(figures.len(), expected);
+    assert!(figures.iter().all(|f| f.change == 1.0), "{figures:?}");
+    if cfg!(feature = "embree") {
+        let packet = figures
+            .iter()
+            .find(|f| f.contestant == "packet" && f.what == "incoherent any, 2 threads")
+            .unwrap();
+        assert!(
+            packet
+                .reference
+                .as_deref()
+                .is_some_and(|r| r.starts_with("embree"))
+        );
+    }
 }
 
 /// `--rays-file` replaces the ray sets with a file's rays: one set named `file`, its any
