@@ -10,6 +10,7 @@
 //! cargo bench -p raybench-tests --bench peers --features embree
 //! cargo bench -p raybench-tests --bench peers -- --quick --meshes sphere --contestants bvh,packet,obvhs-bvh2
 //! cargo bench -p raybench-tests --bench peers -- --diff before.json after.json
+//! cargo bench -p raybench-tests --bench peers -- --diff b1.json,b2.json a1.json,a2.json
 //! cargo bench -p raybench-tests --bench peers -- --help
 //! ```
 
@@ -34,16 +35,32 @@ fn main() -> ExitCode {
             return ExitCode::SUCCESS;
         }
         Ok(Command::Diff(before, after, reference)) => {
-            let figures = peers::diff::read(&before).and_then(|b| {
-                let a = peers::diff::read(&after)?;
-                peers::diff::diff(&b, &a, reference.as_deref())
-            });
-            return match figures {
-                Ok(f) => {
-                    let name = |p: &std::path::Path| p.display().to_string();
+            let pairs = before
+                .iter()
+                .zip(&after)
+                .map(|(b, a)| {
+                    let (b, a) = (peers::diff::read(b)?, peers::diff::read(a)?);
+                    peers::diff::diff(&b, &a, reference.as_deref())
+                })
+                .collect::<Result<Vec<_>, _>>();
+            let name = |p: &std::path::PathBuf| p.display().to_string();
+            return match pairs {
+                Ok(pairs) if pairs.len() == 1 => {
                     print!(
                         "{}",
-                        peers::diff::markdown(&f, &name(&before), &name(&after))
+                        peers::diff::markdown(&pairs[0], &name(&before[0]), &name(&after[0]))
+                    );
+                    ExitCode::SUCCESS
+                }
+                Ok(pairs) => {
+                    let names: Vec<_> = before
+                        .iter()
+                        .zip(&after)
+                        .map(|(b, a)| (name(b), name(a)))
+                        .collect();
+                    print!(
+                        "{}",
+                        peers::diff::markdown_across(&peers::diff::across(&pairs), &names)
                     );
                     ExitCode::SUCCESS
                 }

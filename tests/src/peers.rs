@@ -112,9 +112,9 @@ pub enum Command {
     /// Time random walks through memory (`raybench_report::cache_probe`) for about this
     /// long each.
     CacheProbe(std::time::Duration),
-    /// Set two runs' JSON side by side ([`diff`]): before, after, and the reference
-    /// contestant asked for.
-    Diff(PathBuf, PathBuf, Option<String>),
+    /// Set runs' JSON side by side ([`diff`]): the runs before and the runs after (as many,
+    /// paired in order), and the reference contestant asked for.
+    Diff(Vec<PathBuf>, Vec<PathBuf>, Option<String>),
 }
 
 /// The command line's usage.
@@ -149,10 +149,11 @@ options:
                         miss it, 10 s each, and print how much their samples spread
                         (on a virtual machine whose cache other guests share, the second
                         spreads between the cache's latency and the memory's); then exit
-  --diff BEFORE AFTER   set two runs' JSON side by side: per figure, the change of the
-                        contestant's speed relative to a reference timed in the same
-                        rounds (by default its first Embree reference), with an interval
-                        and a verdict; then exit
+  --diff B1,B2 A1,A2    set runs' JSON side by side (before, after; several pairs are
+                        paired in order): per figure, the change of the contestant's
+                        speed relative to a reference timed in the same rounds (by default
+                        an Embree variant), with an interval and a verdict per pair, and
+                        a change only where every pair claims it; then exit
   --reference NAME      the reference of --diff (a contestant of both runs)
   --help                this text";
 
@@ -243,8 +244,18 @@ impl Options {
                 "--threads" => o.threads = positive("--threads", value("--threads")?)?,
                 "--json" => o.json = PathBuf::from(value("--json")?),
                 "--diff" => {
-                    let before = PathBuf::from(value("--diff")?);
-                    runs = Some((before, PathBuf::from(value("--diff")?)));
+                    let paths = |v: String| list(v).into_iter().map(PathBuf::from).collect();
+                    let before: Vec<PathBuf> = paths(value("--diff")?);
+                    let after: Vec<PathBuf> = paths(value("--diff")?);
+                    if before.is_empty() || before.len() != after.len() {
+                        return Err(format!(
+                            "--diff: {} runs before and {} after; give as many of each, \
+                             paired in order",
+                            before.len(),
+                            after.len()
+                        ));
+                    }
+                    runs = Some((before, after));
                 }
                 "--reference" => reference = Some(value("--reference")?),
                 "--rays-file" => o.rays_file = Some(PathBuf::from(value("--rays-file")?)),

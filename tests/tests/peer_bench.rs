@@ -61,14 +61,14 @@ fn defaults_are_the_peers_workload() {
     assert_eq!(
         parse(&[
             "--diff",
-            "a.json",
-            "b.json",
+            "a.json,c.json",
+            "b.json,d.json",
             "--reference",
             "embree1-robust"
         ]),
         Ok(Command::Diff(
-            "a.json".into(),
-            "b.json".into(),
+            vec!["a.json".into(), "c.json".into()],
+            vec!["b.json".into(), "d.json".into()],
             Some("embree1-robust".into())
         ))
     );
@@ -103,6 +103,14 @@ fn bad_options_are_refused_with_a_reason() {
         (&["--sets", "primary,up"], "--sets: unknown ray set 'up'"),
         (&["--ao-rays", "5000"], "--ao-rays: 5000 is above 1024"),
         (&["--diff", "a.json"], "--diff needs a value"),
+        (
+            &["--diff", "a.json,c.json", "b.json"],
+            "--diff: 2 runs before and 1 after; give as many of each, paired in order",
+        ),
+        (
+            &["--diff", "a.json,c.json", "b.json"],
+            "--diff: 2 runs before and 1 after; give as many of each, paired in order",
+        ),
         (
             &["--reference", "bvh"],
             "--reference is an option of --diff",

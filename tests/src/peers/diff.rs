@@ -262,6 +262,105 @@ pub fn markdown(figures: &[Figure], before: &str, after: &str) -> String {
     s
 }
 
+/// The figures measured in every one of several pairs of runs (each pair's [`diff`]),
+/// grouped per figure in the first pair's order: one [`Figure`] per pair.
+#[must_use]
+pub fn across(pairs: &[Vec<Figure>]) -> Vec<Vec<Figure>> {
+    let Some((first, rest)) = pairs.split_first() else {
+        return Vec::new();
+    };
+    let same = |a: &Figure, b: &Figure| {
+        (&a.mesh, &a.contestant, &a.what) == (&b.mesh, &b.contestant, &b.what)
+    };
+    first
+        .iter()
+        .filter_map(|f| {
+            let mut group = vec![f.clone()];
+            for pair in rest {
+                group.push(pair.iter().find(|g| same(f, g))?.clone());
+            }
+            Some(group)
+        })
+        .collect()
+}
+
+/// What several pairs' verdicts on one figure say together: a change only where every
+/// pair claims it.
+#[must_use]
+pub fn agreed(group: &[Figure]) -> &'static str {
+    let all = |c: Change| group.iter().all(|f| f.verdict == c);
+    let any = |c: Change| group.iter().any(|f| f.verdict == c);
+    if any(Change::Unknown) {
+        "noise unknown"
+    } else if all(Change::Faster) {
+        "faster in every pair"
+    } else if all(Change::Slower) {
+        "slower in every pair"
+    } else if any(Change::Faster) || any(Change::Slower) {
+        "mixed"
+    } else {
+        "within noise"
+    }
+}
+
+/// Several pairs' figures ([`across`]) as Markdown tables, one per mesh: each pair's change
+/// with its interval, and the verdict they agree on ([`agreed`]).
+#[must_use]
+pub fn markdown_across(groups: &[Vec<Figure>], pairs: &[(String, String)]) -> String {
+    let mut s = format!(
+        "# raybench peers: {} pairs of runs, after over before\n\n",
+        pairs.len()
+    );
+    for (i, (before, after)) in pairs.iter().enumerate() {
+        let _ = writeln!(s, "- pair {}: {after} over {before}", i + 1);
+    }
+    let _ = writeln!(
+        s,
+        "\nPer figure and pair, the change of the contestant's speed relative to a reference \
+         timed in the same rounds, with its {:.0} % bootstrap interval (`+` faster, `-` \
+         slower, by the single-pair rule); a change is claimed only where every pair claims \
+         it.",
+        stats::CONFIDENCE * 100.0
+    );
+    let mut mesh = None;
+    for group in groups {
+        let f = &group[0];
+        if mesh != Some(&f.mesh) {
+            mesh = Some(&f.mesh);
+            let _ = write!(
+                s,
+                "\n## {}\n\n| contestant | figure | reference | after / before per pair \
+                 [interval] | verdict |\n|---|---|---|---|---|\n",
+                f.mesh
+            );
+        }
+        let cells: Vec<String> = group
+            .iter()
+            .map(|g| {
+                let mark = match g.verdict {
+                    Change::Faster => " +",
+                    Change::Slower => " -",
+                    Change::Same | Change::Unknown => "",
+                };
+                let interval = g
+                    .interval
+                    .map_or_else(String::new, |[lo, hi]| format!(" [{lo:.2}-{hi:.2}]"));
+                format!("{:.3}{interval}{mark}", g.change)
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} |",
+            f.contestant,
+            f.what,
+            f.reference.as_deref().unwrap_or("(raw times)"),
+            cells.join("; "),
+            agreed(group)
+        );
+    }
+    s
+}
+
 /// Reads a peer benchmark's JSON.
 ///
 /// # Errors
@@ -367,6 +466,44 @@ mod tests {
             same.iter()
                 .all(|f| f.change == 1.0 && f.verdict != Change::Faster)
         );
+    }
+
+    /// Over several pairs, a change is claimed only where every pair claims it.
+    #[test]
+    fn pairs_agree_or_are_mixed() {
+        let before = run(&[1.00, 1.02, 0.99, 1.01, 1.00], &[1.0; 5]);
+        let faster = run(&[0.80, 0.81, 0.79, 0.80, 0.80], &[1.0; 5]);
+        let slower = run(&[1.20, 1.21, 1.19, 1.20, 1.20], &[1.0; 5]);
+        let d = |a: &Value| diff(&before, a, None).unwrap();
+        let pick = |groups: Vec<Vec<Figure>>| {
+            let g = groups
+                .into_iter()
+                .find(|g| g[0].what == "shadow any, 1 thread");
+            agreed(&g.expect("the shadow figure"))
+        };
+        assert_eq!(
+            pick(across(&[d(&faster), d(&faster)])),
+            "faster in every pair"
+        );
+        assert_eq!(
+            pick(across(&[d(&slower), d(&slower)])),
+            "slower in every pair"
+        );
+        assert_eq!(pick(across(&[d(&faster), d(&slower)])), "mixed");
+        assert_eq!(pick(across(&[d(&faster), d(&before)])), "mixed");
+        assert_eq!(pick(across(&[d(&before), d(&before)])), "within noise");
+        let groups = across(&[d(&faster), d(&slower)]);
+        let names = [
+            ("b1".to_string(), "a1".to_string()),
+            ("b2".into(), "a2".into()),
+        ];
+        let text = markdown_across(&groups, &names);
+        assert!(
+            text.contains("| packet | shadow any, 1 thread | embree1-default | 1.250 [1.23-1.27] +; 0.833 [0.82-0.85] - | mixed |"),
+            "{text}"
+        );
+        // A figure missing from one pair is left out.
+        assert!(across(&[d(&faster), Vec::new()]).is_empty());
     }
 
     #[test]
