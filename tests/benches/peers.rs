@@ -39,8 +39,9 @@ fn main() -> ExitCode {
                 .iter()
                 .zip(&after)
                 .map(|(b, a)| {
-                    let (b, a) = (peers::diff::read(b)?, peers::diff::read(a)?);
-                    peers::diff::diff(&b, &a, reference.as_deref())
+                    let (before, after) = (peers::diff::read(b)?, peers::diff::read(a)?);
+                    peers::diff::diff(&before, &after, reference.as_deref())
+                        .map_err(|e| format!("{} over {}: {e}", a.display(), b.display()))
                 })
                 .collect::<Result<Vec<_>, _>>();
             let name = |p: &std::path::PathBuf| p.display().to_string();

@@ -1,5 +1,6 @@
-//! Before and after: two runs of the peer benchmark set side by side (`--diff BEFORE AFTER`),
-//! the way a change to a backend is judged on a shared machine.
+//! Before and after: runs of the peer benchmark set side by side (`--diff BEFORE AFTER`, or
+//! several alternating pairs `--diff B1,B2 A1,A2`), the way a change to a backend is judged
+//! on a shared machine.
 //!
 //! Absolute Mrays/s of two runs minutes apart move with the neighbours' use of the shared
 //! cache (see docs/benchmarks.md), so each figure is first made relative to a reference
@@ -12,11 +13,24 @@
 //! ([`raybench_report::stats::judge`]: faster or slower only where the interval excludes 1
 //! and the change reaches [`raybench_report::stats::MIN_EFFECT`]). A figure without a
 //! reference in both runs is compared on its raw times, which include the machine's drift,
-//! and says so.
+//! and says so. One pair's interval covers the noise within its two runs, not the drift
+//! between them, so over several pairs a change is claimed only where every pair claims it
+//! ([`agreed`]).
 
 use raybench_report::stats::{self, Change};
 use serde_json::Value;
 use std::fmt::Write as _;
+
+/// The workload's fields that decide the rays, which both runs must share (the rounds and
+/// thread counts may differ).
+pub const SAME_RAYS: [&str; 6] = [
+    "primary_size",
+    "tile",
+    "incoherent_rays",
+    "seed",
+    "chunk",
+    "shadow_fraction",
+];
 
 /// One figure measured in both runs.
 #[derive(Clone, Debug, PartialEq)]
@@ -48,7 +62,9 @@ pub struct Figure {
 /// else the builds' reference).
 ///
 /// # Errors
-/// When either document is not a peer benchmark's JSON (`raybench-peers/*`).
+/// When either document is not a peer benchmark's JSON (`raybench-peers/*`), or the two
+/// traced other rays ([`SAME_RAYS`], or a mesh's ray sets hold other counts of rays) or ran
+/// on different CPU models.
 pub fn diff(before: &Value, after: &Value, reference: Option<&str>) -> Result<Vec<Figure>, String> {
     for (name, doc) in [("before", before), ("after", after)] {
         let schema = doc["schema"].as_str().unwrap_or("");
@@ -58,12 +74,42 @@ pub fn diff(before: &Value, after: &Value, reference: Option<&str>) -> Result<Ve
             ));
         }
     }
+    for key in SAME_RAYS {
+        let (b, a) = (&before["workload"][key], &after["workload"][key]);
+        if b != a {
+            return Err(format!(
+                "the runs traced different rays: workload {key} {b} before, {a} after"
+            ));
+        }
+    }
+    let (b, a) = (&before["machine"]["cpu"], &after["machine"]["cpu"]);
+    if b != a {
+        return Err(format!(
+            "the runs ran on different CPUs: {b} before, {a} after"
+        ));
+    }
     let mut out = Vec::new();
     for mesh_after in meshes(after) {
         let name = mesh_after["name"].as_str().unwrap_or_default();
         let Some(mesh_before) = meshes(before).find(|m| m["name"] == name) else {
             continue;
         };
+        // The ray counts catch what the workload does not name (`--ao-rays`, a ray file).
+        for set in mesh_after["ray_sets"].as_array().into_iter().flatten() {
+            let rays = |m: &Value| {
+                let sets = m["ray_sets"].as_array()?;
+                sets.iter()
+                    .find(|s| s["name"] == set["name"])
+                    .map(|s| s["rays"].clone())
+            };
+            if let Some(b) = rays(mesh_before).filter(|b| *b != set["rays"]) {
+                return Err(format!(
+                    "mesh {name}: the runs traced different rays: ray set {} of {b} rays \
+                     before, {} after",
+                    set["name"], set["rays"]
+                ));
+            }
+        }
         for c in contestants(mesh_after) {
             let cname = c["name"].as_str().unwrap_or_default();
             let Some(c_before) = contestant(mesh_before, cname) else {
@@ -394,8 +440,12 @@ mod tests {
         };
         json!({
             "schema": "raybench-peers/2",
+            "machine": {"cpu": "AMD EPYC (family 25, model 17)"},
+            "workload": {"primary_size": 1024, "tile": 16, "incoherent_rays": 1_048_576,
+                         "seed": 1, "chunk": 1024, "shadow_fraction": 0.5},
             "meshes": [{
                 "name": "sponza",
+                "ray_sets": [{"name": "shadow", "rays": 1000}],
                 "groups": [["packet", "embree1-default"]],
                 "contestants": [contestant("packet", packet), contestant("embree1-default", embree)],
             }],
