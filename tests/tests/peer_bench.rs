@@ -108,10 +108,6 @@ fn bad_options_are_refused_with_a_reason() {
             "--diff: 2 runs before and 1 after; give as many of each, paired in order",
         ),
         (
-            &["--diff", "a.json,c.json", "b.json"],
-            "--diff: 2 runs before and 1 after; give as many of each, paired in order",
-        ),
-        (
             &["--reference", "bvh"],
             "--reference is an option of --diff",
         ),
