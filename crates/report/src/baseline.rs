@@ -183,12 +183,7 @@ pub fn compare(before: &Results, after: &Results) -> Comparison {
             hi: 1.0 / lo,
             confidence: stats::CONFIDENCE,
         });
-        c.verdict = match stats::judge(1.0 / c.relative, times, out.min_effect) {
-            stats::Change::Faster => "faster",
-            stats::Change::Slower => "slower",
-            stats::Change::Same => "within noise",
-            stats::Change::Unknown => "noise unknown",
-        };
+        c.verdict = stats::judge(1.0 / c.relative, times, out.min_effect).label();
         c.significant = matches!(c.verdict, "faster" | "slower");
     }
     for b in before.runs.iter().filter(timed) {

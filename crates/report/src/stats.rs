@@ -183,6 +183,20 @@ pub enum Change {
     Unknown,
 }
 
+impl Change {
+    /// The verdict as the tables write it: `faster`, `slower`, `within noise` or `noise
+    /// unknown`.
+    #[must_use]
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::Faster => "faster",
+            Self::Slower => "slower",
+            Self::Same => "within noise",
+            Self::Unknown => "noise unknown",
+        }
+    }
+}
+
 /// The median of the round-by-round ratios `a[i] / b[i]` (over the rounds both took part
 /// in, the first `min(len)`) and its distribution-free interval ([`median_interval`]).
 /// For times taken in the same rounds ([`crate::rounds`]) this is the sharper estimate: a

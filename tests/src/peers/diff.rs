@@ -120,7 +120,7 @@ pub fn diff(before: &Value, after: &Value, reference: Option<&str>) -> Result<Ve
             // Builds: rounds of every contestant of the mesh, interleaved.
             out.extend(compare(
                 [name, cname, "build"],
-                pick(reference, build_reference, cname, runs),
+                pick(reference, build_reference, cname, runs, false),
                 runs,
                 [c_before, c],
                 |c| floats(&c["build_rounds_s"]),
@@ -138,13 +138,13 @@ pub fn diff(before: &Value, after: &Value, reference: Option<&str>) -> Result<Ve
                             .flatten()
                             .filter(|x| x["threads"].as_u64() == Some(threads))
                             .filter_map(|x| x["reference"].as_str())
-                            .find(|r| pick(None, Some(r), cname, runs).is_some())
+                            .find(|r| pick(None, Some(r), cname, runs, true).is_some())
                             .or(build_reference);
                         let plural = if threads == 1 { "" } else { "s" };
                         let what = format!("{sname} {query}, {threads} thread{plural}");
                         out.extend(compare(
                             [name, cname, &what],
-                            pick(reference, default, cname, runs),
+                            pick(reference, default, cname, runs, true),
                             runs,
                             [c_before, c],
                             |c| {
@@ -206,17 +206,22 @@ fn compare(
     })
 }
 
-/// The reference asked for, else `default`, where it is another contestant timed in the
-/// same rounds as `contestant` in both runs' mesh.
+/// The reference asked for, else `default`, where it is another contestant of both runs'
+/// mesh than `name`, and, for traced figures (`grouped`), one timed in the same group of
+/// rounds (builds are interleaved across every contestant of a mesh).
 fn pick<'a>(
     asked: Option<&'a str>,
     default: Option<&'a str>,
-    contestant: &str,
+    name: &str,
     runs: [&Value; 2],
+    grouped: bool,
 ) -> Option<&'a str> {
-    asked
-        .or(default)
-        .filter(|r| *r != contestant && runs.iter().all(|m| paired(m, contestant, r)))
+    asked.or(default).filter(|r| {
+        *r != name
+            && runs
+                .iter()
+                .all(|m| contestant(m, r).is_some() && (!grouped || paired(m, name, r)))
+    })
 }
 
 /// The meshes of a run.
@@ -282,19 +287,12 @@ pub fn markdown(figures: &[Figure], before: &str, after: &str) -> String {
                 f.mesh
             );
         }
-        let interval = f
-            .interval
-            .map_or_else(String::new, |[lo, hi]| format!(" [{lo:.2}-{hi:.2}]"));
+        let interval = interval_text(f);
         let (reference, scale) = match &f.reference {
             Some(r) => (r.as_str(), 1.0),
             None => ("(raw times)", f.before),
         };
-        let verdict = match f.verdict {
-            Change::Faster => "faster",
-            Change::Slower => "slower",
-            Change::Same => "within noise",
-            Change::Unknown => "noise unknown",
-        };
+        let verdict = f.verdict.label();
         let _ = writeln!(
             s,
             "| {} | {} | {reference} | {:.3} | {:.3} | {:.3}{interval} | {verdict} |",
@@ -306,6 +304,12 @@ pub fn markdown(figures: &[Figure], before: &str, after: &str) -> String {
         );
     }
     s
+}
+
+/// A figure's interval as the tables write it (` [lo-hi]`), or nothing.
+fn interval_text(f: &Figure) -> String {
+    f.interval
+        .map_or_else(String::new, |[lo, hi]| format!(" [{lo:.2}-{hi:.2}]"))
 }
 
 /// The figures measured in every one of several pairs of runs (each pair's [`diff`]),
@@ -388,9 +392,7 @@ pub fn markdown_across(groups: &[Vec<Figure>], pairs: &[(String, String)]) -> St
                     Change::Slower => " -",
                     Change::Same | Change::Unknown => "",
                 };
-                let interval = g
-                    .interval
-                    .map_or_else(String::new, |[lo, hi]| format!(" [{lo:.2}-{hi:.2}]"));
+                let interval = interval_text(g);
                 format!("{:.3}{interval}{mark}", g.change)
             })
             .collect();
@@ -516,6 +518,26 @@ mod tests {
             same.iter()
                 .all(|f| f.change == 1.0 && f.verdict != Change::Faster)
         );
+    }
+
+    /// Builds, interleaved across every contestant, keep their reference when the traces
+    /// ran in separate groups; the traces, whose rounds were not paired, fall back to raw
+    /// times.
+    #[test]
+    fn separate_groups_keep_the_builds_reference_only() {
+        let mut split = run(&[1.0, 1.0, 1.0], &[1.0, 1.0, 1.0]);
+        split["meshes"][0]["groups"] = json!([["packet"], ["embree1-default"]]);
+        let figures = diff(&split, &split, None).unwrap();
+        let of = |what: &str| {
+            figures
+                .iter()
+                .find(|f| f.contestant == "packet" && f.what == what)
+                .unwrap()
+                .reference
+                .clone()
+        };
+        assert_eq!(of("build").as_deref(), Some("embree1-default"));
+        assert_eq!(of("shadow any, 1 thread"), None);
     }
 
     /// Over several pairs, a change is claimed only where every pair claims it.
