@@ -153,7 +153,7 @@ options:
                         paired in order): per figure, the change of the contestant's
                         speed relative to a reference timed in the same rounds (by default
                         an Embree variant), with an interval and a verdict per pair, and
-                        a change only where every pair claims it; then exit
+                        the pairs' geometric mean with a t interval over them; then exit
   --reference NAME      the reference of --diff (a contestant of both runs)
   --help                this text";
 

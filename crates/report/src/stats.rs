@@ -8,6 +8,8 @@
 //! and criterion replaces by a bootstrap of the mean). The interval of a ratio of two medians
 //! comes from a bootstrap that resamples both sides independently, seeded, so a report is
 //! reproducible from its samples.
+//! Ratios measured in independent replicates (alternating pairs of runs) are pooled by
+//! Student's t over their logarithms: few replicates allow no distribution-free interval.
 
 /// The confidence of every interval the report gives.
 pub const CONFIDENCE: f64 = 0.95;
@@ -238,6 +240,61 @@ pub fn paired_change(a: &[f64], b: &[f64]) -> Change {
     judge(ratio, interval, MIN_EFFECT)
 }
 
+/// Student's t quantile `t(0.975, df)` for `df` = 1 to 30: the two-sided 95 %
+/// ([`CONFIDENCE`]) bound of a mean of `df + 1` normal samples, in units of its standard
+/// error.
+const T_975: [f64; 30] = [
+    12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160,
+    2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056,
+    2.052, 2.048, 2.045, 2.042,
+];
+
+/// `t(0.975, df)`: from the table up to 30 degrees of freedom, beyond by the first two
+/// terms of its expansion about the normal quantile `z` (Cornish-Fisher: `z + (z^3 + z) /
+/// (4 df) + (5 z^5 + 16 z^3 + 3 z) / (96 df^2)`, 2.0395 at 31 as the exact value).
+fn t_975(df: usize) -> f64 {
+    const Z: f64 = 1.959_964;
+    match df {
+        0 => f64::INFINITY,
+        1..=30 => T_975[df - 1],
+        _ => {
+            let (z3, df) = (Z * Z * Z, df as f64);
+            Z + (z3 + Z) / (4.0 * df) + (5.0 * z3 * Z * Z + 16.0 * z3 + 3.0 * Z) / (96.0 * df * df)
+        }
+    }
+}
+
+/// The geometric mean of `ratios` measured in independent replicates (alternating pairs
+/// of runs, each giving one ratio of medians) and its [`CONFIDENCE`] interval by Student's
+/// t over their logarithms. Each replicate's ratio carries the noise within its runs and
+/// the drift between them, so the spread of the replicates bounds both, where a bootstrap
+/// of one replicate's rounds sees only the first. The t interval takes the logarithms as
+/// normal; with few replicates it is wide (t = 4.30 for three), and it needs no more
+/// replicates than that to say anything. The interval is `None` with fewer than two
+/// ratios or any that is not positive and finite.
+#[must_use]
+pub fn replicate_ratio(ratios: &[f64]) -> (f64, Option<Interval>) {
+    if ratios.is_empty() || ratios.iter().any(|r| !(r.is_finite() && *r > 0.0)) {
+        return (f64::NAN, None);
+    }
+    let n = ratios.len();
+    let logs: Vec<f64> = ratios.iter().map(|r| r.ln()).collect();
+    let mean = logs.iter().sum::<f64>() / n as f64;
+    if n < 2 {
+        return (mean.exp(), None);
+    }
+    let variance = logs.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+    let half = t_975(n - 1) * (variance / n as f64).sqrt();
+    (
+        mean.exp(),
+        Some(Interval {
+            lo: (mean - half).exp(),
+            hi: (mean + half).exp(),
+            confidence: CONFIDENCE,
+        }),
+    )
+}
+
 /// Who is fastest on one workload.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Fastest {
@@ -295,6 +352,44 @@ pub fn nearest_rank(sorted: &[u64], p: u32) -> Option<u64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Replicates' ratios: the geometric mean, and Student's t interval over their
+    /// logarithms (here computed by hand), wide with few replicates and none with one.
+    #[test]
+    fn replicates_give_a_t_interval_of_the_geometric_mean() {
+        let (r, i) = replicate_ratio(&[1.10, 1.12, 1.17]);
+        let logs = [1.10f64.ln(), 1.12f64.ln(), 1.17f64.ln()];
+        let mean = logs.iter().sum::<f64>() / 3.0;
+        let sd = (logs.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / 2.0).sqrt();
+        let i = i.expect("an interval");
+        assert!((r - mean.exp()).abs() < 1e-12);
+        assert!((i.lo - (mean - 4.303 * sd / 3f64.sqrt()).exp()).abs() < 1e-12);
+        assert!((i.hi - (mean + 4.303 * sd / 3f64.sqrt()).exp()).abs() < 1e-12);
+        assert!(i.lo > 1.0, "{i:?}");
+        // Replicates that disagree: the interval holds 1.
+        let (_, i) = replicate_ratio(&[0.99, 1.135, 1.27]);
+        assert!(i.expect("an interval").contains(1.0));
+        // Two replicates alike read the same as one alike three times, but wider.
+        let two = replicate_ratio(&[1.05, 1.15]).1.expect("an interval");
+        let four = replicate_ratio(&[1.05, 1.15, 1.05, 1.15])
+            .1
+            .expect("an interval");
+        assert!(two.lo < four.lo && two.hi > four.hi, "{two:?} {four:?}");
+        let (one, none) = replicate_ratio(&[1.2]);
+        assert!((one - 1.2).abs() < 1e-12 && none.is_none());
+        assert!(replicate_ratio(&[]).0.is_nan());
+        assert_eq!(replicate_ratio(&[1.1, 0.0]).1, None);
+        assert_eq!(replicate_ratio(&[1.1, f64::NAN]).1, None);
+    }
+
+    /// The t quantile falls towards the normal's and joins its expansion smoothly.
+    #[test]
+    fn t_quantiles_fall_to_the_normal() {
+        assert!(T_975.windows(2).all(|w| w[0] > w[1]));
+        assert!(t_975(31) < t_975(30) && (t_975(31) - 2.0395).abs() < 0.0002);
+        assert!((t_975(1000) - 1.96234).abs() < 0.0001);
+        assert!(t_975(0).is_infinite());
+    }
 
     /// Times from a skewed distribution (a floor plus exponential noise, as a busy machine
     /// gives): `floor * (1 + scale * Exp(1))`.

@@ -14,8 +14,8 @@
 //! and the change reaches [`raybench_report::stats::MIN_EFFECT`]). A figure without a
 //! reference in both runs is compared on its raw times, which include the machine's drift,
 //! and says so. One pair's interval covers the noise within its two runs, not the drift
-//! between them, so over several pairs a change is claimed only where every pair claims it
-//! ([`agreed`]).
+//! between them, so several pairs are taken together ([`pooled`]): the geometric mean of
+//! their changes, with an interval from their spread.
 
 use raybench_report::stats::{self, Change};
 use serde_json::Value;
@@ -287,7 +287,7 @@ pub fn markdown(figures: &[Figure], before: &str, after: &str) -> String {
                 f.mesh
             );
         }
-        let interval = interval_text(f);
+        let interval = bracketed(f.interval);
         let (reference, scale) = match &f.reference {
             Some(r) => (r.as_str(), 1.0),
             None => ("(raw times)", f.before),
@@ -306,10 +306,9 @@ pub fn markdown(figures: &[Figure], before: &str, after: &str) -> String {
     s
 }
 
-/// A figure's interval as the tables write it (` [lo-hi]`), or nothing.
-fn interval_text(f: &Figure) -> String {
-    f.interval
-        .map_or_else(String::new, |[lo, hi]| format!(" [{lo:.2}-{hi:.2}]"))
+/// An interval as the tables write it (` [lo-hi]`), or nothing.
+fn bracketed(interval: Option<[f64; 2]>) -> String {
+    interval.map_or_else(String::new, |[lo, hi]| format!(" [{lo:.2}-{hi:.2}]"))
 }
 
 /// The figures measured in every one of several pairs of runs (each pair's [`diff`]),
@@ -334,27 +333,40 @@ pub fn across(pairs: &[Vec<Figure>]) -> Vec<Vec<Figure>> {
         .collect()
 }
 
-/// What several pairs' verdicts on one figure say together: a change only where every
-/// pair claims it.
+/// Several pairs' changes of one figure taken together.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pooled {
+    /// The geometric mean of the pairs' changes (above 1: faster).
+    pub change: f64,
+    /// Its interval by Student's t over the pairs ([`stats::replicate_ratio`]); `None`
+    /// with fewer than two pairs.
+    pub interval: Option<[f64; 2]>,
+    /// What the interval says, by the rule of a single pair ([`stats::judge`]).
+    pub verdict: Change,
+}
+
+/// Several pairs' figures of one figure ([`across`]) taken together: each pair gives one
+/// change, and their spread bounds the drift between runs as well as the noise within
+/// them, which one pair's interval leaves out.
 #[must_use]
-pub fn agreed(group: &[Figure]) -> &'static str {
-    let all = |c: Change| group.iter().all(|f| f.verdict == c);
-    let any = |c: Change| group.iter().any(|f| f.verdict == c);
-    if any(Change::Unknown) {
-        "noise unknown"
-    } else if all(Change::Faster) {
-        "faster in every pair"
-    } else if all(Change::Slower) {
-        "slower in every pair"
-    } else if any(Change::Faster) || any(Change::Slower) {
-        "mixed"
-    } else {
-        "within noise"
+pub fn pooled(group: &[Figure]) -> Pooled {
+    let changes: Vec<f64> = group.iter().map(|f| f.change).collect();
+    let (change, interval) = stats::replicate_ratio(&changes);
+    // `judge` reads ratios of times: after over before below 1 is faster.
+    let times = interval.map(|i| stats::Interval {
+        lo: 1.0 / i.hi,
+        hi: 1.0 / i.lo,
+        confidence: i.confidence,
+    });
+    Pooled {
+        change,
+        interval: interval.map(|i| [i.lo, i.hi]),
+        verdict: stats::judge(1.0 / change, times, stats::MIN_EFFECT),
     }
 }
 
 /// Several pairs' figures ([`across`]) as Markdown tables, one per mesh: each pair's change
-/// with its interval, and the verdict they agree on ([`agreed`]).
+/// with its interval, and the pairs taken together ([`pooled`]) with their verdict.
 #[must_use]
 pub fn markdown_across(groups: &[Vec<Figure>], pairs: &[(String, String)]) -> String {
     let mut s = format!(
@@ -368,8 +380,10 @@ pub fn markdown_across(groups: &[Vec<Figure>], pairs: &[(String, String)]) -> St
         s,
         "\nPer figure and pair, the change of the contestant's speed relative to a reference \
          timed in the same rounds, with its {:.0} % bootstrap interval (`+` faster, `-` \
-         slower, by the single-pair rule); a change is claimed only where every pair claims \
-         it.",
+         slower, by that pair alone); across pairs, the geometric mean of the pairs' changes \
+         with its {:.0} % Student t interval over the pairs, which holds the drift between \
+         runs as well as the noise within them, and the verdict it gives.",
+        stats::CONFIDENCE * 100.0,
         stats::CONFIDENCE * 100.0
     );
     let mut mesh = None;
@@ -380,7 +394,7 @@ pub fn markdown_across(groups: &[Vec<Figure>], pairs: &[(String, String)]) -> St
             let _ = write!(
                 s,
                 "\n## {}\n\n| contestant | figure | reference | after / before per pair \
-                 [interval] | verdict |\n|---|---|---|---|---|\n",
+                 [interval] | across pairs [interval] | verdict |\n|---|---|---|---|---|---|\n",
                 f.mesh
             );
         }
@@ -392,18 +406,21 @@ pub fn markdown_across(groups: &[Vec<Figure>], pairs: &[(String, String)]) -> St
                     Change::Slower => " -",
                     Change::Same | Change::Unknown => "",
                 };
-                let interval = interval_text(g);
+                let interval = bracketed(g.interval);
                 format!("{:.3}{interval}{mark}", g.change)
             })
             .collect();
+        let all = pooled(group);
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {:.3}{} | {} |",
             f.contestant,
             f.what,
             f.reference.as_deref().unwrap_or("(raw times)"),
             cells.join("; "),
-            agreed(group)
+            all.change,
+            bracketed(all.interval),
+            all.verdict.label()
         );
     }
     s
@@ -540,30 +557,41 @@ mod tests {
         assert_eq!(of("shadow any, 1 thread"), None);
     }
 
-    /// Over several pairs, a change is claimed only where every pair claims it.
+    /// Several pairs are taken together: a change where their changes agree, whether or
+    /// not each pair's own interval excludes 1, and none where they part ways.
     #[test]
-    fn pairs_agree_or_are_mixed() {
+    fn pairs_are_pooled() {
         let before = run(&[1.00, 1.02, 0.99, 1.01, 1.00], &[1.0; 5]);
         let faster = run(&[0.80, 0.81, 0.79, 0.80, 0.80], &[1.0; 5]);
         let slower = run(&[1.20, 1.21, 1.19, 1.20, 1.20], &[1.0; 5]);
         let d = |a: &Value| diff(&before, a, None).unwrap();
-        let pick = |groups: Vec<Vec<Figure>>| {
-            let g = groups
+        let shadow = |groups: Vec<Vec<Figure>>| {
+            groups
                 .into_iter()
-                .find(|g| g[0].what == "shadow any, 1 thread");
-            agreed(&g.expect("the shadow figure"))
+                .find(|g| g[0].what == "shadow any, 1 thread")
+                .expect("the shadow figure")
         };
-        assert_eq!(
-            pick(across(&[d(&faster), d(&faster)])),
-            "faster in every pair"
-        );
-        assert_eq!(
-            pick(across(&[d(&slower), d(&slower)])),
-            "slower in every pair"
-        );
-        assert_eq!(pick(across(&[d(&faster), d(&slower)])), "mixed");
-        assert_eq!(pick(across(&[d(&faster), d(&before)])), "mixed");
-        assert_eq!(pick(across(&[d(&before), d(&before)])), "within noise");
+        let verdict = |pairs: &[Vec<Figure>]| pooled(&shadow(across(pairs))).verdict;
+        assert_eq!(verdict(&[d(&faster), d(&faster)]), Change::Faster);
+        assert_eq!(verdict(&[d(&slower), d(&slower)]), Change::Slower);
+        assert_eq!(verdict(&[d(&faster), d(&slower)]), Change::Same);
+        assert_eq!(verdict(&[d(&faster), d(&before)]), Change::Same);
+        assert_eq!(verdict(&[d(&before), d(&before)]), Change::Same);
+        // Pairs whose own intervals hold 1 but whose changes agree (Sponza's diffuse any
+        // hits under the fused box test, three pairs), and pairs that part ways.
+        let group = |changes: [f64; 3]| {
+            let one = shadow(across(&[d(&faster)])).remove(0);
+            changes.map(|change| Figure {
+                change,
+                interval: Some([change * 0.9, change * 1.1]),
+                verdict: Change::Same,
+                ..one.clone()
+            })
+        };
+        let agree = pooled(&group([1.10, 1.12, 1.17]));
+        assert_eq!(agree.verdict, Change::Faster, "{agree:?}");
+        assert!((agree.change - (1.10f64 * 1.12 * 1.17).cbrt()).abs() < 1e-12);
+        assert_eq!(pooled(&group([0.99, 1.135, 1.27])).verdict, Change::Same);
         let groups = across(&[d(&faster), d(&slower)]);
         let names = [
             ("b1".to_string(), "a1".to_string()),
@@ -571,7 +599,7 @@ mod tests {
         ];
         let text = markdown_across(&groups, &names);
         assert!(
-            text.contains("| packet | shadow any, 1 thread | embree1-default | 1.250 [1.23-1.27] +; 0.833 [0.82-0.85] - | mixed |"),
+            text.contains("| packet | shadow any, 1 thread | embree1-default | 1.250 [1.23-1.27] +; 0.833 [0.82-0.85] - | 1.021 [0.08-13.41] | within noise |"),
             "{text}"
         );
         // A figure missing from one pair is left out.
