@@ -19,9 +19,9 @@
 //!   SIMD test of eight children, nearest first (the nearest visited next without the
 //!   stack; for any hits the child in the highest slot, see the layout's slot order),
 //!   children prefetched, one SIMD test per block of four triangles; a batch's
-//!   incoherent rays go two at a time (four when the BVH8 exceeds the last-level cache),
-//!   interleaved step by step so that their memory waits overlap (`stream.rs`,
-//!   [`Interleave`]).
+//!   incoherent rays go one at a time, or, when the BVH8 exceeds the last-level cache,
+//!   four at a time interleaved step by step so that their memory waits overlap
+//!   (`stream.rs`, [`Interleave`]).
 //! - **Instruction sets chosen at run time** ([`Isa::detect`]): AVX2, else SSE4.1, else
 //!   portable code (four plain `f32` lanes, the fallback on any target). The same generic
 //!   kernels are instantiated once per instruction set inside a `#[target_feature]`
@@ -249,14 +249,16 @@ impl Bvh2Builder {
 }
 
 /// How many of a batch's incoherent rays (those not traced as packets) are in flight at
-/// once, advanced one traversal step each in turn so that their memory waits overlap. Any
-/// choice gives the same hits; only the speed differs.
+/// once: one, or several advanced one traversal step each in turn so that their memory
+/// waits overlap. Any choice gives the same hits; only the speed differs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Interleave {
-    /// Two when the BVH8 fits the last-level cache, four when it does not (the faster of
-    /// the two on each side of that line, by the peer benchmark).
+    /// One when the BVH8 fits the last-level cache, four when it does not (the faster on
+    /// each side of that line, by the peer benchmark: see [`stream`]'s documentation).
     #[default]
     Auto,
+    /// Each ray alone, through the single-ray loop, whose state stays in registers.
+    One,
     /// Two rays.
     Two,
     /// Four rays.
@@ -280,7 +282,8 @@ pub struct PacketAccel {
     geometry: Arc<Geometry>,
     layout: Layout,
     params: PacketParams,
-    /// Incoherent rays in flight at once ([`stream::NARROW`] or [`stream::WIDE`]).
+    /// Incoherent rays in flight at once ([`stream::ONE`], [`stream::NARROW`] or
+    /// [`stream::WIDE`]).
     streams: usize,
 }
 
@@ -296,6 +299,7 @@ impl PacketAccel {
         let layout = Layout::new(&bvh, &geometry);
         let streams = match params.interleave {
             Interleave::Auto => stream::width(layout.memory_bytes()),
+            Interleave::One => stream::ONE,
             Interleave::Two => stream::NARROW,
             Interleave::Four => stream::WIDE,
         };
@@ -346,7 +350,7 @@ fn batch_closest<L: Lanes, const K: usize, C: Counters>(
     }
     let mut stack = [(0, 0.0); single::STACK];
     let mut packet_stack: packet::PacketStack<K> = [(0, 0.0, [0; K]); single::STACK];
-    // Rays that do not form coherent packets, traced interleaved afterwards.
+    // Rays that do not form coherent packets, traced afterwards (see `stream::width`).
     let mut pending = Vec::new();
     for (start, chunk) in (0..).step_by(size).zip(rays.chunks(size)) {
         let end = start + chunk.len();
@@ -364,25 +368,38 @@ fn batch_closest<L: Lanes, const K: usize, C: Counters>(
             None => pending.extend(start..end),
         }
     }
-    if !pending.is_empty() {
-        if accel.streams == stream::WIDE {
-            stream::closest::<L, C, { stream::WIDE }>(
-                &accel.layout,
-                g,
-                rays,
-                &pending,
-                &mut best,
-                counters,
-            );
-        } else {
-            stream::closest::<L, C, { stream::NARROW }>(
-                &accel.layout,
-                g,
-                rays,
-                &pending,
-                &mut best,
-                counters,
-            );
+    // A plain `match`, not a closure: a closure in a kernel is compiled as a function of
+    // its own, without the kernel's instruction set.
+    match accel.streams {
+        _ if pending.is_empty() => {}
+        stream::WIDE => stream::closest::<L, C, { stream::WIDE }>(
+            &accel.layout,
+            g,
+            rays,
+            &pending,
+            &mut best,
+            counters,
+        ),
+        stream::NARROW => stream::closest::<L, C, { stream::NARROW }>(
+            &accel.layout,
+            g,
+            rays,
+            &pending,
+            &mut best,
+            counters,
+        ),
+        _ => {
+            for &i in &pending {
+                best[i] = single::closest::<L, C>(
+                    &accel.layout,
+                    g,
+                    &rays[i],
+                    0,
+                    best[i],
+                    &mut stack,
+                    counters,
+                );
+            }
         }
     }
     for ((ray, b), hit) in rays.iter().zip(best).zip(hits) {
@@ -402,7 +419,7 @@ fn batch_occluded<L: Lanes, const K: usize, C: Counters>(
     let size = K * L::W;
     let mut stack = [(0, 0.0); single::STACK];
     let mut packet_stack: packet::AnyStack<K> = [(0, [0; K]); single::STACK];
-    // Rays that do not form coherent packets, traced interleaved afterwards.
+    // Rays that do not form coherent packets, traced afterwards (see `stream::width`).
     let mut pending = Vec::new();
     for (start, (chunk, out)) in (0..)
         .step_by(size)
@@ -432,25 +449,29 @@ fn batch_occluded<L: Lanes, const K: usize, C: Counters>(
             ),
         }
     }
-    if !pending.is_empty() {
-        if accel.streams == stream::WIDE {
-            stream::occluded::<L, C, { stream::WIDE }>(
-                &accel.layout,
-                g,
-                rays,
-                &pending,
-                occluded,
-                counters,
-            );
-        } else {
-            stream::occluded::<L, C, { stream::NARROW }>(
-                &accel.layout,
-                g,
-                rays,
-                &pending,
-                occluded,
-                counters,
-            );
+    match accel.streams {
+        _ if pending.is_empty() => {}
+        stream::WIDE => stream::occluded::<L, C, { stream::WIDE }>(
+            &accel.layout,
+            g,
+            rays,
+            &pending,
+            occluded,
+            counters,
+        ),
+        stream::NARROW => stream::occluded::<L, C, { stream::NARROW }>(
+            &accel.layout,
+            g,
+            rays,
+            &pending,
+            occluded,
+            counters,
+        ),
+        _ => {
+            for &i in &pending {
+                occluded[i] =
+                    single::occluded::<L, C>(&accel.layout, g, &rays[i], 0, &mut stack, counters);
+            }
         }
     }
 }

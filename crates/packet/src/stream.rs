@@ -1,5 +1,6 @@
-//! Incoherent single rays traced a few at a time ([`width`]), interleaved one traversal
-//! step each.
+//! Incoherent single rays traced a few at a time, interleaved one traversal step each,
+//! where the structure exceeds the last-level cache ([`width`]; where it fits, each ray
+//! walks alone).
 //!
 //! One incoherent ray is a chain of dependent loads: the nearest child's node is read as soon
 //! as its parent's test is done, so each step waits for memory (the profile of the PEERS.md
@@ -10,12 +11,15 @@
 //! width.
 //!
 //! The overlap has a price: the rays' state no longer fits the registers and their branches
-//! interleave. Measured with the peer benchmark on a 2-vCPU Intel Xeon (2026-12-05, against
-//! Embree's single rays in the same run), two rays in flight beat four on every mesh whose
-//! BVH8 fits the last-level cache (the five meshes up to the million-triangle terrain:
-//! geometric mean 1.07x over the incoherent, shadow, ao and diffuse sets, up to 1.35x on
-//! Sponza's ao rays), while four beat two by up to 20% on a 12.6-million-triangle scene
-//! whose 820 MB do not fit it (480 MB there). [`width`] chooses by that rule.
+//! interleave. Where the structure fits the last-level cache the price is the larger: on a
+//! 2-vCPU AMD EPYC Zen 4 guest (2026-12-07, peer benchmark, three alternating pairs judged
+//! against Embree's single rays in the same rounds), each ray walking alone through
+//! [`crate::single`]'s loop instead of two in flight traced Sponza's ao and diffuse rays
+//! 1.20x to 1.22x as fast and its incoherent any hits 1.13x, and left the bunny within the
+//! noise; where it does not fit (the terrain's BVH8 on that guest), four in flight stay
+//! 1.44x as fast as one on incoherent closest hits. (On a 2-vCPU Intel Xeon, 2026-12-05,
+//! four beat two by up to 20% on a 12.6-million-triangle scene whose 820 MB do not fit.)
+//! [`width`] chooses by that rule; two in flight remain as an explicit choice.
 
 use crate::layout::{LEAF_BIT, Layout, LeafRef};
 use crate::simd::Lanes;
@@ -23,22 +27,26 @@ use crate::single::{self, AnyStep, STACK, Stack, WideRay};
 use crate::tri::SplatRay;
 use raybench_geometry::{Counters, Geometry, NodeStack, PrimHit, Ray, cull_bound};
 
-/// Rays in flight when the structure fits the last-level cache.
+/// Rays in flight when the structure fits the last-level cache: each ray alone, through
+/// [`single::closest`] and [`single::occluded`], whose state stays in registers.
+pub(crate) const ONE: usize = 1;
+
+/// Two rays in flight (chosen explicitly only).
 pub(crate) const NARROW: usize = 2;
 
-/// Rays in flight when it does not.
+/// Rays in flight when the structure exceeds the last-level cache.
 pub(crate) const WIDE: usize = 4;
 
 /// Last-level cache size assumed where the system does not say (Linux's sysfs is read).
 const DEFAULT_CACHE: usize = 32 << 20;
 
 /// Rays in flight for a structure of `bytes`: [`WIDE`] when it exceeds the last-level cache,
-/// else [`NARROW`].
+/// else [`ONE`].
 pub(crate) fn width(bytes: usize) -> usize {
     if bytes > last_level_cache() {
         WIDE
     } else {
-        NARROW
+        ONE
     }
 }
 
@@ -295,8 +303,8 @@ mod tests {
 
     #[test]
     fn a_structure_beyond_the_cache_gets_the_wide_stream() {
-        assert_eq!(width(0), NARROW);
-        assert_eq!(width(last_level_cache()), NARROW);
+        assert_eq!(width(0), ONE);
+        assert_eq!(width(last_level_cache()), ONE);
         assert_eq!(width(last_level_cache() + 1), WIDE);
     }
 }

@@ -216,11 +216,11 @@ fn avx2_matches_naive() {
 }
 
 /// Every ray alone, two and four in flight (the test meshes fit any cache, so `Auto` alone
-/// would never take the wide path).
+/// would never take the interleaved paths).
 #[test]
 fn every_interleave_matches_naive() {
     let isa = Isa::detect();
-    for interleave in [Interleave::Two, Interleave::Four] {
+    for interleave in [Interleave::One, Interleave::Two, Interleave::Four] {
         check(PacketParams {
             isa,
             packets: false,

@@ -261,7 +261,7 @@ const BVH: &str =
 const OBVHS: &str = "obvhs crate: PLOC + reinsertion, compressed wide CWBVH8, obvhs traversal";
 const GRID: &str = "uniform grid walked by 3D-DDA (ray marching), mailboxing";
 const GRID2: &str = "two-level grid: crowded cells hold their own grid";
-const PACKET: &str = "SIMD over a BVH8 collapsed by SAH, leaves of 4-triangle blocks: 64-ray packets for coherent rays, interleaved single rays otherwise (AVX2, SSE4.1 or portable, picked at run time; RAYBENCH_ISA overrides)";
+const PACKET: &str = "SIMD over a BVH8 collapsed by SAH, leaves of 4-triangle blocks: 64-ray packets for coherent rays, single rays otherwise (four interleaved where the BVH8 exceeds the last-level cache) (AVX2, SSE4.1 or portable, picked at run time; RAYBENCH_ISA overrides)";
 
 /// Every backend, the oracle (naive) first.
 ///
