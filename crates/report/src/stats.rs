@@ -269,9 +269,8 @@ fn t_975(df: usize) -> f64 {
 /// t over their logarithms. Each replicate's ratio carries the noise within its runs and
 /// the drift between them, so the spread of the replicates bounds both, where a bootstrap
 /// of one replicate's rounds sees only the first. The t interval takes the logarithms as
-/// normal; with few replicates it is wide (t = 4.30 for three), and it needs no more
-/// replicates than that to say anything. The interval is `None` with fewer than two
-/// ratios or any that is not positive and finite.
+/// normal; with few replicates it is wide (t = 12.71 for two, 4.30 for three). The
+/// interval is `None` with fewer than two ratios or any that is not positive and finite.
 #[must_use]
 pub fn replicate_ratio(ratios: &[f64]) -> (f64, Option<Interval>) {
     if ratios.is_empty() || ratios.iter().any(|r| !(r.is_finite() && *r > 0.0)) {
@@ -369,7 +368,7 @@ mod tests {
         // Replicates that disagree: the interval holds 1.
         let (_, i) = replicate_ratio(&[0.99, 1.135, 1.27]);
         assert!(i.expect("an interval").contains(1.0));
-        // Two replicates alike read the same as one alike three times, but wider.
+        // The same spread over fewer replicates: a wider interval.
         let two = replicate_ratio(&[1.05, 1.15]).1.expect("an interval");
         let four = replicate_ratio(&[1.05, 1.15, 1.05, 1.15])
             .1
