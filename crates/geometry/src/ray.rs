@@ -8,7 +8,13 @@ use glam::Vec3;
 /// shear constants of the watertight triangle test (Woop, Benthin and Wald, JCGT 2013), so
 /// that each triangle test does no per-ray work. Build rays with [`Ray::new`] or
 /// [`Ray::with_interval`]; the fields stay public for reading.
+///
+/// The layout is C's, with every `f32` first: `origin`, `dir`, `inv_dir`, `t_min`, `t_max`
+/// and `shear` are the ray's first fourteen floats, in that order ([`Ray::FLOATS`]), so
+/// SIMD code can load several consecutive fields of a ray at once and transpose rays into
+/// lanes without a round trip through memory.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 pub struct Ray {
     /// Where the ray starts.
     pub origin: Vec3,
@@ -20,6 +26,8 @@ pub struct Ray {
     pub t_min: f32,
     /// Hits farther than this are ignored.
     pub t_max: f32,
+    /// Watertight test: shear constants `(dir[kx] / dir[kz], dir[ky] / dir[kz], 1 / dir[kz])`.
+    pub shear: Vec3,
     /// Watertight test: the axis along which `dir` has its largest magnitude.
     pub kz: u8,
     /// Watertight test: the first of the other two axes (swapped when `dir[kz] < 0`, which
@@ -27,11 +35,25 @@ pub struct Ray {
     pub kx: u8,
     /// Watertight test: the second of the other two axes.
     pub ky: u8,
-    /// Watertight test: shear constants `(dir[kx] / dir[kz], dir[ky] / dir[kz], 1 / dir[kz])`.
-    pub shear: Vec3,
 }
 
+// The layout [`Ray`] documents: its floats first, without padding.
+const _: () = {
+    use std::mem::offset_of;
+    assert!(offset_of!(Ray, origin) == 0);
+    assert!(offset_of!(Ray, dir) == 12);
+    assert!(offset_of!(Ray, inv_dir) == 24);
+    assert!(offset_of!(Ray, t_min) == 36);
+    assert!(offset_of!(Ray, t_max) == 40);
+    assert!(offset_of!(Ray, shear) == 44);
+    assert!(offset_of!(Ray, kz) == 4 * Ray::FLOATS);
+};
+
 impl Ray {
+    /// How many `f32`s the ray starts with (`origin`, `dir`, `inv_dir`, `t_min`, `t_max`,
+    /// `shear`, in that order, without padding).
+    pub const FLOATS: usize = 14;
+
     /// A ray over `[0, inf)`.
     #[inline]
     #[must_use]

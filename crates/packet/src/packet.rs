@@ -17,7 +17,7 @@
 //! coherent in that sense takes the single-ray path lane by lane.
 
 use crate::layout::{EMPTY_CHILD, LEAF_BIT, Layout, LeafRef, WIDE, WideNode, core_triangle};
-use crate::simd::{Lanes, lanes_below};
+use crate::simd::{Lanes, lanes_below, ray_rows};
 use crate::single::{
     self, BitIter, FAR_SCALE, HitValues, STACK, Stack, block_closest, scalar_lanes,
 };
@@ -243,7 +243,6 @@ type Chunks<L, const K: usize> = [(SlabLanes<L>, <L as Lanes>::V, u32); K];
 #[inline(always)]
 fn split<L: Lanes, const K: usize>(rays: &[Ray]) -> Chunks<L, K> {
     let n = rays.len();
-    let mut buf = [[0.0f32; 16]; 8];
     let mut out = [(
         SlabLanes {
             origin: [L::splat(0.0); 3],
@@ -256,29 +255,17 @@ fn split<L: Lanes, const K: usize>(rays: &[Ray]) -> Chunks<L, K> {
     for (k, chunk) in out.iter_mut().enumerate() {
         let lo = (k * L::W).min(n - 1);
         let part = &rays[lo..n.min(lo + L::W).max(lo + 1)];
-        for lane in 0..L::W {
-            let r = &part[lane.min(part.len() - 1)];
-            let vals = [
-                r.origin.x,
-                r.origin.y,
-                r.origin.z,
-                r.inv_dir.x,
-                r.inv_dir.y,
-                r.inv_dir.z,
-                r.t_max,
-                r.t_min,
-            ];
-            for (b, v) in buf.iter_mut().zip(vals) {
-                b[lane] = v;
-            }
-        }
+        let (head, tail) = ray_rows::<L>(part);
+        // Columns of floats 0..8 (origin, dir, inv_dir.x, .y) and 6..14 (inv_dir, t_min,
+        // t_max, shear).
+        let (a, b) = (L::columns8(&head), L::columns8(&tail));
         *chunk = (
             SlabLanes {
-                origin: [L::load(&buf[0]), L::load(&buf[1]), L::load(&buf[2])],
-                inv: [L::load(&buf[3]), L::load(&buf[4]), L::load(&buf[5])],
-                t_min: L::load(&buf[7]),
+                origin: [a[0], a[1], a[2]],
+                inv: [a[6], a[7], b[2]],
+                t_min: b[3],
             },
-            L::load(&buf[6]),
+            b[4],
             if k * L::W < n {
                 lanes_below::<L>(n - k * L::W)
             } else {

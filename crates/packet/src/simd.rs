@@ -10,6 +10,8 @@
 //! *second* is returned. The box tests rely on that to leave an axis unconstrained when
 //! `0 * inf` makes its distance NaN (see `raybench_geometry::SlabRay`).
 
+use raybench_geometry::Ray;
+
 /// A vector of `W` `f32` lanes and its lane masks.
 pub(crate) trait Lanes: Copy + Send + Sync + 'static {
     /// Lanes per vector.
@@ -54,6 +56,51 @@ pub(crate) trait Lanes: Copy + Send + Sync + 'static {
     fn bits(m: Self::M) -> u32;
     /// The mask whose lane `i` is bit `i` of `bits`.
     fn mask(bits: u32) -> Self::M;
+    /// The eight columns of the `W x 8` matrix whose row `i` is `rows[i]` (`rows` holds at
+    /// least `W`): vector `j` holds element `j` of every row. It turns eight consecutive
+    /// fields of `W` rays ([`ray_rows`]) into lanes with vector loads and shuffles; storing
+    /// the fields one float at a time and loading them back as vectors stalls every load
+    /// on store forwarding.
+    fn columns8(rows: &[&[f32; 8]]) -> [Self::V; 8];
+}
+
+/// The first [`Ray::FLOATS`] floats of `ray` as one array (`origin`, `dir`, `inv_dir`,
+/// `t_min`, `t_max`, `shear`).
+#[allow(unsafe_code)]
+#[inline(always)]
+pub(crate) fn ray_floats(ray: &Ray) -> &[f32; Ray::FLOATS] {
+    const {
+        assert!(std::mem::size_of::<Ray>() >= 4 * Ray::FLOATS);
+        assert!(std::mem::offset_of!(Ray, shear) + 12 == 4 * Ray::FLOATS);
+    }
+    // SAFETY: `Ray` is `repr(C)` and starts with `Ray::FLOATS` `f32` fields and no padding
+    // (asserted where it is declared, and its size above), so the array covers initialised
+    // floats inside the ray, aligned as `f32`, and borrows it for its own lifetime.
+    unsafe { &*std::ptr::from_ref(ray).cast::<[f32; Ray::FLOATS]>() }
+}
+
+/// For each lane of a packet vector, its ray's floats `0..8` (`origin`, `dir`, `inv_dir.x`,
+/// `inv_dir.y`) and `6..14` (`inv_dir`, `t_min`, `t_max`, `shear`), the rows
+/// [`Lanes::columns8`] transposes; lanes past the end of `rays` repeat its last ray.
+#[inline(always)]
+pub(crate) fn ray_rows<L: Lanes>(rays: &[Ray]) -> ([&[f32; 8]; 16], [&[f32; 8]; 16]) {
+    let last = ray_floats(&rays[rays.len() - 1]);
+    let (mut head, mut tail) = ([first8(last); 16], [last8(last); 16]);
+    for (lane, ray) in rays.iter().take(L::W).enumerate() {
+        let f = ray_floats(ray);
+        (head[lane], tail[lane]) = (first8(f), last8(f));
+    }
+    (head, tail)
+}
+
+#[inline(always)]
+fn first8(f: &[f32; Ray::FLOATS]) -> &[f32; 8] {
+    f.first_chunk().expect("a ray has more than eight floats")
+}
+
+#[inline(always)]
+fn last8(f: &[f32; Ray::FLOATS]) -> &[f32; 8] {
+    f.last_chunk().expect("a ray has more than eight floats")
 }
 
 /// Portable lanes: four plain `f32`s, compiled for the baseline target.
@@ -144,6 +191,10 @@ impl Lanes for Portable {
     #[inline(always)]
     fn mask(bits: u32) -> Self::M {
         std::array::from_fn(|i| bits & (1 << i) != 0)
+    }
+    #[inline(always)]
+    fn columns8(rows: &[&[f32; 8]]) -> [Self::V; 8] {
+        std::array::from_fn(|j| std::array::from_fn(|i| rows[i][j]))
     }
 }
 
@@ -292,6 +343,27 @@ mod x86 {
             let m = intrinsic!(_mm_cmpeq_epi32(_mm_and_si128(b, lanes), lanes));
             intrinsic!(_mm_castsi128_ps(m))
         }
+        #[inline(always)]
+        fn columns8(rows: &[&[f32; 8]]) -> [Self::V; 8] {
+            let rows = &rows[..4];
+            let mut out = [Self::splat(0.0); 8];
+            for half in 0..2 {
+                let r0 = Self::load(&rows[0][4 * half..]);
+                let r1 = Self::load(&rows[1][4 * half..]);
+                let r2 = Self::load(&rows[2][4 * half..]);
+                let r3 = Self::load(&rows[3][4 * half..]);
+                // (r0[0] r1[0] r0[1] r1[1]), (r2[0] r3[0] r2[1] r3[1]), and the same of 2, 3.
+                let t0 = intrinsic!(_mm_unpacklo_ps(r0, r1));
+                let t1 = intrinsic!(_mm_unpacklo_ps(r2, r3));
+                let t2 = intrinsic!(_mm_unpackhi_ps(r0, r1));
+                let t3 = intrinsic!(_mm_unpackhi_ps(r2, r3));
+                out[4 * half] = intrinsic!(_mm_movelh_ps(t0, t1));
+                out[4 * half + 1] = intrinsic!(_mm_movehl_ps(t1, t0));
+                out[4 * half + 2] = intrinsic!(_mm_movelh_ps(t2, t3));
+                out[4 * half + 3] = intrinsic!(_mm_movehl_ps(t3, t2));
+            }
+            out
+        }
     }
 
     /// AVX2: eight lanes in `__m256`.
@@ -386,6 +458,49 @@ mod x86 {
             let m = intrinsic!(_mm256_cmpeq_epi32(_mm256_and_si256(b, lanes), lanes));
             intrinsic!(_mm256_castsi256_ps(m))
         }
+        #[inline(always)]
+        fn columns8(rows: &[&[f32; 8]]) -> [Self::V; 8] {
+            let rows = &rows[..8];
+            let r: [__m256; 8] = [
+                Self::load(rows[0]),
+                Self::load(rows[1]),
+                Self::load(rows[2]),
+                Self::load(rows[3]),
+                Self::load(rows[4]),
+                Self::load(rows[5]),
+                Self::load(rows[6]),
+                Self::load(rows[7]),
+            ];
+            // Pairs of rows interleaved: (a[0] b[0] a[1] b[1] | a[4] b[4] a[5] b[5]) and
+            // (a[2] b[2] a[3] b[3] | a[6] b[6] a[7] b[7]).
+            let t0 = intrinsic!(_mm256_unpacklo_ps(r[0], r[1]));
+            let t1 = intrinsic!(_mm256_unpackhi_ps(r[0], r[1]));
+            let t2 = intrinsic!(_mm256_unpacklo_ps(r[2], r[3]));
+            let t3 = intrinsic!(_mm256_unpackhi_ps(r[2], r[3]));
+            let t4 = intrinsic!(_mm256_unpacklo_ps(r[4], r[5]));
+            let t5 = intrinsic!(_mm256_unpackhi_ps(r[4], r[5]));
+            let t6 = intrinsic!(_mm256_unpacklo_ps(r[6], r[7]));
+            let t7 = intrinsic!(_mm256_unpackhi_ps(r[6], r[7]));
+            // Columns j and j + 4 of four rows: u0 holds 0 | 4, u1 1 | 5, u2 2 | 6, u3 3 | 7.
+            let u0 = intrinsic!(_mm256_shuffle_ps::<0x44>(t0, t2));
+            let u1 = intrinsic!(_mm256_shuffle_ps::<0xEE>(t0, t2));
+            let u2 = intrinsic!(_mm256_shuffle_ps::<0x44>(t1, t3));
+            let u3 = intrinsic!(_mm256_shuffle_ps::<0xEE>(t1, t3));
+            let u4 = intrinsic!(_mm256_shuffle_ps::<0x44>(t4, t6));
+            let u5 = intrinsic!(_mm256_shuffle_ps::<0xEE>(t4, t6));
+            let u6 = intrinsic!(_mm256_shuffle_ps::<0x44>(t5, t7));
+            let u7 = intrinsic!(_mm256_shuffle_ps::<0xEE>(t5, t7));
+            [
+                intrinsic!(_mm256_permute2f128_ps::<0x20>(u0, u4)),
+                intrinsic!(_mm256_permute2f128_ps::<0x20>(u1, u5)),
+                intrinsic!(_mm256_permute2f128_ps::<0x20>(u2, u6)),
+                intrinsic!(_mm256_permute2f128_ps::<0x20>(u3, u7)),
+                intrinsic!(_mm256_permute2f128_ps::<0x31>(u0, u4)),
+                intrinsic!(_mm256_permute2f128_ps::<0x31>(u1, u5)),
+                intrinsic!(_mm256_permute2f128_ps::<0x31>(u2, u6)),
+                intrinsic!(_mm256_permute2f128_ps::<0x31>(u3, u7)),
+            ]
+        }
     }
 
     /// AVX-512F: sixteen lanes in `__m512`, masks in `__mmask16` (a measured extra: its
@@ -478,6 +593,17 @@ mod x86 {
         fn mask(bits: u32) -> Self::M {
             bits as u16
         }
+        #[inline(always)]
+        fn columns8(rows: &[&[f32; 8]]) -> [Self::V; 8] {
+            let (lo, hi) = (Avx2::columns8(&rows[..8]), Avx2::columns8(&rows[8..16]));
+            let mut out = [Self::splat(0.0); 8];
+            for (o, (lo, hi)) in out.iter_mut().zip(lo.into_iter().zip(hi)) {
+                let wide = intrinsic!(_mm512_castpd256_pd512(_mm256_castps_pd(lo)));
+                let both = intrinsic!(_mm512_insertf64x4::<1>(wide, _mm256_castps_pd(hi)));
+                *o = intrinsic!(_mm512_castpd_ps(both));
+            }
+            out
+        }
     }
 }
 
@@ -535,6 +661,60 @@ mod tests {
         assert_eq!(L::bits(L::andnot(L::mask(0b11), L::mask(0b110))), 0b100);
         assert_eq!(L::bits(L::or(L::mask(0b1), L::mask(0b10))), 0b11);
         assert_eq!(L::bits(L::and(L::mask(0b11), L::mask(0b10))), 0b10);
+        // Transposes: row i, column j holds 100 i + j (a NaN in one place, kept as is).
+        let rows: Vec<[f32; 8]> = (0..16)
+            .map(|i| {
+                std::array::from_fn(|j| {
+                    if i == 3 && j == 5 {
+                        f32::NAN
+                    } else {
+                        (100 * i + j) as f32
+                    }
+                })
+            })
+            .collect();
+        let refs: Vec<&[f32; 8]> = rows.iter().collect();
+        for (j, column) in L::columns8(&refs).into_iter().enumerate() {
+            L::store(column, &mut out);
+            for (i, row) in rows.iter().take(L::W).enumerate() {
+                assert_eq!(out[i].to_bits(), row[j].to_bits(), "column {j} row {i}");
+            }
+        }
+    }
+
+    /// The rows of a packet's rays are their fields, in the documented order, and lanes
+    /// past the last ray repeat it.
+    #[test]
+    fn ray_rows_hold_the_fields() {
+        use raybench_geometry::Vec3;
+        let rays = [
+            Ray::with_interval(
+                Vec3::new(1.0, 2.0, 3.0),
+                Vec3::new(0.5, -4.0, 2.0),
+                0.25,
+                9.0,
+            ),
+            Ray::with_interval(
+                Vec3::new(-1.0, 0.0, 7.0),
+                Vec3::new(-2.0, 1.0, 8.0),
+                0.0,
+                3.0,
+            ),
+        ];
+        let (head, tail) = ray_rows::<Portable>(&rays);
+        for (lane, r) in [&rays[0], &rays[1], &rays[1], &rays[1]]
+            .into_iter()
+            .enumerate()
+        {
+            let mut want = [0.0; 14];
+            want[..3].copy_from_slice(&r.origin.to_array());
+            want[3..6].copy_from_slice(&r.dir.to_array());
+            want[6..9].copy_from_slice(&r.inv_dir.to_array());
+            (want[9], want[10]) = (r.t_min, r.t_max);
+            want[11..].copy_from_slice(&r.shear.to_array());
+            assert_eq!(head[lane][..], want[..8], "lane {lane}");
+            assert_eq!(tail[lane][..], want[6..], "lane {lane}");
+        }
     }
 
     #[test]

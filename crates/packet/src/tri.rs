@@ -8,7 +8,7 @@
 //! `zero` and the caller hands them to the scalar routine itself.
 
 use crate::layout::{BLOCK, TriBlock};
-use crate::simd::{Lanes, lanes_below};
+use crate::simd::{Lanes, ray_rows};
 
 /// Per-lane results of a triangle test.
 #[derive(Clone, Copy)]
@@ -71,8 +71,11 @@ impl<L: Lanes> SplatRay<L> {
 pub(crate) struct RayLanes<L: Lanes> {
     pub origin: [L::V; 3],
     pub shear: [L::V; 3],
-    /// `is[k][a]`: lanes whose permuted axis `k` (x, y, z) is axis `a` (for `a` = 0, 1).
-    pub is: [[L::M; 2]; 3],
+    /// `is[k][a]`: bits of the lanes whose permuted axis `k` (x, y, z) is axis `a` (for
+    /// `a` = 0, 1); read only when the permutation is not `uniform`. (Bits, not masks: the
+    /// packet's `K` of these are made at its first leaf, and six mask vectors each made
+    /// them a third larger to write.)
+    pub is: [[u32; 2]; 3],
     /// The permutation when every lane has the same one (primary rays almost always do):
     /// then it is applied by indexing, without selects.
     pub uniform: Option<[usize; 3]>,
@@ -83,60 +86,57 @@ impl<L: Lanes> RayLanes<L> {
     /// Lanes `rays[0..W]`; missing rays are padded with the last one.
     #[inline(always)]
     pub fn new(rays: &[raybench_geometry::Ray]) -> Self {
-        let mut buf = [[0.0f32; 16]; 7];
-        let mut k = [[0u32; 3]; 2];
-        for lane in 0..L::W {
-            let r = &rays[lane.min(rays.len() - 1)];
-            let vals = [
-                r.origin.x, r.origin.y, r.origin.z, r.shear.x, r.shear.y, r.shear.z, r.t_min,
-            ];
-            for (b, v) in buf.iter_mut().zip(vals) {
-                b[lane] = v;
-            }
-            for (slot, kk) in [r.kx, r.ky, r.kz].into_iter().enumerate() {
-                for (a, bits) in k.iter_mut().enumerate() {
-                    if usize::from(kk) == a {
-                        bits[slot] |= 1 << lane;
+        let (head, tail) = ray_rows::<L>(rays);
+        // Columns of floats 0..8 (origin, dir, inv_dir.x, .y) and 6..14 (inv_dir, t_min,
+        // t_max, shear).
+        let (a, b) = (L::columns8(&head), L::columns8(&tail));
+        let perm = |r: &raybench_geometry::Ray| [r.kx, r.ky, r.kz];
+        let first = perm(&rays[0]);
+        let lanes = &rays[..rays.len().min(L::W)];
+        let (is, uniform) = if lanes.iter().all(|r| perm(r) == first) {
+            // One permutation (primary and shadow rays almost always): no per-lane bits.
+            ([[0; 2]; 3], Some(first.map(|a| usize::from(a) % 3)))
+        } else {
+            let mut is = [[0u32; 2]; 3];
+            for lane in 0..L::W {
+                let r = &rays[lane.min(rays.len() - 1)];
+                for (slot, kk) in perm(r).into_iter().enumerate() {
+                    for (a, bits) in is[slot].iter_mut().enumerate() {
+                        if usize::from(kk) == a {
+                            *bits |= 1 << lane;
+                        }
                     }
                 }
             }
-        }
+            (is, None)
+        };
         Self {
-            origin: [L::load(&buf[0]), L::load(&buf[1]), L::load(&buf[2])],
-            shear: [L::load(&buf[3]), L::load(&buf[4]), L::load(&buf[5])],
-            is: [
-                [L::mask(k[0][0]), L::mask(k[1][0])],
-                [L::mask(k[0][1]), L::mask(k[1][1])],
-                [L::mask(k[0][2]), L::mask(k[1][2])],
-            ],
-            uniform: {
-                let all = lanes_below::<L>(L::W);
-                let axis_of = |slot: usize| {
-                    if k[0][slot] == all {
-                        Some(0)
-                    } else if k[1][slot] == all {
-                        Some(1)
-                    } else if (k[0][slot] | k[1][slot]) == 0 {
-                        Some(2)
-                    } else {
-                        None
-                    }
-                };
-                match (axis_of(0), axis_of(1), axis_of(2)) {
-                    (Some(x), Some(y), Some(z)) => Some([x, y, z]),
-                    _ => None,
-                }
-            },
-            t_min: L::load(&buf[6]),
+            origin: [a[0], a[1], a[2]],
+            shear: [b[5], b[6], b[7]],
+            is,
+            uniform,
+            t_min: b[3],
         }
     }
 
-    /// Component `slot` (0 = kx, 1 = ky, 2 = kz) of `a` under each lane's permutation.
+    /// The masks of `is`.
     #[inline(always)]
-    fn pick(&self, a: &[L::V; 3], slot: usize) -> L::V {
-        let [is0, is1] = self.is[slot];
-        L::select(is0, a[0], L::select(is1, a[1], a[2]))
+    fn masks(&self) -> [[L::M; 2]; 3] {
+        let is = &self.is;
+        [
+            [L::mask(is[0][0]), L::mask(is[0][1])],
+            [L::mask(is[1][0]), L::mask(is[1][1])],
+            [L::mask(is[2][0]), L::mask(is[2][1])],
+        ]
     }
+}
+
+/// Component `slot` (0 = kx, 1 = ky, 2 = kz) of `a` under each lane's permutation
+/// ([`RayLanes::masks`]).
+#[inline(always)]
+fn pick<L: Lanes>(is: &[[L::M; 2]; 3], a: &[L::V; 3], slot: usize) -> L::V {
+    let [is0, is1] = is[slot];
+    L::select(is0, a[0], L::select(is1, a[1], a[2]))
 }
 
 /// The shared tail of both kernels: edge functions to hit lanes.
@@ -213,6 +213,10 @@ pub(crate) fn rays_vs_triangle<L: Lanes>(
     let mut p = [[L::splat(0.0); 2]; 3];
     let mut z = [L::splat(0.0); 3];
     let [sx, sy, sz] = rays.shear;
+    let is = match rays.uniform {
+        Some(_) => [[L::mask(0); 2]; 3],
+        None => rays.masks(),
+    };
     for vertex in 0..3 {
         let v = [
             L::sub(L::splat(tri[3 * vertex]), rays.origin[0]),
@@ -221,7 +225,11 @@ pub(crate) fn rays_vs_triangle<L: Lanes>(
         ];
         let (x, y, vz) = match rays.uniform {
             Some([kx, ky, kz]) => (v[kx], v[ky], v[kz]),
-            None => (rays.pick(&v, 0), rays.pick(&v, 1), rays.pick(&v, 2)),
+            None => (
+                pick::<L>(&is, &v, 0),
+                pick::<L>(&is, &v, 1),
+                pick::<L>(&is, &v, 2),
+            ),
         };
         p[vertex] = [L::sub(x, L::mul(sx, vz)), L::sub(y, L::mul(sy, vz))];
         z[vertex] = L::mul(sz, vz);
