@@ -418,7 +418,7 @@ fn batch_occluded<L: Lanes, const K: usize, C: Counters>(
     let g = &*accel.geometry;
     let size = K * L::W;
     let mut stack = [(0, 0.0); single::STACK];
-    let mut packet_stack: packet::AnyStack<K> = [(0, [0; K]); single::STACK];
+    let mut packet_stack: packet::AnyStack = [(0, 0); single::STACK];
     // Rays that do not form coherent packets, traced afterwards (see `stream::width`).
     let mut pending = Vec::new();
     for (start, (chunk, out)) in (0..)

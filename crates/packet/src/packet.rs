@@ -627,13 +627,20 @@ fn packet_leaf<L: Lanes, const K: usize, C: Counters>(
     }
 }
 
-/// An any-hit packet traversal stack entry: a child reference and the lanes (per vector)
-/// that entered it.
-pub(crate) type AnyEntry<const K: usize> = (u32, [u32; K]);
+/// An any-hit packet traversal stack entry: a child reference and the packet's lanes that
+/// entered it, lane `lane` of vector `k` at bit `k * W + lane`. One `u64` holds the whole
+/// packet (`K * W <= 64`), so that a stack entry, the open lanes and a node's live lanes
+/// are one integer each (per-vector masks cost an array operation at every step).
+pub(crate) type AnyEntry = (u32, u64);
 
-/// An any-hit packet traversal stack, allocated once per batch (made per packet, its 5.5 KB
-/// were zeroed for every packet).
-pub(crate) type AnyStack<const K: usize> = [AnyEntry<K>; STACK];
+/// An any-hit packet traversal stack, allocated once per batch.
+pub(crate) type AnyStack = [AnyEntry; STACK];
+
+/// Vector `k`'s lanes of the lane set `lanes`.
+#[inline(always)]
+fn vector_lanes<L: Lanes>(lanes: u64, k: usize) -> u32 {
+    ((lanes >> (k * L::W)) & ((1 << L::W) - 1)) as u32
+}
 
 /// Any-hit results of a coherent packet: `blocked[i]` arrives true for rays already
 /// blocked (by an unbounded primitive) and leaves true for every blocked ray. A lane leaves
@@ -649,17 +656,18 @@ pub(crate) fn occluded<L: Lanes, const K: usize, C: Counters>(
     rays: &[Ray],
     oct: u8,
     blocked: &mut [bool],
-    stack: &mut AnyStack<K>,
+    stack: &mut AnyStack,
     scratch: &mut Stack,
     counters: &mut C,
 ) {
+    const { assert!(K * L::W <= 64) };
     if layout.wide.is_empty() {
         return;
     }
-    let mut open = [0u32; K];
+    let mut open = 0u64;
     for (i, b) in blocked.iter().enumerate() {
         if !*b {
-            open[i / L::W] |= 1 << (i % L::W);
+            open |= 1 << i;
         }
     }
     let chunks = split::<L, K>(rays);
@@ -680,14 +688,15 @@ pub(crate) fn occluded<L: Lanes, const K: usize, C: Counters>(
     let packet_limit_lo = <L::Single as Lanes>::splat(lo);
     stack[0] = (0, open);
     let mut sp = 1;
-    while sp > 0 && open.iter().any(|&m| m != 0) {
+    while sp > 0 && open != 0 {
         sp -= 1;
         let (index, pushed) = stack[sp];
-        let masks: [u32; K] = std::array::from_fn(|k| pushed[k] & open[k]);
-        let active = visit(&masks, counters);
-        if active == 0 {
+        let live = pushed & open;
+        if live == 0 {
             continue;
         }
+        let active = live.count_ones();
+        counters.add_visits(u64::from(active));
         if index & LEAF_BIT != 0 {
             let tri_lanes = tri_lanes.get_or_insert_with(|| triangle_lanes::<L, K>(rays));
             packet_leaf_any::<L, K, C>(
@@ -697,7 +706,7 @@ pub(crate) fn occluded<L: Lanes, const K: usize, C: Counters>(
                 tri_lanes,
                 (&chunks, &negative),
                 LeafRef::decode(index),
-                masks,
+                live,
                 &mut open,
                 blocked,
                 counters,
@@ -706,18 +715,16 @@ pub(crate) fn occluded<L: Lanes, const K: usize, C: Counters>(
         }
         if active <= SPLIT_LANES {
             // The packet has diverged: its last lanes finish this subtree one by one.
-            for (k, m) in masks.iter().enumerate() {
-                for lane in BitIter(*m) {
-                    let i = k * L::W + lane;
-                    if single::occluded::<L, C>(layout, g, &rays[i], index, scratch, counters) {
-                        blocked[i] = true;
-                        open[k] &= !(1 << lane);
-                    }
+            for i in BitIter(live) {
+                if single::occluded::<L, C>(layout, g, &rays[i], index, scratch, counters) {
+                    blocked[i] = true;
+                    open &= !(1 << i);
                 }
             }
             continue;
         }
         let node = &layout.wide[index as usize];
+        let masks: [u32; K] = std::array::from_fn(|k| vector_lanes::<L>(live, k));
         let mut first = 0;
         while first < WIDE {
             let (_, bits, full) = frustum.entries(node, first, packet_limit, packet_limit_lo);
@@ -727,11 +734,18 @@ pub(crate) fn occluded<L: Lanes, const K: usize, C: Counters>(
                     continue;
                 }
                 let lanes = if full & (1 << slot) != 0 {
-                    Some(masks)
+                    live
                 } else {
-                    child_lanes(&chunks, node, first + slot, &negative, &masks, &t_max)
+                    let mut lanes = 0;
+                    for (k, (chunk, &m)) in chunks.iter().zip(&masks).enumerate() {
+                        if m != 0 {
+                            let e = chunk.0.enters(node, first + slot, &negative, t_max[k]) & m;
+                            lanes |= u64::from(e) << (k * L::W);
+                        }
+                    }
+                    lanes
                 };
-                if let Some(lanes) = lanes {
+                if lanes != 0 {
                     single::prefetch_child(layout, child);
                     stack[sp] = (child, lanes);
                     sp += 1;
@@ -753,34 +767,31 @@ fn packet_leaf_any<L: Lanes, const K: usize, C: Counters>(
     tri_lanes: &[RayLanes<L>; K],
     (chunks, negative): (&Chunks<L, K>, &[bool; 3]),
     leaf: LeafRef,
-    entered: [u32; K],
-    open: &mut [u32; K],
+    entered: u64,
+    open: &mut u64,
     blocked: &mut [bool],
     counters: &mut C,
 ) {
     for block in &layout.blocks[leaf.first..leaf.first + leaf.blocks] {
         let occupied = block.occupied();
         let tris = occupied.count_ones();
-        let masks: [u32; K] = std::array::from_fn(|k| entered[k] & open[k]);
-        let active: u32 = masks.iter().map(|m| m.count_ones()).sum();
-        if active == 0 {
+        let live = entered & *open;
+        if live == 0 {
             return;
         }
+        let active = live.count_ones();
         if C::ENABLED {
             counters.add_tests(u64::from(active * tris));
         }
-        let vectors = masks.iter().filter(|&&m| m != 0).count() as u32;
+        let vectors = (0..K).filter(|&k| vector_lanes::<L>(live, k) != 0).count() as u32;
         // Few lanes left: one SIMD test of the block per lane is cheaper than one SIMD
         // test of the lanes per triangle.
         if active < vectors * tris {
-            for (k, m) in masks.iter().enumerate() {
-                for lane in BitIter(*m) {
-                    let i = k * L::W + lane;
-                    let splat = SplatRay::<L::Narrow>::new(&rays[i]);
-                    if single::block_occluded(g, block, leaf.mixed, &rays[i], &splat) {
-                        blocked[i] = true;
-                        open[k] &= !(1 << lane);
-                    }
+            for i in BitIter(live) {
+                let splat = SplatRay::<L::Narrow>::new(&rays[i]);
+                if single::block_occluded(g, block, leaf.mixed, &rays[i], &splat) {
+                    blocked[i] = true;
+                    *open &= !(1 << i);
                 }
             }
             continue;
@@ -793,7 +804,7 @@ fn packet_leaf_any<L: Lanes, const K: usize, C: Counters>(
         for j in BitIter(occupied) {
             let tri = block.triangle(j);
             for (k, (lanes, (_, t_max, _))) in tri_lanes.iter().zip(chunks).enumerate() {
-                let m = entered[k] & open[k];
+                let m = vector_lanes::<L>(entered & *open, k);
                 if m == 0 {
                     continue;
                 }
@@ -814,7 +825,7 @@ fn packet_leaf_any<L: Lanes, const K: usize, C: Counters>(
                 for lane in BitIter(hit) {
                     blocked[k * L::W + lane] = true;
                 }
-                open[k] &= !hit;
+                *open &= !(u64::from(hit) << (k * L::W));
             }
         }
     }

@@ -260,20 +260,27 @@ pub(crate) fn leaf_prims(layout: &Layout, leaf: LeafRef) -> u64 {
 }
 
 /// Indices of the set bits, lowest first.
-pub(crate) struct BitIter(pub u32);
+pub(crate) struct BitIter<T>(pub T);
 
-impl Iterator for BitIter {
-    type Item = usize;
-    #[inline(always)]
-    fn next(&mut self) -> Option<usize> {
-        if self.0 == 0 {
-            return None;
+/// [`BitIter`] over one integer type.
+macro_rules! bit_iter {
+    ($t:ty) => {
+        impl Iterator for BitIter<$t> {
+            type Item = usize;
+            #[inline(always)]
+            fn next(&mut self) -> Option<usize> {
+                if self.0 == 0 {
+                    return None;
+                }
+                let i = self.0.trailing_zeros() as usize;
+                self.0 &= self.0 - 1;
+                Some(i)
+            }
         }
-        let i = self.0.trailing_zeros() as usize;
-        self.0 &= self.0 - 1;
-        Some(i)
-    }
+    };
 }
+bit_iter!(u32);
+bit_iter!(u64);
 
 /// Traversal stack capacity: the BVH2 depth bound (60) times seven siblings, plus slack.
 pub(crate) const STACK: usize = 7 * 64 + 8;
