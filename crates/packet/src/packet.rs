@@ -803,8 +803,13 @@ fn packet_leaf_any<L: Lanes, const K: usize, C: Counters>(
         };
         for j in BitIter(occupied) {
             let tri = block.triangle(j);
+            // The vectors' tests are independent: each reads its lanes from `live` and the
+            // blocked lanes are closed after all (closing them in `open` vector by vector
+            // chained every vector's test to the previous one's division).
+            let live = entered & *open;
+            let mut closed = 0u64;
             for (k, (lanes, (_, t_max, _))) in tri_lanes.iter().zip(chunks).enumerate() {
-                let m = vector_lanes::<L>(entered & *open, k);
+                let m = vector_lanes::<L>(live, k);
                 if m == 0 {
                     continue;
                 }
@@ -825,8 +830,9 @@ fn packet_leaf_any<L: Lanes, const K: usize, C: Counters>(
                 for lane in BitIter(hit) {
                     blocked[k * L::W + lane] = true;
                 }
-                *open &= !(u64::from(hit) << (k * L::W));
+                closed |= u64::from(hit) << (k * L::W);
             }
+            *open &= !closed;
         }
     }
 }
