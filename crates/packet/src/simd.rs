@@ -93,11 +93,13 @@ pub(crate) fn ray_rows<L: Lanes>(rays: &[Ray]) -> ([&[f32; 8]; 16], [&[f32; 8]; 
     (head, tail)
 }
 
+/// Floats `0..8` of a ray's [`ray_floats`].
 #[inline(always)]
 fn first8(f: &[f32; Ray::FLOATS]) -> &[f32; 8] {
     f.first_chunk().expect("a ray has more than eight floats")
 }
 
+/// Floats `6..14` of a ray's [`ray_floats`].
 #[inline(always)]
 fn last8(f: &[f32; Ray::FLOATS]) -> &[f32; 8] {
     f.last_chunk().expect("a ray has more than eight floats")
