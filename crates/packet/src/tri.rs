@@ -72,9 +72,8 @@ pub(crate) struct RayLanes<L: Lanes> {
     pub origin: [L::V; 3],
     pub shear: [L::V; 3],
     /// `is[k][a]`: bits of the lanes whose permuted axis `k` (x, y, z) is axis `a` (for
-    /// `a` = 0, 1); read only when the permutation is not `uniform`. (Bits, not masks: the
-    /// packet's `K` of these are made at its first leaf, and six mask vectors each made
-    /// them a third larger to write.)
+    /// `a` = 0, 1); read only when the permutation is not `uniform`. (Bits, not masks: a
+    /// packet writes `K` of these at its first leaf, and masks add six vectors to each.)
     pub is: [[u32; 2]; 3],
     /// The permutation when every lane has the same one (primary rays almost always do):
     /// then it is applied by indexing, without selects.
@@ -94,7 +93,7 @@ impl<L: Lanes> RayLanes<L> {
         let first = perm(&rays[0]);
         let lanes = &rays[..rays.len().min(L::W)];
         let (is, uniform) = if lanes.iter().all(|r| perm(r) == first) {
-            // One permutation (primary and shadow rays almost always): no per-lane bits.
+            // One permutation (primary rays almost always): no per-lane bits.
             ([[0; 2]; 3], Some(first.map(|a| usize::from(a) % 3)))
         } else {
             let mut is = [[0u32; 2]; 3];
