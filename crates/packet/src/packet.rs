@@ -636,6 +636,16 @@ pub(crate) type AnyEntry = (u32, u64);
 /// An any-hit packet traversal stack, allocated once per batch.
 pub(crate) type AnyStack = [AnyEntry; STACK];
 
+/// The lane set of per-vector masks `masks` (the inverse of [`vector_lanes`]).
+#[inline(always)]
+fn packed<L: Lanes, const K: usize>(masks: &[u32; K]) -> u64 {
+    let mut lanes = 0;
+    for (k, &m) in masks.iter().enumerate() {
+        lanes |= u64::from(m) << (k * L::W);
+    }
+    lanes
+}
+
 /// Vector `k`'s lanes of the lane set `lanes`.
 #[inline(always)]
 fn vector_lanes<L: Lanes>(lanes: u64, k: usize) -> u32 {
@@ -736,14 +746,8 @@ pub(crate) fn occluded<L: Lanes, const K: usize, C: Counters>(
                 let lanes = if full & (1 << slot) != 0 {
                     live
                 } else {
-                    let mut lanes = 0;
-                    for (k, (chunk, &m)) in chunks.iter().zip(&masks).enumerate() {
-                        if m != 0 {
-                            let e = chunk.0.enters(node, first + slot, &negative, t_max[k]) & m;
-                            lanes |= u64::from(e) << (k * L::W);
-                        }
-                    }
-                    lanes
+                    child_lanes(&chunks, node, first + slot, &negative, &masks, &t_max)
+                        .map_or(0, |lanes| packed::<L, K>(&lanes))
                 };
                 if lanes != 0 {
                     single::prefetch_child(layout, child);
